@@ -1,0 +1,83 @@
+"""assembler_pin: the Assembler — serialized Stewart platforms — on Pinocchio.
+
+Closed-loop kinematic model (generated URDF + closure sidecar), exact statics under
+gravity and payload, constraint evaluation, and the command ``assembler-pin``.
+
+Quick start::
+
+    import assembler_pin as ap
+    am = ap.AssemblerModel.from_config()          # default 4-platform stack
+    state = ap.evaluate_state(am, am.home)        # statics of the home pose
+    print(state.forces)                           # (4, 6) [N], tension positive
+"""
+
+from .config import AssemblerConfig, LegConfig, PayloadConfig, PlateConfig, load_config
+from .constraints import GoalTolerance, Violation, evaluate_constraints
+from .exceptions import (
+    AssemblerError,
+    ConfigError,
+    ConvergenceError,
+    ModelFileError,
+    PoseError,
+    SingularConfigurationError,
+)
+from .geometry import home_plates, leg_geometry
+from .kinematics import (
+    FKResult,
+    LegState,
+    PlateArrays,
+    StackFKResult,
+    ee_jacobian_wrt_lengths,
+    leg_state,
+    plate_arrays,
+    plates_from_q,
+    q_from_plates,
+    sp_forward_kinematics,
+    stack_forward_kinematics,
+    to_se3,
+)
+from .model import AssemblerModel
+from .state import StackState, evaluate_state
+from .statics import StaticsResult, solve_statics
+from .urdf import assembler_urdf, closure_sidecar, export_model_files
+
+__all__ = [
+    "AssemblerConfig",
+    "AssemblerError",
+    "AssemblerModel",
+    "ConfigError",
+    "ConvergenceError",
+    "FKResult",
+    "GoalTolerance",
+    "LegConfig",
+    "LegState",
+    "ModelFileError",
+    "PayloadConfig",
+    "PlateArrays",
+    "PlateConfig",
+    "PoseError",
+    "SingularConfigurationError",
+    "StackFKResult",
+    "StackState",
+    "StaticsResult",
+    "Violation",
+    "assembler_urdf",
+    "closure_sidecar",
+    "ee_jacobian_wrt_lengths",
+    "evaluate_constraints",
+    "evaluate_state",
+    "export_model_files",
+    "home_plates",
+    "leg_geometry",
+    "leg_state",
+    "load_config",
+    "plate_arrays",
+    "plates_from_q",
+    "q_from_plates",
+    "solve_statics",
+    "sp_forward_kinematics",
+    "stack_forward_kinematics",
+    "to_se3",
+]
+
+__version__ = "0.1.0"

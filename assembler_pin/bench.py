@@ -1,0 +1,69 @@
+"""Benchmarks: median wall time per call of the hot computations.
+
+Run with ``assembler-pin bench [--json] [--repeat N]``. Times are medians over
+``repeat`` calls on random valid poses of the default (or given) configuration; they
+measure this machine, not a target.
+"""
+
+from __future__ import annotations
+
+import statistics
+import time
+from collections.abc import Callable
+
+import numpy as np
+
+from .kinematics import PlateArrays, q_from_plates, sp_forward_kinematics, stack_forward_kinematics
+from .model import AssemblerModel
+from .statics import solve_statics
+
+__all__ = ["median_time_us", "random_reachable_plates", "run_benchmarks"]
+
+
+def median_time_us(fn: Callable[[], object], repeat: int) -> float:
+    """Median wall time of ``fn()`` over ``repeat`` calls, after one warm-up call [µs]."""
+    fn()
+    times = []
+    for _ in range(repeat):
+        t0 = time.perf_counter()
+        fn()
+        times.append(time.perf_counter() - t0)
+    return statistics.median(times) * 1e6
+
+
+def random_reachable_plates(am: AssemblerModel, rng: np.random.Generator, spread: float = 0.35) -> tuple[np.ndarray, PlateArrays]:
+    """Random in-stroke leg lengths and the plate poses they give (by stack FK).
+
+    Args:
+        spread: fraction of the stroke around mid-stroke that lengths are drawn from.
+
+    Returns:
+        (lengths (n, 6) [m], plate poses).
+    """
+    leg = am.config.leg
+    half = 0.5 * spread * (leg.max_length - leg.min_length)
+    while True:
+        lengths = rng.uniform(leg.mid_length - half, leg.mid_length + half, (am.n, 6))
+        fk = stack_forward_kinematics(am, lengths)
+        if fk.success:
+            return lengths, fk.plates
+
+
+def run_benchmarks(am: AssemblerModel, repeat: int = 300, seed: int = 0) -> dict[str, float]:
+    """Median per-call times [µs] of statics, SP FK, stack FK and closed-form q.
+
+    Each figure is the median over ``repeat`` calls, cycling through 20 random poses.
+    """
+    rng = np.random.default_rng(seed)
+    samples = [random_reachable_plates(am, rng) for _ in range(20)]
+    counter = iter(range(10**9))
+
+    def pick() -> tuple[np.ndarray, PlateArrays]:
+        return samples[next(counter) % len(samples)]
+
+    return {
+        "statics_us": median_time_us(lambda: solve_statics(am, pick()[1]), repeat),
+        "sp_fk_us": median_time_us(lambda: sp_forward_kinematics(am, 0, pick()[0][0]), repeat),
+        "stack_fk_us": median_time_us(lambda: stack_forward_kinematics(am, pick()[0]), repeat),
+        "q_from_plates_us": median_time_us(lambda: q_from_plates(am, pick()[1]), repeat),
+    }

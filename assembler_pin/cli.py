@@ -1,0 +1,156 @@
+"""The ``assembler-pin`` command.
+
+Subcommands: ``export`` (URDF + closure sidecar), ``statics`` (forces of given plate
+poses), ``bench`` (timings). Errors in the input end the command with exit status 2 and
+one line on stderr saying what was wrong.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import logging
+import sys
+from collections.abc import Sequence
+from pathlib import Path
+
+import numpy as np
+
+from .config import AssemblerConfig, load_config
+from .exceptions import AssemblerError, PoseError
+from .model import AssemblerModel
+from .state import StackState, evaluate_state
+from .urdf import export_model_files
+
+logger = logging.getLogger("assembler_pin")
+
+
+class CLIError(AssemblerError):
+    """A command-line input problem (reported as one line, exit status 2)."""
+
+
+def _config(args: argparse.Namespace) -> AssemblerConfig:
+    return load_config(args.config) if args.config else load_config()
+
+
+def _read_json(source: str) -> object:
+    try:
+        text = sys.stdin.read() if source == "-" else Path(source).read_text()
+    except OSError as exc:
+        raise CLIError(f"cannot read '{source}': {exc.strerror or exc}") from None
+    try:
+        return json.loads(text)
+    except json.JSONDecodeError as exc:
+        raise CLIError(f"'{source}' is not valid JSON: {exc}") from None
+
+
+def format_state_table(state: StackState, title: str = "") -> str:
+    """A readable table of a state: forces and lengths per actuator, then summary lines."""
+    n = state.forces.shape[0]
+    lines = [title] if title else []
+    header = "leg | " + " | ".join(f"SP{j + 1} F [N]  L [mm]" for j in range(n))
+    lines += [header, "-" * len(header)]
+    for i in range(6):
+        cells = [f"{state.forces[j, i]:9.3f} {1e3 * state.leg_lengths[j, i]:7.2f}" for j in range(n)]
+        lines.append(f"{i + 1:>3} | " + " | ".join(cells))
+    j, i = np.unravel_index(np.abs(state.forces).argmax(), state.forces.shape)
+    lines.append(f"max |F| = {state.max_abs_force:.3f} N (SP{j + 1} leg {i + 1}), "
+                 f"mean |F| = {state.mean_abs_force:.3f} N   (tension positive)")
+    w = state.statics.base_wrench
+    lines.append(f"base wrench [N, N·m]: f = ({w[0]:.3f}, {w[1]:.3f}, {w[2]:.3f}), "
+                 f"m = ({w[3]:.3f}, {w[4]:.3f}, {w[5]:.3f})")
+    if state.feasible:
+        lines.append("feasible: yes (every constraint holds)")
+    else:
+        lines.append(f"feasible: NO — {len(state.violations)} violation(s):")
+        lines += [f"  - {v}" for v in state.violations]
+    return "\n".join(lines)
+
+
+def cmd_export(args: argparse.Namespace) -> int:
+    cfg = _config(args)
+    paths = export_model_files(cfg, args.out)
+    for role, path in paths.items():
+        print(f"wrote {role}: {path}")
+    return 0
+
+
+def cmd_statics(args: argparse.Namespace) -> int:
+    am = AssemblerModel.from_config(_config(args))
+    if args.home:
+        plates = am.home
+    else:
+        if args.plates is None:
+            raise CLIError("give --plates FILE (or - for stdin) or --home")
+        doc = _read_json(args.plates)
+        if not isinstance(doc, dict) or "plates" not in doc:
+            raise CLIError('the input must be a JSON object {"plates": [n+1 4x4 world transforms]}')
+        plates = doc["plates"]
+        if not isinstance(plates, list):
+            raise CLIError('"plates" must be a list of n+1 4x4 matrices, plate 0 first')
+    state = evaluate_state(am, plates)
+    if args.json:
+        print(json.dumps(state.to_dict()))
+    else:
+        print(format_state_table(state, f"Statics of {am.n} platforms, payload "
+                                        f"{am.config.payload.mass:g} kg at {am.config.payload.offset:g} m"))
+    return 0
+
+
+def cmd_bench(args: argparse.Namespace) -> int:
+    from .bench import run_benchmarks
+
+    am = AssemblerModel.from_config(_config(args))
+    results = run_benchmarks(am, repeat=args.repeat)
+    if args.json:
+        print(json.dumps(results))
+    else:
+        for key, value in results.items():
+            print(f"{key:>20}: {value:10.1f}")
+    return 0
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(
+        prog="assembler-pin",
+        description="Serialized Stewart platforms (the Assembler) on Pinocchio: model, statics, solve.")
+    parser.add_argument("-v", "--verbose", action="store_true", help="log progress to stderr")
+    sub = parser.add_subparsers(dest="command", required=True)
+
+    def add(name: str, help_: str) -> argparse.ArgumentParser:
+        p = sub.add_parser(name, help=help_, description=help_)
+        p.add_argument("--config", metavar="FILE", help="YAML configuration (default: built-in)")
+        return p
+
+    p = add("export", "write assembler.urdf and its closure sidecar assembler.yaml")
+    p.add_argument("--out", default="urdf", metavar="DIR", help="output directory (default: urdf)")
+    p.set_defaults(func=cmd_export)
+
+    p = add("statics", "actuator forces of given plate poses (tension positive, newtons)")
+    src = p.add_mutually_exclusive_group()
+    src.add_argument("--plates", metavar="FILE", help='JSON {"plates": [n+1 4x4]} file, or - for stdin')
+    src.add_argument("--home", action="store_true", help="use the home pose")
+    p.add_argument("--json", action="store_true", help="print one JSON object")
+    p.set_defaults(func=cmd_statics)
+
+    p = add("bench", "median time per call of the hot computations")
+    p.add_argument("--json", action="store_true", help="print one JSON object")
+    p.add_argument("--repeat", type=int, default=300, help="calls per figure (default 300)")
+    p.set_defaults(func=cmd_bench)
+    return parser
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    logging.basicConfig(level=logging.INFO if args.verbose else logging.WARNING,
+                        format="%(levelname)s %(name)s: %(message)s")
+    try:
+        return int(args.func(args))
+    except (AssemblerError, PoseError) as exc:
+        print(f"assembler-pin {args.command}: error: {exc}", file=sys.stderr)
+        return 2
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,300 @@
+"""Configuration of an Assembler: geometry, masses, limits and payload.
+
+The YAML format (every key optional; a missing key takes the default shown)::
+
+    platforms: 4            # number of stacked Stewart platforms, integer >= 1
+    gravity: 9.81           # [m/s^2], along -z of the world frame, >= 0
+    plate:
+      node_radius: 0.15     # [m] radius of the circle carrying the joint nodes, > 0
+      node_spacing_deg: 8.0 # [deg] angle between the two leg ends of a node, in [0, 60)
+      mass: 0.2             # [kg] plate mass, at the plate centre, >= 0
+    leg:
+      min_length: 0.20      # [m] shortest pin-to-pin length, > 0
+      max_length: 0.35      # [m] longest pin-to-pin length, > min_length
+      motor_mass: 0.10      # [kg] >= 0
+      shaft_mass: 0.04      # [kg] >= 0
+      motor_com: 0.06       # [m] motor centre of mass from the bottom joint, on the leg axis
+      shaft_com: 0.06       # [m] shaft centre of mass from the top joint, on the leg axis
+      max_deflection_deg: 45  # [deg] largest joint deflection from the home direction, (0, 90)
+      max_tension: 200      # [N] > 0
+      max_compression: 200  # [N] > 0
+    payload:
+      mass: 5.0             # [kg] >= 0
+      offset: 0.2           # [m] along the end-effector plate's local +z
+
+Internally everything is SI and radians; only keys ending in ``_deg`` are in degrees.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import yaml
+
+from .exceptions import ConfigError
+
+__all__ = [
+    "AssemblerConfig",
+    "LegConfig",
+    "PayloadConfig",
+    "PlateConfig",
+    "load_config",
+]
+
+
+@dataclass(frozen=True)
+class PlateConfig:
+    """Plate geometry and mass.
+
+    Attributes:
+        node_radius: radius of the node circle [m].
+        node_spacing_deg: angle between the two leg ends of one node [deg].
+        mass: plate mass, concentrated at the plate centre [kg].
+    """
+
+    node_radius: float = 0.15
+    node_spacing_deg: float = 8.0
+    mass: float = 0.2
+
+
+@dataclass(frozen=True)
+class LegConfig:
+    """Linear actuator (leg) stroke, masses and limits.
+
+    Attributes:
+        min_length, max_length: pin-to-pin length range [m].
+        motor_mass, shaft_mass: [kg].
+        motor_com: motor centre of mass from the bottom joint centre, on the leg axis [m].
+        shaft_com: shaft centre of mass from the top joint centre, on the leg axis [m].
+        max_deflection_deg: largest deflection of the leg from its home direction at
+            either joint, measured in the frame of the plate the joint sits on [deg].
+        max_tension, max_compression: force limits, both positive magnitudes [N].
+    """
+
+    min_length: float = 0.20
+    max_length: float = 0.35
+    motor_mass: float = 0.10
+    shaft_mass: float = 0.04
+    motor_com: float = 0.06
+    shaft_com: float = 0.06
+    max_deflection_deg: float = 45.0
+    max_tension: float = 200.0
+    max_compression: float = 200.0
+
+    @property
+    def mid_length(self) -> float:
+        """Mid-stroke (home) length [m]."""
+        return 0.5 * (self.min_length + self.max_length)
+
+    @property
+    def max_deflection(self) -> float:
+        """Largest joint deflection [rad]."""
+        return math.radians(self.max_deflection_deg)
+
+
+@dataclass(frozen=True)
+class PayloadConfig:
+    """A point mass held rigidly by the end-effector plate.
+
+    Attributes:
+        mass: [kg].
+        offset: distance along the end-effector plate's local +z [m].
+    """
+
+    mass: float = 5.0
+    offset: float = 0.2
+
+
+@dataclass(frozen=True)
+class AssemblerConfig:
+    """Everything that defines an Assembler. Build with :func:`load_config` or directly.
+
+    Attributes:
+        platforms: number of Stewart platforms in series (plates 0..platforms).
+        gravity: magnitude of gravity along the world's -z [m/s^2].
+        plate, leg, payload: see :class:`PlateConfig`, :class:`LegConfig`,
+            :class:`PayloadConfig`.
+    """
+
+    platforms: int = 4
+    gravity: float = 9.81
+    plate: PlateConfig = field(default_factory=PlateConfig)
+    leg: LegConfig = field(default_factory=LegConfig)
+    payload: PayloadConfig = field(default_factory=PayloadConfig)
+
+    def __post_init__(self) -> None:
+        _validate(self)
+
+    # ------------------------------------------------------------------ derived
+    @property
+    def node_spacing(self) -> float:
+        """Angle between the two leg ends of one node [rad]."""
+        return math.radians(self.plate.node_spacing_deg)
+
+    @property
+    def leg_chord(self) -> float:
+        """Horizontal distance between the two ends of a leg in the home pose [m]."""
+        return 2.0 * self.plate.node_radius * math.sin(0.5 * (math.pi / 3.0 - self.node_spacing))
+
+    @property
+    def home_height(self) -> float:
+        """Distance between consecutive plates in the home pose [m] (every leg mid-stroke)."""
+        return math.sqrt(self.leg.mid_length**2 - self.leg_chord**2)
+
+    def to_dict(self) -> dict[str, Any]:
+        """The configuration as a plain dict, in the YAML file's layout."""
+        return dataclasses.asdict(self)
+
+    def replace(self, **changes: Any) -> AssemblerConfig:
+        """A copy with top-level fields or whole sections replaced (validated again)."""
+        return dataclasses.replace(self, **changes)
+
+
+_SECTIONS: dict[str, type] = {"plate": PlateConfig, "leg": LegConfig, "payload": PayloadConfig}
+_TOP_SCALARS = ("platforms", "gravity")
+
+
+def _is_number(value: Any) -> bool:
+    return isinstance(value, (int, float)) and not isinstance(value, bool)
+
+
+def _check(condition: bool, key: str, value: Any, allowed: str) -> None:
+    if not condition:
+        raise ConfigError(f"config key '{key}' = {value!r} is invalid: {allowed}")
+
+
+def _validate(cfg: AssemblerConfig) -> None:
+    """Check every value; raise ConfigError naming the key and what is allowed."""
+    p, leg, pl = cfg.plate, cfg.leg, cfg.payload
+    _check(
+        isinstance(cfg.platforms, int) and not isinstance(cfg.platforms, bool)
+        and 1 <= cfg.platforms <= 64,
+        "platforms", cfg.platforms, "must be an integer from 1 to 64",
+    )
+    numbers = {"gravity": cfg.gravity}
+    numbers |= {f"plate.{f.name}": getattr(p, f.name) for f in dataclasses.fields(p)}
+    numbers |= {f"leg.{f.name}": getattr(leg, f.name) for f in dataclasses.fields(leg)}
+    numbers |= {f"payload.{f.name}": getattr(pl, f.name) for f in dataclasses.fields(pl)}
+    for key, value in numbers.items():
+        _check(_is_number(value) and math.isfinite(value), key, value, "must be a finite number")
+    _check(cfg.gravity >= 0, "gravity", cfg.gravity, "must be >= 0 [m/s^2]")
+    _check(p.node_radius > 0, "plate.node_radius", p.node_radius, "must be > 0 [m]")
+    _check(
+        0 <= p.node_spacing_deg < 60, "plate.node_spacing_deg", p.node_spacing_deg,
+        "must be in [0, 60) degrees",
+    )
+    for key in ("mass",):
+        _check(getattr(p, key) >= 0, f"plate.{key}", getattr(p, key), "must be >= 0 [kg]")
+    for key in ("motor_mass", "shaft_mass"):
+        _check(getattr(leg, key) >= 0, f"leg.{key}", getattr(leg, key), "must be >= 0 [kg]")
+    _check(pl.mass >= 0, "payload.mass", pl.mass, "must be >= 0 [kg]")
+    _check(leg.min_length > 0, "leg.min_length", leg.min_length, "must be > 0 [m]")
+    _check(
+        leg.max_length > leg.min_length, "leg.max_length", leg.max_length,
+        f"must be > leg.min_length ({leg.min_length}) [m]",
+    )
+    for key in ("motor_com", "shaft_com"):
+        value = getattr(leg, key)
+        _check(
+            0 <= value <= leg.min_length, f"leg.{key}", value,
+            f"must be in [0, leg.min_length = {leg.min_length}] [m]",
+        )
+    _check(
+        0 < leg.max_deflection_deg < 90, "leg.max_deflection_deg", leg.max_deflection_deg,
+        "must be in (0, 90) degrees",
+    )
+    for key in ("max_tension", "max_compression"):
+        _check(getattr(leg, key) > 0, f"leg.{key}", getattr(leg, key), "must be > 0 [N]")
+    chord = cfg.leg_chord
+    if leg.mid_length <= chord * (1.0 + 1e-9):
+        raise ConfigError(
+            f"no home pose exists: mid-stroke leg length {leg.mid_length:.4g} m must exceed "
+            f"the horizontal span between its nodes {chord:.4g} m "
+            "(lengthen the legs or reduce plate.node_radius)"
+        )
+
+
+def _section_from_mapping(name: str, cls: type, data: Any) -> Any:
+    if not isinstance(data, Mapping):
+        raise ConfigError(f"config key '{name}' must be a mapping of keys to values, got {data!r}")
+    allowed = [f.name for f in dataclasses.fields(cls)]
+    for key in data:
+        if key not in allowed:
+            raise ConfigError(
+                f"unknown config key '{name}.{key}'; allowed keys in '{name}': {', '.join(allowed)}"
+            )
+    for key, value in data.items():
+        if not _is_number(value):
+            raise ConfigError(
+                f"config key '{name}.{key}' = {value!r} is invalid: must be a number"
+            )
+    return cls(**{k: float(v) for k, v in data.items()})
+
+
+def config_from_dict(data: Mapping[str, Any] | None) -> AssemblerConfig:
+    """Build a validated configuration from a (possibly partial) mapping.
+
+    Raises:
+        ConfigError: unknown keys, wrong types or out-of-range values.
+    """
+    if data is None:
+        data = {}
+    if not isinstance(data, Mapping):
+        raise ConfigError(f"a configuration must be a mapping of keys to values, got {data!r}")
+    allowed = list(_TOP_SCALARS) + list(_SECTIONS)
+    for key in data:
+        if key not in allowed:
+            raise ConfigError(f"unknown config key '{key}'; allowed keys: {', '.join(allowed)}")
+    kwargs: dict[str, Any] = {}
+    if "platforms" in data:
+        value = data["platforms"]
+        if isinstance(value, float) and value.is_integer():
+            value = int(value)
+        _check(
+            isinstance(value, int) and not isinstance(value, bool), "platforms", value,
+            "must be an integer from 1 to 64",
+        )
+        kwargs["platforms"] = value
+    if "gravity" in data:
+        _check(_is_number(data["gravity"]), "gravity", data["gravity"], "must be a number")
+        kwargs["gravity"] = float(data["gravity"])
+    for name, cls in _SECTIONS.items():
+        if name in data:
+            kwargs[name] = _section_from_mapping(name, cls, data[name])
+    return AssemblerConfig(**kwargs)
+
+
+def load_config(source: str | Path | Mapping[str, Any] | AssemblerConfig | None = None) -> AssemblerConfig:
+    """Load a configuration from a YAML file path, a mapping, or return the default.
+
+    Args:
+        source: path of a YAML file, a mapping in the YAML layout, an existing
+            :class:`AssemblerConfig` (returned as is), or ``None`` for the defaults.
+
+    Raises:
+        ConfigError: unreadable file, invalid YAML, unknown keys, wrong types or values.
+    """
+    if source is None:
+        return AssemblerConfig()
+    if isinstance(source, AssemblerConfig):
+        return source
+    if isinstance(source, Mapping):
+        return config_from_dict(source)
+    path = Path(source)
+    try:
+        text = path.read_text()
+    except OSError as exc:
+        raise ConfigError(f"cannot read config file '{path}': {exc.strerror or exc}") from None
+    try:
+        data = yaml.safe_load(text)
+    except yaml.YAMLError as exc:
+        raise ConfigError(f"config file '{path}' is not valid YAML: {exc}") from None
+    try:
+        return config_from_dict(data)
+    except ConfigError as exc:
+        raise ConfigError(f"{path}: {exc}") from None

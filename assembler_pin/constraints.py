@@ -1,0 +1,127 @@
+"""Constraint evaluation of a state: every constraint class of the paper (§IV-A).
+
+* leg length limits ``min_length <= L <= max_length``;
+* joint deflection ``θ <= max_deflection`` at both ends of every leg;
+* force limits ``-max_compression <= F <= max_tension`` (tension positive);
+* end effector at the goal within a position [m] and rotation [rad] tolerance;
+* continuous translation: each top joint above its bottom joint in the bottom plate's
+  frame;
+* and, beyond the paper, a near-singular platform (its forces are not defined).
+
+:func:`evaluate_constraints` returns a list of :class:`Violation` — empty when feasible.
+"""
+
+from __future__ import annotations
+
+from dataclasses import asdict, dataclass
+
+import numpy as np
+import pinocchio as pin
+
+from .config import AssemblerConfig
+from .kinematics import LegState, PlateArrays
+from .statics import CONDITION_LIMIT, StaticsResult
+
+__all__ = ["DEFAULT_GOAL_TOLERANCE", "GoalTolerance", "Violation", "evaluate_constraints"]
+
+
+@dataclass(frozen=True)
+class GoalTolerance:
+    """How close the end effector must be to its goal.
+
+    Attributes:
+        position: largest distance between EE and goal origins [m].
+        rotation: largest angle of the rotation between EE and goal [rad].
+    """
+
+    position: float = 1e-6
+    rotation: float = 1e-6
+
+
+DEFAULT_GOAL_TOLERANCE = GoalTolerance()
+
+
+@dataclass(frozen=True)
+class Violation:
+    """One violated constraint.
+
+    Attributes:
+        kind: ``min_length``, ``max_length``, ``deflection_bottom``, ``deflection_top``,
+            ``tension``, ``compression``, ``continuous_translation``, ``ee_position``,
+            ``ee_rotation`` or ``singular``.
+        platform: platform index j (``None`` for end-effector constraints).
+        leg: leg index i within the platform (``None`` when not about one leg).
+        value: the offending value, in the constraint's unit ([m], [rad], [N], or the
+            condition number for ``singular``).
+        limit: the bound it crosses, same unit.
+    """
+
+    kind: str
+    platform: int | None
+    leg: int | None
+    value: float
+    limit: float
+
+    @property
+    def amount(self) -> float:
+        """How far past the bound, in the constraint's unit (>= 0)."""
+        return abs(self.value - self.limit)
+
+    def to_dict(self) -> dict:
+        return asdict(self)
+
+    def __str__(self) -> str:
+        where = "end effector" if self.platform is None else f"platform {self.platform}"
+        if self.leg is not None:
+            where += f" leg {self.leg}"
+        return f"{self.kind} at {where}: {self.value:.6g} (limit {self.limit:.6g})"
+
+
+def _per_leg(kind: str, mask: np.ndarray, values: np.ndarray, limit: float) -> list[Violation]:
+    return [Violation(kind, int(j), int(i), float(values[j, i]), float(limit))
+            for j, i in zip(*np.nonzero(mask), strict=True)]
+
+
+def evaluate_constraints(
+    cfg: AssemblerConfig,
+    legs: LegState,
+    statics: StaticsResult | None,
+    plates: PlateArrays | None = None,
+    goal: pin.SE3 | None = None,
+    tolerance: GoalTolerance = DEFAULT_GOAL_TOLERANCE,
+) -> list[Violation]:
+    """All violated constraints of a state (empty list: feasible).
+
+    Args:
+        cfg: limits come from here.
+        legs: leg state of the pose (:func:`~assembler_pin.kinematics.leg_state`).
+        statics: its statics, or None to skip the force and singularity checks.
+        plates, goal: with a goal, the EE plate (plates[n]) is checked against it.
+        tolerance: EE goal tolerance.
+    """
+    leg = cfg.leg
+    out: list[Violation] = []
+    L = legs.lengths
+    out += _per_leg("min_length", L < leg.min_length, L, leg.min_length)
+    out += _per_leg("max_length", L > leg.max_length, L, leg.max_length)
+    defl = legs.deflection
+    out += _per_leg("deflection_bottom", defl[..., 0] > leg.max_deflection, defl[..., 0], leg.max_deflection)
+    out += _per_leg("deflection_top", defl[..., 1] > leg.max_deflection, defl[..., 1], leg.max_deflection)
+    out += _per_leg("continuous_translation", legs.rise <= 0.0, legs.rise, 0.0)
+    if statics is not None:
+        F = statics.forces
+        out += _per_leg("tension", F > leg.max_tension, F, leg.max_tension)
+        out += _per_leg("compression", F < -leg.max_compression, F, -leg.max_compression)
+        for j in np.nonzero(~(statics.condition <= CONDITION_LIMIT))[0]:
+            out.append(Violation("singular", int(j), None, float(statics.condition[j]), CONDITION_LIMIT))
+    if goal is not None:
+        if plates is None:
+            raise ValueError("evaluate_constraints: a goal needs the plate poses")
+        ee = plates.se3(len(plates) - 1)
+        dist = float(np.linalg.norm(ee.translation - goal.translation))
+        angle = float(np.linalg.norm(pin.log3(goal.rotation.T @ ee.rotation)))
+        if dist > tolerance.position:
+            out.append(Violation("ee_position", None, None, dist, tolerance.position))
+        if angle > tolerance.rotation:
+            out.append(Violation("ee_rotation", None, None, angle, tolerance.rotation))
+    return out

@@ -1,0 +1,51 @@
+"""Exceptions raised by assembler_pin.
+
+Every error the package raises on purpose derives from :class:`AssemblerError`, so a
+caller can catch one type. Messages say what was wrong and what is allowed.
+"""
+
+from __future__ import annotations
+
+
+class AssemblerError(Exception):
+    """Root of every error raised on purpose by assembler_pin."""
+
+
+class ConfigError(AssemblerError, ValueError):
+    """A configuration value, key or file is invalid."""
+
+
+class PoseError(AssemblerError, ValueError):
+    """A pose, a list of plate poses or a vector of leg lengths is malformed."""
+
+
+class ModelFileError(AssemblerError):
+    """A URDF or closure sidecar file is missing or does not describe an Assembler."""
+
+
+class ConvergenceError(AssemblerError, RuntimeError):
+    """A numerical solve (e.g. forward kinematics) did not converge.
+
+    Attributes:
+        iterations: iterations spent.
+        residual: final residual norm, in the units of the solve ([m] for FK).
+    """
+
+    def __init__(self, message: str, iterations: int = 0, residual: float = float("nan")):
+        super().__init__(message)
+        self.iterations = iterations
+        self.residual = residual
+
+
+class SingularConfigurationError(AssemblerError, RuntimeError):
+    """The statics of a pose cannot be solved reliably (a near-singular platform).
+
+    Attributes:
+        condition_number: the largest condition number of the per-platform systems.
+        platform: index of the worst platform.
+    """
+
+    def __init__(self, message: str, condition_number: float, platform: int):
+        super().__init__(message)
+        self.condition_number = condition_number
+        self.platform = platform

@@ -1,0 +1,473 @@
+"""Kinematics of the stack: plate poses ↔ configuration, leg lengths (IK), FK, Jacobian.
+
+Plate poses are given as ``n + 1`` world transforms (plate 0 first): ``pin.SE3``
+objects, 4×4 arrays, or one (n+1, 4, 4) array. Internally they are held as
+:class:`PlateArrays` (rotations ``R`` (n+1, 3, 3) and translations ``p`` (n+1, 3)) so
+that everything per leg is vectorized with numpy.
+
+Conventions: lengths in metres are pin-to-pin (universal-joint centre to ball-joint
+centre); angles in radians; twists ordered ``[v, ω]`` as in Pinocchio.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+
+import numpy as np
+import numpy.typing as npt
+import pinocchio as pin
+from scipy.linalg.lapack import dgesv as _dgesv
+
+from .exceptions import ConvergenceError, PoseError
+from .geometry import LEGS_PER_PLATFORM
+from .model import AssemblerModel
+
+__all__ = [
+    "FKResult",
+    "LegState",
+    "PlateArrays",
+    "StackFKResult",
+    "ee_jacobian_wrt_lengths",
+    "leg_state",
+    "plate_arrays",
+    "plates_from_q",
+    "q_from_plates",
+    "sp_forward_kinematics",
+    "sp_inverse_jacobian",
+    "stack_forward_kinematics",
+    "to_se3",
+]
+
+ORTHONORMAL_TOL = 1e-6
+
+
+@dataclass(frozen=True)
+class PlateArrays:
+    """World poses of plates 0..n as arrays: ``R`` (n+1, 3, 3), ``p`` (n+1, 3) [m]."""
+
+    R: np.ndarray
+    p: np.ndarray
+
+    def __len__(self) -> int:
+        return self.R.shape[0]
+
+    def se3(self, k: int) -> pin.SE3:
+        """Pose of plate k in the world as ``pin.SE3``."""
+        return pin.SE3(self.R[k].copy(), self.p[k].copy())
+
+    def as_se3(self) -> list[pin.SE3]:
+        return [self.se3(k) for k in range(len(self))]
+
+    def as_matrices(self) -> np.ndarray:
+        """(n+1, 4, 4) homogeneous transforms."""
+        out = np.zeros((len(self), 4, 4))
+        out[:, :3, :3] = self.R
+        out[:, :3, 3] = self.p
+        out[:, 3, 3] = 1.0
+        return out
+
+
+def to_se3(pose: pin.SE3 | npt.ArrayLike, what: str = "pose") -> pin.SE3:
+    """Validate one pose (``pin.SE3`` or 4×4 homogeneous matrix) and return it as SE3.
+
+    A rotation within 1e-6 of orthonormal is projected onto SO(3).
+
+    Raises:
+        PoseError: not 4×4, not finite, last row not [0 0 0 1], or not a rotation.
+    """
+    if isinstance(pose, pin.SE3):
+        matrix = pose.homogeneous
+    else:
+        try:
+            matrix = np.asarray(pose, dtype=float)
+        except (TypeError, ValueError):
+            raise PoseError(f"{what} must be a 4x4 homogeneous matrix of numbers") from None
+    if matrix.shape != (4, 4):
+        raise PoseError(f"{what} must be a 4x4 homogeneous matrix, got shape {matrix.shape}")
+    if not np.all(np.isfinite(matrix)):
+        raise PoseError(f"{what} contains NaN or infinite values")
+    if not np.allclose(matrix[3], [0.0, 0.0, 0.0, 1.0], atol=1e-9):
+        raise PoseError(f"{what}: the last row must be [0, 0, 0, 1], got {matrix[3].tolist()}")
+    rot = matrix[:3, :3]
+    err = np.abs(rot.T @ rot - np.eye(3)).max()
+    if err > ORTHONORMAL_TOL or np.linalg.det(rot) <= 0:
+        raise PoseError(
+            f"{what}: the 3x3 block is not a rotation (|RᵀR - I| = {err:.2g}, det = "
+            f"{np.linalg.det(rot):.3g}); it must be orthonormal to {ORTHONORMAL_TOL} with det +1")
+    if err > 1e-14:
+        u, _, vt = np.linalg.svd(rot)
+        rot = u @ vt
+    return pin.SE3(rot, matrix[:3, 3].copy())
+
+
+def plate_arrays(am: AssemblerModel, plates: PlateArrays | Sequence | np.ndarray) -> PlateArrays:
+    """Validate ``n + 1`` plate poses (plate 0 first) and return them as arrays.
+
+    Raises:
+        PoseError: wrong count of plates or a malformed pose.
+    """
+    if isinstance(plates, PlateArrays):
+        if len(plates) != am.n + 1:
+            raise PoseError(f"expected {am.n + 1} plate poses (plates 0..{am.n}), got {len(plates)}")
+        return plates
+    if isinstance(plates, np.ndarray) and plates.ndim == 3 and plates.shape[1:] == (4, 4):
+        items: Sequence = list(plates)
+    elif isinstance(plates, (list, tuple)):
+        items = plates
+    else:
+        raise PoseError("plate poses must be a list of n+1 SE3 poses or 4x4 matrices, plate 0 first")
+    if len(items) != am.n + 1:
+        raise PoseError(f"expected {am.n + 1} plate poses (plates 0..{am.n}), got {len(items)}")
+    poses = [to_se3(m, f"plate {k}") for k, m in enumerate(items)]
+    return PlateArrays(np.array([m.rotation for m in poses]), np.array([m.translation for m in poses]))
+
+
+# ---------------------------------------------------------------------- legs (IK)
+@dataclass(frozen=True)
+class LegState:
+    """Everything per leg that follows from the plate poses (the paper's IK, eq. 3).
+
+    Arrays are indexed ``[platform j, leg i]``.
+
+    Attributes:
+        bottom_points, top_points: (n, 6, 3) joint centres in the world [m].
+        lengths: (n, 6) pin-to-pin lengths [m].
+        directions: (n, 6, 3) unit vectors bottom → top, world frame.
+        dir_in_bottom, dir_in_top: (n, 6, 3) the same direction in the bottom / top
+            plate's frame.
+        deflection: (n, 6, 2) angle from the home direction at the bottom (universal)
+            and top (ball) joint, each in its own plate's frame [rad].
+        rise: (n, 6) height of the top joint above the bottom joint in the bottom
+            plate's frame [m] (continuous translation needs > 0).
+    """
+
+    bottom_points: np.ndarray
+    top_points: np.ndarray
+    lengths: np.ndarray
+    directions: np.ndarray
+    dir_in_bottom: np.ndarray
+    dir_in_top: np.ndarray
+    deflection: np.ndarray
+    rise: np.ndarray
+
+
+def _angle_between(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Angle between unit vectors along the last axis [rad]."""
+    return np.arccos(np.clip(np.einsum("...k,...k->...", a, b), -1.0, 1.0))
+
+
+def _leg_vectors(am: AssemblerModel, pa: PlateArrays) -> tuple[np.ndarray, ...]:
+    """World joint centres (n, 6, 3), bottom→top vectors and lengths (n, 6)."""
+    geo = am.geometry
+    bottom = np.matmul(geo.bottom_in_plate, pa.R[:-1].transpose(0, 2, 1)) + pa.p[:-1, None, :]
+    top = np.matmul(geo.top_in_plate, pa.R[1:].transpose(0, 2, 1)) + pa.p[1:, None, :]
+    vec = top - bottom
+    lengths = np.sqrt(np.einsum("jik,jik->ji", vec, vec))
+    if lengths.min() < 1e-9:
+        raise PoseError("plate poses put a leg's two joint centres on top of each other")
+    return bottom, top, vec, lengths
+
+
+def leg_state(am: AssemblerModel, plates: PlateArrays | Sequence | np.ndarray) -> LegState:
+    """Leg lengths, directions, deflections and rise of every leg for given plate poses."""
+    pa = plate_arrays(am, plates)
+    bottom, top, vec, lengths = _leg_vectors(am, pa)
+    directions = vec / lengths[..., None]
+    in_bottom = np.matmul(directions, pa.R[:-1])
+    in_top = np.matmul(directions, pa.R[1:])
+    home = am.geometry.home_direction
+    deflection = np.stack([_angle_between(in_bottom, home), _angle_between(in_top, home)], axis=-1)
+    rise = in_bottom[..., 2] * lengths
+    return LegState(bottom, top, lengths, directions, in_bottom, in_top, deflection, rise)
+
+
+# ---------------------------------------------------------------------- configuration
+def q_from_plates(am: AssemblerModel, plates: PlateArrays | Sequence | np.ndarray) -> np.ndarray:
+    """The full configuration ``q`` that puts the plates at the given world poses.
+
+    Closed form: the root free-flyer holds plate 0's pose, each plate free-flyer the pose
+    relative to the plate below (composed after the joint's home placement), each leg's
+    universal joint the two angles that point it at its top joint, and its actuator the
+    pin-to-pin length.
+    """
+    pa = plate_arrays(am, plates)
+    _, _, vec, lengths = _leg_vectors(am, pa)
+    return _q_from_arrays(am, pa, vec, lengths)
+
+
+def _q_from_arrays(am: AssemblerModel, pa: PlateArrays, vec: np.ndarray, lengths: np.ndarray) -> np.ndarray:
+    q = am.q_template.copy()
+    R, p = pa.R, pa.p
+    Rb_T = R[:-1].transpose(0, 2, 1)
+    # pose of plate k+1 relative to plate k, composed after the joint's home placement
+    place_T = am.plate_placement_R.transpose(0, 2, 1)
+    rel_R = np.matmul(place_T, np.matmul(Rb_T, R[1:]))
+    rel_p = np.matmul(place_T, (np.matmul(Rb_T, (p[1:] - p[:-1])[..., None])[..., 0]
+                                - am.plate_placement_p)[..., None])[..., 0]
+    free = np.empty((am.n + 1, 7))
+    free[0, :3], free[1:, :3] = p[0], rel_p
+    free[0, 3:] = pin.Quaternion(R[0]).coeffs()
+    for j in range(am.n):
+        free[j + 1, 3:] = pin.Quaternion(rel_R[j]).coeffs()
+    q[am.plate_q_flat] = free.ravel()
+    # leg direction in each universal joint's base frame: d = R_baseᵀ R_bottomᵀ vec
+    d = np.matmul(np.matmul(vec, R[:-1])[:, :, None, :], am.geometry.leg_base_rotation)[:, :, 0, :]
+    q[am.leg_q_flat] = np.concatenate([
+        np.arctan2(-d[..., 1], d[..., 2]).ravel(),
+        np.arctan2(d[..., 0], np.hypot(d[..., 1], d[..., 2])).ravel(),
+        lengths.ravel()])
+    return q
+
+
+def plates_from_q(am: AssemblerModel, q: np.ndarray) -> PlateArrays:
+    """World poses of the plates for a configuration (Pinocchio forward kinematics)."""
+    pin.forwardKinematics(am.model, am.data, q)
+    oM = [am.data.oMi[int(k)] for k in am.plate_joint_ids]
+    return PlateArrays(np.array([m.rotation for m in oM]), np.array([m.translation for m in oM]))
+
+
+# ---------------------------------------------------------------------- forward kinematics
+@dataclass
+class FKResult:
+    """Result of one Stewart platform's forward kinematics.
+
+    Attributes:
+        pose: top plate in the bottom plate's frame (the last iterate if not converged).
+        success: True only when the length residual is below the tolerance and the
+            solution is the mechanism's assembly mode (every top joint above its bottom).
+        iterations: Newton iterations used.
+        residual: largest |L_i(pose) - L_i| [m].
+        message: why it failed, or "converged".
+    """
+
+    pose: pin.SE3
+    success: bool
+    iterations: int
+    residual: float
+    message: str
+
+    def raise_if_failed(self) -> pin.SE3:
+        """Return ``pose``, or raise :class:`ConvergenceError` when not successful."""
+        if not self.success:
+            raise ConvergenceError(self.message, self.iterations, self.residual)
+        return self.pose
+
+
+def sp_inverse_jacobian(am: AssemblerModel, j: int, top_in_bottom: pin.SE3) -> np.ndarray:
+    """dL/dξ of platform j (6×6): leg-length rates for a local twist ξ = [v, ω] of the top
+    plate (pose perturbed as ``top_in_bottom * exp6(ξ)``), bottom plate fixed [m/m, m/rad]."""
+    geo = am.geometry
+    R, p = top_in_bottom.rotation, top_in_bottom.translation
+    vec = geo.top_in_plate[j] @ R.T + p - geo.bottom_in_plate[j]
+    u_top = (vec / np.linalg.norm(vec, axis=1, keepdims=True)) @ R
+    return np.hstack([u_top, np.cross(geo.top_in_plate[j], u_top)])
+
+
+def _check_lengths(lengths: npt.ArrayLike, shape: tuple[int, ...]) -> np.ndarray:
+    try:
+        arr = np.asarray(lengths, dtype=float)
+    except (TypeError, ValueError):
+        raise PoseError(f"leg lengths must be numbers of shape {shape}") from None
+    if arr.shape != shape:
+        raise PoseError(f"leg lengths must have shape {shape}, got {arr.shape}")
+    if not np.all(np.isfinite(arr)) or np.any(arr <= 0):
+        raise PoseError("leg lengths must be finite and > 0 [m]")
+    return arr
+
+
+def sp_forward_kinematics(
+    am: AssemblerModel,
+    j: int,
+    lengths: npt.ArrayLike,
+    guess: pin.SE3 | None = None,
+    tol: float = 1e-12,
+    max_iterations: int = 30,
+) -> FKResult:
+    """Forward kinematics of platform j: six leg lengths → top plate pose in the bottom frame.
+
+    Newton's method on the length residual with the platform's inverse Jacobian
+    (:func:`sp_inverse_jacobian`), updating the pose on SE(3) with ``pin.exp6``.
+
+    Args:
+        j: platform index (0..n-1); the anchors differ per platform.
+        lengths: (6,) pin-to-pin lengths [m].
+        guess: initial top-in-bottom pose; default the home pose.
+        tol: required largest length residual [m].
+        max_iterations: Newton iterations before giving up.
+    """
+    target = _check_lengths(lengths, (LEGS_PER_PLATFORM,))
+    if not 0 <= j < am.n:
+        raise PoseError(f"platform index must be in 0..{am.n - 1}, got {j}")
+    return _batched_fk(am, [j], target[None], [guess], tol, max_iterations)[0]
+
+
+def _batched_fk(
+    am: AssemblerModel,
+    platforms: Sequence[int],
+    target: np.ndarray,
+    guesses: Sequence[pin.SE3 | None],
+    tol: float,
+    max_iterations: int,
+) -> list[FKResult]:
+    """Newton FK of several platforms at once (they are independent in relative poses).
+
+    Residual ``f_i = |x_i - b_i|² - L_i²`` (no square roots in the loop). The pose is
+    perturbed on the left, ``T ← exp6(ξ) T`` with ξ a twist in the bottom plate's frame,
+    so that the Jacobian rows are ``2 [v_i, b_i × v_i]`` with ``v_i = x_i - b_i`` and the
+    bottom anchors ``b_i`` constant. The reported residual is the exact length error.
+    """
+    geo = am.geometry
+    idx = list(platforms)
+    m = len(idx)
+    top_h = am.top_anchor_homogeneous[idx]  # (m, 6, 4)
+    bottom = geo.bottom_in_plate[idx]
+    bottom_skew = am.bottom_anchor_skew[idx]
+    H = np.array([(am.plate_joint_placement[j + 1] if g is None else g).homogeneous
+                  for j, g in zip(idx, guesses, strict=True)])
+    target_sq = target * target
+    # |L - L*| <= |L² - L*²| / (L + L*) <= |f| / L*: converged when max |f| / L* <= tol
+    inv_target = 1.0 / target
+    jac = np.empty((m, 6, 6))
+    iterations = [max_iterations] * m
+    converged = [False] * m
+    failure: list[str | None] = [None] * m
+    for it in range(max_iterations + 1):
+        vec = np.matmul(top_h, H.transpose(0, 2, 1))[..., :3] - bottom
+        err = target_sq - (vec * vec).sum(axis=2)
+        bound = (np.abs(err) * inv_target).max(axis=1).tolist()
+        for k in range(m):
+            if not converged[k] and bound[k] <= tol:
+                converged[k], iterations[k] = True, it
+        if all(converged) or it == max_iterations:
+            break
+        jac[..., :3] = vec
+        jac[..., 3:] = np.matmul(bottom_skew, vec[..., None])[..., 0]
+        try:
+            step = (lapack_solve(jac[0], err[0])[None] if m == 1
+                    else np.linalg.solve(jac, err[..., None])[..., 0])
+        except np.linalg.LinAlgError:
+            step = np.full((m, 6), np.nan)
+        step *= 0.5
+        finite = np.isfinite(step).all(axis=1).tolist()
+        for k in range(m):
+            if not finite[k]:
+                failure[k] = failure[k] or f"platform {idx[k]}: singular Jacobian or divergence in FK"
+                converged[k] = True
+            elif not converged[k] or m > 1:
+                H[k] = pin.exp6(step[k]).homogeneous @ H[k]
+    vec = np.matmul(top_h, H.transpose(0, 2, 1))[..., :3] - bottom
+    residual = np.abs(np.sqrt((vec * vec).sum(axis=2)) - target).max(axis=1)
+    results = []
+    for k, j in enumerate(idx):
+        pose = pin.SE3(H[k])
+        res_k = float(residual[k])
+        if failure[k] is not None:
+            results.append(FKResult(pose, False, iterations[k], res_k, failure[k]))
+        elif not res_k <= tol:
+            results.append(FKResult(pose, False, iterations[k], res_k,
+                                    f"platform {j}: FK did not converge in {max_iterations} iterations "
+                                    f"(length residual {res_k:.3g} m > {tol:.1g} m)"))
+        elif np.any(vec[k, :, 2] <= 0.0):
+            results.append(FKResult(pose, False, iterations[k], res_k,
+                                    f"platform {j}: converged to an assembly mode with a top joint "
+                                    "below its bottom joint (not this mechanism's branch)"))
+        else:
+            results.append(FKResult(pose, True, iterations[k], res_k, "converged"))
+    return results
+
+
+def lapack_solve(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Solve one small dense system with LAPACK's dgesv (less overhead than numpy's)."""
+    _, _, x, info = _dgesv(a, b)
+    if info != 0:
+        raise np.linalg.LinAlgError("singular matrix")
+    return x
+
+
+@dataclass
+class StackFKResult:
+    """Result of the whole stack's forward kinematics.
+
+    Attributes:
+        plates: world poses of plates 0..n (meaningful only where ``success``).
+        success: every platform converged.
+        platforms: the per-platform :class:`FKResult`.
+        message: "converged" or the first failure.
+    """
+
+    plates: PlateArrays
+    success: bool
+    platforms: list[FKResult] = field(default_factory=list)
+    message: str = "converged"
+
+    @property
+    def iterations(self) -> int:
+        return sum(r.iterations for r in self.platforms)
+
+    @property
+    def residual(self) -> float:
+        return max(r.residual for r in self.platforms)
+
+    def raise_if_failed(self) -> PlateArrays:
+        """Return ``plates``, or raise :class:`ConvergenceError` when not successful."""
+        if not self.success:
+            raise ConvergenceError(self.message, self.iterations, self.residual)
+        return self.plates
+
+
+def stack_forward_kinematics(
+    am: AssemblerModel,
+    lengths: npt.ArrayLike,
+    base: pin.SE3 | npt.ArrayLike | None = None,
+    guess: PlateArrays | Sequence | None = None,
+    tol: float = 1e-12,
+    max_iterations: int = 30,
+) -> StackFKResult:
+    """Forward kinematics of the stack: (n, 6) leg lengths → world poses of all plates.
+
+    Each platform is solved by :func:`sp_forward_kinematics` in its bottom plate's frame
+    and chained serially from the base (the paper's eq. 4).
+
+    Args:
+        lengths: (n, 6) pin-to-pin lengths [m], platform 0 first.
+        base: world pose of plate 0 (default identity).
+        guess: plate poses to start each platform from (default: home).
+    """
+    L = _check_lengths(lengths, (am.n, LEGS_PER_PLATFORM))
+    base_pose = pin.SE3.Identity() if base is None else to_se3(base, "base pose")
+    guesses: list[pin.SE3 | None] = [None] * am.n
+    if guess is not None:
+        ga = plate_arrays(am, guess)
+        guesses = [ga.se3(j).actInv(ga.se3(j + 1)) for j in range(am.n)]
+    # relative poses are independent given the lengths: solve all platforms at once
+    results = _batched_fk(am, range(am.n), L, guesses, tol, max_iterations)
+    plates = [base_pose]
+    for res in results:
+        plates.append(plates[-1] * res.pose)
+    pa = PlateArrays(np.array([m.rotation for m in plates]), np.array([m.translation for m in plates]))
+    failed = [r for r in results if not r.success]
+    return StackFKResult(pa, not failed, results, failed[0].message if failed else "converged")
+
+
+# ---------------------------------------------------------------------- Jacobian
+def ee_jacobian_wrt_lengths(am: AssemblerModel, plates: PlateArrays | Sequence | np.ndarray) -> np.ndarray:
+    """Jacobian of the end-effector twist with respect to the 6n leg lengths.
+
+    Returns:
+        (6, 6n) matrix mapping leg-length rates (flattened ``[j, i]``) [m/s] to the EE
+        plate's twist ``[v, ω]`` expressed in world-aligned axes at the EE plate origin
+        (Pinocchio's LOCAL_WORLD_ALIGNED) [m/s, rad/s].
+    """
+    pa = plate_arrays(am, plates)
+    n = am.n
+    ee = pa.se3(n)
+    jac = np.zeros((6, 6 * n))
+    rot6 = np.zeros((6, 6))
+    rot6[:3, :3] = rot6[3:, 3:] = ee.rotation
+    for j in range(n):
+        rel = pa.se3(j).actInv(pa.se3(j + 1))
+        local_twist_per_length = np.linalg.inv(sp_inverse_jacobian(am, j, rel))
+        plate_to_ee = pa.se3(j + 1).actInv(ee)
+        jac[:, 6 * j:6 * j + 6] = rot6 @ plate_to_ee.inverse().action @ local_twist_per_length
+    return jac

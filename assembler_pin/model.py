@@ -1,0 +1,224 @@
+"""Load the Assembler into Pinocchio: model, data, closure constraints, actuation map.
+
+:class:`AssemblerModel` is built from the generated URDF + closure sidecar — the same
+files a user gets from ``assembler-pin export`` — and holds everything that does not
+change with the pose: the Pinocchio ``model``, the point-anchor closure constraints and
+index maps. Per-pose computations live in :mod:`assembler_pin.kinematics` and
+:mod:`assembler_pin.statics`; they take an ``AssemblerModel`` and use its ``data``.
+
+The base (plate 0) is mounted by a free-flyer root joint: its pose in the world is a
+coordinate of ``q`` and its generalized gravity is the wrench the mount must supply.
+"""
+
+from __future__ import annotations
+
+import logging
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+import pinocchio as pin
+import yaml
+
+from .config import AssemblerConfig, load_config
+from .exceptions import ConfigError, ModelFileError
+from .geometry import LEGS_PER_PLATFORM, LegGeometry, home_plates, leg_geometry
+from .urdf import SIDECAR_FILENAME, URDF_FILENAME, assembler_urdf, closure_sidecar, names
+
+__all__ = ["AssemblerModel", "Closure"]
+
+logger = logging.getLogger(__name__)
+
+
+@dataclass(frozen=True)
+class Closure:
+    """One ball-joint loop closure read from the sidecar.
+
+    Attributes:
+        shaft_frame, anchor_frame: the two frame names the sidecar pairs.
+        platform, leg: indices (j, i) of the leg it closes.
+    """
+
+    shaft_frame: str
+    anchor_frame: str
+    platform: int
+    leg: int
+
+
+@dataclass
+class AssemblerModel:
+    """The Pinocchio model of an Assembler and the index maps around it.
+
+    Build with :meth:`from_config` or :meth:`from_files`. Attributes:
+
+    * ``config``: the :class:`AssemblerConfig`; ``n``: number of platforms.
+    * ``model``, ``data``: Pinocchio model (free-flyer root) and its data.
+    * ``constraint_models`` / ``constraint_datas``: the 6n point-anchor closures as
+      ``pin.StdVec_ConstraintModel`` / ``StdVec_ConstraintData``, ordered ``[j, i]``.
+    * ``geometry``: :class:`~assembler_pin.geometry.LegGeometry`.
+    * ``plate_joint_ids`` (n+1): joint of plate k (root free-flyer for plate 0).
+    * ``plate_idx_q`` / ``plate_idx_v`` (n+1): first q / v index of each plate joint.
+    * ``leg_idx_q`` / ``leg_idx_v`` (n, 6, 3): q / v indices of (ux, uy, actuator).
+    * ``actuator_idx_v`` (n, 6): v index of each prismatic actuator.
+    * ``platform_rows_v`` (n, 24): v indices of SP j's leg joints then plate j+1's
+      free-flyer — the rows of SP j's statics block.
+    * ``plate_joint_placement`` (n+1): placement of each plate joint in its parent.
+    * ``shaft_joint_ids`` (n, 6): joint carrying each shaft (the actuator joint).
+    """
+
+    config: AssemblerConfig
+    model: pin.Model
+    closures: list[Closure]
+    urdf_text: str
+    data: pin.Data = field(init=False, repr=False)
+
+    def __post_init__(self) -> None:
+        cfg, model = self.config, self.model
+        n = cfg.platforms
+        self.n = n
+        self.data = model.createData()
+        self.geometry: LegGeometry = leg_geometry(cfg)
+        self.bottom_anchor_skew = np.array([[pin.skew(b) for b in sp] for sp in self.geometry.bottom_in_plate])
+        self.top_anchor_homogeneous = np.concatenate(
+            [self.geometry.top_in_plate, np.ones(self.geometry.top_in_plate.shape[:2] + (1,))], axis=2)
+        model.gravity.linear = np.array([0.0, 0.0, -cfg.gravity])
+
+        def joint(name: str) -> int:
+            if not model.existJointName(name):
+                raise ModelFileError(f"the URDF has no joint '{name}'; is it an Assembler URDF?")
+            return model.getJointId(name)
+
+        self.plate_joint_ids = np.array([1] + [joint(names.plate_joint(j)) for j in range(n)])
+        self.plate_idx_q = np.array([model.idx_qs[int(k)] for k in self.plate_joint_ids])
+        self.plate_idx_v = np.array([model.idx_vs[int(k)] for k in self.plate_joint_ids])
+        self.plate_joint_placement = [model.jointPlacements[int(k)].copy() for k in self.plate_joint_ids]
+        self.plate_placement_R = np.array([m.rotation for m in self.plate_joint_placement[1:]])
+        self.plate_placement_p = np.array([m.translation for m in self.plate_joint_placement[1:]])
+        self.q_template = pin.neutral(model)
+        parts = ("ux", "uy", "actuator")
+        leg_ids = np.array([[[joint(names.leg(j, i, p)) for p in parts]
+                             for i in range(LEGS_PER_PLATFORM)] for j in range(n)])
+        self.leg_joint_ids = leg_ids
+        self.leg_idx_q = np.vectorize(lambda k: model.idx_qs[int(k)])(leg_ids)
+        self.leg_idx_v = np.vectorize(lambda k: model.idx_vs[int(k)])(leg_ids)
+        self.plate_q_flat = (self.plate_idx_q[:, None] + np.arange(7)).ravel()
+        self.leg_q_flat = np.concatenate([self.leg_idx_q[:, :, k].ravel() for k in range(3)])
+        self.actuator_idx_v = self.leg_idx_v[:, :, 2]
+        self.shaft_joint_ids = leg_ids[:, :, 2]
+        self.platform_rows_v = np.concatenate(
+            [self.leg_idx_v.reshape(n, 18),
+             self.plate_idx_v[1:, None] + np.arange(6)[None, :]], axis=1)
+        self._check_order()
+        self._build_constraints()
+        self.home = home_plates(cfg)
+
+    # ------------------------------------------------------------------ builders
+    @classmethod
+    def from_config(cls, config: AssemblerConfig | str | Path | dict | None = None) -> AssemblerModel:
+        """Generate the URDF + sidecar of ``config`` in memory and load them.
+
+        Args:
+            config: an :class:`AssemblerConfig`, a YAML path, a mapping, or None (defaults).
+        """
+        cfg = load_config(config)
+        return cls._from_texts(assembler_urdf(cfg), closure_sidecar(cfg), "<generated>")
+
+    @classmethod
+    def from_files(cls, urdf_path: str | Path, sidecar_path: str | Path | None = None) -> AssemblerModel:
+        """Load an exported ``assembler.urdf`` and its closure sidecar.
+
+        Args:
+            urdf_path: the URDF file, or a directory holding ``assembler.urdf``.
+            sidecar_path: the sidecar; default ``assembler.yaml`` beside the URDF.
+
+        Raises:
+            ModelFileError: a file is missing or does not describe an Assembler.
+        """
+        urdf_path = Path(urdf_path)
+        if urdf_path.is_dir():
+            urdf_path = urdf_path / URDF_FILENAME
+        sidecar_path = Path(sidecar_path) if sidecar_path else urdf_path.with_name(SIDECAR_FILENAME)
+        try:
+            urdf_text = urdf_path.read_text()
+            sidecar_text = sidecar_path.read_text()
+        except OSError as exc:
+            raise ModelFileError(f"cannot read model file: {exc}") from None
+        return cls._from_texts(urdf_text, sidecar_text, str(sidecar_path))
+
+    @classmethod
+    def _from_texts(cls, urdf_text: str, sidecar_text: str, origin: str) -> AssemblerModel:
+        try:
+            sidecar = yaml.safe_load(sidecar_text)
+        except yaml.YAMLError as exc:
+            raise ModelFileError(f"closure sidecar {origin} is not valid YAML: {exc}") from None
+        if not isinstance(sidecar, dict) or not {"closed_loop", "type", "name_mot"} <= set(sidecar):
+            raise ModelFileError(
+                f"closure sidecar {origin} must have the keys closed_loop, type, name_mot")
+        try:
+            cfg = load_config(sidecar.get("assembler_config") or {})
+        except ConfigError as exc:
+            raise ModelFileError(f"closure sidecar {origin}: assembler_config: {exc}") from None
+        pairs, types = sidecar["closed_loop"], sidecar["type"]
+        if len(pairs) != len(types) or len(pairs) != 6 * cfg.platforms:
+            raise ModelFileError(
+                f"closure sidecar {origin}: expected {6 * cfg.platforms} closures with one type "
+                f"each, got {len(pairs)} pairs and {len(types)} types")
+        closures = []
+        for c, (pair, kind) in enumerate(zip(pairs, types, strict=True)):
+            if str(kind).lower() != "3d":
+                raise ModelFileError(f"closure {pair}: only type '3d' is supported, got {kind!r}")
+            closures.append(Closure(str(pair[0]), str(pair[1]), c // 6, c % 6))
+        try:
+            model = pin.buildModelFromXML(urdf_text, pin.JointModelFreeFlyer())
+        except (RuntimeError, ValueError) as exc:
+            raise ModelFileError(f"Pinocchio cannot parse the URDF: {exc}") from None
+        expected_mot = [names.leg(j, i, "actuator") for j in range(cfg.platforms) for i in range(6)]
+        if list(sidecar["name_mot"]) != expected_mot:
+            raise ModelFileError(f"closure sidecar {origin}: name_mot must list {expected_mot}")
+        return cls(cfg, model, closures, urdf_text)
+
+    def _check_order(self) -> None:
+        """Each platform's legs must precede the next plate's free-flyer (depth-first)."""
+        for j in range(self.n):
+            if self.leg_idx_v[j].max() > self.plate_idx_v[j + 1]:
+                raise ModelFileError(
+                    f"joint order: the legs of platform {j} must come before joint "
+                    f"'{names.plate_joint(j)}' in the URDF (depth-first order)")
+        if not self.model.check(self.data):
+            raise ModelFileError("model.check(data) failed on the loaded URDF")
+
+    def _build_constraints(self) -> None:
+        model = self.model
+        self.constraint_models = pin.StdVec_ConstraintModel()
+        self.anchor_frame_ids = np.zeros((self.n, 6), dtype=int)
+        for c in self.closures:
+            for frame in (c.shaft_frame, c.anchor_frame):
+                if not model.existFrame(frame):
+                    raise ModelFileError(f"closure frame '{frame}' is not in the URDF")
+            shaft = model.frames[model.getFrameId(c.shaft_frame)]
+            anchor_id = model.getFrameId(c.anchor_frame)
+            anchor = model.frames[anchor_id]
+            self.anchor_frame_ids[c.platform, c.leg] = anchor_id
+            if shaft.parentJoint != self.shaft_joint_ids[c.platform, c.leg]:
+                raise ModelFileError(f"closure frame '{c.shaft_frame}' is not the leg's shaft")
+            if anchor.parentJoint != self.plate_joint_ids[c.platform + 1]:
+                raise ModelFileError(f"closure frame '{c.anchor_frame}' is not on the top plate")
+            cm = pin.PointAnchorConstraintModel(
+                model, shaft.parentJoint, shaft.placement, anchor.parentJoint, anchor.placement)
+            self.constraint_models.append(pin.ConstraintModel(cm))
+        self.constraint_datas = pin.StdVec_ConstraintData()
+        for cm in self.constraint_models:
+            self.constraint_datas.append(cm.createData())
+
+    # ------------------------------------------------------------------ helpers
+    @property
+    def nq(self) -> int:
+        return self.model.nq
+
+    @property
+    def nv(self) -> int:
+        return self.model.nv
+
+    def total_mass(self) -> float:
+        """Mass of every body of the stack, payload included [kg]."""
+        return float(sum(inertia.mass for inertia in self.model.inertias))

@@ -1,0 +1,103 @@
+"""A full state of the stack: plate poses, legs, statics and constraint check.
+
+:func:`evaluate_state` is the one call that turns plate poses into everything a user
+asks about a pose; :meth:`StackState.to_dict` is the JSON contract of
+``assembler-pin statics --json`` (and of the ``initial`` / ``optimized`` states of
+``assembler-pin solve``).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+
+import numpy as np
+import pinocchio as pin
+
+from .constraints import DEFAULT_GOAL_TOLERANCE, GoalTolerance, Violation, evaluate_constraints
+from .kinematics import LegState, PlateArrays, leg_state, plate_arrays
+from .model import AssemblerModel
+from .statics import StaticsResult, solve_statics
+
+__all__ = ["StackState", "evaluate_state"]
+
+
+@dataclass
+class StackState:
+    """Everything about one pose of the stack.
+
+    Attributes:
+        plates: world poses of plates 0..n.
+        legs: lengths [m], joint centres, directions, deflections [rad].
+        statics: actuator forces [N, tension positive], ball forces, base wrench.
+        violations: every violated constraint (empty when feasible).
+        goal: the EE goal it was checked against, if any.
+    """
+
+    plates: PlateArrays
+    legs: LegState
+    statics: StaticsResult
+    violations: list[Violation] = field(default_factory=list)
+    goal: pin.SE3 | None = None
+
+    @property
+    def feasible(self) -> bool:
+        """True only when every constraint holds."""
+        return not self.violations
+
+    @property
+    def forces(self) -> np.ndarray:
+        """(n, 6) actuator forces [N], tension positive."""
+        return self.statics.forces
+
+    @property
+    def leg_lengths(self) -> np.ndarray:
+        """(n, 6) pin-to-pin leg lengths [m]."""
+        return self.legs.lengths
+
+    @property
+    def max_abs_force(self) -> float:
+        return self.statics.max_abs_force
+
+    @property
+    def mean_abs_force(self) -> float:
+        return self.statics.mean_abs_force
+
+    def to_dict(self) -> dict:
+        """The JSON contract: plates, leg_lengths, forces, bottom_points, top_points,
+        max_abs_force, mean_abs_force, feasible, violations — then extras: joint
+        deflections [deg], base wrench, condition numbers."""
+        return {
+            "plates": self.plates.as_matrices().tolist(),
+            "leg_lengths": self.legs.lengths.tolist(),
+            "forces": self.statics.forces.tolist(),
+            "bottom_points": self.legs.bottom_points.tolist(),
+            "top_points": self.legs.top_points.tolist(),
+            "max_abs_force": self.max_abs_force,
+            "mean_abs_force": self.mean_abs_force,
+            "feasible": self.feasible,
+            "violations": [v.to_dict() for v in self.violations],
+            "deflection_deg": np.rad2deg(self.legs.deflection).tolist(),
+            "base_wrench": self.statics.base_wrench.tolist(),
+            "condition": self.statics.condition.tolist(),
+        }
+
+
+def evaluate_state(
+    am: AssemblerModel,
+    plates: PlateArrays | Sequence | np.ndarray,
+    goal: pin.SE3 | None = None,
+    tolerance: GoalTolerance = DEFAULT_GOAL_TOLERANCE,
+) -> StackState:
+    """Leg state, statics and constraint check of the given plate poses.
+
+    Args:
+        plates: world poses of plates 0..n, plate 0 first.
+        goal: optional EE goal to check plate n against.
+        tolerance: EE goal tolerance.
+    """
+    pa = plate_arrays(am, plates)
+    legs = leg_state(am, pa)
+    statics = solve_statics(am, pa)
+    violations = evaluate_constraints(am.config, legs, statics, pa, goal, tolerance)
+    return StackState(pa, legs, statics, violations, goal)

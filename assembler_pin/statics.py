@@ -1,0 +1,170 @@
+"""Exact statics of the stack under gravity and payload, from Pinocchio.
+
+For plate poses given, the configuration ``q`` follows in closed form
+(:func:`~assembler_pin.kinematics.q_from_plates`). Static equilibrium of the tree with
+its loops closed reads
+
+    g(q) = Sᵀ τ + J_cᵀ λ
+
+with ``g`` Pinocchio's generalized gravity (every plate, motor, shaft and the payload),
+``S`` the selection of the prismatic actuators, ``τ`` their generalized forces
+(Pinocchio's sign: dV/dL, compression positive), ``J_c`` the Jacobian of the 3D ball
+closures (shaft tip minus top-plate anchor, world axes) and ``λ`` the force the top plate
+exerts on each shaft tip [N, world axes].
+
+Only the rows of platform j's legs and of plate j+1's free-flyer involve platform j's
+unknowns (6 τ + 18 λ), and those rows involve no other unknowns: a closure's two points
+move together under any joint below plate j+1. The system is therefore block-diagonal,
+one 24×24 block per platform, solved in one batched call. The paper's force (tension
+positive) is ``-τ``. The root free-flyer's row of ``g`` is the wrench the base mount
+supplies.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+import pinocchio as pin
+
+from .exceptions import SingularConfigurationError
+from .kinematics import PlateArrays, _leg_vectors, _q_from_arrays, plate_arrays
+from .model import AssemblerModel
+
+__all__ = ["CONDITION_LIMIT", "StaticsResult", "closure_jacobian_blocks", "solve_statics"]
+
+CONDITION_LIMIT = 1e8
+"""Largest 1-norm condition number of a platform's reduced 6×6 statics system trusted."""
+
+
+@dataclass(frozen=True)
+class StaticsResult:
+    """Static equilibrium of a pose.
+
+    Attributes:
+        forces: (n, 6) axial actuator forces [N], tension positive (the paper's sign).
+        ball_forces: (n, 6, 3) force the top plate exerts on each shaft tip at the ball
+            joint, world axes [N].
+        base_wrench: (6,) wrench ``[f, m]`` the base mount applies to plate 0, world
+            axes, moment about plate 0's origin [N, N·m].
+        condition: (n,) 1-norm condition number of each platform's statics block.
+        q: the configuration the statics were solved at.
+        singular: True when a block's condition number exceeds :data:`CONDITION_LIMIT`
+            (the forces are then not trustworthy).
+    """
+
+    forces: np.ndarray
+    ball_forces: np.ndarray
+    base_wrench: np.ndarray
+    condition: np.ndarray
+    q: np.ndarray
+    singular: bool
+
+    @property
+    def max_abs_force(self) -> float:
+        return float(np.abs(self.forces).max())
+
+    @property
+    def mean_abs_force(self) -> float:
+        return float(np.abs(self.forces).mean())
+
+
+def _skew_batch(v: np.ndarray) -> np.ndarray:
+    """(..., 3) → (..., 3, 3) cross-product matrices."""
+    out = np.zeros(v.shape + (3,))
+    out[..., 0, 1], out[..., 0, 2] = -v[..., 2], v[..., 1]
+    out[..., 1, 0], out[..., 1, 2] = v[..., 2], -v[..., 0]
+    out[..., 2, 0], out[..., 2, 1] = -v[..., 1], v[..., 0]
+    return out
+
+
+def _point_jacobians(am: AssemblerModel, top_points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Closure Jacobian blocks from Pinocchio's joint Jacobians (``data.J``, world frame).
+
+    Requires ``pin.computeJointJacobians`` at the pose whose world ball-joint centres are
+    ``top_points`` (n, 6, 3). The closure of leg (j, i) is the shaft tip minus the top
+    plate's anchor, in world axes; only leg (j, i)'s own joints and plate j+1's
+    free-flyer move one of the two points without the other.
+
+    Returns:
+        ``leg`` (n, 6, 3, 3): closure rows × the leg's (ux, uy, actuator) columns;
+        ``plate`` (n, 6, 3, 6): closure rows × plate j+1's free-flyer columns.
+    """
+    J = am.data.J
+    skew = _skew_batch(top_points)  # (n, 6, 3, 3)
+    legs = J[:, am.leg_idx_v]  # (6, n, 6, 3)
+    leg = legs[:3].transpose(1, 2, 0, 3) - np.matmul(skew, legs[3:].transpose(1, 2, 0, 3))
+    ff = J[:, am.plate_idx_v[1:, None] + np.arange(6)]  # (6, n, 6)
+    plate = np.matmul(skew, ff[3:].transpose(1, 0, 2)[:, None]) - ff[:3].transpose(1, 0, 2)[:, None]
+    return leg, plate
+
+
+def closure_jacobian_blocks(am: AssemblerModel, top_points: np.ndarray) -> np.ndarray:
+    """The closure Jacobian restricted to each platform's block (for inspection and tests).
+
+    Returns:
+        (n, 18, 24): rows (leg i, world axis) of platform j's closures; columns the
+        velocity coordinates ``am.platform_rows_v[j]`` (18 leg joints, then the top plate's
+        free-flyer).
+    """
+    leg, plate = _point_jacobians(am, top_points)
+    n = am.n
+    out = np.zeros((n, 6, 3, 24))
+    for i in range(6):
+        out[:, i, :, 3 * i:3 * i + 3] = leg[:, i]
+    out[:, :, :, 18:] = plate
+    return out.reshape(n, 18, 24)
+
+
+def solve_statics(
+    am: AssemblerModel,
+    plates: PlateArrays | Sequence | np.ndarray,
+    raise_on_singular: bool = False,
+) -> StaticsResult:
+    """Actuator and ball-joint forces holding the stack still at the given plate poses.
+
+    Each platform's 24×24 block is solved by eliminating every leg's own 3×3 closure
+    block (invertible away from universal-joint gimbal lock): with ``w = J_legᵀ⁻¹ e_z``
+    (the leg axis) the ball force is ``λ_i = J_legᵀ⁻¹ g_leg - τ_i w_i``, and the plate's
+    free-flyer rows leave a 6×6 system for the six actuator forces.
+
+    Args:
+        plates: world poses of plates 0..n (see :func:`~assembler_pin.kinematics.plate_arrays`).
+        raise_on_singular: raise :class:`SingularConfigurationError` instead of returning
+            a result flagged ``singular``.
+    """
+    pa = plate_arrays(am, plates)
+    _, top, vec, lengths = _leg_vectors(am, pa)
+    q = _q_from_arrays(am, pa, vec, lengths)
+    model, data = am.model, am.data
+    g = pin.computeGeneralizedGravity(model, data, q)
+    pin.computeJointJacobians(model, data, q)
+    leg, plate = _point_jacobians(am, top)
+    n = am.n
+    rhs_leg = np.empty((n, 6, 3, 2))
+    rhs_leg[..., 0] = g[am.leg_idx_v]
+    rhs_leg[..., 1] = _E_Z
+    sol = np.linalg.solve(leg.transpose(0, 1, 3, 2), rhs_leg)  # (n, 6, 3, 2)
+    own, axis = sol[..., 0], sol[..., 1]
+    # free-flyer rows: g_ff = Σ_i plateᵀ λ_i = Σ_i plateᵀ own_i - Σ_i τ_i plateᵀ axis_i
+    plate_t = plate.transpose(0, 1, 3, 2)  # (n, 6 legs, 6 ff, 3)
+    reduced = np.matmul(plate_t, axis[..., None])[..., 0].transpose(0, 2, 1)  # (n, 6 ff, 6 legs)
+    rhs = np.matmul(plate_t, own[..., None])[..., 0].sum(axis=1) - g[am.plate_idx_v[1:, None] + np.arange(6)]
+    inverse = np.linalg.inv(reduced)
+    tau = np.matmul(inverse, rhs[..., None])[..., 0]
+    condition = np.abs(reduced).sum(axis=1).max(axis=1) * np.abs(inverse).sum(axis=1).max(axis=1)
+    singular = bool(np.any(~np.isfinite(condition) | (condition > CONDITION_LIMIT)))
+    if singular and raise_on_singular:
+        worst = int(np.argmax(np.where(np.isfinite(condition), condition, np.inf)))
+        raise SingularConfigurationError(
+            f"platform {worst} is near a singular configuration (condition number "
+            f"{condition[worst]:.3g} > {CONDITION_LIMIT:.0g}); its forces are not defined",
+            float(condition[worst]), worst)
+    ball = own - tau[..., None] * axis
+    R0 = pa.R[0]
+    base = np.concatenate([R0 @ g[:3], R0 @ g[3:6]])
+    return StaticsResult(-tau, ball, base, condition, q, singular)
+
+
+_E_Z = np.array([0.0, 0.0, 1.0])

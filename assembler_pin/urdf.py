@@ -1,0 +1,242 @@
+"""URDF and closure-sidecar generation for an Assembler of any number of platforms.
+
+The URDF is a tree (see DESIGN conventions):
+
+* ``plate_0`` is the root link. Plate k+1 hangs from plate k by the ``floating`` joint
+  ``sp{k}_plate`` whose origin is the home pose, so a free-flyer coordinate of zero is
+  the home pose of that platform.
+* Leg i of platform j is the chain ``plate_j`` → revolute ``sp{j}_leg{i}_ux`` (axis x of a
+  frame at the bottom joint centre whose z is the leg's home direction) → ``_cross``
+  (massless) → revolute ``sp{j}_leg{i}_uy`` → ``_motor`` → prismatic
+  ``sp{j}_leg{i}_actuator`` (axis z, position = pin-to-pin length [m]) → ``_shaft``, whose
+  frame origin is the top joint centre.
+* The link ``sp{j}_leg{i}_top`` is fixed to plate j+1 at the top joint centre. The ball
+  joint closing the loop is the 3D point constraint joining ``sp{j}_leg{i}_shaft`` and
+  ``sp{j}_leg{i}_top``: the sidecar lists these pairs.
+* ``payload`` is fixed to the end-effector plate at the payload offset and carries the
+  payload mass.
+
+Children are written (and named) so that each platform's legs come before the next
+plate's free-flyer in Pinocchio's depth-first joint order.
+
+The sidecar (``assembler.yaml``) follows the convention of Gepetto's
+example-parallel-robots: ``closed_loop`` (frame-name pairs), ``type`` (``3d`` for each
+pair), ``name_mot`` (actuated joints). It adds one key, ``assembler_config``: the
+configuration the files were generated from, so that they can be loaded back with all
+the limits that are not part of URDF.
+"""
+
+from __future__ import annotations
+
+import math
+import xml.etree.ElementTree as ET
+from pathlib import Path
+
+import numpy as np
+import pinocchio as pin
+import yaml
+
+from .config import AssemblerConfig
+from .geometry import DIMENSIONS, LEGS_PER_PLATFORM, leg_geometry
+
+__all__ = [
+    "URDF_FILENAME",
+    "SIDECAR_FILENAME",
+    "assembler_urdf",
+    "closure_sidecar",
+    "export_model_files",
+    "names",
+]
+
+URDF_FILENAME = "assembler.urdf"
+SIDECAR_FILENAME = "assembler.yaml"
+
+
+class names:  # noqa: N801 - a namespace of name builders
+    """Names of links and joints in the generated URDF."""
+
+    @staticmethod
+    def plate(k: int) -> str:
+        return f"plate_{k}"
+
+    @staticmethod
+    def plate_joint(j: int) -> str:
+        """Floating joint of plate j+1 relative to plate j."""
+        return f"sp{j}_plate"
+
+    @staticmethod
+    def leg(j: int, i: int, part: str) -> str:
+        """``part`` in {ux, cross, uy, motor, actuator, shaft, top}."""
+        return f"sp{j}_leg{i}_{part}"
+
+    payload = "payload"
+    payload_joint = "payload_mount"
+
+
+def _fmt(x: float) -> str:
+    x = float(x)
+    if x == 0.0:
+        return "0"
+    return repr(round(x, 15))
+
+
+def _vec(v: np.ndarray) -> str:
+    return " ".join(_fmt(x) for x in v)
+
+
+def _origin(parent: ET.Element, xyz: np.ndarray, rotation: np.ndarray | None = None) -> None:
+    rpy = np.zeros(3) if rotation is None else pin.rpy.matrixToRpy(rotation)
+    ET.SubElement(parent, "origin", xyz=_vec(xyz), rpy=_vec(rpy))
+
+
+def _inertial(link: ET.Element, mass: float, com: np.ndarray, diag: np.ndarray) -> None:
+    inertial = ET.SubElement(link, "inertial")
+    _origin(inertial, com)
+    ET.SubElement(inertial, "mass", value=_fmt(mass))
+    ET.SubElement(
+        inertial, "inertia", ixx=_fmt(diag[0]), ixy="0", ixz="0", iyy=_fmt(diag[1]), iyz="0",
+        izz=_fmt(diag[2]),
+    )
+
+
+def _cylinder_inertia(mass: float, radius: float, length: float) -> np.ndarray:
+    """Diagonal inertia of a solid cylinder about its centre, axis z [kg m^2]."""
+    ixx = mass * (3.0 * radius**2 + length**2) / 12.0
+    return np.array([ixx, ixx, 0.5 * mass * radius**2])
+
+
+def _shape(link: ET.Element, xyz: np.ndarray, geometry: tuple[str, dict[str, str]],
+           material: str | None = None, collision: bool = True) -> None:
+    tags = ("visual", "collision") if collision else ("visual",)
+    for tag in tags:
+        el = ET.SubElement(link, tag)
+        _origin(el, xyz)
+        geom = ET.SubElement(el, "geometry")
+        ET.SubElement(geom, geometry[0], **geometry[1])
+        if tag == "visual" and material is not None:
+            ET.SubElement(el, "material", name=material)
+
+
+def _joint(robot: ET.Element, name: str, kind: str, parent: str, child: str,
+           xyz: np.ndarray, rotation: np.ndarray | None = None, axis: str | None = None,
+           limit: tuple[float, float, float] | None = None) -> None:
+    joint = ET.SubElement(robot, "joint", name=name, type=kind)
+    _origin(joint, xyz, rotation)
+    ET.SubElement(joint, "parent", link=parent)
+    ET.SubElement(joint, "child", link=child)
+    if axis is not None:
+        ET.SubElement(joint, "axis", xyz=axis)
+    if limit is not None:
+        lower, upper, effort = limit
+        ET.SubElement(joint, "limit", lower=_fmt(lower), upper=_fmt(upper), effort=_fmt(effort),
+                      velocity="0")
+
+
+def assembler_urdf(cfg: AssemblerConfig) -> str:
+    """The URDF text of the stack described by ``cfg`` (see module docstring)."""
+    geo = leg_geometry(cfg)
+    dim = DIMENSIONS
+    leg = cfg.leg
+    robot = ET.Element("robot", name="assembler")
+    materials = {"plate": "0.55 0.6 0.7 1", "motor": "0.2 0.25 0.3 1", "shaft": "0.8 0.8 0.8 1",
+                 "node": "0.15 0.35 0.8 1", "payload": "0.85 0.55 0.1 1"}
+    for name, rgba in materials.items():
+        ET.SubElement(ET.SubElement(robot, "material", name=name), "color", rgba=rgba)
+    zero = np.zeros(3)
+    r = cfg.plate.node_radius
+    plate_inertia = _cylinder_inertia(cfg.plate.mass, r, dim.plate_thickness)
+    z_axis = np.array([0.0, 0.0, 1.0])
+    defl = leg.max_deflection
+    force_limit = max(leg.max_tension, leg.max_compression)
+    node_angles_deg = [[90.0 + 60.0 * k + 120.0 * m for m in range(3)] for k in range(cfg.platforms + 1)]
+
+    def add_plate(k: int) -> None:
+        link = ET.SubElement(robot, "link", name=names.plate(k))
+        _inertial(link, cfg.plate.mass, zero, plate_inertia)
+        _shape(link, zero, ("cylinder", {"radius": _fmt(r), "length": _fmt(dim.plate_thickness)}), "plate")
+        for a in node_angles_deg[k]:
+            p = np.array([r * math.cos(math.radians(a)), r * math.sin(math.radians(a)), 0.0])
+            _shape(link, p, ("sphere", {"radius": _fmt(dim.node_sphere_radius)}), "node",
+                   collision=False)
+
+    add_plate(0)
+    for j in range(cfg.platforms):
+        for i in range(LEGS_PER_PLATFORM):
+            n_ = lambda part: names.leg(j, i, part)  # noqa: E731
+            ET.SubElement(robot, "link", name=n_("cross"))
+            _inertial(robot.find(f"link[@name='{n_('cross')}']"), 0.0, zero, zero)
+            _joint(robot, n_("ux"), "revolute", names.plate(j), n_("cross"),
+                   geo.bottom_in_plate[j, i], geo.leg_base_rotation[j, i], "1 0 0",
+                   (-defl, defl, 0.0))
+            motor = ET.SubElement(robot, "link", name=n_("motor"))
+            motor_len = 2.0 * leg.motor_com
+            _inertial(motor, leg.motor_mass, leg.motor_com * z_axis,
+                      _cylinder_inertia(leg.motor_mass, dim.motor_radius, motor_len))
+            if motor_len > 0:
+                _shape(motor, leg.motor_com * z_axis, ("cylinder", {
+                    "radius": _fmt(dim.motor_radius), "length": _fmt(motor_len)}), "motor")
+            _joint(robot, n_("uy"), "revolute", n_("cross"), n_("motor"), zero, None, "0 1 0",
+                   (-defl, defl, 0.0))
+            shaft = ET.SubElement(robot, "link", name=n_("shaft"))
+            shaft_len = 2.0 * leg.shaft_com
+            _inertial(shaft, leg.shaft_mass, -leg.shaft_com * z_axis,
+                      _cylinder_inertia(leg.shaft_mass, dim.shaft_radius, shaft_len))
+            if shaft_len > 0:
+                _shape(shaft, -leg.shaft_com * z_axis, ("cylinder", {
+                    "radius": _fmt(dim.shaft_radius), "length": _fmt(shaft_len)}), "shaft")
+            _joint(robot, n_("actuator"), "prismatic", n_("motor"), n_("shaft"), zero, None,
+                   "0 0 1", (leg.min_length, leg.max_length, force_limit))
+        add_plate(j + 1)
+        _joint(robot, names.plate_joint(j), "floating", names.plate(j), names.plate(j + 1),
+               np.array([0.0, 0.0, cfg.home_height]))
+        for i in range(LEGS_PER_PLATFORM):
+            top = ET.SubElement(robot, "link", name=names.leg(j, i, "top"))
+            _inertial(top, 0.0, zero, zero)
+            _joint(robot, names.leg(j, i, "top_mount"), "fixed", names.plate(j + 1),
+                   names.leg(j, i, "top"), geo.top_in_plate[j, i])
+    payload = ET.SubElement(robot, "link", name=names.payload)
+    m = cfg.payload.mass
+    _inertial(payload, m, zero, np.full(3, m * dim.payload_size**2 / 6.0))
+    _shape(payload, zero, ("box", {"size": _vec(np.full(3, dim.payload_size))}), "payload")
+    _joint(robot, names.payload_joint, "fixed", names.plate(cfg.platforms), names.payload,
+           np.array([0.0, 0.0, cfg.payload.offset]))
+    ET.indent(robot, space="  ")
+    header = (
+        '<?xml version="1.0"?>\n'
+        "<!-- Assembler: {n} stacked Stewart platforms, generated by assembler_pin. Loop\n"
+        "     closures (ball joints) are listed in the sidecar assembler.yaml. -->\n"
+    ).format(n=cfg.platforms)
+    return header + ET.tostring(robot, encoding="unicode") + "\n"
+
+
+def closure_sidecar(cfg: AssemblerConfig) -> str:
+    """The closure sidecar YAML text (Gepetto example-parallel-robots convention)."""
+    pairs = [[names.leg(j, i, "shaft"), names.leg(j, i, "top")]
+             for j in range(cfg.platforms) for i in range(LEGS_PER_PLATFORM)]
+    data = {
+        "closed_loop": pairs,
+        "type": ["3d"] * len(pairs),
+        "name_mot": [names.leg(j, i, "actuator") for j in range(cfg.platforms)
+                     for i in range(LEGS_PER_PLATFORM)],
+        "assembler_config": cfg.to_dict(),
+    }
+    header = (
+        "# Loop closures of assembler.urdf (convention of Gepetto's example-parallel-robots).\n"
+        "# closed_loop: frame pairs joined by a ball joint; type: 3d = point constraint;\n"
+        "# name_mot: actuated (prismatic) joints; assembler_config: the generating config.\n"
+    )
+    return header + yaml.safe_dump(data, sort_keys=False, default_flow_style=None, width=100)
+
+
+def export_model_files(cfg: AssemblerConfig, out_dir: str | Path) -> dict[str, Path]:
+    """Write the stack URDF and its closure sidecar into ``out_dir``.
+
+    Returns:
+        A mapping from file role (``urdf``, ``sidecar``) to the written path.
+    """
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    paths = {"urdf": out / URDF_FILENAME, "sidecar": out / SIDECAR_FILENAME}
+    paths["urdf"].write_text(assembler_urdf(cfg))
+    paths["sidecar"].write_text(closure_sidecar(cfg))
+    return paths
