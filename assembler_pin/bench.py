@@ -31,7 +31,9 @@ def median_time_us(fn: Callable[[], object], repeat: int) -> float:
     return statistics.median(times) * 1e6
 
 
-def random_reachable_plates(am: AssemblerModel, rng: np.random.Generator, spread: float = 0.35) -> tuple[np.ndarray, PlateArrays]:
+def random_reachable_plates(
+    am: AssemblerModel, rng: np.random.Generator, spread: float = 0.35
+) -> tuple[np.ndarray, PlateArrays]:
     """Random in-stroke leg lengths and the plate poses they give (by stack FK).
 
     Args:

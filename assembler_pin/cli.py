@@ -54,11 +54,14 @@ def format_state_table(state: StackState, title: str = "") -> str:
         cells = [f"{state.forces[j, i]:9.3f} {1e3 * state.leg_lengths[j, i]:7.2f}" for j in range(n)]
         lines.append(f"{i + 1:>3} | " + " | ".join(cells))
     j, i = np.unravel_index(np.abs(state.forces).argmax(), state.forces.shape)
-    lines.append(f"max |F| = {state.max_abs_force:.3f} N (SP{j + 1} leg {i + 1}), "
-                 f"mean |F| = {state.mean_abs_force:.3f} N   (tension positive)")
+    lines.append(
+        f"max |F| = {state.max_abs_force:.3f} N (SP{j + 1} leg {i + 1}), "
+        f"mean |F| = {state.mean_abs_force:.3f} N   (tension positive)"
+    )
     w = state.statics.base_wrench
-    lines.append(f"base wrench [N, N·m]: f = ({w[0]:.3f}, {w[1]:.3f}, {w[2]:.3f}), "
-                 f"m = ({w[3]:.3f}, {w[4]:.3f}, {w[5]:.3f})")
+    lines.append(
+        f"base wrench [N, N·m]: f = ({w[0]:.3f}, {w[1]:.3f}, {w[2]:.3f}), m = ({w[3]:.3f}, {w[4]:.3f}, {w[5]:.3f})"
+    )
     if state.feasible:
         lines.append("feasible: yes (every constraint holds)")
     else:
@@ -92,8 +95,12 @@ def cmd_statics(args: argparse.Namespace) -> int:
     if args.json:
         print(json.dumps(state.to_dict()))
     else:
-        print(format_state_table(state, f"Statics of {am.n} platforms, payload "
-                                        f"{am.config.payload.mass:g} kg at {am.config.payload.offset:g} m"))
+        print(
+            format_state_table(
+                state,
+                f"Statics of {am.n} platforms, payload {am.config.payload.mass:g} kg at {am.config.payload.offset:g} m",
+            )
+        )
     return 0
 
 
@@ -113,7 +120,8 @@ def cmd_bench(args: argparse.Namespace) -> int:
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="assembler-pin",
-        description="Serialized Stewart platforms (the Assembler) on Pinocchio: model, statics, solve.")
+        description="Serialized Stewart platforms (the Assembler) on Pinocchio: model, statics, solve.",
+    )
     parser.add_argument("-v", "--verbose", action="store_true", help="log progress to stderr")
     sub = parser.add_subparsers(dest="command", required=True)
 
@@ -143,8 +151,9 @@ def build_parser() -> argparse.ArgumentParser:
 def main(argv: Sequence[str] | None = None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
-    logging.basicConfig(level=logging.INFO if args.verbose else logging.WARNING,
-                        format="%(levelname)s %(name)s: %(message)s")
+    logging.basicConfig(
+        level=logging.INFO if args.verbose else logging.WARNING, format="%(levelname)s %(name)s: %(message)s"
+    )
     try:
         return int(args.func(args))
     except (AssemblerError, PoseError) as exc:

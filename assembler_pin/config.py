@@ -172,9 +172,10 @@ def _validate(cfg: AssemblerConfig) -> None:
     """Check every value; raise ConfigError naming the key and what is allowed."""
     p, leg, pl = cfg.plate, cfg.leg, cfg.payload
     _check(
-        isinstance(cfg.platforms, int) and not isinstance(cfg.platforms, bool)
-        and 1 <= cfg.platforms <= 64,
-        "platforms", cfg.platforms, "must be an integer from 1 to 64",
+        isinstance(cfg.platforms, int) and not isinstance(cfg.platforms, bool) and 1 <= cfg.platforms <= 64,
+        "platforms",
+        cfg.platforms,
+        "must be an integer from 1 to 64",
     )
     numbers = {"gravity": cfg.gravity}
     numbers |= {f"plate.{f.name}": getattr(p, f.name) for f in dataclasses.fields(p)}
@@ -185,7 +186,9 @@ def _validate(cfg: AssemblerConfig) -> None:
     _check(cfg.gravity >= 0, "gravity", cfg.gravity, "must be >= 0 [m/s^2]")
     _check(p.node_radius > 0, "plate.node_radius", p.node_radius, "must be > 0 [m]")
     _check(
-        0 <= p.node_spacing_deg < 60, "plate.node_spacing_deg", p.node_spacing_deg,
+        0 <= p.node_spacing_deg < 60,
+        "plate.node_spacing_deg",
+        p.node_spacing_deg,
         "must be in [0, 60) degrees",
     )
     for key in ("mass",):
@@ -195,17 +198,23 @@ def _validate(cfg: AssemblerConfig) -> None:
     _check(pl.mass >= 0, "payload.mass", pl.mass, "must be >= 0 [kg]")
     _check(leg.min_length > 0, "leg.min_length", leg.min_length, "must be > 0 [m]")
     _check(
-        leg.max_length > leg.min_length, "leg.max_length", leg.max_length,
+        leg.max_length > leg.min_length,
+        "leg.max_length",
+        leg.max_length,
         f"must be > leg.min_length ({leg.min_length}) [m]",
     )
     for key in ("motor_com", "shaft_com"):
         value = getattr(leg, key)
         _check(
-            0 <= value <= leg.min_length, f"leg.{key}", value,
+            0 <= value <= leg.min_length,
+            f"leg.{key}",
+            value,
             f"must be in [0, leg.min_length = {leg.min_length}] [m]",
         )
     _check(
-        0 < leg.max_deflection_deg < 90, "leg.max_deflection_deg", leg.max_deflection_deg,
+        0 < leg.max_deflection_deg < 90,
+        "leg.max_deflection_deg",
+        leg.max_deflection_deg,
         "must be in (0, 90) degrees",
     )
     for key in ("max_tension", "max_compression"):
@@ -225,14 +234,10 @@ def _section_from_mapping(name: str, cls: type, data: Any) -> Any:
     allowed = [f.name for f in dataclasses.fields(cls)]
     for key in data:
         if key not in allowed:
-            raise ConfigError(
-                f"unknown config key '{name}.{key}'; allowed keys in '{name}': {', '.join(allowed)}"
-            )
+            raise ConfigError(f"unknown config key '{name}.{key}'; allowed keys in '{name}': {', '.join(allowed)}")
     for key, value in data.items():
         if not _is_number(value):
-            raise ConfigError(
-                f"config key '{name}.{key}' = {value!r} is invalid: must be a number"
-            )
+            raise ConfigError(f"config key '{name}.{key}' = {value!r} is invalid: must be a number")
     return cls(**{k: float(v) for k, v in data.items()})
 
 
@@ -256,7 +261,9 @@ def config_from_dict(data: Mapping[str, Any] | None) -> AssemblerConfig:
         if isinstance(value, float) and value.is_integer():
             value = int(value)
         _check(
-            isinstance(value, int) and not isinstance(value, bool), "platforms", value,
+            isinstance(value, int) and not isinstance(value, bool),
+            "platforms",
+            value,
             "must be an integer from 1 to 64",
         )
         kwargs["platforms"] = value

@@ -78,8 +78,10 @@ class Violation:
 
 
 def _per_leg(kind: str, mask: np.ndarray, values: np.ndarray, limit: float) -> list[Violation]:
-    return [Violation(kind, int(j), int(i), float(values[j, i]), float(limit))
-            for j, i in zip(*np.nonzero(mask), strict=True)]
+    return [
+        Violation(kind, int(j), int(i), float(values[j, i]), float(limit))
+        for j, i in zip(*np.nonzero(mask), strict=True)
+    ]
 
 
 def evaluate_constraints(

@@ -94,7 +94,8 @@ def to_se3(pose: pin.SE3 | npt.ArrayLike, what: str = "pose") -> pin.SE3:
     if err > ORTHONORMAL_TOL or np.linalg.det(rot) <= 0:
         raise PoseError(
             f"{what}: the 3x3 block is not a rotation (|RᵀR - I| = {err:.2g}, det = "
-            f"{np.linalg.det(rot):.3g}); it must be orthonormal to {ORTHONORMAL_TOL} with det +1")
+            f"{np.linalg.det(rot):.3g}); it must be orthonormal to {ORTHONORMAL_TOL} with det +1"
+        )
     if err > 1e-14:
         u, _, vt = np.linalg.svd(rot)
         rot = u @ vt
@@ -203,8 +204,9 @@ def _q_from_arrays(am: AssemblerModel, pa: PlateArrays, vec: np.ndarray, lengths
     # pose of plate k+1 relative to plate k, composed after the joint's home placement
     place_T = am.plate_placement_R.transpose(0, 2, 1)
     rel_R = np.matmul(place_T, np.matmul(Rb_T, R[1:]))
-    rel_p = np.matmul(place_T, (np.matmul(Rb_T, (p[1:] - p[:-1])[..., None])[..., 0]
-                                - am.plate_placement_p)[..., None])[..., 0]
+    rel_p = np.matmul(
+        place_T, (np.matmul(Rb_T, (p[1:] - p[:-1])[..., None])[..., 0] - am.plate_placement_p)[..., None]
+    )[..., 0]
     free = np.empty((am.n + 1, 7))
     free[0, :3], free[1:, :3] = p[0], rel_p
     free[0, 3:] = pin.Quaternion(R[0]).coeffs()
@@ -213,10 +215,13 @@ def _q_from_arrays(am: AssemblerModel, pa: PlateArrays, vec: np.ndarray, lengths
     q[am.plate_q_flat] = free.ravel()
     # leg direction in each universal joint's base frame: d = R_baseᵀ R_bottomᵀ vec
     d = np.matmul(np.matmul(vec, R[:-1])[:, :, None, :], am.geometry.leg_base_rotation)[:, :, 0, :]
-    q[am.leg_q_flat] = np.concatenate([
-        np.arctan2(-d[..., 1], d[..., 2]).ravel(),
-        np.arctan2(d[..., 0], np.hypot(d[..., 1], d[..., 2])).ravel(),
-        lengths.ravel()])
+    q[am.leg_q_flat] = np.concatenate(
+        [
+            np.arctan2(-d[..., 1], d[..., 2]).ravel(),
+            np.arctan2(d[..., 0], np.hypot(d[..., 1], d[..., 2])).ravel(),
+            lengths.ravel(),
+        ]
+    )
     return q
 
 
@@ -323,8 +328,9 @@ def _batched_fk(
     top_h = am.top_anchor_homogeneous[idx]  # (m, 6, 4)
     bottom = geo.bottom_in_plate[idx]
     bottom_skew = am.bottom_anchor_skew[idx]
-    H = np.array([(am.plate_joint_placement[j + 1] if g is None else g).homogeneous
-                  for j, g in zip(idx, guesses, strict=True)])
+    H = np.array(
+        [(am.plate_joint_placement[j + 1] if g is None else g).homogeneous for j, g in zip(idx, guesses, strict=True)]
+    )
     target_sq = target * target
     # |L - L*| <= |L² - L*²| / (L + L*) <= |f| / L*: converged when max |f| / L* <= tol
     inv_target = 1.0 / target
@@ -344,8 +350,7 @@ def _batched_fk(
         jac[..., :3] = vec
         jac[..., 3:] = np.matmul(bottom_skew, vec[..., None])[..., 0]
         try:
-            step = (lapack_solve(jac[0], err[0])[None] if m == 1
-                    else np.linalg.solve(jac, err[..., None])[..., 0])
+            step = lapack_solve(jac[0], err[0])[None] if m == 1 else np.linalg.solve(jac, err[..., None])[..., 0]
         except np.linalg.LinAlgError:
             step = np.full((m, 6), np.nan)
         step *= 0.5
@@ -365,13 +370,27 @@ def _batched_fk(
         if failure[k] is not None:
             results.append(FKResult(pose, False, iterations[k], res_k, failure[k]))
         elif not res_k <= tol:
-            results.append(FKResult(pose, False, iterations[k], res_k,
-                                    f"platform {j}: FK did not converge in {max_iterations} iterations "
-                                    f"(length residual {res_k:.3g} m > {tol:.1g} m)"))
+            results.append(
+                FKResult(
+                    pose,
+                    False,
+                    iterations[k],
+                    res_k,
+                    f"platform {j}: FK did not converge in {max_iterations} iterations "
+                    f"(length residual {res_k:.3g} m > {tol:.1g} m)",
+                )
+            )
         elif np.any(vec[k, :, 2] <= 0.0):
-            results.append(FKResult(pose, False, iterations[k], res_k,
-                                    f"platform {j}: converged to an assembly mode with a top joint "
-                                    "below its bottom joint (not this mechanism's branch)"))
+            results.append(
+                FKResult(
+                    pose,
+                    False,
+                    iterations[k],
+                    res_k,
+                    f"platform {j}: converged to an assembly mode with a top joint "
+                    "below its bottom joint (not this mechanism's branch)",
+                )
+            )
         else:
             results.append(FKResult(pose, True, iterations[k], res_k, "converged"))
     return results
@@ -469,5 +488,5 @@ def ee_jacobian_wrt_lengths(am: AssemblerModel, plates: PlateArrays | Sequence |
         rel = pa.se3(j).actInv(pa.se3(j + 1))
         local_twist_per_length = np.linalg.inv(sp_inverse_jacobian(am, j, rel))
         plate_to_ee = pa.se3(j + 1).actInv(ee)
-        jac[:, 6 * j:6 * j + 6] = rot6 @ plate_to_ee.inverse().action @ local_twist_per_length
+        jac[:, 6 * j : 6 * j + 6] = rot6 @ plate_to_ee.inverse().action @ local_twist_per_length
     return jac

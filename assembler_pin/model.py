@@ -80,7 +80,8 @@ class AssemblerModel:
         self.geometry: LegGeometry = leg_geometry(cfg)
         self.bottom_anchor_skew = np.array([[pin.skew(b) for b in sp] for sp in self.geometry.bottom_in_plate])
         self.top_anchor_homogeneous = np.concatenate(
-            [self.geometry.top_in_plate, np.ones(self.geometry.top_in_plate.shape[:2] + (1,))], axis=2)
+            [self.geometry.top_in_plate, np.ones((*self.geometry.top_in_plate.shape[:2], 1))], axis=2
+        )
         model.gravity.linear = np.array([0.0, 0.0, -cfg.gravity])
 
         def joint(name: str) -> int:
@@ -96,8 +97,9 @@ class AssemblerModel:
         self.plate_placement_p = np.array([m.translation for m in self.plate_joint_placement[1:]])
         self.q_template = pin.neutral(model)
         parts = ("ux", "uy", "actuator")
-        leg_ids = np.array([[[joint(names.leg(j, i, p)) for p in parts]
-                             for i in range(LEGS_PER_PLATFORM)] for j in range(n)])
+        leg_ids = np.array(
+            [[[joint(names.leg(j, i, p)) for p in parts] for i in range(LEGS_PER_PLATFORM)] for j in range(n)]
+        )
         self.leg_joint_ids = leg_ids
         self.leg_idx_q = np.vectorize(lambda k: model.idx_qs[int(k)])(leg_ids)
         self.leg_idx_v = np.vectorize(lambda k: model.idx_vs[int(k)])(leg_ids)
@@ -106,8 +108,8 @@ class AssemblerModel:
         self.actuator_idx_v = self.leg_idx_v[:, :, 2]
         self.shaft_joint_ids = leg_ids[:, :, 2]
         self.platform_rows_v = np.concatenate(
-            [self.leg_idx_v.reshape(n, 18),
-             self.plate_idx_v[1:, None] + np.arange(6)[None, :]], axis=1)
+            [self.leg_idx_v.reshape(n, 18), self.plate_idx_v[1:, None] + np.arange(6)[None, :]], axis=1
+        )
         self._check_order()
         self._build_constraints()
         self.home = home_plates(cfg)
@@ -152,8 +154,7 @@ class AssemblerModel:
         except yaml.YAMLError as exc:
             raise ModelFileError(f"closure sidecar {origin} is not valid YAML: {exc}") from None
         if not isinstance(sidecar, dict) or not {"closed_loop", "type", "name_mot"} <= set(sidecar):
-            raise ModelFileError(
-                f"closure sidecar {origin} must have the keys closed_loop, type, name_mot")
+            raise ModelFileError(f"closure sidecar {origin} must have the keys closed_loop, type, name_mot")
         try:
             cfg = load_config(sidecar.get("assembler_config") or {})
         except ConfigError as exc:
@@ -162,7 +163,8 @@ class AssemblerModel:
         if len(pairs) != len(types) or len(pairs) != 6 * cfg.platforms:
             raise ModelFileError(
                 f"closure sidecar {origin}: expected {6 * cfg.platforms} closures with one type "
-                f"each, got {len(pairs)} pairs and {len(types)} types")
+                f"each, got {len(pairs)} pairs and {len(types)} types"
+            )
         closures = []
         for c, (pair, kind) in enumerate(zip(pairs, types, strict=True)):
             if str(kind).lower() != "3d":
@@ -183,7 +185,8 @@ class AssemblerModel:
             if self.leg_idx_v[j].max() > self.plate_idx_v[j + 1]:
                 raise ModelFileError(
                     f"joint order: the legs of platform {j} must come before joint "
-                    f"'{names.plate_joint(j)}' in the URDF (depth-first order)")
+                    f"'{names.plate_joint(j)}' in the URDF (depth-first order)"
+                )
         if not self.model.check(self.data):
             raise ModelFileError("model.check(data) failed on the loaded URDF")
 
@@ -204,7 +207,8 @@ class AssemblerModel:
             if anchor.parentJoint != self.plate_joint_ids[c.platform + 1]:
                 raise ModelFileError(f"closure frame '{c.anchor_frame}' is not on the top plate")
             cm = pin.PointAnchorConstraintModel(
-                model, shaft.parentJoint, shaft.placement, anchor.parentJoint, anchor.placement)
+                model, shaft.parentJoint, shaft.placement, anchor.parentJoint, anchor.placement
+            )
             self.constraint_models.append(pin.ConstraintModel(cm))
         self.constraint_datas = pin.StdVec_ConstraintData()
         for cm in self.constraint_models:

@@ -72,7 +72,7 @@ class StaticsResult:
 
 def _skew_batch(v: np.ndarray) -> np.ndarray:
     """(..., 3) → (..., 3, 3) cross-product matrices."""
-    out = np.zeros(v.shape + (3,))
+    out = np.zeros((*v.shape, 3))
     out[..., 0, 1], out[..., 0, 2] = -v[..., 2], v[..., 1]
     out[..., 1, 0], out[..., 1, 2] = v[..., 2], -v[..., 0]
     out[..., 2, 0], out[..., 2, 1] = -v[..., 1], v[..., 0]
@@ -112,7 +112,7 @@ def closure_jacobian_blocks(am: AssemblerModel, top_points: np.ndarray) -> np.nd
     n = am.n
     out = np.zeros((n, 6, 3, 24))
     for i in range(6):
-        out[:, i, :, 3 * i:3 * i + 3] = leg[:, i]
+        out[:, i, :, 3 * i : 3 * i + 3] = leg[:, i]
     out[:, :, :, 18:] = plate
     return out.reshape(n, 18, 24)
 
@@ -160,7 +160,9 @@ def solve_statics(
         raise SingularConfigurationError(
             f"platform {worst} is near a singular configuration (condition number "
             f"{condition[worst]:.3g} > {CONDITION_LIMIT:.0g}); its forces are not defined",
-            float(condition[worst]), worst)
+            float(condition[worst]),
+            worst,
+        )
     ball = own - tau[..., None] * axis
     R0 = pa.R[0]
     base = np.concatenate([R0 @ g[:3], R0 @ g[3:6]])

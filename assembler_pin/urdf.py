@@ -28,6 +28,7 @@ the limits that are not part of URDF.
 
 from __future__ import annotations
 
+import functools
 import math
 import xml.etree.ElementTree as ET
 from pathlib import Path
@@ -40,8 +41,8 @@ from .config import AssemblerConfig
 from .geometry import DIMENSIONS, LEGS_PER_PLATFORM, leg_geometry
 
 __all__ = [
-    "URDF_FILENAME",
     "SIDECAR_FILENAME",
+    "URDF_FILENAME",
     "assembler_urdf",
     "closure_sidecar",
     "export_model_files",
@@ -94,7 +95,13 @@ def _inertial(link: ET.Element, mass: float, com: np.ndarray, diag: np.ndarray) 
     _origin(inertial, com)
     ET.SubElement(inertial, "mass", value=_fmt(mass))
     ET.SubElement(
-        inertial, "inertia", ixx=_fmt(diag[0]), ixy="0", ixz="0", iyy=_fmt(diag[1]), iyz="0",
+        inertial,
+        "inertia",
+        ixx=_fmt(diag[0]),
+        ixy="0",
+        ixz="0",
+        iyy=_fmt(diag[1]),
+        iyz="0",
         izz=_fmt(diag[2]),
     )
 
@@ -105,8 +112,13 @@ def _cylinder_inertia(mass: float, radius: float, length: float) -> np.ndarray:
     return np.array([ixx, ixx, 0.5 * mass * radius**2])
 
 
-def _shape(link: ET.Element, xyz: np.ndarray, geometry: tuple[str, dict[str, str]],
-           material: str | None = None, collision: bool = True) -> None:
+def _shape(
+    link: ET.Element,
+    xyz: np.ndarray,
+    geometry: tuple[str, dict[str, str]],
+    material: str | None = None,
+    collision: bool = True,
+) -> None:
     tags = ("visual", "collision") if collision else ("visual",)
     for tag in tags:
         el = ET.SubElement(link, tag)
@@ -117,9 +129,17 @@ def _shape(link: ET.Element, xyz: np.ndarray, geometry: tuple[str, dict[str, str
             ET.SubElement(el, "material", name=material)
 
 
-def _joint(robot: ET.Element, name: str, kind: str, parent: str, child: str,
-           xyz: np.ndarray, rotation: np.ndarray | None = None, axis: str | None = None,
-           limit: tuple[float, float, float] | None = None) -> None:
+def _joint(
+    robot: ET.Element,
+    name: str,
+    kind: str,
+    parent: str,
+    child: str,
+    xyz: np.ndarray,
+    rotation: np.ndarray | None = None,
+    axis: str | None = None,
+    limit: tuple[float, float, float] | None = None,
+) -> None:
     joint = ET.SubElement(robot, "joint", name=name, type=kind)
     _origin(joint, xyz, rotation)
     ET.SubElement(joint, "parent", link=parent)
@@ -128,8 +148,7 @@ def _joint(robot: ET.Element, name: str, kind: str, parent: str, child: str,
         ET.SubElement(joint, "axis", xyz=axis)
     if limit is not None:
         lower, upper, effort = limit
-        ET.SubElement(joint, "limit", lower=_fmt(lower), upper=_fmt(upper), effort=_fmt(effort),
-                      velocity="0")
+        ET.SubElement(joint, "limit", lower=_fmt(lower), upper=_fmt(upper), effort=_fmt(effort), velocity="0")
 
 
 def assembler_urdf(cfg: AssemblerConfig) -> str:
@@ -138,8 +157,13 @@ def assembler_urdf(cfg: AssemblerConfig) -> str:
     dim = DIMENSIONS
     leg = cfg.leg
     robot = ET.Element("robot", name="assembler")
-    materials = {"plate": "0.55 0.6 0.7 1", "motor": "0.2 0.25 0.3 1", "shaft": "0.8 0.8 0.8 1",
-                 "node": "0.15 0.35 0.8 1", "payload": "0.85 0.55 0.1 1"}
+    materials = {
+        "plate": "0.55 0.6 0.7 1",
+        "motor": "0.2 0.25 0.3 1",
+        "shaft": "0.8 0.8 0.8 1",
+        "node": "0.15 0.35 0.8 1",
+        "payload": "0.85 0.55 0.1 1",
+    }
     for name, rgba in materials.items():
         ET.SubElement(ET.SubElement(robot, "material", name=name), "color", rgba=rgba)
     zero = np.zeros(3)
@@ -156,68 +180,119 @@ def assembler_urdf(cfg: AssemblerConfig) -> str:
         _shape(link, zero, ("cylinder", {"radius": _fmt(r), "length": _fmt(dim.plate_thickness)}), "plate")
         for a in node_angles_deg[k]:
             p = np.array([r * math.cos(math.radians(a)), r * math.sin(math.radians(a)), 0.0])
-            _shape(link, p, ("sphere", {"radius": _fmt(dim.node_sphere_radius)}), "node",
-                   collision=False)
+            _shape(link, p, ("sphere", {"radius": _fmt(dim.node_sphere_radius)}), "node", collision=False)
 
     add_plate(0)
     for j in range(cfg.platforms):
         for i in range(LEGS_PER_PLATFORM):
-            n_ = lambda part: names.leg(j, i, part)  # noqa: E731
+            n_ = functools.partial(names.leg, j, i)
             ET.SubElement(robot, "link", name=n_("cross"))
             _inertial(robot.find(f"link[@name='{n_('cross')}']"), 0.0, zero, zero)
-            _joint(robot, n_("ux"), "revolute", names.plate(j), n_("cross"),
-                   geo.bottom_in_plate[j, i], geo.leg_base_rotation[j, i], "1 0 0",
-                   (-defl, defl, 0.0))
+            _joint(
+                robot,
+                n_("ux"),
+                "revolute",
+                names.plate(j),
+                n_("cross"),
+                geo.bottom_in_plate[j, i],
+                geo.leg_base_rotation[j, i],
+                "1 0 0",
+                (-defl, defl, 0.0),
+            )
             motor = ET.SubElement(robot, "link", name=n_("motor"))
             motor_len = 2.0 * leg.motor_com
-            _inertial(motor, leg.motor_mass, leg.motor_com * z_axis,
-                      _cylinder_inertia(leg.motor_mass, dim.motor_radius, motor_len))
+            _inertial(
+                motor,
+                leg.motor_mass,
+                leg.motor_com * z_axis,
+                _cylinder_inertia(leg.motor_mass, dim.motor_radius, motor_len),
+            )
             if motor_len > 0:
-                _shape(motor, leg.motor_com * z_axis, ("cylinder", {
-                    "radius": _fmt(dim.motor_radius), "length": _fmt(motor_len)}), "motor")
-            _joint(robot, n_("uy"), "revolute", n_("cross"), n_("motor"), zero, None, "0 1 0",
-                   (-defl, defl, 0.0))
+                _shape(
+                    motor,
+                    leg.motor_com * z_axis,
+                    ("cylinder", {"radius": _fmt(dim.motor_radius), "length": _fmt(motor_len)}),
+                    "motor",
+                )
+            _joint(robot, n_("uy"), "revolute", n_("cross"), n_("motor"), zero, None, "0 1 0", (-defl, defl, 0.0))
             shaft = ET.SubElement(robot, "link", name=n_("shaft"))
             shaft_len = 2.0 * leg.shaft_com
-            _inertial(shaft, leg.shaft_mass, -leg.shaft_com * z_axis,
-                      _cylinder_inertia(leg.shaft_mass, dim.shaft_radius, shaft_len))
+            _inertial(
+                shaft,
+                leg.shaft_mass,
+                -leg.shaft_com * z_axis,
+                _cylinder_inertia(leg.shaft_mass, dim.shaft_radius, shaft_len),
+            )
             if shaft_len > 0:
-                _shape(shaft, -leg.shaft_com * z_axis, ("cylinder", {
-                    "radius": _fmt(dim.shaft_radius), "length": _fmt(shaft_len)}), "shaft")
-            _joint(robot, n_("actuator"), "prismatic", n_("motor"), n_("shaft"), zero, None,
-                   "0 0 1", (leg.min_length, leg.max_length, force_limit))
+                _shape(
+                    shaft,
+                    -leg.shaft_com * z_axis,
+                    ("cylinder", {"radius": _fmt(dim.shaft_radius), "length": _fmt(shaft_len)}),
+                    "shaft",
+                )
+            _joint(
+                robot,
+                n_("actuator"),
+                "prismatic",
+                n_("motor"),
+                n_("shaft"),
+                zero,
+                None,
+                "0 0 1",
+                (leg.min_length, leg.max_length, force_limit),
+            )
         add_plate(j + 1)
-        _joint(robot, names.plate_joint(j), "floating", names.plate(j), names.plate(j + 1),
-               np.array([0.0, 0.0, cfg.home_height]))
+        _joint(
+            robot,
+            names.plate_joint(j),
+            "floating",
+            names.plate(j),
+            names.plate(j + 1),
+            np.array([0.0, 0.0, cfg.home_height]),
+        )
         for i in range(LEGS_PER_PLATFORM):
             top = ET.SubElement(robot, "link", name=names.leg(j, i, "top"))
             _inertial(top, 0.0, zero, zero)
-            _joint(robot, names.leg(j, i, "top_mount"), "fixed", names.plate(j + 1),
-                   names.leg(j, i, "top"), geo.top_in_plate[j, i])
+            _joint(
+                robot,
+                names.leg(j, i, "top_mount"),
+                "fixed",
+                names.plate(j + 1),
+                names.leg(j, i, "top"),
+                geo.top_in_plate[j, i],
+            )
     payload = ET.SubElement(robot, "link", name=names.payload)
     m = cfg.payload.mass
     _inertial(payload, m, zero, np.full(3, m * dim.payload_size**2 / 6.0))
     _shape(payload, zero, ("box", {"size": _vec(np.full(3, dim.payload_size))}), "payload")
-    _joint(robot, names.payload_joint, "fixed", names.plate(cfg.platforms), names.payload,
-           np.array([0.0, 0.0, cfg.payload.offset]))
+    _joint(
+        robot,
+        names.payload_joint,
+        "fixed",
+        names.plate(cfg.platforms),
+        names.payload,
+        np.array([0.0, 0.0, cfg.payload.offset]),
+    )
     ET.indent(robot, space="  ")
     header = (
         '<?xml version="1.0"?>\n'
-        "<!-- Assembler: {n} stacked Stewart platforms, generated by assembler_pin. Loop\n"
+        f"<!-- Assembler: {cfg.platforms} stacked Stewart platforms, generated by assembler_pin. Loop\n"
         "     closures (ball joints) are listed in the sidecar assembler.yaml. -->\n"
-    ).format(n=cfg.platforms)
+    )
     return header + ET.tostring(robot, encoding="unicode") + "\n"
 
 
 def closure_sidecar(cfg: AssemblerConfig) -> str:
     """The closure sidecar YAML text (Gepetto example-parallel-robots convention)."""
-    pairs = [[names.leg(j, i, "shaft"), names.leg(j, i, "top")]
-             for j in range(cfg.platforms) for i in range(LEGS_PER_PLATFORM)]
+    pairs = [
+        [names.leg(j, i, "shaft"), names.leg(j, i, "top")]
+        for j in range(cfg.platforms)
+        for i in range(LEGS_PER_PLATFORM)
+    ]
     data = {
         "closed_loop": pairs,
         "type": ["3d"] * len(pairs),
-        "name_mot": [names.leg(j, i, "actuator") for j in range(cfg.platforms)
-                     for i in range(LEGS_PER_PLATFORM)],
+        "name_mot": [names.leg(j, i, "actuator") for j in range(cfg.platforms) for i in range(LEGS_PER_PLATFORM)],
         "assembler_config": cfg.to_dict(),
     }
     header = (

@@ -29,6 +29,22 @@ def random_poses(am):
     return out
 
 
+def design_anchors(cfg, j: int) -> tuple[np.ndarray, np.ndarray]:
+    """Bottom (plate j frame) and top (plate j+1 frame) joint centres of SP j, (6, 3) each,
+    written out again from the design notes (independent of assembler_pin.geometry)."""
+    r = cfg.plate.node_radius
+    half = np.deg2rad(cfg.plate.node_spacing_deg) / 2
+    bottom, top = [], []
+    for m in range(3):
+        node = np.deg2rad(90 + 60 * j + 120 * m)
+        for sign in (+1, -1):
+            a_b = node + sign * half
+            a_t = node + sign * (np.pi / 3 - half)
+            bottom.append([r * np.cos(a_b), r * np.sin(a_b), 0.0])
+            top.append([r * np.cos(a_t), r * np.sin(a_t), 0.0])
+    return np.array(bottom), np.array(top)
+
+
 def potential_energy(cfg, plates) -> float:
     """Gravitational potential energy [J] of the stack, computed from geometry alone.
 
@@ -37,22 +53,17 @@ def potential_energy(cfg, plates) -> float:
     """
     n = cfg.platforms
     g = cfg.gravity
-    r = cfg.plate.node_radius
-    half = np.deg2rad(cfg.plate.node_spacing_deg) / 2
     energy = 0.0
     for k in range(n + 1):
         energy += cfg.plate.mass * g * plates.p[k][2]
     for j in range(n):
-        for m in range(3):
-            node = np.deg2rad(90 + 60 * j + 120 * m)
-            for sign in (+1, -1):
-                a_b = node + sign * half
-                a_t = node + sign * (np.pi / 3 - half)
-                b = plates.R[j] @ [r * np.cos(a_b), r * np.sin(a_b), 0] + plates.p[j]
-                t = plates.R[j + 1] @ [r * np.cos(a_t), r * np.sin(a_t), 0] + plates.p[j + 1]
-                u = (t - b) / np.linalg.norm(t - b)
-                energy += cfg.leg.motor_mass * g * (b + cfg.leg.motor_com * u)[2]
-                energy += cfg.leg.shaft_mass * g * (t - cfg.leg.shaft_com * u)[2]
+        bottom, top = design_anchors(cfg, j)
+        for b_local, t_local in zip(bottom, top, strict=True):
+            b = plates.R[j] @ b_local + plates.p[j]
+            t = plates.R[j + 1] @ t_local + plates.p[j + 1]
+            u = (t - b) / np.linalg.norm(t - b)
+            energy += cfg.leg.motor_mass * g * (b + cfg.leg.motor_com * u)[2]
+            energy += cfg.leg.shaft_mass * g * (t - cfg.leg.shaft_com * u)[2]
     payload = plates.R[n] @ [0, 0, cfg.payload.offset] + plates.p[n]
     energy += cfg.payload.mass * g * payload[2]
     return float(energy)

@@ -20,7 +20,8 @@ def test_repository_urdf_matches_export(tmp_path):
     assert main(["export", "--out", str(tmp_path)]) == 0
     for name in ("assembler.urdf", "assembler.yaml"):
         assert (REPO_URDF / name).read_text() == (tmp_path / name).read_text(), (
-            f"urdf/{name} is stale: run 'assembler-pin export --out urdf'")
+            f"urdf/{name} is stale: run 'assembler-pin export --out urdf'"
+        )
 
 
 @pytest.mark.parametrize("platforms", [1, 2, 4, 7])
@@ -46,8 +47,9 @@ def test_sidecar_convention():
 
 
 def test_every_link_has_inertial_and_leg_chains_are_rx_ry_prismatic():
-    robot = yourdfpy.URDF.load(str(REPO_URDF / "assembler.urdf"), load_meshes=False,
-                               build_collision_scene_graph=False).robot
+    robot = yourdfpy.URDF.load(
+        str(REPO_URDF / "assembler.urdf"), load_meshes=False, build_collision_scene_graph=False
+    ).robot
     assert all(link.inertial is not None for link in robot.links)
     joints = {j.name: j for j in robot.joints}
     assert joints["sp2_leg3_ux"].type == "revolute" and np.allclose(joints["sp2_leg3_ux"].axis, [1, 0, 0])
@@ -59,8 +61,7 @@ def test_every_link_has_inertial_and_leg_chains_are_rx_ry_prismatic():
 
 def test_yourdfpy_closes_the_loops_for_our_configuration(am, random_poses):
     """Second parser: with yourdfpy's own FK, every shaft tip meets its top anchor."""
-    urdf = yourdfpy.URDF.load(str(REPO_URDF / "assembler.urdf"), load_meshes=False,
-                              build_collision_scene_graph=False)
+    urdf = yourdfpy.URDF.load(str(REPO_URDF / "assembler.urdf"), load_meshes=False, build_collision_scene_graph=False)
     _, plates = random_poses[0]
     q = q_from_plates(am, plates)
     cfg = {}
@@ -76,8 +77,11 @@ def test_yourdfpy_closes_the_loops_for_our_configuration(am, random_poses):
     urdf.update_cfg(cfg)
     worst = 0.0
     for j in range(am.n):
-        assert np.allclose(urdf.get_transform(f"plate_{j + 1}", "plate_0"),
-                           (plates.se3(0).actInv(plates.se3(j + 1))).homogeneous, atol=1e-12)
+        assert np.allclose(
+            urdf.get_transform(f"plate_{j + 1}", "plate_0"),
+            (plates.se3(0).actInv(plates.se3(j + 1))).homogeneous,
+            atol=1e-12,
+        )
         for i in range(6):
             tip = urdf.get_transform(f"sp{j}_leg{i}_shaft", "plate_0")[:3, 3]
             anchor = urdf.get_transform(f"sp{j}_leg{i}_top", "plate_0")[:3, 3]

@@ -1,0 +1,112 @@
+"""The assembler-pin command: export, statics JSON contract and table, errors, bench."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+from assembler_pin import AssemblerModel, evaluate_state
+from assembler_pin.cli import main
+
+STATE_KEYS = [
+    "plates",
+    "leg_lengths",
+    "forces",
+    "bottom_points",
+    "top_points",
+    "max_abs_force",
+    "mean_abs_force",
+    "feasible",
+    "violations",
+]
+
+
+def run(*args, stdin: str | None = None):
+    return subprocess.run(
+        [sys.executable, "-m", "assembler_pin.cli", *args], input=stdin, capture_output=True, text=True, timeout=120
+    )
+
+
+def test_statics_json_contract(tmp_path, am, random_poses):
+    _, plates = random_poses[4]
+    path = tmp_path / "in.json"
+    path.write_text(json.dumps({"plates": plates.as_matrices().tolist()}))
+    out = run("statics", "--plates", str(path), "--json")
+    assert out.returncode == 0, out.stderr
+    doc = json.loads(out.stdout)
+    assert list(doc)[: len(STATE_KEYS)] == STATE_KEYS
+    n = am.n
+    assert np.array(doc["plates"]).shape == (n + 1, 4, 4)
+    assert np.array(doc["leg_lengths"]).shape == (n, 6) and np.array(doc["forces"]).shape == (n, 6)
+    assert np.array(doc["bottom_points"]).shape == (n, 6, 3)
+    # the output is the input's statics, as the API computes it
+    ref = evaluate_state(am, plates)
+    assert np.allclose(doc["forces"], ref.forces, atol=1e-9)
+    # legs joined the points it reports
+    lengths = np.linalg.norm(np.array(doc["top_points"]) - np.array(doc["bottom_points"]), axis=2)
+    assert np.allclose(lengths, doc["leg_lengths"], atol=1e-12)
+    assert doc["max_abs_force"] == pytest.approx(np.abs(doc["forces"]).max())
+    assert isinstance(doc["feasible"], bool)
+    for v in doc["violations"]:
+        assert set(v) == {"kind", "platform", "leg", "value", "limit"}
+
+
+def test_statics_stdin_table_and_violations(capsys):
+    am = AssemblerModel.from_config()
+    plates = [m.homogeneous.tolist() for m in am.home]
+    plates[1][2][3] += 0.12  # first platform far past its stroke
+    out = run("statics", "--plates", "-", stdin=json.dumps({"plates": plates}))
+    assert out.returncode == 0
+    assert "feasible: NO" in out.stdout and "max_length at platform 0" in out.stdout
+    assert main(["statics", "--home"]) == 0
+    assert "feasible: yes" in capsys.readouterr().out
+
+
+@pytest.mark.parametrize(
+    ("stdin", "needle"),
+    [
+        ("not json", "not valid JSON"),
+        ('{"plates": [[[1,0,0,0],[0,1,0,0],[0,0,1,0],[0,0,0,1]]]}', "expected 5 plate poses"),
+        ('{"poses": []}', "JSON object"),
+        (
+            '{"plates": [[[1,0,0,0],[0,1,0,0],[0,0,1,0],[0,0,0,1]], [[2,0,0,0],[0,1,0,0],[0,0,1,0],[0,0,0,1]],'
+            "[[1,0,0,0],[0,1,0,0],[0,0,1,0],[0,0,0,1]], [[1,0,0,0],[0,1,0,0],[0,0,1,0],[0,0,0,1]],"
+            "[[1,0,0,0],[0,1,0,0],[0,0,1,0],[0,0,0,1]]]}",
+            "not a rotation",
+        ),
+        ('{"plates": [[[NaN,0,0,0],[0,1,0,0],[0,0,1,0],[0,0,0,1]]]}', "expected 5"),
+    ],
+)
+def test_statics_bad_input_is_one_line(stdin, needle):
+    out = run("statics", "--plates", "-", stdin=stdin)
+    assert out.returncode == 2
+    lines = out.stderr.strip().splitlines()
+    assert len(lines) == 1 and needle in lines[0] and "Traceback" not in out.stderr
+
+
+def test_unreadable_file_and_bad_config(tmp_path):
+    out = run("statics", "--plates", str(tmp_path / "missing.json"))
+    assert out.returncode == 2 and "cannot read" in out.stderr
+    cfg = tmp_path / "c.yaml"
+    cfg.write_text("leg: {min_length: 0.4}\n")
+    out = run("statics", "--home", "--config", str(cfg))
+    assert out.returncode == 2 and "leg.max_length" in out.stderr and len(out.stderr.strip().splitlines()) == 1
+
+
+def test_export_with_config(tmp_path):
+    cfg = tmp_path / "c.yaml"
+    cfg.write_text("platforms: 2\n")
+    assert main(["export", "--config", str(cfg), "--out", str(tmp_path / "o")]) == 0
+    assert AssemblerModel.from_files(tmp_path / "o").n == 2
+
+
+def test_bench_json_keys():
+    out = run("bench", "--json", "--repeat", "3")
+    assert out.returncode == 0, out.stderr
+    doc = json.loads(out.stdout)
+    for key in ("statics_us", "sp_fk_us", "stack_fk_us", "q_from_plates_us"):
+        assert doc[key] > 0

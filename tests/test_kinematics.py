@@ -1,0 +1,171 @@
+"""Kinematics: closed-form q, IK, deflections, SP/stack FK, EE Jacobian."""
+
+from __future__ import annotations
+
+import numpy as np
+import pinocchio as pin
+import pytest
+from conftest import design_anchors, random_se3
+
+from assembler_pin import (
+    ConvergenceError,
+    PoseError,
+    ee_jacobian_wrt_lengths,
+    leg_state,
+    plate_arrays,
+    plates_from_q,
+    q_from_plates,
+    sp_forward_kinematics,
+    stack_forward_kinematics,
+)
+from assembler_pin.kinematics import PlateArrays
+
+
+def _closure_residuals(am, q) -> np.ndarray:
+    pin.forwardKinematics(am.model, am.data, q)
+    pin.updateFramePlacements(am.model, am.data)
+    return np.array(
+        [
+            np.linalg.norm(
+                am.data.oMi[int(am.shaft_joint_ids[j, i])].translation
+                - am.data.oMf[int(am.anchor_frame_ids[j, i])].translation
+            )
+            for j in range(am.n)
+            for i in range(6)
+        ]
+    )
+
+
+def test_q_from_plates_closes_every_loop(am, random_poses):
+    rng = np.random.default_rng(1)
+    for _, plates in random_poses:
+        base = random_se3(rng, 0.5)
+        moved = PlateArrays(*_rigid(plates, base))
+        q = q_from_plates(am, moved)
+        assert _closure_residuals(am, q).max() < 1e-12
+        back = plates_from_q(am, q)
+        assert np.allclose(back.R, moved.R, atol=1e-14) and np.allclose(back.p, moved.p, atol=1e-14)
+        assert np.allclose(q[am.leg_idx_q[:, :, 2]], leg_state(am, moved).lengths, atol=1e-15)
+
+
+def _rigid(plates, M):
+    R = np.matmul(M.rotation, plates.R)
+    p = plates.p @ M.rotation.T + M.translation
+    return R, p
+
+
+def test_leg_lengths_are_the_paper_ik(am, random_poses):
+    """L_i = ||p_top - p_bottom|| from anchors written out independently."""
+    assert np.allclose(leg_state(am, am.home).lengths, am.config.leg.mid_length, atol=1e-15)
+    for _, plates in random_poses:
+        legs = leg_state(am, plates)
+        for j in range(am.n):
+            b, t = design_anchors(am.config, j)
+            bw = b @ plates.R[j].T + plates.p[j]
+            tw = t @ plates.R[j + 1].T + plates.p[j + 1]
+            assert np.allclose(legs.lengths[j], np.linalg.norm(tw - bw, axis=1), atol=1e-15)
+            assert np.allclose(legs.bottom_points[j], bw) and np.allclose(legs.top_points[j], tw)
+
+
+def test_deflections(am, random_poses):
+    home = leg_state(am, am.home)
+    assert np.abs(home.deflection).max() < 1e-7
+    rng = np.random.default_rng(2)
+    for _, plates in random_poses:
+        legs = leg_state(am, plates)
+        # second method for the bottom joint: the universal joint's two angles
+        q = q_from_plates(am, plates)
+        ux, uy = q[am.leg_idx_q[:, :, 0]], q[am.leg_idx_q[:, :, 1]]
+        assert np.allclose(np.cos(legs.deflection[..., 0]), np.cos(ux) * np.cos(uy), atol=1e-12)
+        # both angles are measured in plate frames: invariant under a rigid motion of everything
+        moved = leg_state(am, PlateArrays(*_rigid(plates, random_se3(rng))))
+        assert np.allclose(moved.deflection, legs.deflection, atol=1e-7)
+        assert np.allclose(moved.rise, legs.rise, atol=1e-14)
+    # top joint: tilting only the top plate about its own centre deflects its ball joints
+    plates = plate_arrays(am, am.home)
+    tilt = pin.exp3(np.array([0.2, 0.0, 0.0]))
+    R = plates.R.copy()
+    R[1:] = tilt @ R[1:]
+    p = plates.p.copy()
+    p[2:] = (p[2:] - p[1]) @ tilt.T + p[1]
+    legs = leg_state(am, PlateArrays(R, p))
+    d_top = legs.dir_in_top[0]
+    expected = np.arccos(np.clip(np.einsum("ik,ik->i", d_top, am.geometry.home_direction[0]), -1, 1))
+    assert np.allclose(legs.deflection[0, :, 1], expected) and expected.max() > 0.05
+
+
+def test_sp_fk_round_trip(am, random_poses):
+    for lengths, plates in random_poses:
+        for j in range(am.n):
+            res = sp_forward_kinematics(am, j, lengths[j])
+            assert res.success and res.residual <= 1e-12 and res.iterations <= 10
+            expected = plates.se3(j).actInv(plates.se3(j + 1))
+            assert np.allclose(res.pose.homogeneous, expected.homogeneous, atol=1e-10)
+            # FK from the converged pose: zero iterations needed
+            again = sp_forward_kinematics(am, j, lengths[j], guess=res.pose)
+            assert again.success and again.iterations == 0
+
+
+def test_fk_failure_is_explicit(am):
+    res = sp_forward_kinematics(am, 0, [0.02] * 6)  # shorter than the node spacing allows
+    assert not res.success and res.residual > 1e-3 and "did not converge" in res.message
+    with pytest.raises(ConvergenceError) as info:
+        res.raise_if_failed()
+    assert info.value.residual == res.residual
+    stack = stack_forward_kinematics(am, np.full((am.n, 6), 0.02))
+    assert not stack.success
+    with pytest.raises(ConvergenceError):
+        stack.raise_if_failed()
+    with pytest.raises(PoseError, match="finite"):
+        sp_forward_kinematics(am, 0, [0.3, 0.3, np.nan, 0.3, 0.3, 0.3])
+    with pytest.raises(PoseError, match="shape"):
+        sp_forward_kinematics(am, 0, [0.3] * 5)
+    with pytest.raises(PoseError, match="platform index"):
+        sp_forward_kinematics(am, 9, [0.3] * 6)
+
+
+def test_stack_fk_round_trip_with_moved_base(am, random_poses):
+    rng = np.random.default_rng(3)
+    for lengths, plates in random_poses:
+        base = random_se3(rng, 0.3)
+        res = stack_forward_kinematics(am, lengths, base=base.homogeneous)
+        assert res.success
+        R, p = _rigid(plates, base)
+        assert np.allclose(res.plates.R, R, atol=1e-10) and np.allclose(res.plates.p, p, atol=1e-10)
+        assert np.abs(leg_state(am, res.plates).lengths - lengths).max() < 1e-12
+
+
+def test_ee_jacobian_matches_finite_differences(am, random_poses):
+    lengths, plates = random_poses[0]
+    jac = ee_jacobian_wrt_lengths(am, plates)
+    ee0 = plates.se3(am.n)
+    h = 1e-6
+    fd = np.zeros_like(jac)
+    for c in range(6 * am.n):
+        dL = np.zeros(6 * am.n)
+        dL[c] = h
+        ee_p = stack_forward_kinematics(am, lengths + dL.reshape(am.n, 6)).raise_if_failed().se3(am.n)
+        ee_m = stack_forward_kinematics(am, lengths - dL.reshape(am.n, 6)).raise_if_failed().se3(am.n)
+        # twist in world-aligned axes at the EE origin: [dp, dθ_world]
+        dp = (ee_p.translation - ee_m.translation) / (2 * h)
+        dtheta = pin.log3(ee_p.rotation @ ee_m.rotation.T) / (2 * h)
+        fd[:, c] = np.concatenate([dp, dtheta])
+    assert np.allclose(jac, fd, atol=1e-7 * np.abs(jac).max())
+    assert ee0.translation[2] > 0
+
+
+@pytest.mark.parametrize(
+    ("plates", "needle"),
+    [
+        ([np.eye(4)] * 4, "expected 5 plate poses"),
+        ([np.eye(4)] * 4 + [np.full((4, 4), np.nan)], "NaN"),
+        ([np.eye(4)] * 4 + [np.eye(3)], "4x4"),
+        ([np.eye(4)] * 4 + [np.diag([2.0, 1, 1, 1])], "not a rotation"),
+        ([np.eye(4)] * 4 + [np.diag([-1.0, 1, 1, 1])], "not a rotation"),
+        ([np.eye(4)] * 4 + [[["a"] * 4] * 4], "4x4"),
+        ("plates", "list"),
+    ],
+)
+def test_bad_plate_input(am, plates, needle):
+    with pytest.raises(PoseError, match=needle):
+        plate_arrays(am, plates)

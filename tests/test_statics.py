@@ -1,0 +1,129 @@
+"""Statics held to independent computations: Jacobian-transpose truss, virtual work, weight."""
+
+from __future__ import annotations
+
+import numpy as np
+import pinocchio as pin
+import pytest
+from conftest import design_anchors, potential_energy, random_se3
+
+from assembler_pin import SingularConfigurationError, solve_statics, stack_forward_kinematics
+from assembler_pin.kinematics import PlateArrays, leg_state, q_from_plates
+from assembler_pin.statics import closure_jacobian_blocks
+
+
+def test_closure_jacobian_equals_pinocchio_constraint_jacobian(am, random_poses):
+    """Our block Jacobian (from data.J) against Pinocchio's PointAnchorConstraintModel."""
+    _, plates = random_poses[1]
+    q = q_from_plates(am, plates)
+    model, data = am.model, am.data
+    pin.computeJointJacobians(model, data, q)
+    for cm, cd in zip(am.constraint_models, am.constraint_datas, strict=True):
+        cm.calc(model, data, cd)
+    reference = pin.getConstraintsJacobian(model, data, am.constraint_models, am.constraint_datas)
+    blocks = closure_jacobian_blocks(am, leg_state(am, plates).top_points)
+    ours = np.zeros((18 * am.n, am.nv))
+    for j in range(am.n):
+        ours[18 * j : 18 * (j + 1), am.platform_rows_v[j]] = blocks[j]
+    for c in range(6 * am.n):
+        j, i = divmod(c, 6)
+        R_shaft = data.oMi[int(am.shaft_joint_ids[j, i])].rotation
+        # Pinocchio expresses the anchor-minus-shaft velocity in the shaft's frame
+        assert np.allclose(-R_shaft @ reference[3 * c : 3 * c + 3], ours[3 * c : 3 * c + 3], atol=1e-13)
+
+
+def _truss_forces(cfg, plates) -> np.ndarray:
+    """Massless legs: two-force members. For each SP, the six axial forces balance the
+    weight of everything above (Jacobian-transpose wrench), solved with numpy only."""
+    n, g = cfg.platforms, cfg.gravity
+    out = np.zeros((n, 6))
+    for j in range(n):
+        # weight and its moment about the world origin, of plates j+1..n and the payload
+        force = np.zeros(3)
+        moment = np.zeros(3)
+        points = [(cfg.plate.mass, plates.p[k]) for k in range(j + 1, n + 1)]
+        points.append((cfg.payload.mass, plates.R[n] @ [0, 0, cfg.payload.offset] + plates.p[n]))
+        for mass, c in points:
+            w = np.array([0, 0, -mass * g])
+            force += w
+            moment += np.cross(c, w)
+        b, t = design_anchors(cfg, j)
+        bw = b @ plates.R[j].T + plates.p[j]
+        tw = t @ plates.R[j + 1].T + plates.p[j + 1]
+        u = (tw - bw) / np.linalg.norm(tw - bw, axis=1, keepdims=True)
+        # leg in tension F pulls the top plate along -u at tw
+        A = np.vstack([-u.T, -np.cross(tw, u).T])
+        out[j] = np.linalg.solve(A, -np.concatenate([force, moment]))
+    return out
+
+
+def test_massless_legs_equal_jacobian_transpose_truss(massless_am):
+    am = massless_am
+    rng = np.random.default_rng(5)
+    leg = am.config.leg
+    for _ in range(5):
+        lengths = rng.uniform(leg.min_length + 0.02, leg.max_length - 0.02, (am.n, 6))
+        plates = stack_forward_kinematics(am, lengths).raise_if_failed()
+        ours = solve_statics(am, plates).forces
+        reference = _truss_forces(am.config, plates)
+        assert np.allclose(ours, reference, rtol=1e-9, atol=1e-9 * np.abs(reference).max())
+
+
+def test_leg_masses_equal_virtual_work_through_fk(am, random_poses):
+    """F_i = -dV/dL_i, V computed from geometry alone, L perturbed through stack FK."""
+    lengths, plates = random_poses[2]
+    ours = solve_statics(am, plates).forces
+    h = 1e-6
+    reference = np.zeros((am.n, 6))
+    for j in range(am.n):
+        for i in range(6):
+            dL = np.zeros((am.n, 6))
+            dL[j, i] = h
+            up = stack_forward_kinematics(am, lengths + dL, guess=plates).raise_if_failed()
+            down = stack_forward_kinematics(am, lengths - dL, guess=plates).raise_if_failed()
+            reference[j, i] = -(potential_energy(am.config, up) - potential_energy(am.config, down)) / (2 * h)
+    assert np.allclose(ours, reference, rtol=1e-6, atol=1e-6 * np.abs(reference).max())
+
+
+def test_base_wrench_is_the_total_weight(am, random_poses):
+    rng = np.random.default_rng(6)
+    for _, plates in random_poses[:3]:
+        base = random_se3(rng, 0.3)
+        R = np.matmul(base.rotation, plates.R)
+        p = plates.p @ base.rotation.T + base.translation
+        moved = PlateArrays(R, p)
+        result = solve_statics(am, moved)
+        weight = am.total_mass() * am.config.gravity
+        com = pin.centerOfMass(am.model, am.data, result.q)
+        assert np.allclose(result.base_wrench[:3], [0, 0, weight], rtol=1e-12)
+        expected_moment = np.cross(com - moved.p[0], [0, 0, weight])
+        assert np.allclose(result.base_wrench[3:], expected_moment, atol=1e-10)
+
+
+def test_forces_invariant_under_yaw_of_the_whole_stack(am, random_poses):
+    """Gravity is along z: turning everything about z and shifting it changes no force."""
+    _, plates = random_poses[3]
+    yaw = pin.SE3(pin.exp3(np.array([0, 0, 1.1])), np.array([0.3, -0.2, 0.5]))
+    R = np.matmul(yaw.rotation, plates.R)
+    p = plates.p @ yaw.rotation.T + yaw.translation
+    assert np.allclose(solve_statics(am, PlateArrays(R, p)).forces, solve_statics(am, plates).forces, atol=1e-10)
+
+
+def test_home_pose_forces_are_symmetric_and_compressive(am):
+    forces = solve_statics(am, am.home).forces
+    assert np.all(forces < 0)
+    assert np.allclose(forces, forces[:, :1], atol=1e-12)  # six equal legs per platform
+    assert np.all(np.diff(np.abs(forces[:, 0])) < 0)  # lower platforms carry more
+
+
+def test_singular_platform_is_reported_not_answered(am):
+    """A 3-3 platform turned 90° about its axis is the octahedral singularity."""
+    plates = [pin.SE3.Identity()]
+    turn = pin.SE3(pin.exp3(np.array([0, 0, np.pi / 2])), np.array([0, 0, am.config.home_height]))
+    for _ in range(am.n):
+        plates.append(plates[-1] * turn)
+    result = solve_statics(am, plates)
+    assert result.singular and result.condition.max() > 1e8
+    with pytest.raises(SingularConfigurationError, match="singular"):
+        solve_statics(am, plates, raise_on_singular=True)
+    assert not solve_statics(am, am.home).singular
