@@ -33,7 +33,9 @@ from .kinematics import (
     plates_from_q,
     q_from_plates,
     sp_forward_kinematics,
+    se3_to_taa,
     stack_forward_kinematics,
+    taa_to_se3,
     to_se3,
 )
 from .model import AssemblerModel
@@ -76,7 +78,9 @@ __all__ = [
     "q_from_plates",
     "solve_statics",
     "sp_forward_kinematics",
+    "se3_to_taa",
     "stack_forward_kinematics",
+    "taa_to_se3",
     "to_se3",
 ]
 

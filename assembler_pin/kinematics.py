@@ -34,8 +34,10 @@ __all__ = [
     "plates_from_q",
     "q_from_plates",
     "sp_forward_kinematics",
+    "se3_to_taa",
     "sp_inverse_jacobian",
     "stack_forward_kinematics",
+    "taa_to_se3",
     "to_se3",
 ]
 
@@ -100,6 +102,33 @@ def to_se3(pose: pin.SE3 | npt.ArrayLike, what: str = "pose") -> pin.SE3:
         u, _, vt = np.linalg.svd(rot)
         rot = u @ vt
     return pin.SE3(rot, matrix[:3, 3].copy())
+
+
+def taa_to_se3(taa: npt.ArrayLike, degrees: bool = False, what: str = "goal") -> pin.SE3:
+    """A pose from the paper's translation-axis-angle vector ``(x, y, z, rx, ry, rz)``.
+
+    Args:
+        taa: translation [m] then rotation vector θ·w [rad, or deg with ``degrees``].
+        degrees: the rotation vector is in degrees.
+
+    Raises:
+        PoseError: not six finite numbers.
+    """
+    try:
+        arr = np.asarray(taa, dtype=float)
+    except (TypeError, ValueError):
+        raise PoseError(f"{what} must be six numbers X Y Z RX RY RZ") from None
+    if arr.shape != (6,):
+        raise PoseError(f"{what} must be six numbers X Y Z RX RY RZ, got shape {arr.shape}")
+    if not np.all(np.isfinite(arr)):
+        raise PoseError(f"{what} contains NaN or infinite values: {arr.tolist()}")
+    rotvec = np.deg2rad(arr[3:]) if degrees else arr[3:]
+    return pin.SE3(pin.exp3(rotvec), arr[:3].copy())
+
+
+def se3_to_taa(pose: pin.SE3) -> np.ndarray:
+    """The translation-axis-angle vector ``(p, θ·w)`` of a pose [m, rad]."""
+    return np.concatenate([pose.translation, pin.log3(pose.rotation)])
 
 
 def plate_arrays(am: AssemblerModel, plates: PlateArrays | Sequence | np.ndarray) -> PlateArrays:

@@ -169,3 +169,16 @@ def test_ee_jacobian_matches_finite_differences(am, random_poses):
 def test_bad_plate_input(am, plates, needle):
     with pytest.raises(PoseError, match=needle):
         plate_arrays(am, plates)
+
+
+def test_taa_round_trip_and_errors():
+    from assembler_pin import se3_to_taa, taa_to_se3
+
+    x = np.array([0.1, -0.2, 0.9, 0.3, -0.4, 0.5])
+    M = taa_to_se3(x)
+    assert np.allclose(M.rotation, pin.exp3(x[3:])) and np.allclose(se3_to_taa(M), x)
+    assert np.allclose(taa_to_se3([0, 0, 0, 90, 0, 0], degrees=True).rotation, pin.exp3(np.array([np.pi / 2, 0, 0])))
+    with pytest.raises(PoseError, match="six numbers"):
+        taa_to_se3([1, 2, 3])
+    with pytest.raises(PoseError, match="NaN"):
+        taa_to_se3([0, 0, np.nan, 0, 0, 0])
