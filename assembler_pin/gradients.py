@@ -1,0 +1,229 @@
+"""Differentiable statics and kinematics of a stack pose, for the optimizer.
+
+The optimizer needs the actuator forces, leg lengths, joint deflections, rise and
+plate angular deviations *and their exact derivatives* with respect to the plate poses.
+Differentiating the Pinocchio system ``g(q) = Sᵀτ + J_cᵀλ`` needs second-order kinematics
+and a correction for the world-fixed closure forces; the same equilibrium written per
+platform in closed form differentiates in a few vectorized lines, so this module uses it:
+
+* each leg (motor + shaft, a universal joint at the bottom, a ball at the top) balances
+  its own weight: the ball force's component across the leg is
+  ``f⊥ = -(c_m m_m + (L - c_s) m_s) / L · g⊥`` (g⊥ = gravity across the leg), and the
+  universal joint carries no moment (the leg's weights act on its axis);
+* the top plate of platform j and everything it carries balance the six ball forces:
+  ``Σ a_i [u_i; t_i × u_i] = [W_up; M_up] - Σ [f⊥_i; t_i × f⊥_i]`` — a 6×6 system for the
+  axial ball-force components ``a_i`` (``W_up``/``M_up``: weight of everything above and
+  its moment about the world origin);
+* the actuator force (tension positive) is ``F_i = a_i + m_s g·u_i``.
+
+The tests hold these forces to :func:`~assembler_pin.statics.solve_statics` (Pinocchio)
+and every derivative to finite differences of the Pinocchio statics.
+
+Derivatives are taken with respect to a **world twist** ``η_k = (v, ω)`` of each plate
+k = 1..n (``T_k ← exp6(η_k) · T_k``), columns ``6(k-1) .. 6k-1``; plate 0 is fixed.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from .kinematics import PlateArrays
+from .model import AssemblerModel
+
+__all__ = ["PoseDerivatives", "pose_derivatives"]
+
+_I3 = np.eye(3)
+
+
+def _skew(v: np.ndarray) -> np.ndarray:
+    """(..., 3) → (..., 3, 3) with skew(a) @ b = a × b."""
+    out = np.zeros((*v.shape, 3))
+    out[..., 0, 1], out[..., 0, 2] = -v[..., 2], v[..., 1]
+    out[..., 1, 0], out[..., 1, 2] = v[..., 2], -v[..., 0]
+    out[..., 2, 0], out[..., 2, 1] = -v[..., 1], v[..., 0]
+    return out
+
+
+@dataclass(frozen=True)
+class PoseDerivatives:
+    """Values and derivatives (last axis: 6n world-twist columns of plates 1..n).
+
+    Attributes:
+        forces, d_forces: (n, 6) actuator forces [N, tension positive] and (n, 6, 6n).
+        lengths, d_lengths: (n, 6) [m] and (n, 6, 6n).
+        cos_deflection, d_cos_deflection: (n, 6, 2) cosines of the bottom / top joint
+            deflections and (n, 6, 2, 6n).
+        rise, d_rise: (n, 6) height of each top joint above its bottom joint in the
+            bottom plate's frame [m] and (n, 6, 6n).
+        plate_angles, d_plate_angles_sq: (n,) angle λ_k between ``p_k - p_{k-1}`` and the
+            rest direction of plate k on plate k-1 [rad] (paper eq. 9), and the
+            derivative of λ_k² (n, 6n) — smooth where λ_k itself is not.
+    """
+
+    forces: np.ndarray
+    d_forces: np.ndarray
+    lengths: np.ndarray
+    d_lengths: np.ndarray
+    cos_deflection: np.ndarray
+    d_cos_deflection: np.ndarray
+    rise: np.ndarray
+    d_rise: np.ndarray
+    plate_angles: np.ndarray
+    d_plate_angles_sq: np.ndarray
+
+
+def _point_jacobian(points: np.ndarray, columns: int, plate: np.ndarray) -> np.ndarray:
+    """d(point)/d(world twist) of points (m, 3) on plates ``plate`` (m,) → (m, 3, C).
+
+    Plate 0 is fixed (zero columns); plate k ≥ 1 owns columns 6(k-1)..6k-1.
+    """
+    out = np.zeros((points.shape[0], 3, columns))
+    for k in np.unique(plate):
+        if k == 0:
+            continue
+        sel = plate == k
+        c = 6 * (k - 1)
+        out[sel, :, c : c + 3] = _I3
+        out[sel, :, c + 3 : c + 6] = -_skew(points[sel])
+    return out
+
+
+def pose_derivatives(am: AssemblerModel, pa: PlateArrays) -> PoseDerivatives:
+    """Forces, lengths, deflections, rise and plate angles with their derivatives.
+
+    Args:
+        pa: world poses of plates 0..n (validated, e.g. by
+            :func:`~assembler_pin.kinematics.plate_arrays`).
+    """
+    cfg, geo = am.config, am.geometry
+    n = am.n
+    C = 6 * n
+    leg = cfg.leg
+    g = np.array([0.0, 0.0, -cfg.gravity])
+    R, p = pa.R, pa.p
+    # --- leg geometry and its derivatives -------------------------------------------
+    b = np.matmul(geo.bottom_in_plate, R[:-1].transpose(0, 2, 1)) + p[:-1, None, :]
+    t = np.matmul(geo.top_in_plate, R[1:].transpose(0, 2, 1)) + p[1:, None, :]
+    d = t - b
+    L = np.sqrt(np.einsum("jik,jik->ji", d, d))
+    u = d / L[..., None]
+    plate_of_sp = np.repeat(np.arange(n), 6)
+    db = _point_jacobian(b.reshape(-1, 3), C, plate_of_sp).reshape(n, 6, 3, C)
+    dt = _point_jacobian(t.reshape(-1, 3), C, plate_of_sp + 1).reshape(n, 6, 3, C)
+    dd = dt - db
+    dL = np.einsum("jik,jikc->jic", u, dd)
+    du = (dd - u[..., None] * dL[:, :, None, :]) / L[..., None, None]
+    # --- per-leg transverse ball force from the leg's own weight ----------------------
+    gu = u @ g
+    dgu = np.einsum("k,jikc->jic", g, du)
+    g_perp = g - gu[..., None] * u
+    dg_perp = -(dgu[:, :, None, :] * u[..., None] + gu[..., None, None] * du)
+    lever = leg.motor_com * leg.motor_mass - leg.shaft_com * leg.shaft_mass
+    s = leg.shaft_mass + lever / L
+    ds = (-lever / L**2)[..., None] * dL
+    f_perp = -s[..., None] * g_perp
+    df_perp = -(ds[:, :, None, :] * g_perp[..., None] + s[..., None, None] * dg_perp)
+    # --- weight above each platform's top plate and its moment ------------------------
+    mg_plate = cfg.plate.mass * g
+    payload_point = R[n] @ np.array([0.0, 0.0, cfg.payload.offset]) + p[n]
+    motor_c = b + leg.motor_com * u
+    shaft_c = t - leg.shaft_com * u
+    d_motor_c = db + leg.motor_com * du
+    d_shaft_c = dt - leg.shaft_com * du
+    level_moment = np.zeros((n + 1, 3))  # level k: plate k, legs of SP k, payload (k = n)
+    level_dmoment = np.zeros((n + 1, 3, C))
+    level_force = np.zeros((n + 1, 3))
+    skew_g = _skew(g)
+    level_moment[1:] = np.cross(p[1:], mg_plate)
+    dp_plates = _point_jacobian(p[1:], C, np.arange(1, n + 1))
+    level_dmoment[1:] = -cfg.plate.mass * np.matmul(skew_g, dp_plates)
+    level_force[1:] = mg_plate
+    leg_moment = leg.motor_mass * np.cross(motor_c, g) + leg.shaft_mass * np.cross(shaft_c, g)
+    leg_dmoment = -np.matmul(skew_g, leg.motor_mass * d_motor_c + leg.shaft_mass * d_shaft_c)
+    level_moment[:n] += leg_moment.sum(axis=1)
+    level_dmoment[:n] += leg_dmoment.sum(axis=1)
+    level_force[:n] += 6 * (leg.motor_mass + leg.shaft_mass) * g
+    level_moment[n] += cfg.payload.mass * np.cross(payload_point, g)
+    d_payload = _point_jacobian(payload_point[None], C, np.array([n]))[0]
+    level_dmoment[n] += -cfg.payload.mass * skew_g @ d_payload
+    level_force[n] += cfg.payload.mass * g
+    # everything above plate j+1 = levels j+1 .. n  (reverse cumulative sums)
+    up_force = np.cumsum(level_force[::-1], axis=0)[::-1][1:]
+    up_moment = np.cumsum(level_moment[::-1], axis=0)[::-1][1:]
+    up_dmoment = np.cumsum(level_dmoment[::-1], axis=0)[::-1][1:]
+    # --- the 6x6 system of each platform -----------------------------------------------
+    t_cross_u = np.cross(t, u)
+    K = np.concatenate([u, t_cross_u], axis=2).transpose(0, 2, 1)  # (n, 6 rows, 6 legs)
+    skew_t = _skew(t)
+    t_cross_f = np.cross(t, f_perp)
+    rhs = np.concatenate([up_force - f_perp.sum(axis=1), up_moment - t_cross_f.sum(axis=1)], axis=1)
+    a = np.linalg.solve(K, rhs[..., None])[..., 0]  # (n, 6)
+    # d(t × f) = -[f]× dt + [t]× df ;  d(t × u) = -[u]× dt + [t]× du
+    d_t_cross_f = -np.matmul(_skew(f_perp), dt) + np.matmul(skew_t, df_perp)
+    d_t_cross_u = -np.matmul(_skew(u), dt) + np.matmul(skew_t, du)
+    d_rhs = np.concatenate([-df_perp.sum(axis=1), up_dmoment - d_t_cross_f.sum(axis=1)], axis=1)
+    dK_a = np.concatenate([np.einsum("ji,jikc->jkc", a, du), np.einsum("ji,jikc->jkc", a, d_t_cross_u)], axis=1)
+    da = np.linalg.solve(K, d_rhs - dK_a)  # (n, 6, C)
+    forces = a + leg.shaft_mass * gu
+    d_forces = da + leg.shaft_mass * dgu
+    # --- deflection cosines and rise -----------------------------------------------------
+    home = geo.home_direction
+    h_bottom = np.matmul(home, R[:-1].transpose(0, 2, 1))  # home direction in world, bottom plate
+    h_top = np.matmul(home, R[1:].transpose(0, 2, 1))
+    cos_b = np.einsum("jik,jik->ji", u, h_bottom)
+    cos_t = np.einsum("jik,jik->ji", u, h_top)
+    d_cos_b = np.einsum("jik,jikc->jic", h_bottom, du)
+    d_cos_t = np.einsum("jik,jikc->jic", h_top, du)
+    # rotating plate k by ω turns h into h + ω × h: d(u·h) += u·(ω × h) = (h × u)·ω
+    hb_x_u = np.cross(h_bottom, u)
+    ht_x_u = np.cross(h_top, u)
+    for j in range(n):
+        if j >= 1:
+            d_cos_b[j, :, 6 * (j - 1) + 3 : 6 * j] += hb_x_u[j]
+        d_cos_t[j, :, 6 * j + 3 : 6 * j + 6] += ht_x_u[j]
+    z_bottom = R[:-1, :, 2]  # (n, 3)
+    rise = np.einsum("jk,jik->ji", z_bottom, d)
+    d_rise = np.einsum("jk,jikc->jic", z_bottom, dd)
+    z_x_d = np.cross(z_bottom[:, None, :], d)
+    for j in range(1, n):
+        d_rise[j, :, 6 * (j - 1) + 3 : 6 * j] += z_x_d[j]
+    # --- plate angular deviation λ_k (paper eq. 9) --------------------------------------
+    rest = np.array([m.translation for m in am.plate_joint_placement[1:]])
+    rest_dir = np.matmul(R[:-1], (rest / np.linalg.norm(rest, axis=1, keepdims=True))[..., None])[..., 0]
+    step = p[1:] - p[:-1]
+    step_len = np.linalg.norm(step, axis=1)
+    step_dir = step / step_len[:, None]
+    cross = np.cross(step_dir, rest_dir)
+    sin_l = np.linalg.norm(cross, axis=1)
+    cos_l = np.einsum("jk,jk->j", step_dir, rest_dir)
+    lam = np.arctan2(sin_l, cos_l)
+    # d(λ²) = 2 λ dλ;  dλ = -(c - cosλ â)·dâ / sinλ - (â - cosλ c)·dc / sinλ, λ/sinλ → 1
+    ratio = np.where(sin_l > 1e-12, lam / np.maximum(sin_l, 1e-300), 1.0)
+    d_step = np.zeros((n, 3, C))
+    d_rest_dir = np.zeros((n, 3, C))
+    dp_all = _point_jacobian(p[1:], C, np.arange(1, n + 1))
+    for k in range(n):
+        d_step[k] += dp_all[k]
+        if k >= 1:
+            d_step[k] -= dp_all[k - 1]
+            d_rest_dir[k, :, 6 * (k - 1) + 3 : 6 * k] = -_skew(rest_dir[k])
+    d_step_dir = np.matmul((_I3 - step_dir[:, :, None] * step_dir[:, None, :]) / step_len[:, None, None], d_step)
+    g_a = -(rest_dir - cos_l[:, None] * step_dir)
+    g_c = -(step_dir - cos_l[:, None] * rest_dir)
+    d_lam_sq = (
+        2.0 * ratio[:, None] * (np.einsum("jk,jkc->jc", g_a, d_step_dir) + np.einsum("jk,jkc->jc", g_c, d_rest_dir))
+    )
+    return PoseDerivatives(
+        forces=forces,
+        d_forces=d_forces,
+        lengths=L,
+        d_lengths=dL,
+        cos_deflection=np.stack([cos_b, cos_t], axis=-1),
+        d_cos_deflection=np.stack([d_cos_b, d_cos_t], axis=2),
+        rise=rise,
+        d_rise=d_rise,
+        plate_angles=lam,
+        d_plate_angles_sq=d_lam_sq,
+    )
