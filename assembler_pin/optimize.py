@@ -20,7 +20,8 @@ Methods:
   kept as the baseline to compare against.
 
 Constraints (all methods): leg lengths, joint deflection (as cosines, smooth), tension and
-compression limits, continuous translation (every top joint at least ``rise_margin``
+compression limits (each also capped by the start's max|F|, so max|F| never increases),
+continuous translation (every top joint at least ``rise_margin``
 above its bottom joint in the bottom plate's frame), end effector within tolerance.
 
 The result never calls a constraint-violating state a success: the returned state is the
@@ -145,6 +146,10 @@ class _Problem:
         self.nx_pose = 6 * len(self.movable)
         leg = am.config.leg
         self.cos_max = np.cos(leg.max_deflection)
+        # never accept a larger max|F| than the start: cap both force limits by it
+        start_max = float(np.abs(solve_statics(am, start).forces).max())
+        self.tension_limit = min(leg.max_tension, start_max)
+        self.compression_limit = min(leg.max_compression, start_max)
         self.best: tuple[float, np.ndarray] | None = None
         self.evaluations = 0
         self.gradient_evaluations = 0
@@ -196,7 +201,8 @@ class _Problem:
             rot = pin.log3(self.goal.rotation.T @ pa.R[self.n])
         else:
             rot = x[self.nx_pose - 3 : self.nx_pose]
-        return np.array([tol.position**2 - dp @ dp, tol.rotation**2 - rot @ rot])
+        shrink = 1.0 - 1e-6  # stay strictly inside the tolerance the final check applies
+        return np.array([(shrink * tol.position) ** 2 - dp @ dp, (shrink * tol.rotation) ** 2 - rot @ rot])
 
     def _track(self, x: np.ndarray, physical: np.ndarray, ee: np.ndarray, omega: float) -> None:
         if np.all(physical >= 0) and np.all(ee >= 0) and (self.best is None or omega < self.best[0]):
@@ -349,7 +355,8 @@ def optimize_internal_poses(
         pad = np.concatenate([x, [0.0]]) if opts.method == "slsqp" else x
         state = evaluate_state(am, to_plates(pad), goal=goal, tolerance=check_tol)
         omega = objective_value(am, state, opts.w1, opts.w2)
-        if state.feasible and (not chosen.feasible or omega < omega_chosen):
+        no_worse = state.max_abs_force <= initial_state.max_abs_force + 1e-9
+        if state.feasible and (not chosen.feasible or (omega < omega_chosen and no_worse)):
             chosen, omega_chosen = state, omega
     converged = bool(res.success)
     if chosen is initial_state:

@@ -1,0 +1,94 @@
+"""Internal-pose optimization: feasibility checked independently, monotone objective,
+determinism, infeasible starts, the paper baseline."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from assembler_pin import AssemblerModel, GoalTolerance, leg_state, load_config, solve_statics
+from assembler_pin.optimize import OptimizeOptions, objective_value, optimize_internal_poses
+
+
+def _assert_feasible_independently(am, state, goal=None, tol=1e-9):
+    """Every constraint of the paper, recomputed from the plates with the config limits."""
+    cfg = am.config.leg
+    legs = leg_state(am, state.plates)
+    forces = solve_statics(am, state.plates).forces
+    assert np.all(legs.lengths >= cfg.min_length) and np.all(legs.lengths <= cfg.max_length)
+    assert np.all(legs.deflection <= np.deg2rad(am.config.leg.max_deflection_deg))
+    assert np.all(forces <= cfg.max_tension) and np.all(forces >= -cfg.max_compression)
+    bottom_z = state.plates.R[:-1, :, 2]
+    assert np.all(np.einsum("jk,jik->ji", bottom_z, legs.top_points - legs.bottom_points) > 0)
+    if goal is not None:
+        assert np.linalg.norm(state.plates.p[-1] - goal.translation) <= tol
+        assert np.linalg.norm(state.plates.R[-1] - goal.rotation) <= 10 * tol
+
+
+@pytest.fixture(scope="module")
+def start(random_poses):
+    return random_poses[7][1]
+
+
+def test_optimized_state_is_feasible_and_better(am, start):
+    result = optimize_internal_poses(am, start)
+    assert result.success and result.message == "converged"
+    _assert_feasible_independently(am, result.optimized, goal=start.se3(am.n))
+    assert result.objective_optimized <= result.objective_initial
+    assert result.optimized.max_abs_force <= result.initial.max_abs_force
+    assert result.objective_optimized == pytest.approx(objective_value(am, result.optimized))
+    # plate 0 and the EE did not move
+    assert np.allclose(result.optimized.plates.as_matrices()[[0, -1]], start.as_matrices()[[0, -1]])
+
+
+def test_smooth_method_beats_or_matches_the_paper_baseline(am, start):
+    smooth = optimize_internal_poses(am, start)
+    paper = optimize_internal_poses(am, start, options=OptimizeOptions(method="paper", max_iterations=60))
+    _assert_feasible_independently(am, paper.optimized, goal=start.se3(am.n))
+    assert paper.objective_optimized <= paper.objective_initial
+    assert smooth.objective_optimized <= paper.objective_optimized + 1e-6
+    assert smooth.evaluations < paper.evaluations
+
+
+def test_deterministic(am, start):
+    a = optimize_internal_poses(am, start)
+    b = optimize_internal_poses(am, start)
+    assert np.array_equal(a.optimized.plates.as_matrices(), b.optimized.plates.as_matrices())
+    assert a.iterations == b.iterations
+
+
+def test_infeasible_start_is_driven_feasible(start):
+    """Force limits between the optimum and the start: the start violates them."""
+    am = AssemblerModel.from_config()
+    first = optimize_internal_poses(am, start)
+    limit = 0.5 * (first.initial.max_abs_force + first.optimized.max_abs_force)
+    tight = AssemblerModel.from_config(load_config({"leg": {"max_tension": limit, "max_compression": limit}}))
+    result = optimize_internal_poses(tight, start)
+    assert not result.initial.feasible and {v.kind for v in result.initial.violations} <= {"tension", "compression"}
+    assert result.success and result.optimized.feasible
+    _assert_feasible_independently(tight, result.optimized)
+
+
+def test_impossible_limits_are_reported_not_hidden(start):
+    am = AssemblerModel.from_config(load_config({"leg": {"max_tension": 5, "max_compression": 5}}))
+    result = optimize_internal_poses(am, start)
+    assert not result.success and not result.optimized.feasible
+    assert result.message.startswith("no feasible state found")
+
+
+def test_free_end_effector_within_tolerance(am, start):
+    tol = GoalTolerance(position=0.01, rotation=0.02)
+    result = optimize_internal_poses(am, start, options=OptimizeOptions(ee_tolerance=tol))
+    assert result.success
+    goal = start.se3(am.n)
+    ee = result.optimized.plates.se3(am.n)
+    assert np.linalg.norm(ee.translation - goal.translation) <= tol.position + 1e-9
+    fixed = optimize_internal_poses(am, start)
+    assert result.objective_optimized <= fixed.objective_optimized + 1e-6
+
+
+def test_bad_options():
+    with pytest.raises(ValueError, match="method"):
+        OptimizeOptions(method="newton")
+    with pytest.raises(ValueError, match="weights"):
+        OptimizeOptions(w1=0, w2=0)
