@@ -74,20 +74,30 @@ class PoseDerivatives:
     d_plate_angles_sq: np.ndarray
 
 
-def _point_jacobian(points: np.ndarray, columns: int, plate: np.ndarray) -> np.ndarray:
-    """d(point)/d(world twist) of points (m, 3) on plates ``plate`` (m,) → (m, 3, C).
+def _cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Cross product along the last axis (numpy's ``np.cross`` is slow on small arrays)."""
+    a0, a1, a2 = a[..., 0], a[..., 1], a[..., 2]
+    b0, b1, b2 = b[..., 0], b[..., 1], b[..., 2]
+    return np.stack([a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0], axis=-1)
 
-    Plate 0 is fixed (zero columns); plate k ≥ 1 owns columns 6(k-1)..6k-1.
+
+def _point_jacobian(points: np.ndarray, first_plate: int, n: int) -> np.ndarray:
+    """d(point)/d(world twists of plates 1..n) for points (m, ..., 3) with points[r] on
+    plate ``first_plate + r``; returns (m, ..., 3, 6n).
+
+    Plate 0 is fixed (zero columns); plate k ≥ 1 owns columns 6(k-1)..6k-1:
+    ``[I, -[x]×]`` (a world twist (v, ω) moves x by v + ω × x).
     """
-    out = np.zeros((points.shape[0], 3, columns))
-    for k in np.unique(plate):
-        if k == 0:
-            continue
-        sel = plate == k
-        c = 6 * (k - 1)
-        out[sel, :, c : c + 3] = _I3
-        out[sel, :, c + 3 : c + 6] = -_skew(points[sel])
-    return out
+    m = points.shape[0]
+    inner = points.shape[1:-1]
+    out = np.zeros((m, *inner, 3, n, 6))
+    rows = np.arange(m)
+    cols = rows + first_plate - 1
+    rows, cols = rows[cols >= 0], cols[cols >= 0]
+    sel = (rows, *([slice(None)] * len(inner)), slice(None), cols)
+    out[(*sel, slice(0, 3))] = _I3
+    out[(*sel, slice(3, 6))] = -_skew(points[rows])
+    return out.reshape(*out.shape[:-2], 6 * n)
 
 
 def pose_derivatives(am: AssemblerModel, pa: PlateArrays) -> PoseDerivatives:
@@ -109,9 +119,8 @@ def pose_derivatives(am: AssemblerModel, pa: PlateArrays) -> PoseDerivatives:
     d = t - b
     L = np.sqrt(np.einsum("jik,jik->ji", d, d))
     u = d / L[..., None]
-    plate_of_sp = np.repeat(np.arange(n), 6)
-    db = _point_jacobian(b.reshape(-1, 3), C, plate_of_sp).reshape(n, 6, 3, C)
-    dt = _point_jacobian(t.reshape(-1, 3), C, plate_of_sp + 1).reshape(n, 6, 3, C)
+    db = _point_jacobian(b, 0, n)  # bottom joints of SP j lie on plate j
+    dt = _point_jacobian(t, 1, n)  # top joints on plate j+1
     dd = dt - db
     dL = np.einsum("jik,jikc->jic", u, dd)
     du = (dd - u[..., None] * dL[:, :, None, :]) / L[..., None, None]
@@ -136,17 +145,17 @@ def pose_derivatives(am: AssemblerModel, pa: PlateArrays) -> PoseDerivatives:
     level_dmoment = np.zeros((n + 1, 3, C))
     level_force = np.zeros((n + 1, 3))
     skew_g = _skew(g)
-    level_moment[1:] = np.cross(p[1:], mg_plate)
-    dp_plates = _point_jacobian(p[1:], C, np.arange(1, n + 1))
+    level_moment[1:] = _cross(p[1:], mg_plate)
+    dp_plates = _point_jacobian(p[1:], 1, n)
     level_dmoment[1:] = -cfg.plate.mass * np.matmul(skew_g, dp_plates)
     level_force[1:] = mg_plate
-    leg_moment = leg.motor_mass * np.cross(motor_c, g) + leg.shaft_mass * np.cross(shaft_c, g)
+    leg_moment = leg.motor_mass * _cross(motor_c, g) + leg.shaft_mass * _cross(shaft_c, g)
     leg_dmoment = -np.matmul(skew_g, leg.motor_mass * d_motor_c + leg.shaft_mass * d_shaft_c)
     level_moment[:n] += leg_moment.sum(axis=1)
     level_dmoment[:n] += leg_dmoment.sum(axis=1)
     level_force[:n] += 6 * (leg.motor_mass + leg.shaft_mass) * g
-    level_moment[n] += cfg.payload.mass * np.cross(payload_point, g)
-    d_payload = _point_jacobian(payload_point[None], C, np.array([n]))[0]
+    level_moment[n] += cfg.payload.mass * _cross(payload_point, g)
+    d_payload = _point_jacobian(payload_point[None], n, n)[0]
     level_dmoment[n] += -cfg.payload.mass * skew_g @ d_payload
     level_force[n] += cfg.payload.mass * g
     # everything above plate j+1 = levels j+1 .. n  (reverse cumulative sums)
@@ -154,10 +163,10 @@ def pose_derivatives(am: AssemblerModel, pa: PlateArrays) -> PoseDerivatives:
     up_moment = np.cumsum(level_moment[::-1], axis=0)[::-1][1:]
     up_dmoment = np.cumsum(level_dmoment[::-1], axis=0)[::-1][1:]
     # --- the 6x6 system of each platform -----------------------------------------------
-    t_cross_u = np.cross(t, u)
+    t_cross_u = _cross(t, u)
     K = np.concatenate([u, t_cross_u], axis=2).transpose(0, 2, 1)  # (n, 6 rows, 6 legs)
     skew_t = _skew(t)
-    t_cross_f = np.cross(t, f_perp)
+    t_cross_f = _cross(t, f_perp)
     rhs = np.concatenate([up_force - f_perp.sum(axis=1), up_moment - t_cross_f.sum(axis=1)], axis=1)
     a = np.linalg.solve(K, rhs[..., None])[..., 0]  # (n, 6)
     # d(t × f) = -[f]× dt + [t]× df ;  d(t × u) = -[u]× dt + [t]× du
@@ -177,8 +186,8 @@ def pose_derivatives(am: AssemblerModel, pa: PlateArrays) -> PoseDerivatives:
     d_cos_b = np.einsum("jik,jikc->jic", h_bottom, du)
     d_cos_t = np.einsum("jik,jikc->jic", h_top, du)
     # rotating plate k by ω turns h into h + ω × h: d(u·h) += u·(ω × h) = (h × u)·ω
-    hb_x_u = np.cross(h_bottom, u)
-    ht_x_u = np.cross(h_top, u)
+    hb_x_u = _cross(h_bottom, u)
+    ht_x_u = _cross(h_top, u)
     for j in range(n):
         if j >= 1:
             d_cos_b[j, :, 6 * (j - 1) + 3 : 6 * j] += hb_x_u[j]
@@ -186,7 +195,7 @@ def pose_derivatives(am: AssemblerModel, pa: PlateArrays) -> PoseDerivatives:
     z_bottom = R[:-1, :, 2]  # (n, 3)
     rise = np.einsum("jk,jik->ji", z_bottom, d)
     d_rise = np.einsum("jk,jikc->jic", z_bottom, dd)
-    z_x_d = np.cross(z_bottom[:, None, :], d)
+    z_x_d = _cross(z_bottom[:, None, :], d)
     for j in range(1, n):
         d_rise[j, :, 6 * (j - 1) + 3 : 6 * j] += z_x_d[j]
     # --- plate angular deviation λ_k (paper eq. 9) --------------------------------------
@@ -195,7 +204,7 @@ def pose_derivatives(am: AssemblerModel, pa: PlateArrays) -> PoseDerivatives:
     step = p[1:] - p[:-1]
     step_len = np.linalg.norm(step, axis=1)
     step_dir = step / step_len[:, None]
-    cross = np.cross(step_dir, rest_dir)
+    cross = _cross(step_dir, rest_dir)
     sin_l = np.linalg.norm(cross, axis=1)
     cos_l = np.einsum("jk,jk->j", step_dir, rest_dir)
     lam = np.arctan2(sin_l, cos_l)
@@ -203,7 +212,7 @@ def pose_derivatives(am: AssemblerModel, pa: PlateArrays) -> PoseDerivatives:
     ratio = np.where(sin_l > 1e-12, lam / np.maximum(sin_l, 1e-300), 1.0)
     d_step = np.zeros((n, 3, C))
     d_rest_dir = np.zeros((n, 3, C))
-    dp_all = _point_jacobian(p[1:], C, np.arange(1, n + 1))
+    dp_all = dp_plates
     for k in range(n):
         d_step[k] += dp_all[k]
         if k >= 1:
