@@ -193,7 +193,7 @@ def _leg_vectors(am: AssemblerModel, pa: PlateArrays) -> tuple[np.ndarray, ...]:
     bottom = np.matmul(geo.bottom_in_plate, pa.R[:-1].transpose(0, 2, 1)) + pa.p[:-1, None, :]
     top = np.matmul(geo.top_in_plate, pa.R[1:].transpose(0, 2, 1)) + pa.p[1:, None, :]
     vec = top - bottom
-    lengths = np.sqrt(np.einsum("jik,jik->ji", vec, vec))
+    lengths = np.sqrt((vec * vec).sum(axis=2))
     if lengths.min() < 1e-9:
         raise PoseError("plate poses put a leg's two joint centres on top of each other")
     return bottom, top, vec, lengths

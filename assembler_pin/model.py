@@ -110,6 +110,7 @@ class AssemblerModel:
         self.platform_rows_v = np.concatenate(
             [self.leg_idx_v.reshape(n, 18), self.plate_idx_v[1:, None] + np.arange(6)[None, :]], axis=1
         )
+        self.plate_rows_ff = self.plate_idx_v[1:, None] + np.arange(6)
         self._check_order()
         self._build_constraints()
         self.home = home_plates(cfg)
