@@ -117,6 +117,72 @@ def cmd_bench(args: argparse.Namespace) -> int:
     return 0
 
 
+def cmd_view(args: argparse.Namespace) -> int:
+    """Show a pose in Meshcat: write a standalone page (--html) or serve until Ctrl-C."""
+    import time
+    import webbrowser
+
+    from .kinematics import taa_to_se3
+    from .viewer import StackViewer
+
+    am = AssemblerModel.from_config(_config(args))
+    viewer = StackViewer(am)
+    try:
+        if args.goal is not None or args.goal_deg is not None:
+            try:
+                from .solve import solve  # lazy: the solver is only needed for --goal
+            except ImportError as exc:
+                raise CLIError(f"--goal needs assembler_pin.solve, which cannot be imported: {exc}") from None
+
+            degrees = args.goal is None
+            goal = taa_to_se3(args.goal_deg if degrees else args.goal, degrees=degrees)
+            result = solve(am, goal)
+            if result.initial is None and result.optimized is None:
+                raise CLIError(f"no pose to show: {result.message}")
+            arm = getattr(getattr(result, "initial_result", None), "arm_points", None)
+            viewer.show_comparison(result.initial, result.optimized, None if args.no_arm else arm)
+            shown = result.optimized if result.optimized is not None else result.initial
+            if args.animate and result.initial is not None and result.optimized is not None:
+                from .viewer import interpolate_states
+
+                viewer.animate(interpolate_states(am, result.initial, result.optimized, args.animate))
+            print(f"solve: {'success' if result.success else 'FAILED'} — {result.message}", file=sys.stderr)
+        else:
+            if args.home:
+                plates = am.home
+            elif args.plates is not None:
+                doc = _read_json(args.plates)
+                if not isinstance(doc, dict) or not isinstance(doc.get("plates"), list):
+                    raise CLIError('the input must be a JSON object {"plates": [n+1 4x4 world transforms]}')
+                plates = doc["plates"]
+            else:
+                raise CLIError("give one of --goal, --goal-deg, --plates FILE or --home")
+            shown = viewer.display(plates)
+            viewer.frame()
+        print(
+            f"max |F| = {shown.max_abs_force:.3f} N, feasible: {'yes' if shown.feasible else 'NO'}",
+            file=sys.stderr,
+        )
+        if args.html:
+            path = Path(args.html).resolve()
+            viewer.static_html(path)
+            print(f"wrote {path}")
+            if args.open:
+                webbrowser.open(path.as_uri())
+            return 0
+        viewer.frame()
+        print(viewer.url, flush=True)
+        if args.open:
+            webbrowser.open(viewer.url)
+        try:
+            while True:
+                time.sleep(0.5)
+        except KeyboardInterrupt:
+            return 0
+    finally:
+        viewer.close()
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="assembler-pin",
@@ -145,6 +211,36 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--json", action="store_true", help="print one JSON object")
     p.add_argument("--repeat", type=int, default=300, help="calls per figure (default 300)")
     p.set_defaults(func=cmd_bench)
+
+    p = add("view", "show a pose in Meshcat (live server until Ctrl-C, or a standalone HTML page)")
+    src = p.add_mutually_exclusive_group(required=True)
+    src.add_argument(
+        "--goal",
+        type=float,
+        nargs=6,
+        metavar=("X", "Y", "Z", "RX", "RY", "RZ"),
+        help="EE goal: translation [m] and rotation vector [rad]; shows initial and optimized poses",
+    )
+    src.add_argument(
+        "--goal-deg",
+        type=float,
+        nargs=6,
+        metavar=("X", "Y", "Z", "RX", "RY", "RZ"),
+        help="as --goal with the rotation vector in degrees",
+    )
+    src.add_argument("--plates", metavar="FILE", help='JSON {"plates": [n+1 4x4]} file, or - for stdin')
+    src.add_argument("--home", action="store_true", help="show the home pose")
+    p.add_argument("--html", metavar="FILE", help="write a standalone HTML page instead of serving")
+    p.add_argument("--open", action="store_true", help="open the page / viewer URL in a web browser")
+    p.add_argument(
+        "--animate",
+        type=int,
+        default=0,
+        metavar="STEPS",
+        help="with --goal: animate initial -> optimized in STEPS leg-length steps",
+    )
+    p.add_argument("--no-arm", action="store_true", help="with --goal: do not draw the helper arm")
+    p.set_defaults(func=cmd_view)
     return parser
 
 

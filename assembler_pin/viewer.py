@@ -1,0 +1,533 @@
+"""Meshcat viewing of the stack: poses, leg forces, helper arm, ghosts and animations.
+
+:class:`StackViewer` draws the stack with :class:`pinocchio.visualize.MeshcatVisualizer`
+and a visual geometry model parsed from the generated URDF (primitive shapes only:
+plate discs and node spheres, motor and shaft cylinders, payload cube). It adds:
+
+* leg colors by actuator force — blue (compression) ↔ gray (zero) ↔ red (tension),
+  saturating at the configured limits (:func:`force_color`);
+* markers on legs that violate a constraint;
+* the helper arm of the initial-condition algorithm (gray links, blue joint clusters,
+  as in the paper's Fig. 2) from ``(n+2, 3)`` world points;
+* a translucent green "ghost" of a second pose (e.g. the initial condition next to the
+  optimized pose), drawn by a second visualizer under another meshcat path;
+* animations of a sequence of states (:func:`interpolate_states`), stored as meshcat
+  animation tracks so that they play in a standalone HTML page too.
+
+Everything is in the world frame O (z up) and SI units. The meshcat server is a local
+subprocess bound to 127.0.0.1; :meth:`StackViewer.close` stops it. The static page
+(:meth:`StackViewer.static_html`) needs no server to be opened.
+
+Display note: meshcat's orbit camera always turns about the world origin, so to frame
+the stack the whole scene (stack, grid and axes) is translated by ``-target`` in the
+viewer; :attr:`StackViewer.scene_offset` holds that translation. Poses passed to the
+API are always world poses.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import io
+import logging
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass
+from pathlib import Path
+
+import meshcat
+import meshcat.animation
+import meshcat.geometry as mg
+import numpy as np
+import numpy.typing as npt
+import pinocchio as pin
+from pinocchio.visualize import MeshcatVisualizer
+
+from .exceptions import AssemblerError, ConvergenceError
+from .geometry import DIMENSIONS
+from .kinematics import PlateArrays, leg_state, plate_arrays, q_from_plates, stack_forward_kinematics
+from .model import AssemblerModel
+from .state import StackState, evaluate_state
+from .urdf import names
+
+__all__ = [
+    "COMPRESSION_RGB",
+    "GHOST_RGBA",
+    "NEUTRAL_RGB",
+    "TENSION_RGB",
+    "StackViewer",
+    "camera_for_points",
+    "force_color",
+    "interpolate_states",
+]
+
+logger = logging.getLogger(__name__)
+
+COMPRESSION_RGB = np.array([0.12, 0.30, 0.95])
+"""Leg color at (or beyond) the compression limit."""
+NEUTRAL_RGB = np.array([0.62, 0.62, 0.62])
+"""Leg color at zero force."""
+TENSION_RGB = np.array([0.95, 0.12, 0.10])
+"""Leg color at (or beyond) the tension limit."""
+GHOST_RGBA = np.array([0.15, 0.75, 0.25, 0.3])
+"""Color of the translucent ghost pose (the paper draws the initial condition green)."""
+ARM_LINK_RGBA = np.array([0.55, 0.55, 0.55, 1.0])
+ARM_CLUSTER_RGBA = np.array([0.10, 0.25, 0.95, 1.0])
+VIOLATION_RGBA = np.array([1.0, 0.85, 0.0, 0.9])
+CAMERA_FOV_DEG = 75.0
+"""Vertical field of view of meshcat's default perspective camera [deg]."""
+
+
+def force_color(forces: npt.ArrayLike, max_tension: float, max_compression: float) -> np.ndarray:
+    """RGB colors of actuator forces: blue (compression) ↔ gray (0) ↔ red (tension).
+
+    Linear between the three anchor colors and saturating at the limits, so that the red
+    channel grows and the blue channel falls monotonically with the force.
+
+    Args:
+        forces: actuator forces [N], tension positive, any shape.
+        max_tension, max_compression: the limits [N] (positive numbers).
+
+    Returns:
+        Array of shape ``forces.shape + (3,)`` with components in [0, 1].
+    """
+    f = np.asarray(forces, dtype=float)
+    if max_tension <= 0 or max_compression <= 0:
+        raise AssemblerError("force limits for coloring must be positive")
+    s = np.where(f >= 0, np.clip(f / max_tension, 0.0, 1.0), np.clip(f / max_compression, -1.0, 0.0))
+    s = s[..., None]
+    hot = NEUTRAL_RGB + s * (TENSION_RGB - NEUTRAL_RGB)
+    cold = NEUTRAL_RGB - s * (COMPRESSION_RGB - NEUTRAL_RGB)
+    return np.where(s >= 0, hot, cold)
+
+
+@dataclass(frozen=True)
+class Camera:
+    """A camera pose for meshcat: look at ``target`` from ``position`` (world, [m])."""
+
+    target: np.ndarray
+    position: np.ndarray
+
+
+def camera_for_points(
+    points: npt.ArrayLike,
+    elevation_deg: float = 12.0,
+    azimuth_deg: float = -90.0,
+    margin: float = 1.15,
+    aspect: float = 4.0 / 3.0,
+) -> Camera:
+    """A side camera framing every point: z up, looking horizontally at the box centre.
+
+    Args:
+        points: (m, 3) world points to frame [m].
+        elevation_deg: camera height angle above the horizontal [deg].
+        azimuth_deg: direction of the camera from the target in the x–y plane [deg];
+            -90° looks from -y towards +y (x to the right, z up: the paper's side view).
+        margin: factor on the distance that just fits the points.
+        aspect: expected width / height of the window.
+    """
+    pts = np.asarray(points, dtype=float).reshape(-1, 3)
+    lo, hi = pts.min(axis=0), pts.max(axis=0)
+    target = 0.5 * (lo + hi)
+    radius_v = 0.5 * (hi[2] - lo[2])
+    radius_h = 0.5 * max(hi[0] - lo[0], hi[1] - lo[1])
+    half_fov = math.radians(CAMERA_FOV_DEG) / 2
+    fit_v = radius_v / math.tan(half_fov)
+    fit_h = radius_h / (math.tan(half_fov) * aspect)
+    distance = margin * max(fit_v, fit_h, 0.2) + radius_h  # + radius_h: the near side is closer
+    el, az = math.radians(elevation_deg), math.radians(azimuth_deg)
+    direction = np.array([math.cos(el) * math.cos(az), math.cos(el) * math.sin(az), math.sin(el)])
+    return Camera(target, target + distance * direction)
+
+
+def _cylinder_between(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """4×4 transform placing meshcat's y-axis cylinder (centred) between points a and b."""
+    d = b - a
+    length = float(np.linalg.norm(d))
+    y = d / length if length > 0 else np.array([0.0, 0.0, 1.0])
+    helper = np.array([1.0, 0.0, 0.0]) if abs(y[0]) < 0.9 else np.array([0.0, 0.0, 1.0])
+    x = np.cross(y, helper)
+    x /= np.linalg.norm(x)
+    z = np.cross(x, y)
+    T = np.eye(4)
+    T[:3, :3] = np.column_stack([x, y, z])
+    T[:3, 3] = 0.5 * (a + b)
+    return T
+
+
+def _material(rgba: npt.ArrayLike) -> mg.MeshPhongMaterial:
+    rgba = np.asarray(rgba, dtype=float)
+    r, g, b = (round(255 * float(c)) for c in rgba[:3])
+    mat = mg.MeshPhongMaterial(color=(r << 16) + (g << 8) + b)
+    if rgba.shape[0] > 3 and rgba[3] < 1.0:
+        mat.transparent = True
+        mat.opacity = float(rgba[3])
+    return mat
+
+
+def _as_plates(am: AssemblerModel, pose: StackState | PlateArrays | Sequence | np.ndarray) -> PlateArrays:
+    return pose.plates if isinstance(pose, StackState) else plate_arrays(am, pose)
+
+
+def interpolate_states(
+    am: AssemblerModel,
+    start: StackState | PlateArrays | Sequence | np.ndarray,
+    end: StackState | PlateArrays | Sequence | np.ndarray,
+    steps: int = 30,
+    end_tolerance: float = 1e-6,
+) -> list[StackState]:
+    """States along a straight line in leg-length space between two solved poses.
+
+    Step k has lengths ``L0 + (k / (steps - 1)) (L1 - L0)``; its plate poses come from
+    the stack forward kinematics (each step started from the previous one, base held at
+    the start pose's base), and its statics from :func:`evaluate_state`.
+
+    Args:
+        start, end: the two poses (states or world plate poses); they must share plate 0.
+        steps: number of states returned, both ends included (>= 2).
+        end_tolerance: largest allowed distance [m] between the last FK pose and ``end``.
+
+    Raises:
+        ConvergenceError: the FK of a step failed (the message names the step), or the
+            interpolation did not arrive at ``end``.
+    """
+    if steps < 2:
+        raise AssemblerError(f"an animation needs at least 2 steps, got {steps}")
+    p0, p1 = _as_plates(am, start), _as_plates(am, end)
+    L0, L1 = leg_state(am, p0).lengths, leg_state(am, p1).lengths
+    base = p0.se3(0)
+    previous = p0
+    states = []
+    for k in range(steps):
+        t = k / (steps - 1)
+        fk = stack_forward_kinematics(am, (1.0 - t) * L0 + t * L1, base=base, guess=previous)
+        if not fk.success:
+            raise ConvergenceError(
+                f"animation step {k}/{steps - 1} (t = {t:.3f}): stack forward kinematics failed: {fk.message}",
+                fk.iterations,
+                fk.residual,
+            )
+        previous = fk.plates
+        states.append(evaluate_state(am, fk.plates))
+    gap = float(np.abs(previous.p - p1.p).max() + np.abs(previous.R - p1.R).max())
+    if gap > end_tolerance:
+        raise ConvergenceError(
+            f"the interpolated motion ends {gap:.3g} away from the end pose (another assembly mode, "
+            "or the two poses do not share plate 0)",
+            0,
+            gap,
+        )
+    return states
+
+
+class StackViewer:
+    """Meshcat view of an Assembler.
+
+    Args:
+        am: the model to draw.
+        viewer: an existing ``meshcat.Visualizer`` to draw into; default: start a local
+            meshcat server (127.0.0.1) owned by this object, stopped by :meth:`close`.
+        prefix: meshcat path of the main stack.
+        open: open the viewer's URL in a web browser.
+
+    Attributes:
+        viz: the :class:`pinocchio.visualize.MeshcatVisualizer` of the main stack.
+        meshcat: the underlying ``meshcat.Visualizer`` (``viewer.meshcat.jupyter_cell()``
+            or :meth:`jupyter_static` for notebooks).
+        scene_offset: translation applied to the whole scene for framing [m].
+    """
+
+    def __init__(
+        self,
+        am: AssemblerModel,
+        viewer: meshcat.Visualizer | None = None,
+        prefix: str = "assembler",
+        open: bool = False,
+    ) -> None:
+        self.am = am
+        self._owns_server = viewer is None
+        if viewer is None:
+            with contextlib.redirect_stdout(io.StringIO()):  # meshcat prints its URL
+                viewer = meshcat.Visualizer()
+        self.meshcat: meshcat.Visualizer = viewer
+        self.visual_model = pin.buildGeomFromUrdfString(am.model, am.urdf_text, pin.GeometryType.VISUAL)
+        self.prefix = prefix
+        self.scene_offset = np.zeros(3)
+        self._ghosts: dict[str, MeshcatVisualizer] = {}
+        self._extra_points: dict[str, np.ndarray] = {}
+        self._roots: list[str] = [prefix, f"{prefix}_violations"]
+        self.state: StackState | None = None
+        self.viz = self._make_visualizer(prefix)
+        self._leg_geoms = self._index_leg_geometries()
+        if open:
+            self.meshcat.open()
+        logger.info("meshcat viewer at %s", self.url)
+
+    # ------------------------------------------------------------------ plumbing
+    def _make_visualizer(self, root: str, rgba: npt.ArrayLike | None = None) -> MeshcatVisualizer:
+        viz = MeshcatVisualizer(self.am.model, None, self.visual_model, copy_models=False)
+        viz.initViewer(viewer=self.meshcat)
+        viz.loadViewerModel(rootNodeName=root, visual_color=None if rgba is None else list(rgba))
+        return viz
+
+    def _index_leg_geometries(self) -> dict[tuple[int, int], list[int]]:
+        """Geometry ids of the motor and shaft of every leg, keyed by (platform, leg)."""
+        frames = self.am.model.frames
+        out: dict[tuple[int, int], list[int]] = {}
+        wanted = {
+            names.leg(j, i, part): (j, i) for j in range(self.am.n) for i in range(6) for part in ("motor", "shaft")
+        }
+        for gid, g in enumerate(self.visual_model.geometryObjects):
+            key = wanted.get(frames[g.parentFrame].name)
+            if key is not None:
+                out.setdefault(key, []).append(gid)
+        return out
+
+    @property
+    def url(self) -> str:
+        """URL of the live viewer (served by the meshcat server on 127.0.0.1)."""
+        return self.meshcat.url()
+
+    def close(self) -> None:
+        """Stop the meshcat server this viewer started (no-op for a borrowed viewer)."""
+        window = self.meshcat.window
+        proc = getattr(window, "server_proc", None)
+        if self._owns_server and proc is not None and proc.poll() is None:
+            proc.kill()
+            proc.wait(timeout=10)
+        with contextlib.suppress(Exception):
+            window.zmq_socket.close(linger=0)
+
+    def __enter__(self) -> StackViewer:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
+
+    # ------------------------------------------------------------------ drawing
+    def display(
+        self,
+        pose: StackState | PlateArrays | Sequence | np.ndarray,
+        color_forces: bool = True,
+        mark_violations: bool = True,
+    ) -> StackState:
+        """Show a pose; color each leg by its force and mark violating legs.
+
+        Args:
+            pose: a :class:`StackState`, or world plate poses (their state is computed).
+            color_forces: color motor and shaft by the actuator force (else URDF colors).
+            mark_violations: put a yellow marker at the middle of every leg that
+                violates a constraint (length, deflection, force, rise).
+
+        Returns:
+            The state shown.
+        """
+        state = pose if isinstance(pose, StackState) else evaluate_state(self.am, pose)
+        self.state = state
+        self.viz.display(q_from_plates(self.am, state.plates))
+        leg_cfg = self.am.config.leg
+        colors = force_color(state.forces, leg_cfg.max_tension, leg_cfg.max_compression)
+        for (j, i), gids in self._leg_geoms.items():
+            for gid in gids:
+                g = self.visual_model.geometryObjects[gid]
+                rgba = [*colors[j, i], 1.0] if color_forces else list(g.meshColor)
+                self.viz.loadViewerGeometryObject(g, pin.GeometryType.VISUAL, rgba)
+        self.viz.display()  # reloaded objects keep their transforms; refresh anyway
+        marks = self.meshcat[f"{self.prefix}_violations"]
+        marks.delete()
+        if mark_violations:
+            for j, i in self.violating_legs(state):
+                mid = 0.5 * (state.legs.bottom_points[j, i] + state.legs.top_points[j, i])
+                node = marks[f"sp{j}_leg{i}"]
+                node.set_object(mg.Sphere(2.2 * DIMENSIONS.motor_radius), _material(VIOLATION_RGBA))
+                node.set_transform(_translation(mid))
+        self._extra_points["stack"] = self._stack_points(state)
+        return state
+
+    @staticmethod
+    def violating_legs(state: StackState) -> list[tuple[int, int]]:
+        """(platform, leg) of every leg with at least one violation, sorted."""
+        return sorted({(v.platform, v.leg) for v in state.violations if v.platform is not None and v.leg is not None})
+
+    def drawn_leg_endpoints(self) -> tuple[np.ndarray, np.ndarray]:
+        """World joint centres of the legs as drawn: (n, 6, 3) bottom and top [m].
+
+        Read back from the visualizer's own kinematics (motor frame origin = universal
+        joint centre, shaft frame origin = ball joint centre).
+        """
+        model, data = self.viz.model, self.viz.data
+        pin.updateFramePlacements(model, data)
+        bottom = np.zeros((self.am.n, 6, 3))
+        top = np.zeros((self.am.n, 6, 3))
+        for j in range(self.am.n):
+            for i in range(6):
+                bottom[j, i] = data.oMf[model.getFrameId(names.leg(j, i, "motor"))].translation
+                top[j, i] = data.oMf[model.getFrameId(names.leg(j, i, "shaft"))].translation
+        return bottom, top
+
+    def show_ghost(
+        self,
+        pose: StackState | PlateArrays | Sequence | np.ndarray,
+        name: str = "initial",
+        rgba: npt.ArrayLike = GHOST_RGBA,
+    ) -> None:
+        """Draw a second pose as a translucent ghost (default: green, 30 % opacity).
+
+        It is a second ``MeshcatVisualizer`` under the meshcat path ``{prefix}_{name}``.
+        """
+        plates = _as_plates(self.am, pose)
+        if name not in self._ghosts:
+            self._ghosts[name] = self._make_visualizer(f"{self.prefix}_{name}", rgba)
+            self._roots.append(f"{self.prefix}_{name}")
+        self._ghosts[name].display(q_from_plates(self.am, plates))
+        self._extra_points[f"ghost_{name}"] = self._stack_points(plates)
+
+    def show_helper_arm(self, points: npt.ArrayLike, name: str = "helper_arm") -> None:
+        """Draw the helper arm: gray links between consecutive points, blue joint clusters.
+
+        Args:
+            points: (n+2, 3) world points [m]: base, the n joint clusters, tip.
+        """
+        pts = np.asarray(points, dtype=float)
+        if pts.ndim != 2 or pts.shape[1] != 3 or pts.shape[0] < 2 or not np.all(np.isfinite(pts)):
+            raise AssemblerError(f"helper arm points must be a finite (m >= 2, 3) array, got shape {pts.shape}")
+        root = self.meshcat[name]
+        root.delete()
+        link_r = 0.6 * DIMENSIONS.motor_radius
+        for k in range(pts.shape[0] - 1):
+            length = float(np.linalg.norm(pts[k + 1] - pts[k]))
+            if length < 1e-9:
+                continue
+            node = root[f"link{k}"]
+            node.set_object(mg.Cylinder(length, link_r), _material(ARM_LINK_RGBA))
+            node.set_transform(_cylinder_between(pts[k], pts[k + 1]))
+        for k in range(1, pts.shape[0] - 1):
+            node = root[f"cluster{k}"]
+            node.set_object(mg.Sphere(2.0 * DIMENSIONS.node_sphere_radius), _material(ARM_CLUSTER_RGBA))
+            node.set_transform(_translation(pts[k]))
+        for k in (0, pts.shape[0] - 1):
+            node = root[f"end{k}"]
+            node.set_object(mg.Sphere(1.2 * link_r), _material(ARM_LINK_RGBA))
+            node.set_transform(_translation(pts[k]))
+        self._extra_points[name] = pts
+        if name not in self._roots:
+            self._roots.append(name)
+
+    def show_comparison(
+        self,
+        initial: StackState | None,
+        optimized: StackState | None,
+        arm_points: npt.ArrayLike | None = None,
+    ) -> None:
+        """The paper's comparison: optimized pose solid (force colors), initial as a ghost.
+
+        Either pose may be missing (None); with only the initial pose it is drawn solid.
+        """
+        if optimized is not None:
+            self.display(optimized)
+            if initial is not None:
+                self.show_ghost(initial)
+        elif initial is not None:
+            self.display(initial)
+        else:
+            raise AssemblerError("nothing to show: both the initial and the optimized state are missing")
+        if arm_points is not None:
+            self.show_helper_arm(arm_points)
+        self.frame()
+
+    def animate(
+        self,
+        states: Sequence[StackState | PlateArrays],
+        fps: float = 15.0,
+        repetitions: int = 1,
+        play: bool = True,
+    ) -> None:
+        """Store the sequence as a meshcat animation (plays in the live and static viewer).
+
+        The stack is displayed at the first state (leg colors of that state); each frame
+        moves every body of the main stack. Build ``states`` with
+        :func:`interpolate_states`.
+        """
+        if len(states) < 2:
+            raise AssemblerError("an animation needs at least two states")
+        first = states[0]
+        self.display(first if isinstance(first, StackState) else evaluate_state(self.am, first))
+        anim = meshcat.animation.Animation(default_framerate=fps)
+        model, data = self.viz.model, self.viz.data
+        vmodel, vdata = self.visual_model, self.viz.visual_data
+        for k, st in enumerate(states):
+            plates = _as_plates(self.am, st)
+            pin.forwardKinematics(model, data, q_from_plates(self.am, plates))
+            pin.updateGeometryPlacements(model, data, vmodel, vdata)
+            with anim.at_frame(self.meshcat, k) as frame:
+                for gid, g in enumerate(vmodel.geometryObjects):
+                    frame[self.viz.getViewerNodeName(g, pin.GeometryType.VISUAL)].set_transform(
+                        vdata.oMg[gid].homogeneous
+                    )
+            self._extra_points[f"anim{k}"] = self._stack_points(plates)
+        self.meshcat.set_animation(anim, play=play, repetitions=repetitions)
+        self.viz.display(q_from_plates(self.am, _as_plates(self.am, first)))
+
+    # ------------------------------------------------------------------ camera / export
+    def _stack_points(self, pose: StackState | PlateArrays) -> np.ndarray:
+        """World points bounding the drawn stack: plate rims, joint centres, payload."""
+        plates = _as_plates(self.am, pose)
+        r = self.am.config.plate.node_radius + DIMENSIONS.node_sphere_radius
+        ang = np.linspace(0, 2 * np.pi, 12, endpoint=False)
+        rim = np.stack([r * np.cos(ang), r * np.sin(ang), np.zeros_like(ang)], axis=1)
+        pts = [np.einsum("kab,mb->kma", plates.R, rim).reshape(-1, 3) + np.repeat(plates.p, len(ang), axis=0)]
+        half = 0.5 * DIMENSIONS.payload_size
+        payload = plates.R[-1] @ np.array([0.0, 0.0, self.am.config.payload.offset + half]) + plates.p[-1]
+        pts.append(payload[None, :])
+        return np.concatenate(pts)
+
+    def frame(
+        self,
+        elevation_deg: float = 12.0,
+        azimuth_deg: float = -90.0,
+        show_grid: bool = True,
+    ) -> Camera:
+        """Point the camera at everything drawn, from the side (z up), framing it whole.
+
+        meshcat's camera orbits the world origin, so the scene is translated by
+        ``-target`` (stored in :attr:`scene_offset`) and the camera placed relative to it.
+        """
+        if not self._extra_points:
+            raise AssemblerError("nothing drawn yet: call display() first")
+        cam = camera_for_points(np.concatenate(list(self._extra_points.values())), elevation_deg, azimuth_deg)
+        self.scene_offset = -cam.target
+        shift = _translation(self.scene_offset)
+        for root in ["/Grid", "/Axes", *self._roots]:
+            self.meshcat[root].set_transform(shift)
+        rel = cam.position - cam.target
+        self.meshcat["/Cameras/default"].set_transform(np.eye(4))
+        # three.js is y-up: world (x, y, z) -> (x, z, -y)
+        self.meshcat["/Cameras/default/rotated/<object>"].set_property("position", [rel[0], rel[2], -rel[1]])
+        self.meshcat["/Grid"].set_property("visible", show_grid)
+        return cam
+
+    def static_html(self, path: str | Path | None = None, frame: bool = True) -> str:
+        """The standalone HTML page of the scene (no server needed to open it).
+
+        Args:
+            path: write the page there too.
+            frame: set the side camera framing the stack first (:meth:`frame`).
+        """
+        if frame:
+            self.frame()
+        html = self.meshcat.static_html()
+        if path is not None:
+            Path(path).write_text(html)
+            logger.info("wrote %s (%d bytes)", path, len(html))
+        return html
+
+    def jupyter_static(self, height: int = 400):
+        """An inline notebook cell with a self-contained snapshot (needs no browser link
+        to the server: the scene is embedded)."""
+        self.frame()
+        return self.meshcat.render_static(height=height)
+
+
+def _translation(p: npt.ArrayLike) -> np.ndarray:
+    T = np.eye(4)
+    T[:3, 3] = np.asarray(p, dtype=float)
+    return T

@@ -1,0 +1,325 @@
+"""The Meshcat viewer: colors, drawn geometry, animation, CLI, and a real browser rendering.
+
+The browser test renders the standalone page of ``assembler-pin view --html`` in headless
+Chromium and checks the pixels: the stack must be drawn where the camera model says it
+is, and two different poses must give different pictures.
+"""
+
+from __future__ import annotations
+
+import math
+import shutil
+import signal
+import subprocess
+import sys
+import urllib.request
+from pathlib import Path
+
+import matplotlib.image as mpimg
+import numpy as np
+import pytest
+
+from assembler_pin import evaluate_state, stack_forward_kinematics
+from assembler_pin.exceptions import AssemblerError, ConvergenceError
+from assembler_pin.kinematics import StackFKResult
+from assembler_pin.viewer import (
+    CAMERA_FOV_DEG,
+    COMPRESSION_RGB,
+    NEUTRAL_RGB,
+    TENSION_RGB,
+    StackViewer,
+    camera_for_points,
+    force_color,
+    interpolate_states,
+)
+
+WIDTH, HEIGHT = 800, 600
+CHROMIUM = shutil.which("chromium") or shutil.which("chromium-browser")
+
+
+@pytest.fixture(scope="module")
+def bent(am):
+    """A reachable bent pose (from stack FK of uneven leg lengths)."""
+    lengths = np.full((am.n, 6), 0.275)
+    lengths[0, :3] = 0.22
+    lengths[1, 3:] = 0.33
+    fk = stack_forward_kinematics(am, lengths)
+    assert fk.success
+    return fk.plates
+
+
+@pytest.fixture(scope="module")
+def viewer(am):
+    v = StackViewer(am)
+    yield v
+    v.close()
+
+
+# ---------------------------------------------------------------------- colors
+def test_force_colors_monotone_and_saturating():
+    f = np.linspace(-400.0, 400.0, 801)
+    c = force_color(f, max_tension=200.0, max_compression=100.0)
+    assert c.shape == (801, 3) and c.min() >= 0 and c.max() <= 1
+    assert np.all(np.diff(c[:, 0]) >= -1e-15)  # red grows with the force
+    assert np.all(np.diff(c[:, 2]) <= 1e-15)  # blue falls with the force
+    assert np.allclose(force_color(0.0, 200, 100), NEUTRAL_RGB)
+    assert np.allclose(force_color(200.0, 200, 100), TENSION_RGB)
+    assert np.allclose(force_color(1e4, 200, 100), TENSION_RGB)
+    assert np.allclose(force_color(-100.0, 200, 100), COMPRESSION_RGB)
+    assert np.allclose(force_color(-1e4, 200, 100), COMPRESSION_RGB)
+    # half the tension limit is half-way between gray and red
+    assert np.allclose(force_color(100.0, 200, 100), 0.5 * (NEUTRAL_RGB + TENSION_RGB))
+    with pytest.raises(AssemblerError):
+        force_color(1.0, 0.0, 100.0)
+
+
+# ---------------------------------------------------------------------- drawing
+def test_drawn_legs_join_the_joint_centres(am, viewer, bent):
+    state = viewer.display(bent)
+    bottom, top = viewer.drawn_leg_endpoints()
+    assert np.allclose(bottom, state.legs.bottom_points, atol=1e-12)
+    assert np.allclose(top, state.legs.top_points, atol=1e-12)
+    # every motor and shaft is drawn, and their geometry sits on the leg axis
+    assert sorted(viewer._leg_geoms) == [(j, i) for j in range(am.n) for i in range(6)]
+    vdata, vmodel = viewer.viz.visual_data, viewer.visual_model
+    for (j, i), gids in viewer._leg_geoms.items():
+        for gid in gids:
+            centre = vdata.oMg[gid].translation
+            b, t = state.legs.bottom_points[j, i], state.legs.top_points[j, i]
+            u = (t - b) / np.linalg.norm(t - b)
+            off_axis = (centre - b) - ((centre - b) @ u) * u
+            assert np.linalg.norm(off_axis) < 1e-12, vmodel.geometryObjects[gid].name
+
+
+def test_violations_are_marked(am, viewer):
+    lengths = np.full((am.n, 6), 0.275)
+    lengths[0, 0] = 0.36  # beyond max_length
+    fk = stack_forward_kinematics(am, lengths)
+    assert fk.success
+    state = evaluate_state(am, fk.plates)
+    assert (0, 0) in StackViewer.violating_legs(state)
+    assert viewer.display(state, mark_violations=True) is state
+
+
+def test_helper_arm_input_checked(viewer):
+    with pytest.raises(AssemblerError):
+        viewer.show_helper_arm(np.zeros((3, 2)))
+    with pytest.raises(AssemblerError):
+        viewer.show_helper_arm(np.full((6, 3), np.nan))
+
+
+def test_camera_frames_every_point():
+    pts = np.random.default_rng(0).uniform([-0.3, -0.2, 0.0], [0.4, 0.2, 1.3], (200, 3))
+    cam = camera_for_points(pts)
+    px = project(cam, pts)
+    assert np.all((px[:, 0] > 0) & (px[:, 0] < WIDTH) & (px[:, 1] > 0) & (px[:, 1] < HEIGHT))
+    # side view: the camera is on the -y side, z up, looking at the box centre
+    assert cam.position[1] < cam.target[1] and abs(cam.position[0] - cam.target[0]) < 1e-9
+
+
+# ---------------------------------------------------------------------- animation
+def test_interpolation_runs_stack_fk_each_step(am, bent):
+    states = interpolate_states(am, am.home, bent, steps=7)
+    assert len(states) == 7
+    assert np.allclose(states[0].plates.p, np.array([m.translation for m in am.home]), atol=1e-9)
+    assert np.allclose(states[-1].plates.p, bent.p, atol=1e-9)
+    L0 = states[0].leg_lengths
+    L1 = states[-1].leg_lengths
+    for k, s in enumerate(states):
+        assert np.allclose(s.leg_lengths, L0 + k / 6 * (L1 - L0), atol=1e-10)
+
+
+def test_interpolation_stops_on_fk_failure(am, bent, monkeypatch):
+    import assembler_pin.viewer as viewer_mod
+
+    real = viewer_mod.stack_forward_kinematics
+    calls = {"n": 0}
+
+    def failing(*args, **kwargs):
+        calls["n"] += 1
+        res = real(*args, **kwargs)
+        if calls["n"] == 4:
+            return StackFKResult(res.plates, False, res.platforms, "did not converge (test)")
+        return res
+
+    monkeypatch.setattr(viewer_mod, "stack_forward_kinematics", failing)
+    with pytest.raises(ConvergenceError, match=r"animation step 3/9 .*did not converge \(test\)"):
+        interpolate_states(am, am.home, bent, steps=10)
+    with pytest.raises(AssemblerError):
+        interpolate_states(am, am.home, bent, steps=1)
+
+
+def test_animation_in_static_html(am, viewer, bent, tmp_path):
+    states = interpolate_states(am, am.home, bent, steps=5)
+    viewer.animate(states, fps=5)
+    html = viewer.static_html(tmp_path / "anim.html")
+    cmds = page_commands(html)
+    anims = [c for c in cmds if c["type"] == "set_animation"]
+    assert len(anims) == 1
+    tracks = anims[0]["animations"]
+    assert len(tracks) == viewer.visual_model.ngeoms  # one clip per drawn body
+    times = [k["time"] for k in tracks[0]["clip"]["tracks"][0]["keys"]]
+    assert times == list(range(5))
+    assert (tmp_path / "anim.html").stat().st_size > 100_000
+
+
+def test_notebook_inline_cell(viewer, bent):
+    viewer.display(bent)
+    cell = viewer.jupyter_static(height=300)
+    assert "srcdoc" in cell.data and "MeshCat" in cell.data
+
+
+# ---------------------------------------------------------------------- CLI
+def run_cli(*args: str, timeout: float = 120):
+    return subprocess.run(
+        [sys.executable, "-m", "assembler_pin.cli", *args], capture_output=True, text=True, timeout=timeout
+    )
+
+
+def test_cli_view_errors(tmp_path):
+    out = run_cli("view", "--plates", str(tmp_path / "missing.json"), "--html", str(tmp_path / "x.html"))
+    assert out.returncode == 2 and out.stderr.count("\n") == 1 and "cannot read" in out.stderr
+    out = run_cli("view", "--html", str(tmp_path / "x.html"))
+    assert out.returncode == 2  # argparse: one source is required
+
+
+def test_cli_view_serves_until_interrupted():
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "assembler_pin.cli", "view", "--home"],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
+    try:
+        url = proc.stdout.readline().strip()
+        assert url.startswith("http://127.0.0.1:"), url
+        with urllib.request.urlopen(url, timeout=10) as page:
+            assert b"MeshCat" in page.read() or page.status == 200
+        proc.send_signal(signal.SIGINT)
+        assert proc.wait(timeout=20) == 0
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+            proc.wait()
+    # the meshcat server it started is gone too
+    with pytest.raises(OSError):
+        urllib.request.urlopen(url, timeout=2)
+
+
+@pytest.mark.skipif(
+    not __import__("importlib").util.find_spec("assembler_pin.solve"), reason="assembler_pin.solve not available"
+)
+def test_cli_view_goal_writes_comparison(tmp_path):
+    page = tmp_path / "goal.html"
+    out = run_cli("view", "--goal", "0.1", "0", "0.9", "0", "0", "0", "--html", str(page), timeout=300)
+    assert out.returncode == 0, out.stderr
+    assert "solve: success" in out.stderr
+    paths = page_paths(page.read_text())
+    assert any(p.startswith("/meshcat/assembler/visuals/") for p in paths)  # optimized, solid
+    assert any(p.startswith("/meshcat/assembler_initial/visuals/") for p in paths)  # initial, ghost
+    clusters = [p for p in paths if p.startswith("/meshcat/helper_arm/cluster")]
+    assert len(clusters) == 4  # n joint clusters of the helper arm
+
+
+def page_commands(html: str) -> list[dict]:
+    """The meshcat drawing commands embedded in a static page (msgpack, base64)."""
+    import base64
+    import re
+
+    import umsgpack
+
+    blobs = re.findall(r"data:application/octet-binary;base64,([A-Za-z0-9+/=]+)", html)
+    return [umsgpack.unpackb(base64.b64decode(blob)) for blob in blobs]
+
+
+def page_paths(html: str) -> set[str]:
+    """Meshcat paths of every drawing command embedded in a static page."""
+    return {cmd["path"] for cmd in page_commands(html) if cmd.get("path")}
+
+
+# ---------------------------------------------------------------------- real browser
+def project(cam, points: np.ndarray) -> np.ndarray:
+    """Pixel coordinates of world points seen by meshcat's perspective camera (fov 75°,
+    looking from ``cam.position`` at ``cam.target``, z up)."""
+    fwd = cam.target - cam.position
+    fwd /= np.linalg.norm(fwd)
+    right = np.cross(fwd, [0.0, 0.0, 1.0])
+    right /= np.linalg.norm(right)
+    up = np.cross(right, fwd)
+    rel = np.asarray(points) - cam.position
+    depth = rel @ fwd
+    f = (HEIGHT / 2) / math.tan(math.radians(CAMERA_FOV_DEG) / 2)
+    u = WIDTH / 2 + f * (rel @ right) / depth
+    v = HEIGHT / 2 - f * (rel @ up) / depth
+    return np.stack([u, v], axis=1)
+
+
+def screenshot(html: Path, tmp_path: Path) -> np.ndarray:
+    png = html.with_suffix(".png")
+    cmd = [
+        CHROMIUM,
+        "--headless",
+        "--no-sandbox",
+        "--disable-gpu",
+        "--enable-unsafe-swiftshader",
+        "--disable-background-networking",
+        "--disable-component-update",
+        "--disable-sync",
+        "--no-first-run",
+        f"--user-data-dir={tmp_path / 'chromium-profile'}",
+        f"--screenshot={png}",
+        f"--window-size={WIDTH},{HEIGHT}",
+        html.resolve().as_uri(),
+    ]
+    subprocess.run(cmd, capture_output=True, timeout=60, check=False)
+    assert png.exists(), "chromium wrote no screenshot"
+    img = mpimg.imread(png)[..., :3]
+    assert img.shape[:2] == (HEIGHT, WIDTH)
+    return img
+
+
+@pytest.mark.skipif(CHROMIUM is None, reason="chromium not installed (.ci/run installs it)")
+def test_html_page_draws_the_stack_in_a_real_browser(am, bent, tmp_path):
+    import json
+
+    plates_file = tmp_path / "bent.json"
+    plates_file.write_text(json.dumps({"plates": bent.as_matrices().tolist()}))
+    pages = {"home": tmp_path / "home.html", "bent": tmp_path / "bent.html"}
+    out = run_cli("view", "--home", "--html", str(pages["home"]))
+    assert out.returncode == 0, out.stderr
+    out = run_cli("view", "--plates", str(plates_file), "--html", str(pages["bent"]))
+    assert out.returncode == 0, out.stderr
+
+    # the same scene without the stack: the background seen by the same camera
+    with StackViewer(am) as v:
+        v.display(am.home)
+        cam = v.frame()
+        for root in v._roots:
+            v.meshcat[root].set_property("visible", False)
+        v.static_html(tmp_path / "background.html", frame=False)
+        stack_points = v._stack_points(evaluate_state(am, am.home))
+
+    home = screenshot(pages["home"], tmp_path)
+    bent_img = screenshot(pages["bent"], tmp_path)
+    background = screenshot(tmp_path / "background.html", tmp_path)
+
+    # where the stack must appear: its projected bounding box, padded
+    px = project(cam, stack_points)
+    pad = 25
+    u0, v0 = np.floor(px.min(axis=0)).astype(int) - pad
+    u1, v1 = np.ceil(px.max(axis=0)).astype(int) + pad
+    inside = np.zeros((HEIGHT, WIDTH), dtype=bool)
+    inside[max(v0, 0) : v1, max(u0, 0) : u1] = True
+    inside_px = inside.sum()
+    assert 0.05 * WIDTH * HEIGHT < inside_px < 0.6 * WIDTH * HEIGHT  # framed: neither tiny nor clipped
+
+    changed = np.abs(home - background).max(axis=2) > 0.12
+    assert changed[inside].mean() > 0.15, f"only {changed[inside].mean():.1%} of the stack region is drawn"
+    assert changed[~inside].mean() < 0.01, "pixels changed outside the region the stack projects to"
+    # the stack spans the frame vertically: drawn rows from near the top to near the bottom of its box
+    rows = np.flatnonzero(changed[inside.any(axis=1)].any(axis=1))
+    assert rows.size > 0.6 * (min(v1, HEIGHT) - max(v0, 0))
+
+    # a different pose gives a different picture
+    differ = np.abs(home - bent_img).max(axis=2) > 0.12
+    assert differ.mean() > 0.01
