@@ -1,0 +1,366 @@
+"""Matplotlib figures of stack states: force tables, side/top views, force bars, workspace.
+
+Every function returns a :class:`matplotlib.figure.Figure` built without pyplot's global
+state (so it works headless, with any backend, and in notebooks: a Figure displays
+inline there); :func:`save` writes one to PNG.
+
+Conventions (as everywhere in the package): forces in newtons, **tension positive**;
+positions in metres in the world frame O (z up). Colors follow the paper's §V figures:
+the initial condition is green, the optimized pose blue (plates) and red (legs). Force
+maps use a diverging colormap centred at 0 — red tension, blue compression — matching
+the leg colors of the Meshcat viewer.
+"""
+
+from __future__ import annotations
+
+import logging
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+import numpy.typing as npt
+import pinocchio as pin
+from matplotlib.colors import Normalize, TwoSlopeNorm
+from matplotlib.figure import Figure
+
+from .exceptions import AssemblerError
+from .model import AssemblerModel
+from .state import StackState
+
+__all__ = [
+    "INITIAL_COLOR",
+    "OPTIMIZED_LEG_COLOR",
+    "OPTIMIZED_PLATE_COLOR",
+    "WorkspaceSlice",
+    "compute_workspace_slice",
+    "default_state_function",
+    "force_bars",
+    "force_heatmaps",
+    "plot_workspace_slice",
+    "pose_views",
+    "save",
+    "workspace_slice",
+]
+
+logger = logging.getLogger(__name__)
+
+INITIAL_COLOR = "#2ca02c"
+"""Green: the initial condition (paper §V)."""
+OPTIMIZED_PLATE_COLOR = "#1f3fbf"
+"""Blue: plates of the optimized pose."""
+OPTIMIZED_LEG_COLOR = "#d62728"
+"""Red: legs of the optimized pose."""
+FORCE_CMAP = "RdBu_r"
+"""Diverging colormap: blue = compression (negative), red = tension (positive)."""
+
+
+def _named_states(
+    initial: StackState | None, optimized: StackState | None, titles: Sequence[str]
+) -> list[tuple[str, StackState]]:
+    out = [(t, s) for t, s in zip(titles, (initial, optimized), strict=True) if s is not None]
+    if not out:
+        raise AssemblerError("nothing to plot: both states are missing")
+    return out
+
+
+# ---------------------------------------------------------------------- force tables
+def force_heatmaps(
+    initial: StackState | None,
+    optimized: StackState | None = None,
+    titles: Sequence[str] = ("initial", "optimized"),
+    limit: float | None = None,
+    fmt: str = "{:.1f}",
+) -> Figure:
+    """Annotated heatmaps of the actuator forces, actuator × platform, side by side.
+
+    Rows are actuators 1..6, columns platforms (SP) 1..n; each cell is annotated with
+    its force [N]. The colormap is diverging and centred at 0 (red tension, blue
+    compression) with one symmetric scale for both panels: ±``limit`` if given, else
+    ±max |F| over the states shown.
+    """
+    states = _named_states(initial, optimized, titles)
+    vmax = limit if limit is not None else max(float(np.abs(s.forces).max()) for _, s in states)
+    vmax = max(vmax, 1e-9)
+    norm = TwoSlopeNorm(vcenter=0.0, vmin=-vmax, vmax=vmax)
+    n = states[0][1].forces.shape[0]
+    fig = Figure(figsize=(1.2 + 1.25 * n * len(states), 4.2), layout="constrained")
+    axes = fig.subplots(1, len(states), squeeze=False)[0]
+    image = None
+    for ax, (title, state) in zip(axes, states, strict=True):
+        table = state.forces.T  # (6, n): actuator × platform
+        image = ax.imshow(table, cmap=FORCE_CMAP, norm=norm, aspect="auto")
+        for i in range(table.shape[0]):
+            for j in range(table.shape[1]):
+                value = table[i, j]
+                dark = abs(value) > 0.6 * vmax
+                ax.text(
+                    j, i, fmt.format(value), ha="center", va="center", fontsize=8, color="white" if dark else "black"
+                )
+        ax.set_xticks(range(n), [f"SP{j + 1}" for j in range(n)])
+        ax.set_yticks(range(6), [str(i + 1) for i in range(6)])
+        ax.set_xlabel("platform")
+        ax.set_ylabel("actuator")
+        ax.set_title(f"{title}: max |F| {state.max_abs_force:.1f} N, mean {state.mean_abs_force:.1f} N", fontsize=9)
+    fig.colorbar(image, ax=list(axes), label="force [N] (tension +, compression −)", shrink=0.9)
+    return fig
+
+
+def force_bars(
+    initial: StackState | None,
+    optimized: StackState | None = None,
+    titles: Sequence[str] = ("initial", "optimized"),
+    limits: tuple[float, float] | None = None,
+) -> Figure:
+    """Per-actuator force bars [N], initial (green) next to optimized (red).
+
+    Args:
+        limits: optional ``(max_tension, max_compression)`` [N] drawn as dashed lines.
+    """
+    states = _named_states(initial, optimized, titles)
+    n = states[0][1].forces.shape[0]
+    x = np.arange(6 * n)
+    width = 0.8 / len(states)
+    colors = {titles[0]: INITIAL_COLOR, titles[1]: OPTIMIZED_LEG_COLOR}
+    fig = Figure(figsize=(max(6.0, 0.38 * 6 * n), 3.6), layout="constrained")
+    ax = fig.subplots()
+    for k, (title, state) in enumerate(states):
+        offset = (k - (len(states) - 1) / 2) * width
+        ax.bar(x + offset, state.forces.ravel(), width, label=title, color=colors.get(title))
+    ax.axhline(0.0, color="black", lw=0.8)
+    if limits is not None:
+        ax.axhline(limits[0], color="gray", ls="--", lw=0.8, label="limits")
+        ax.axhline(-limits[1], color="gray", ls="--", lw=0.8)
+    for j in range(1, n):
+        ax.axvline(6 * j - 0.5, color="0.85", lw=0.8)
+    ax.set_xticks(x, [f"{j + 1}.{i + 1}" for j in range(n) for i in range(6)], fontsize=7, rotation=90)
+    ax.set_xlabel("actuator (platform.leg)")
+    ax.set_ylabel("force [N] (tension +)")
+    ax.legend(fontsize=8)
+    return fig
+
+
+# ---------------------------------------------------------------------- side / top views
+def _plate_outline(state: StackState, k: int) -> np.ndarray:
+    """World points of plate k's leg joints, in angular order around its centre, closed."""
+    legs = state.legs
+    n = legs.lengths.shape[0]
+    pts = []
+    if k > 0:
+        pts.append(legs.top_points[k - 1])
+    if k < n:
+        pts.append(legs.bottom_points[k])
+    p = np.concatenate(pts)
+    local = (p - state.plates.p[k]) @ state.plates.R[k]
+    order = np.argsort(np.arctan2(local[:, 1], local[:, 0]))
+    p = p[order]
+    return np.vstack([p, p[:1]])
+
+
+def _draw_state(
+    ax, state: StackState, axes_idx: tuple[int, int], leg_color: str, plate_color: str, label: str, alpha: float = 1.0
+) -> None:
+    a, b = axes_idx
+    bottom, top = state.legs.bottom_points, state.legs.top_points
+    for j in range(bottom.shape[0]):
+        for i in range(6):
+            ax.plot(
+                [bottom[j, i, a], top[j, i, a]],
+                [bottom[j, i, b], top[j, i, b]],
+                color=leg_color,
+                lw=1.4,
+                alpha=alpha,
+                label=label if (j, i) == (0, 0) else None,
+            )
+    for k in range(len(state.plates)):
+        outline = _plate_outline(state, k)
+        ax.plot(outline[:, a], outline[:, b], color=plate_color, lw=2.0, alpha=alpha)
+        ax.fill(outline[:, a], outline[:, b], color=plate_color, alpha=0.15 * alpha)
+    ax.plot(state.plates.p[:, a], state.plates.p[:, b], "o", color=plate_color, ms=3, alpha=alpha)
+
+
+def pose_views(
+    initial: StackState | None,
+    optimized: StackState | None = None,
+    arm_points: npt.ArrayLike | None = None,
+    titles: Sequence[str] = ("initial", "optimized"),
+) -> Figure:
+    """Side (x–z) and top (x–y) views of one or two states, as in the paper's figures.
+
+    The initial state is drawn green, the optimized one with blue plates and red legs;
+    legs join their two joint centres, plates are outlined through their leg joints.
+    ``arm_points`` ((n+2, 3) world points [m]) adds the helper arm: gray links, blue
+    joint clusters.
+    """
+    _named_states(initial, optimized, titles)
+    fig = Figure(figsize=(10.0, 5.0), layout="constrained")
+    side, top = fig.subplots(1, 2)
+    for ax, idx, name in ((side, (0, 2), "side view (x–z)"), (top, (0, 1), "top view (x–y)")):
+        if initial is not None:
+            _draw_state(
+                ax, initial, idx, INITIAL_COLOR, INITIAL_COLOR, titles[0], alpha=0.8 if optimized is not None else 1.0
+            )
+        if optimized is not None:
+            _draw_state(ax, optimized, idx, OPTIMIZED_LEG_COLOR, OPTIMIZED_PLATE_COLOR, titles[1])
+        if arm_points is not None:
+            arm = np.asarray(arm_points, dtype=float)
+            ax.plot(arm[:, idx[0]], arm[:, idx[1]], "-", color="0.5", lw=2.5, label="helper arm")
+            ax.plot(arm[1:-1, idx[0]], arm[1:-1, idx[1]], "o", color="#1030f0", ms=7)
+        ax.set_aspect("equal", adjustable="datalim")
+        ax.set_xlabel("x [m]")
+        ax.set_ylabel("z [m]" if idx[1] == 2 else "y [m]")
+        ax.set_title(name)
+        ax.grid(True, lw=0.4, alpha=0.5)
+    side.legend(fontsize=8, loc="best")
+    return fig
+
+
+# ---------------------------------------------------------------------- workspace slice
+@dataclass
+class WorkspaceSlice:
+    """EE positions on a grid in a plane and the max |F| of the state reached there.
+
+    Attributes:
+        plane: the two world axes spanned, e.g. ``"xz"``.
+        u, v: grid coordinates along those axes [m] (1-D).
+        max_abs_force: (len(v), len(u)) max |F| [N]; NaN where no state was found.
+        feasible: (len(v), len(u)) the state found satisfies every constraint.
+        rotation: the EE orientation used for every goal (world frame).
+        fixed: the coordinate of the third axis [m].
+    """
+
+    plane: str
+    u: np.ndarray
+    v: np.ndarray
+    max_abs_force: np.ndarray
+    feasible: np.ndarray
+    rotation: np.ndarray
+    fixed: float
+
+    @property
+    def reachable(self) -> np.ndarray:
+        """Where a state was found."""
+        return np.isfinite(self.max_abs_force)
+
+
+def default_state_function(am: AssemblerModel) -> Callable[[pin.SE3], StackState | None]:
+    """``goal -> state``: the optimized state of :func:`assembler_pin.solve.solve` (falling
+    back to its initial state when the optimization gives none), or, without the solve
+    module, the helper-arm initial condition. None when no valid state is found."""
+    try:
+        from .solve import solve
+    except ImportError:
+        solve = None
+    if solve is not None:
+
+        def by_solve(goal: pin.SE3) -> StackState | None:
+            res = solve(am, goal)
+            return res.optimized if res.optimized is not None else res.initial
+
+        return by_solve
+    from .helper_arm import initial_condition
+
+    def by_arm(goal: pin.SE3) -> StackState | None:
+        res = initial_condition(am, goal)
+        return res.state if res.success else None
+
+    return by_arm
+
+
+_AXES = {"x": 0, "y": 1, "z": 2}
+
+
+def compute_workspace_slice(
+    am: AssemblerModel,
+    state_function: Callable[[pin.SE3], StackState | None] | None = None,
+    plane: str = "xz",
+    u_range: tuple[float, float] = (-0.6, 0.6),
+    v_range: tuple[float, float] = (0.3, 1.1),
+    resolution: tuple[int, int] = (9, 7),
+    fixed: float = 0.0,
+    rotation: npt.ArrayLike | None = None,
+    progress: bool = True,
+) -> WorkspaceSlice:
+    """Max |F| over EE positions on a grid in a world plane (orientation held fixed).
+
+    Args:
+        state_function: ``goal (pin.SE3) -> StackState | None``; default
+            :func:`default_state_function`.
+        plane: two of x, y, z (e.g. ``"xz"``, ``"xy"``); the third is held at ``fixed`` [m].
+        u_range, v_range: grid extents along the plane's two axes [m].
+        resolution: number of points along u and v.
+        rotation: EE orientation (3×3, world), default identity.
+        progress: show a tqdm progress bar (on stderr).
+    """
+    from tqdm.auto import tqdm
+
+    if len(plane) != 2 or any(c not in _AXES for c in plane) or plane[0] == plane[1]:
+        raise AssemblerError(f"plane must name two different axes of x, y, z (e.g. 'xz'), got {plane!r}")
+    fn = state_function or default_state_function(am)
+    rot = np.eye(3) if rotation is None else np.asarray(rotation, dtype=float)
+    ia, ib = _AXES[plane[0]], _AXES[plane[1]]
+    ic = 3 - ia - ib
+    u = np.linspace(*u_range, resolution[0])
+    v = np.linspace(*v_range, resolution[1])
+    force = np.full((v.size, u.size), np.nan)
+    feasible = np.zeros((v.size, u.size), dtype=bool)
+    with tqdm(total=u.size * v.size, desc=f"workspace {plane}", disable=not progress, leave=False) as bar:
+        for r, vv in enumerate(v):
+            for c, uu in enumerate(u):
+                p = np.zeros(3)
+                p[ia], p[ib], p[ic] = uu, vv, fixed
+                state = fn(pin.SE3(rot, p))
+                if state is not None:
+                    force[r, c] = state.max_abs_force
+                    feasible[r, c] = state.feasible
+                bar.update()
+    logger.info("workspace slice %s: %d of %d points reached", plane, int(np.isfinite(force).sum()), force.size)
+    return WorkspaceSlice(plane, u, v, force, feasible, rot, fixed)
+
+
+def plot_workspace_slice(ws: WorkspaceSlice, vmax: float | None = None) -> Figure:
+    """Color map of max |F| [N] over the reachable grid points (unreachable: blank, ×)."""
+    fig = Figure(figsize=(6.0, 4.8), layout="constrained")
+    ax = fig.subplots()
+    du = (ws.u[1] - ws.u[0]) / 2 if ws.u.size > 1 else 0.05
+    dv = (ws.v[1] - ws.v[0]) / 2 if ws.v.size > 1 else 0.05
+    extent = (ws.u[0] - du, ws.u[-1] + du, ws.v[0] - dv, ws.v[-1] + dv)
+    finite = ws.max_abs_force[np.isfinite(ws.max_abs_force)]
+    top = vmax if vmax is not None else (float(finite.max()) if finite.size else 1.0)
+    image = ax.imshow(
+        np.ma.masked_invalid(ws.max_abs_force),
+        origin="lower",
+        extent=extent,
+        cmap="viridis",
+        norm=Normalize(0.0, top),
+        aspect="equal",
+    )
+    uu, vv = np.meshgrid(ws.u, ws.v)
+    miss = ~ws.reachable
+    ax.plot(uu[miss], vv[miss], "x", color="0.6", ms=4, label="no state found")
+    infeasible = ws.reachable & ~ws.feasible
+    if infeasible.any():
+        ax.plot(uu[infeasible], vv[infeasible], "o", mfc="none", color="orange", ms=6, label="violates a limit")
+    ax.set_xlabel(f"{ws.plane[0]} [m]")
+    ax.set_ylabel(f"{ws.plane[1]} [m]")
+    third = "xyz".replace(ws.plane[0], "").replace(ws.plane[1], "")
+    ax.set_title(f"max |F| over EE positions ({third} = {ws.fixed:g} m)", fontsize=10)
+    fig.colorbar(image, ax=ax, label="max |F| [N]")
+    if miss.any() or infeasible.any():
+        ax.legend(fontsize=8, loc="upper right")
+    return fig
+
+
+def workspace_slice(am: AssemblerModel, state_function=None, **kwargs) -> tuple[Figure, WorkspaceSlice]:
+    """:func:`compute_workspace_slice` then :func:`plot_workspace_slice`; returns both."""
+    ws = compute_workspace_slice(am, state_function, **kwargs)
+    return plot_workspace_slice(ws), ws
+
+
+def save(fig: Figure, path: str | Path, dpi: int = 150) -> Path:
+    """Write a figure to PNG (parent directories created) and return the path."""
+    out = Path(path)
+    out.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(out, dpi=dpi, format="png")
+    logger.info("wrote %s", out)
+    return out

@@ -1,0 +1,110 @@
+"""Figures: the numbers drawn are the states' numbers, in the package's conventions."""
+
+from __future__ import annotations
+
+import numpy as np
+import pinocchio as pin
+import pytest
+from matplotlib.colors import to_rgb
+
+from assembler_pin import evaluate_state, plots, stack_forward_kinematics
+from assembler_pin.exceptions import AssemblerError
+
+
+@pytest.fixture(scope="module")
+def two_states(am):
+    lengths = np.full((am.n, 6), 0.275)
+    lengths[0, :3] = 0.23
+    lengths[2, 3:] = 0.32
+    fk = stack_forward_kinematics(am, lengths)
+    assert fk.success
+    return evaluate_state(am, am.home), evaluate_state(am, fk.plates)
+
+
+def test_force_heatmaps_show_the_forces(two_states):
+    initial, optimized = two_states
+    fig = plots.force_heatmaps(initial, optimized)
+    axes = [ax for ax in fig.axes if ax.images]
+    assert len(axes) == 2
+    for ax, state in zip(axes, two_states, strict=True):
+        image = ax.images[0]
+        assert np.array_equal(image.get_array(), state.forces.T)  # actuator × platform
+        norm = image.norm
+        assert norm(0.0) == pytest.approx(0.5)  # diverging, centred at zero
+        texts = [float(t.get_text()) for t in ax.texts]
+        assert np.allclose(sorted(texts), sorted(np.round(state.forces.ravel(), 1)), atol=0.051)
+        # tension (positive) is drawn red, compression blue
+        hot = image.cmap(norm(abs(state.forces).max()))
+        cold = image.cmap(norm(-abs(state.forces).max()))
+        assert hot[0] > hot[2] and cold[2] > cold[0]
+    # one shared, symmetric scale
+    vmax = max(np.abs(s.forces).max() for s in two_states)
+    assert axes[0].images[0].norm.vmax == pytest.approx(vmax) and axes[0].images[0].norm.vmin == pytest.approx(-vmax)
+    with pytest.raises(AssemblerError):
+        plots.force_heatmaps(None, None)
+
+
+def test_pose_views_draw_the_legs_at_their_joint_centres(two_states):
+    initial, optimized = two_states
+    arm = np.vstack([np.zeros(3), optimized.plates.p[1:-1], optimized.plates.p[-1]])
+    fig = plots.pose_views(initial, optimized, arm_points=arm)
+    side, top = fig.axes[:2]
+    for ax, (a, b) in ((side, (0, 2)), (top, (0, 1))):
+        for state, color in ((initial, plots.INITIAL_COLOR), (optimized, plots.OPTIMIZED_LEG_COLOR)):
+            segments = [
+                np.column_stack(line.get_data())
+                for line in ax.lines
+                if to_rgb(line.get_color()) == to_rgb(color) and len(line.get_xdata()) == 2
+            ]
+            expected = [
+                np.array([[bp[a], bp[b]], [tp[a], tp[b]]])
+                for bp, tp in zip(
+                    state.legs.bottom_points.reshape(-1, 3), state.legs.top_points.reshape(-1, 3), strict=True
+                )
+            ]
+            assert len(segments) >= len(expected)
+            for seg in expected:
+                assert any(np.allclose(seg, s, atol=1e-12) for s in segments)
+    assert side.get_xlabel() == "x [m]" and side.get_ylabel() == "z [m]" and top.get_ylabel() == "y [m]"
+
+
+def test_force_bars_heights(two_states, tmp_path):
+    initial, optimized = two_states
+    fig = plots.force_bars(initial, optimized, limits=(200.0, 150.0))
+    ax = fig.axes[0]
+    heights = np.array([p.get_height() for p in ax.patches])
+    n = initial.forces.size
+    assert np.allclose(heights[:n], initial.forces.ravel())
+    assert np.allclose(heights[n:], optimized.forces.ravel())
+    assert {line.get_ydata()[0] for line in ax.lines if line.get_linestyle() == "--"} == {200.0, -150.0}
+    path = plots.save(fig, tmp_path / "sub" / "bars.png")
+    assert path.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+def test_workspace_slice_with_a_user_callable(am):
+    calls = []
+
+    def state_fn(goal: pin.SE3):
+        calls.append(goal.translation.copy())
+        if goal.translation[0] > 0.05:
+            return None  # "unreachable"
+        return evaluate_state(am, am.home)
+
+    fig, ws = plots.workspace_slice(
+        am, state_fn, plane="xz", u_range=(-0.1, 0.1), v_range=(0.8, 1.0), resolution=(3, 2), fixed=0.02
+    )
+    assert ws.max_abs_force.shape == (2, 3)
+    assert np.array_equal(ws.reachable, np.array([[True, True, False], [True, True, False]]))
+    assert np.allclose(ws.max_abs_force[ws.reachable], evaluate_state(am, am.home).max_abs_force)
+    goals = np.array(calls)
+    assert np.allclose(goals[:, 1], 0.02)  # the third axis is held fixed
+    assert np.allclose(sorted(set(np.round(goals[:, 0], 9))), [-0.1, 0.0, 0.1])
+    assert np.allclose(sorted(set(np.round(goals[:, 2], 9))), [0.8, 1.0])
+    assert fig.axes[0].get_xlabel() == "x [m]"
+    with pytest.raises(AssemblerError):
+        plots.compute_workspace_slice(am, state_fn, plane="xx")
+
+
+def test_workspace_slice_default_solver(am):
+    ws = plots.compute_workspace_slice(am, plane="xz", u_range=(0.2, 0.2), v_range=(0.9, 0.9), resolution=(1, 1))
+    assert ws.reachable.all() and ws.max_abs_force[0, 0] > 0
