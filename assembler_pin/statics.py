@@ -79,13 +79,6 @@ def _skew_batch(v: np.ndarray) -> np.ndarray:
     return out
 
 
-def _cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """Cross product along the last axis (numpy's ``np.cross`` is slow on small arrays)."""
-    a0, a1, a2 = a[..., 0], a[..., 1], a[..., 2]
-    b0, b1, b2 = b[..., 0], b[..., 1], b[..., 2]
-    return np.stack([a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0], axis=-1)
-
-
 def _point_jacobians(am: AssemblerModel, top_points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Closure Jacobian blocks from Pinocchio's joint Jacobians (``data.J``, world frame).
 
@@ -148,21 +141,18 @@ def solve_statics(
     g = pin.computeGeneralizedGravity(model, data, q)
     pin.computeJointJacobians(model, data, q)
     leg, plate = _point_jacobians(am, top)
-    # Each leg's rows: J_legᵀ λ_i = g_leg - e_z τ_i. With c_k the columns of J_leg (the
-    # tip velocities of ux, uy and the actuator), λ·c_k = y_k is solved by Cramer's rule:
-    # λ = (y_1 c_2×c_3 + y_2 c_3×c_1 + y_3 c_1×c_2) / det.
-    c1, c2, c3 = leg[..., 0], leg[..., 1], leg[..., 2]
-    dual = np.stack([_cross(c2, c3), _cross(c3, c1), _cross(c1, c2)], axis=-2)  # (n, 6, 3 k, 3)
-    det = np.einsum("jik,jik->ji", c1, dual[..., 0, :])
-    if np.any(np.abs(det) < 1e-12):
+    # Each leg's rows: J_legᵀ λ_i = g_leg - e_z τ_i, with J_leg's columns the tip
+    # velocities of (ux, uy, actuator). The actuator's column is the leg axis u and the
+    # other two are orthogonal to it, so J_legᵀ⁻¹ e_z = u: λ_i = own_i - τ_i u_i.
+    try:
+        own = np.linalg.solve(leg.transpose(0, 1, 3, 2), g[am.leg_idx_v][..., None])[..., 0]  # leg weight alone
+    except np.linalg.LinAlgError:
         raise SingularConfigurationError(
             "a universal joint is at gimbal lock (a leg at 90° from its home direction); its forces are not defined",
-            np.inf,
+            float("inf"),
             -1,
-        )
-    dual /= det[..., None, None]
-    own = np.einsum("jik,jikl->jil", g[am.leg_idx_v], dual)  # leg weight alone
-    axis = dual[..., 2, :]  # λ per unit τ_i (the leg axis)
+        ) from None
+    axis = vec / lengths[..., None]
     # free-flyer rows: g_ff = Σ_i plateᵀ λ_i = Σ_i plateᵀ own_i - Σ_i τ_i plateᵀ axis_i
     plate_t = plate.transpose(0, 1, 3, 2)  # (n, 6 legs, 6 ff, 3)
     reduced = np.matmul(plate_t, axis[..., None])[..., 0].transpose(0, 2, 1)  # (n, 6 ff, 6 legs)
@@ -170,7 +160,7 @@ def solve_statics(
     inverse = np.linalg.inv(reduced)
     tau = np.matmul(inverse, rhs[..., None])[..., 0]
     condition = np.abs(reduced).sum(axis=1).max(axis=1) * np.abs(inverse).sum(axis=1).max(axis=1)
-    singular = bool(np.any(~np.isfinite(condition) | (condition > CONDITION_LIMIT)))
+    singular = not condition.max() <= CONDITION_LIMIT  # NaN counts as singular
     if singular and raise_on_singular:
         worst = int(np.argmax(np.where(np.isfinite(condition), condition, np.inf)))
         raise SingularConfigurationError(
