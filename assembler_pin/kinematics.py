@@ -305,7 +305,7 @@ def _check_lengths(lengths: npt.ArrayLike, shape: tuple[int, ...]) -> np.ndarray
         raise PoseError(f"leg lengths must be numbers of shape {shape}") from None
     if arr.shape != shape:
         raise PoseError(f"leg lengths must have shape {shape}, got {arr.shape}")
-    if not np.all(np.isfinite(arr)) or np.any(arr <= 0):
+    if not arr.min() > 0 or not np.isfinite(arr).all():  # NaN fails the first test
         raise PoseError("leg lengths must be finite and > 0 [m]")
     return arr
 
@@ -360,6 +360,12 @@ def _batched_fk(
     H = np.array(
         [(am.plate_joint_placement[j + 1] if g is None else g).homogeneous for j, g in zip(idx, guesses, strict=True)]
     )
+    # without a guess, start from the home pose moved by one linearized step
+    # (the inverse of the home Jacobian is a constant per platform)
+    home_step = am.fk_home_inverse_jacobian[idx] @ (target - am.config.leg.mid_length)[..., None]
+    for k, g in enumerate(guesses):
+        if g is None:
+            H[k] = pin.exp6(home_step[k, :, 0]).homogeneous @ H[k]
     target_sq = target * target
     # |L - L*| <= |L² - L*²| / (L + L*) <= |f| / L*: converged when max |f| / L* <= tol
     inv_target = 1.0 / target
@@ -383,14 +389,14 @@ def _batched_fk(
         except np.linalg.LinAlgError:
             step = np.full((m, 6), np.nan)
         step *= 0.5
-        finite = np.isfinite(step).all(axis=1).tolist()
+        finite = [True] * m if np.isfinite(step).all() else np.isfinite(step).all(axis=1).tolist()
         for k in range(m):
             if not finite[k]:
                 failure[k] = failure[k] or f"platform {idx[k]}: singular Jacobian or divergence in FK"
                 converged[k] = True
-            elif not converged[k] or m > 1:
+            else:  # converged platforms take their (vanishing) step too: vec stays in sync
                 H[k] = pin.exp6(step[k]).homogeneous @ H[k]
-    vec = np.matmul(top_h, H.transpose(0, 2, 1))[..., :3] - bottom
+    # the loop always leaves right after evaluating vec at the current poses
     residual = np.abs(np.sqrt((vec * vec).sum(axis=2)) - target).max(axis=1)
     results = []
     for k, j in enumerate(idx):
@@ -409,7 +415,7 @@ def _batched_fk(
                     f"(length residual {res_k:.3g} m > {tol:.1g} m)",
                 )
             )
-        elif np.any(vec[k, :, 2] <= 0.0):
+        elif vec[k, :, 2].min() <= 0.0:
             results.append(
                 FKResult(
                     pose,

@@ -111,6 +111,7 @@ class AssemblerModel:
             [self.leg_idx_v.reshape(n, 18), self.plate_idx_v[1:, None] + np.arange(6)[None, :]], axis=1
         )
         self.plate_rows_ff = self.plate_idx_v[1:, None] + np.arange(6)
+        self.fk_home_inverse_jacobian = self._home_inverse_jacobians()
         self._check_order()
         self._build_constraints()
         self.home = home_plates(cfg)
@@ -179,6 +180,14 @@ class AssemblerModel:
         if list(sidecar["name_mot"]) != expected_mot:
             raise ModelFileError(f"closure sidecar {origin}: name_mot must list {expected_mot}")
         return cls(cfg, model, closures, urdf_text)
+
+    def _home_inverse_jacobians(self) -> np.ndarray:
+        """(n, 6, 6): home-pose twist of each top plate per unit leg-length change, in the
+        bottom plate's frame (left perturbation): the inverse of the rows ``[u_i, b_i × u_i]``."""
+        geo = self.geometry
+        u = geo.home_direction
+        rows = np.concatenate([u, np.cross(geo.bottom_in_plate, u)], axis=2)
+        return np.linalg.inv(rows)
 
     def _check_order(self) -> None:
         """Each platform's legs must precede the next plate's free-flyer (depth-first)."""
