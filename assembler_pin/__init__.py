@@ -22,6 +22,13 @@ from .exceptions import (
     SingularConfigurationError,
 )
 from .geometry import home_plates, leg_geometry
+from .helper_arm import (
+    HelperArm,
+    HelperArmOptions,
+    InitialConditionResult,
+    helper_arm_urdf,
+    initial_condition,
+)
 from .kinematics import (
     FKResult,
     LegState,
@@ -39,11 +46,13 @@ from .kinematics import (
     to_se3,
 )
 from .model import AssemblerModel
+from .scenarios import SCENARIOS, Scenario, scenario
 from .state import StackState, evaluate_state
 from .statics import StaticsResult, solve_statics
 from .urdf import assembler_urdf, closure_sidecar, export_model_files
 
 __all__ = [
+    "SCENARIOS",
     "AssemblerConfig",
     "AssemblerError",
     "AssemblerModel",
@@ -51,6 +60,9 @@ __all__ = [
     "ConvergenceError",
     "FKResult",
     "GoalTolerance",
+    "HelperArm",
+    "HelperArmOptions",
+    "InitialConditionResult",
     "LegConfig",
     "LegState",
     "ModelFileError",
@@ -58,6 +70,7 @@ __all__ = [
     "PlateArrays",
     "PlateConfig",
     "PoseError",
+    "Scenario",
     "SingularConfigurationError",
     "StackFKResult",
     "StackState",
@@ -69,13 +82,16 @@ __all__ = [
     "evaluate_constraints",
     "evaluate_state",
     "export_model_files",
+    "helper_arm_urdf",
     "home_plates",
+    "initial_condition",
     "leg_geometry",
     "leg_state",
     "load_config",
     "plate_arrays",
     "plates_from_q",
     "q_from_plates",
+    "scenario",
     "se3_to_taa",
     "solve_statics",
     "sp_forward_kinematics",

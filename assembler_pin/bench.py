@@ -17,7 +17,7 @@ from .kinematics import PlateArrays, q_from_plates, sp_forward_kinematics, stack
 from .model import AssemblerModel
 from .statics import solve_statics
 
-__all__ = ["median_time_us", "random_reachable_plates", "run_benchmarks"]
+__all__ = ["benchmark_initial_condition", "median_time_us", "random_reachable_plates", "run_benchmarks"]
 
 
 def median_time_us(fn: Callable[[], object], repeat: int) -> float:
@@ -52,9 +52,11 @@ def random_reachable_plates(
 
 
 def run_benchmarks(am: AssemblerModel, repeat: int = 300, seed: int = 0) -> dict[str, float]:
-    """Median per-call times [µs] of statics, SP FK, stack FK and closed-form q.
+    """Median per-call times [µs] of statics, SP FK, stack FK and closed-form q, then the
+    helper-arm initial condition (:func:`benchmark_initial_condition`: ``initial_scenarios_ms``,
+    ``initial_random_ms`` [ms], ``initial_success_rate``).
 
-    Each figure is the median over ``repeat`` calls, cycling through 20 random poses.
+    Each per-call figure is the median over ``repeat`` calls, cycling through 20 random poses.
     """
     rng = np.random.default_rng(seed)
     samples = [random_reachable_plates(am, rng) for _ in range(20)]
@@ -63,9 +65,50 @@ def run_benchmarks(am: AssemblerModel, repeat: int = 300, seed: int = 0) -> dict
     def pick() -> tuple[np.ndarray, PlateArrays]:
         return samples[next(counter) % len(samples)]
 
-    return {
+    results = {
         "statics_us": median_time_us(lambda: solve_statics(am, pick()[1]), repeat),
         "sp_fk_us": median_time_us(lambda: sp_forward_kinematics(am, 0, pick()[0][0]), repeat),
         "stack_fk_us": median_time_us(lambda: stack_forward_kinematics(am, pick()[0]), repeat),
         "q_from_plates_us": median_time_us(lambda: q_from_plates(am, pick()[1]), repeat),
+    }
+    results.update(benchmark_initial_condition(am, seed=seed))
+    return results
+
+
+def benchmark_initial_condition(am: AssemblerModel, n_random: int = 20, seed: int = 0) -> dict[str, float]:
+    """Helper-arm initial condition: median solve time and success rate.
+
+    Goals: the scenario goals (:data:`~assembler_pin.scenarios.SCENARIOS`) and ``n_random``
+    random reachable goals (the EE pose of random in-stroke leg lengths over the middle 70 %
+    of the stroke, by stack FK; fixed seed). Each goal is solved once, after one warm-up
+    solve of every goal (so the helper arms of the link lengths used are built and cached).
+
+    Returns:
+        ``initial_scenarios_ms`` and ``initial_random_ms``: median wall time per goal [ms];
+        ``initial_success_rate``: fraction of all those goals solved (kinematically valid).
+    """
+    from .helper_arm import initial_condition
+    from .scenarios import SCENARIOS
+
+    rng = np.random.default_rng(seed)
+    scenario_goals = [s.goal for s in SCENARIOS.values()]
+    random_goals = [random_reachable_plates(am, rng, spread=0.7)[1].se3(am.n) for _ in range(n_random)]
+
+    def solve_all(goals: list) -> tuple[list[float], int]:
+        for goal in goals:  # warm-up: build the arms of every link length these goals use
+            initial_condition(am, goal)
+        times, solved = [], 0
+        for goal in goals:
+            t0 = time.perf_counter()
+            result = initial_condition(am, goal)
+            times.append(time.perf_counter() - t0)
+            solved += int(result.success)
+        return times, solved
+
+    t_scen, ok_scen = solve_all(scenario_goals)
+    t_rand, ok_rand = solve_all(random_goals)
+    return {
+        "initial_scenarios_ms": statistics.median(t_scen) * 1e3,
+        "initial_random_ms": statistics.median(t_rand) * 1e3,
+        "initial_success_rate": (ok_scen + ok_rand) / (len(scenario_goals) + len(random_goals)),
     }

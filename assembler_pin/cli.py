@@ -104,6 +104,52 @@ def cmd_statics(args: argparse.Namespace) -> int:
     return 0
 
 
+def _goal_from_args(args: argparse.Namespace):
+    """The EE goal of ``solve``: ``--goal`` (rotation vector in rad) or ``--goal-deg`` (in deg)."""
+    from .kinematics import taa_to_se3
+
+    if args.goal is not None:
+        return taa_to_se3(args.goal, what="--goal")
+    if args.goal_deg is not None:
+        return taa_to_se3(args.goal_deg, degrees=True, what="--goal-deg")
+    raise CLIError("give the EE goal: --goal X Y Z RX RY RZ (m, rad) or --goal-deg X Y Z RX RY RZ (m, deg)")
+
+
+def cmd_solve(args: argparse.Namespace) -> int:
+    """Initial condition of the stack for an EE goal, by the helper arm (``--no-optimize``)."""
+    from .helper_arm import HelperArmOptions, initial_condition
+    from .kinematics import se3_to_taa
+
+    goal = _goal_from_args(args)
+    if not args.no_optimize:
+        raise CLIError("optimization is not available yet: use --no-optimize")
+    try:
+        options = HelperArmOptions(d_step=args.d_step, max_attempts=args.max_attempts)
+    except ValueError as exc:
+        raise CLIError(str(exc)) from None
+    am = AssemblerModel.from_config(_config(args))
+    result = initial_condition(am, goal, options)
+    if args.json:
+        doc = {
+            "goal": se3_to_taa(result.goal).tolist(),
+            "success": result.success,
+            "message": result.message,
+            "initial": result.state.to_dict(),
+        }
+        print(json.dumps(doc))
+        return 0
+    taa = se3_to_taa(result.goal)
+    print(
+        f"goal: p = ({taa[0]:.4f}, {taa[1]:.4f}, {taa[2]:.4f}) m, "
+        f"rotation vector = ({np.rad2deg(taa[3]):.2f}, {np.rad2deg(taa[4]):.2f}, {np.rad2deg(taa[5]):.2f}) deg"
+    )
+    status = "valid" if result.success else "FAILED"
+    print(f"initial condition (helper arm): {status} — {result.message} [{1e3 * result.time_s:.1f} ms]")
+    title = "Initial condition" if result.success else "Home pose (no valid initial condition)"
+    print(format_state_table(result.state, title))
+    return 0
+
+
 def cmd_bench(args: argparse.Namespace) -> int:
     from .bench import run_benchmarks
 
@@ -206,6 +252,20 @@ def build_parser() -> argparse.ArgumentParser:
     src.add_argument("--home", action="store_true", help="use the home pose")
     p.add_argument("--json", action="store_true", help="print one JSON object")
     p.set_defaults(func=cmd_statics)
+
+    p = add("solve", "a valid pose of the whole stack for an end-effector goal")
+    goal = p.add_mutually_exclusive_group()
+    goal.add_argument("--goal", nargs=6, type=float, metavar=("X", "Y", "Z", "RX", "RY", "RZ"),
+                      help="EE goal: position [m] and rotation vector [rad], world frame")  # fmt: skip
+    goal.add_argument("--goal-deg", nargs=6, type=float, metavar=("X", "Y", "Z", "RX", "RY", "RZ"),
+                      help="EE goal with the rotation vector in degrees")  # fmt: skip
+    p.add_argument("--no-optimize", action="store_true", help="only the helper-arm initial condition")
+    p.add_argument("--d-step", type=float, default=0.01, metavar="M",
+                   help="helper-arm link-length scan step [m] (default 0.01)")  # fmt: skip
+    p.add_argument("--max-attempts", type=int, default=15, metavar="N",
+                   help="helper-arm recursion limit: link lengths tried (default 15)")  # fmt: skip
+    p.add_argument("--json", action="store_true", help="print one JSON object")
+    p.set_defaults(func=cmd_solve)
 
     p = add("bench", "median time per call of the hot computations")
     p.add_argument("--json", action="store_true", help="print one JSON object")

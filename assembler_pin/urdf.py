@@ -304,14 +304,18 @@ def closure_sidecar(cfg: AssemblerConfig) -> str:
 
 
 def export_model_files(cfg: AssemblerConfig, out_dir: str | Path) -> dict[str, Path]:
-    """Write the stack URDF and its closure sidecar into ``out_dir``.
+    """Write the stack URDF, its closure sidecar and the helper arm's URDF into ``out_dir``.
 
     Returns:
-        A mapping from file role (``urdf``, ``sidecar``) to the written path.
+        A mapping from file role (``urdf``, ``sidecar``, ``helper_arm``) to the written path.
     """
+    from .helper_arm import HELPER_ARM_URDF_FILENAME, helper_arm_urdf  # lazy: helper_arm imports the model
+
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     paths = {"urdf": out / URDF_FILENAME, "sidecar": out / SIDECAR_FILENAME}
     paths["urdf"].write_text(assembler_urdf(cfg))
     paths["sidecar"].write_text(closure_sidecar(cfg))
+    paths["helper_arm"] = out / HELPER_ARM_URDF_FILENAME
+    paths["helper_arm"].write_text(helper_arm_urdf(cfg))
     return paths
