@@ -31,11 +31,14 @@ with ``pin.buildModelFromXML``) that stands in for the stack:
 
 * **IK** (:meth:`HelperArm.ik`): ``scipy.optimize.least_squares`` (``trf``, bounds = the
   joint limits) on the 6D error ``log6(goal⁻¹ · tip(q))`` with its analytic Jacobian
-  ``Jlog6 · J_tip`` (Pinocchio LOCAL frame Jacobian), plus a residual ``w·q`` pulling the
-  joints toward zero so that the bending is spread evenly over the clusters (the paper's
-  "minimize angular deviation"). A second solve without the pull then drives the
-  error to machine precision. A few deterministic restarts follow if the first start
-  (``q = 0``) does not reach the goal.
+  ``Jlog6 · J_tip`` (Pinocchio LOCAL frame Jacobian), plus two more residual blocks:
+  the stack's own leg constraints (stroke, deflection, continuous translation) of the
+  plates the arm would place, as a hinge penalty (:meth:`HelperArm.stack_violation`,
+  forward-difference Jacobian) — the box limits alone let combined x/y tilts break
+  legs — and a pull ``w·q`` toward zero so that the bending is spread evenly over the
+  clusters (the paper's "minimize angular deviation"). A second solve without the pull
+  then drives the goal error to machine precision. Optional deterministic restarts
+  (``HelperArmOptions.restarts``, default none: they did not raise the success rate).
 
 * **Initial condition** (:func:`initial_condition`): IK at ``d0``; when the arm does not
   reach the goal, or reaches it with plates that break a kinematic constraint of the

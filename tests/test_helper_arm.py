@@ -1,0 +1,332 @@
+"""Helper arm (paper §III): URDF and limits, arm FK, initial condition, failures, CLI.
+
+Every check is against an independent computation: the arm's FK against a product of
+rotations and translations written out in numpy, the returned states against the stack's
+own forward kinematics (Newton on the leg lengths) and against the constraints recomputed
+here from the design anchors (``conftest.design_anchors``).
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pinocchio as pin
+import pytest
+from conftest import design_anchors
+
+from assembler_pin import (
+    HelperArm,
+    HelperArmOptions,
+    PoseError,
+    helper_arm_urdf,
+    initial_condition,
+    stack_forward_kinematics,
+)
+from assembler_pin.cli import main
+from assembler_pin.helper_arm import cluster_limits, height_range
+
+
+# ---------------------------------------------------------------------- independent references
+def rot_x(a: float) -> np.ndarray:
+    c, s = np.cos(a), np.sin(a)
+    return np.array([[1, 0, 0], [0, c, -s], [0, s, c]])
+
+
+def rot_y(a: float) -> np.ndarray:
+    c, s = np.cos(a), np.sin(a)
+    return np.array([[c, 0, s], [0, 1, 0], [-s, 0, c]])
+
+
+def rot_z(a: float) -> np.ndarray:
+    c, s = np.cos(a), np.sin(a)
+    return np.array([[c, -s, 0], [s, c, 0], [0, 0, 1]])
+
+
+def homogeneous(R: np.ndarray | None = None, p=(0.0, 0.0, 0.0)) -> np.ndarray:
+    T = np.eye(4)
+    if R is not None:
+        T[:3, :3] = R
+    T[:3, 3] = p
+    return T
+
+
+def arm_fk_numpy(q: np.ndarray, d: float) -> tuple[list[np.ndarray], list[np.ndarray]]:
+    """Plates 0..n (4x4) and cluster points of the helper arm: T(d/2) [Rx Ry Rz T(d/2)] ..."""
+    n = len(q) // 3
+    half = homogeneous(p=(0.0, 0.0, d / 2))
+    T = np.eye(4)
+    plates, clusters = [T.copy()], []
+    for j in range(n):
+        T = T @ half @ homogeneous(rot_x(q[3 * j]) @ rot_y(q[3 * j + 1]) @ rot_z(q[3 * j + 2]))
+        clusters.append(T[:3, 3].copy())
+        T = T @ half
+        plates.append(T.copy())
+    return plates, clusters
+
+
+def home_directions(cfg, j: int) -> np.ndarray:
+    """Home leg directions of SP j (bottom frame), from the design anchors and home height."""
+    bottom, top = design_anchors(cfg, j)
+    v = top + np.array([0.0, 0.0, cfg.home_height]) - bottom
+    return v / np.linalg.norm(v, axis=1, keepdims=True)
+
+
+def sp_legs(cfg, j: int, Rb, pb, Rt, pt) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Lengths, bottom and top deflections [rad], rise [m] of SP j's legs for world plate poses."""
+    bottom, top = design_anchors(cfg, j)
+    b = bottom @ Rb.T + pb
+    t = top @ Rt.T + pt
+    v = t - b
+    lengths = np.linalg.norm(v, axis=1)
+    u = v / lengths[:, None]
+    home = home_directions(cfg, j)
+    defl_b = np.arccos(np.clip(np.sum((u @ Rb) * home, axis=1), -1, 1))
+    defl_t = np.arccos(np.clip(np.sum((u @ Rt) * home, axis=1), -1, 1))
+    rise = (v @ Rb)[:, 2]
+    return lengths, defl_b, defl_t, rise
+
+
+def independent_kinematic_problems(cfg, plates, goal: pin.SE3, tol: float = 1e-9) -> list[str]:
+    """Every kinematic constraint recomputed from the design anchors (empty: valid)."""
+    leg = cfg.leg
+    out = []
+    for j in range(cfg.platforms):
+        L, db, dt, rise = sp_legs(cfg, j, plates.R[j], plates.p[j], plates.R[j + 1], plates.p[j + 1])
+        if L.min() < leg.min_length or L.max() > leg.max_length:
+            out.append(f"SP{j} length {L.min():.4f}..{L.max():.4f}")
+        if max(db.max(), dt.max()) > leg.max_deflection:
+            out.append(f"SP{j} deflection {np.rad2deg(max(db.max(), dt.max())):.2f} deg")
+        if rise.min() <= 0:
+            out.append(f"SP{j} rise {rise.min():.4f}")
+    n = cfg.platforms
+    if np.linalg.norm(plates.p[n] - goal.translation) > tol:
+        out.append("EE position")
+    if np.linalg.norm(pin.log3(goal.rotation.T @ plates.R[n])) > tol:
+        out.append("EE rotation")
+    return out
+
+
+def sp_valid_about_mid(cfg, R: np.ndarray, d: float) -> bool:
+    """An SP tilted by R about its mid-height point at height d is valid (all platforms)."""
+    half = np.array([0.0, 0.0, d / 2])
+    p = half + R @ half
+    leg = cfg.leg
+    for j in range(cfg.platforms):
+        L, db, dt, rise = sp_legs(cfg, j, np.eye(3), np.zeros(3), R, p)
+        ok = (
+            L.min() >= leg.min_length
+            and L.max() <= leg.max_length
+            and max(db.max(), dt.max()) <= leg.max_deflection
+            and rise.min() > 0
+        )
+        if not ok:
+            return False
+    return True
+
+
+def check_result(am, result) -> None:
+    """A successful result: stack FK of its lengths gives its plates and the goal; every
+    kinematic constraint holds when recomputed independently."""
+    assert result.success, result.message
+    n = am.n
+    assert result.leg_lengths.shape == (n, 6)
+    fk = stack_forward_kinematics(am, result.leg_lengths, guess=result.state.plates)
+    assert fk.success, fk.message
+    ee = fk.plates.se3(n)
+    assert np.linalg.norm(ee.translation - result.goal.translation) < 1e-9
+    assert np.linalg.norm(pin.log3(result.goal.rotation.T @ ee.rotation)) < 1e-9
+    np.testing.assert_allclose(fk.plates.p, result.state.plates.p, atol=1e-9)
+    assert independent_kinematic_problems(am.config, result.state.plates, result.goal) == []
+    kinds = {v.kind for v in result.state.violations}
+    assert not kinds - {"tension", "compression"}
+
+
+# ---------------------------------------------------------------------- the model
+def test_urdf_loads_with_3n_joints_and_derived_limits(am):
+    cfg = am.config
+    model = pin.buildModelFromXML(helper_arm_urdf(cfg))
+    assert model.nq == model.nv == 3 * am.n
+    names = [model.names[i] for i in range(1, model.njoints)]
+    assert names == [f"sp{j}_r{a}" for j in range(am.n) for a in "xyz"]
+    tilt, twist = cluster_limits(cfg, cfg.home_height)
+    expected = np.tile([tilt, tilt, twist], am.n)
+    np.testing.assert_allclose(model.upperPositionLimit, expected, rtol=0, atol=1e-14)
+    np.testing.assert_allclose(model.lowerPositionLimit, -expected, rtol=0, atol=1e-14)
+    # the repository file is this model
+    repo = pin.buildModelFromUrdf(str(Path(__file__).parents[1] / "urdf" / "helper_arm.urdf"))
+    np.testing.assert_allclose(repo.upperPositionLimit, expected, atol=1e-14)
+
+
+def test_limits_are_the_largest_valid_tilt_and_twist(am):
+    """Independently: at the limits every tilt axis (and both twists) is valid; slightly past
+    them some axis breaks a leg constraint."""
+    cfg, d = am.config, am.config.home_height
+    tilt, twist = cluster_limits(cfg, d)
+    assert 0.3 < tilt < 1.0 and 0.5 < twist < 1.5  # about 34.5 and 63 degrees
+    phis = np.deg2rad(np.arange(24) * 15.0)
+    axes = [np.array([np.cos(f), np.sin(f), 0.0]) for f in phis]
+    assert all(sp_valid_about_mid(cfg, pin.exp3(tilt * (1 - 1e-6) * a), d) for a in axes)
+    assert not all(sp_valid_about_mid(cfg, pin.exp3(tilt * (1 + 1e-6) * a), d) for a in axes)
+    z = np.array([0.0, 0.0, 1.0])
+    assert sp_valid_about_mid(cfg, pin.exp3(twist * (1 - 1e-6) * z), d)
+    assert sp_valid_about_mid(cfg, pin.exp3(-twist * (1 - 1e-6) * z), d)
+    assert not (
+        sp_valid_about_mid(cfg, pin.exp3(twist * (1 + 1e-6) * z), d)
+        and sp_valid_about_mid(cfg, pin.exp3(-twist * (1 + 1e-6) * z), d)
+    )
+
+
+def test_height_range_is_where_a_level_platform_stands(am):
+    cfg = am.config
+    lo, hi = height_range(cfg)
+    for h, ok in ((lo * (1 + 1e-6), True), (hi * (1 - 1e-6), True), (lo * 0.999, False), (hi * 1.001, False)):
+        assert sp_valid_about_mid(cfg, np.eye(3), h) is ok
+    # the stroke alone bounds it: sqrt(L^2 - chord^2) at the stroke ends, chord from the anchors
+    bottom, top = design_anchors(cfg, 0)
+    chord = np.linalg.norm(top[0] - bottom[0])
+    assert lo >= np.sqrt(cfg.leg.min_length**2 - chord**2) - 1e-9
+    assert hi <= np.sqrt(cfg.leg.max_length**2 - chord**2) + 1e-9
+
+
+@pytest.mark.parametrize("d", [None, 0.27])
+def test_arm_fk_matches_product_of_rotations(am, d):
+    arm = HelperArm(am.config, d)
+    rng = np.random.default_rng(3)
+    for _ in range(5):
+        q = rng.uniform(arm.lower, arm.upper)
+        plates, points = arm.forward(q)
+        ref_plates, ref_clusters = arm_fk_numpy(q, arm.link_length)
+        for M, T in zip(plates, ref_plates, strict=True):
+            np.testing.assert_allclose(M.homogeneous, T, atol=1e-12)
+        assert points.shape == (am.n + 2, 3)
+        np.testing.assert_allclose(points[1:-1], ref_clusters, atol=1e-12)
+        np.testing.assert_allclose(points[0], 0.0, atol=1e-15)
+        np.testing.assert_allclose(points[-1], ref_plates[-1][:3, 3], atol=1e-12)
+
+
+# ---------------------------------------------------------------------- initial condition
+def test_home_goal_is_the_home_pose(am):
+    result = initial_condition(am, am.home[-1].homogeneous)
+    check_result(am, result)
+    assert result.attempts == 1 and result.link_length == pytest.approx(am.config.home_height)
+    np.testing.assert_allclose(result.leg_lengths, am.config.leg.mid_length, atol=1e-9)
+
+
+def test_plates_sit_midway_between_clusters(am):
+    goal = pin.SE3(pin.exp3(np.array([0.2, -0.3, 0.4])), np.array([0.15, 0.1, 0.88]))
+    result = initial_condition(am, goal)
+    check_result(am, result)
+    pts, pa, d = result.arm_points, result.state.plates, result.link_length
+    for k in range(1, am.n):  # plate k halfway between clusters k-1 and k, link along its z
+        np.testing.assert_allclose(pa.p[k], 0.5 * (pts[k] + pts[k + 1]), atol=1e-9)
+        np.testing.assert_allclose(pts[k + 1] - pa.p[k], 0.5 * d * pa.R[k][:, 2], atol=1e-9)
+    np.testing.assert_allclose(pts[-1], goal.translation, atol=1e-9)
+    np.testing.assert_allclose(pts[-1] - pts[-2], 0.5 * d * goal.rotation[:, 2], atol=1e-9)
+
+
+def test_d_scan_finds_a_goal_that_needs_another_link_length(am):
+    d0 = am.config.home_height
+    goal = pin.SE3(np.eye(3), np.array([0.50, 0.0, 0.80]))  # beyond the home-height arm
+    result = initial_condition(am, goal)
+    check_result(am, result)
+    assert result.attempts > 1 and result.link_length != pytest.approx(d0)
+    k = (result.link_length - d0) / 0.01
+    assert k == pytest.approx(round(k), abs=1e-9)  # on the scan grid d0 + k s
+    # with a recursion limit of one the same goal fails, with the reason
+    short = initial_condition(am, goal, HelperArmOptions(max_attempts=1))
+    assert not short.success and short.attempts == 1 and "1 attempt" in short.message
+
+
+def test_random_reachable_goals_mostly_succeed(am):
+    """EE poses of random leg lengths over the middle 80 % of the stroke (stack FK, seed 0).
+
+    Measured: 39/40 (97.5 %) here, 199/200 over 200 goals; full-stroke lengths: 94.5 %."""
+    rng = np.random.default_rng(0)
+    leg = am.config.leg
+    goals = []
+    while len(goals) < 40:
+        fk = stack_forward_kinematics(am, rng.uniform(leg.min_length + 0.02, leg.max_length - 0.02, (am.n, 6)))
+        if fk.success:
+            goals.append(fk.plates.se3(am.n))
+    solved = 0
+    for goal in goals:
+        result = initial_condition(am, goal)
+        if result.success:
+            solved += 1
+            check_result(am, result)
+    assert solved / len(goals) >= 0.95
+
+
+@pytest.mark.parametrize(
+    "xyz, rotvec, reason",
+    [
+        ((3.0, 0.0, 0.8), (0.0, 0.0, 0.0), "out of the helper arm's reach"),  # far beyond the stack
+        ((0.0, 0.0, -0.5), (np.pi, 0.0, 0.0), "no valid initial condition"),  # below the base
+        ((-0.1, 0.0, 0.3), (0.0, 0.0, 0.0), "no valid initial condition"),  # inside the stack's own body
+    ],
+)
+def test_unreachable_goals_are_answers(am, xyz, rotvec, reason):
+    goal = pin.SE3(pin.exp3(np.array(rotvec)), np.array(xyz))
+    result = initial_condition(am, goal, HelperArmOptions(max_attempts=5))
+    assert not result.success
+    assert reason in result.message and result.link_length is None
+    assert 1 <= result.attempts <= 5
+    np.testing.assert_allclose(result.state.plates.as_matrices(), np.array([m.homogeneous for m in am.home]))
+    np.testing.assert_allclose(result.leg_lengths, am.config.leg.mid_length, atol=1e-12)
+    assert {"ee_position"} <= {v.kind for v in result.state.violations}
+
+
+@pytest.mark.parametrize(
+    "goal",
+    [
+        np.full((4, 4), np.nan),
+        np.diag([2.0, 1.0, 1.0, 1.0]),  # not a rotation
+        np.eye(3),  # wrong shape
+    ],
+)
+def test_malformed_goals_raise(am, goal):
+    with pytest.raises(PoseError):
+        initial_condition(am, goal)
+
+
+def test_options_are_checked():
+    with pytest.raises(ValueError):
+        HelperArmOptions(d_step=0.0)
+    with pytest.raises(ValueError):
+        HelperArmOptions(max_attempts=0)
+
+
+# ---------------------------------------------------------------------- CLI
+def test_cli_solve_json_contract(am, capsys):
+    assert main(["solve", "--goal-deg", "0.2", "0.1", "0.85", "20", "-10", "15", "--no-optimize", "--json"]) == 0
+    doc = json.loads(capsys.readouterr().out)
+    assert list(doc)[:4] == ["goal", "success", "message", "initial"]
+    assert doc["success"] is True
+    np.testing.assert_allclose(doc["goal"], [0.2, 0.1, 0.85, *np.deg2rad([20, -10, 15])], atol=1e-12)
+    plates = np.array(doc["initial"]["plates"])
+    goal = pin.SE3(pin.exp3(np.deg2rad([20.0, -10.0, 15.0])), np.array([0.2, 0.1, 0.85]))
+    np.testing.assert_allclose(plates[-1], goal.homogeneous, atol=1e-9)
+    fk = stack_forward_kinematics(am, np.array(doc["initial"]["leg_lengths"]))
+    np.testing.assert_allclose(fk.plates.as_matrices(), plates, atol=1e-9)
+
+
+def test_cli_solve_unreachable_and_errors(capsys):
+    args = ["solve", "--goal", "3", "0", "0.8", "0", "0", "0", "--no-optimize", "--json", "--max-attempts", "2"]
+    assert main(args) == 0
+    doc = json.loads(capsys.readouterr().out)
+    assert doc["success"] is False and "reach" in doc["message"]
+    assert main(["solve", "--goal", "nan", "0", "0.8", "0", "0", "0", "--no-optimize"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "NaN" in err[0]
+    assert main(["solve", "--goal", "0", "0", "0.9", "0", "0", "0"]) == 2
+    assert "--no-optimize" in capsys.readouterr().err
+    assert main(["solve", "--no-optimize"]) == 2
+    assert main(["solve", "--goal", "0", "0", "0.9", "0", "0", "0", "--no-optimize", "--d-step", "-1"]) == 2
+
+
+def test_cli_solve_table(capsys):
+    assert main(["solve", "--goal", "0", "0", "0.95", "0", "0", "0.1", "--no-optimize"]) == 0
+    out = capsys.readouterr().out
+    assert "valid" in out and "max |F|" in out and "SP4" in out
