@@ -115,38 +115,83 @@ def _goal_from_args(args: argparse.Namespace):
     raise CLIError("give the EE goal: --goal X Y Z RX RY RZ (m, rad) or --goal-deg X Y Z RX RY RZ (m, deg)")
 
 
-def cmd_solve(args: argparse.Namespace) -> int:
-    """Initial condition of the stack for an EE goal, by the helper arm (``--no-optimize``)."""
-    from .helper_arm import HelperArmOptions, initial_condition
-    from .kinematics import se3_to_taa
+def _optimize_options(args: argparse.Namespace):
+    from .constraints import GoalTolerance
+    from .optimize import OptimizeOptions
 
-    goal = _goal_from_args(args)
-    if not args.no_optimize:
-        raise CLIError("optimization is not available yet: use --no-optimize")
+    ee = None
+    if args.ee_tolerance is not None:
+        pos, rot = args.ee_tolerance
+        if not (pos > 0 and rot > 0):
+            raise CLIError("--ee-tolerance POSITION ROTATION must both be > 0 (m, rad)")
+        ee = GoalTolerance(position=pos, rotation=rot)
     try:
-        options = HelperArmOptions(d_step=args.d_step, max_attempts=args.max_attempts)
+        return OptimizeOptions(method=args.method, w1=args.w1, w2=args.w2, ee_tolerance=ee,
+                               max_iterations=args.max_iterations, ftol=args.ftol)  # fmt: skip
     except ValueError as exc:
         raise CLIError(str(exc)) from None
+
+
+def cmd_solve(args: argparse.Namespace) -> int:
+    """Internal poses for an EE goal: helper-arm initial condition, then (by default) the
+    force optimization. An unreachable goal is an answer (exit 0, success false)."""
+    from .helper_arm import HelperArmOptions
+    from .kinematics import se3_to_taa
+    from .solve import solve
+
+    goal = _goal_from_args(args)
+    try:
+        helper = HelperArmOptions(d_step=args.d_step, max_attempts=args.max_attempts)
+    except ValueError as exc:
+        raise CLIError(str(exc)) from None
+    options = None if args.no_optimize else _optimize_options(args)
     am = AssemblerModel.from_config(_config(args))
-    result = initial_condition(am, goal, options)
+    result = solve(am, goal, optimize=not args.no_optimize, options=options, helper_options=helper)
     if args.json:
-        doc = {
-            "goal": se3_to_taa(result.goal).tolist(),
-            "success": result.success,
-            "message": result.message,
-            "initial": result.state.to_dict(),
-        }
-        print(json.dumps(doc))
+        print(json.dumps(result.to_dict()))
         return 0
     taa = se3_to_taa(result.goal)
     print(
         f"goal: p = ({taa[0]:.4f}, {taa[1]:.4f}, {taa[2]:.4f}) m, "
         f"rotation vector = ({np.rad2deg(taa[3]):.2f}, {np.rad2deg(taa[4]):.2f}, {np.rad2deg(taa[5]):.2f}) deg"
     )
-    status = "valid" if result.success else "FAILED"
-    print(f"initial condition (helper arm): {status} — {result.message} [{1e3 * result.time_s:.1f} ms]")
-    title = "Initial condition" if result.success else "Home pose (no valid initial condition)"
-    print(format_state_table(result.state, title))
+    init = result.initial_result
+    status = "valid" if init.success else "FAILED"
+    print(f"initial condition (helper arm): {status} — {init.message} [{1e3 * init.time_s:.1f} ms]")
+    title = "Initial condition" if init.success else "Home pose (no valid initial condition)"
+    print(format_state_table(init.state, title))
+    opt = result.optimization
+    if opt is not None:
+        print()
+        print(f"optimization ({opt.method}): {'success' if result.success else 'FAILED'} — {opt.message}; "
+              f"{opt.iterations} iterations, {opt.evaluations} evaluations, {opt.time_s:.3f} s")  # fmt: skip
+        print(f"objective Ω = w1·max|F| + w2·sqrt(Σλ²): {opt.objective_initial:.3f} -> {opt.objective_optimized:.3f}")
+        print(format_state_table(opt.optimized, "Optimized"))
+    elif not args.no_optimize:
+        print(f"\nno optimization: {result.message}")
+    return 0
+
+
+def cmd_reproduce(args: argparse.Namespace) -> int:
+    """The paper's scenarios, initial vs optimized, with a markdown report and figures."""
+    from .reproduce import force_tables, run_scenarios, summary_table, write_report
+    from .scenarios import SCENARIOS
+
+    names = args.scenario or list(SCENARIOS)
+    unknown = [n for n in names if n not in SCENARIOS]
+    if unknown:
+        raise CLIError(f"unknown scenario {', '.join(unknown)}; valid: {', '.join(SCENARIOS)}")
+    am = AssemblerModel.from_config(_config(args))
+    outcomes = run_scenarios(am, names, _optimize_options(args))
+    print(f"The paper's scenarios on {am.n} platforms, payload {am.config.payload.mass:g} kg "
+          f"at {am.config.payload.offset:g} m (forces in N, tension positive)\n")  # fmt: skip
+    print(summary_table(outcomes))
+    for outcome in outcomes:
+        print()
+        print(force_tables(outcome))
+    if args.out:
+        path = write_report(am, outcomes, args.out)
+        print(f"\nwrote report: {path}")
     return 0
 
 
@@ -229,6 +274,18 @@ def cmd_view(args: argparse.Namespace) -> int:
         viewer.close()
 
 
+def _add_optimize_arguments(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--method", choices=["slsqp", "paper"], default="slsqp",
+                   help="slsqp: smooth epigraph form, analytic gradients (default); paper: the paper's "
+                        "non-smooth objective with finite differences")  # fmt: skip
+    p.add_argument("--w1", type=float, default=1.0, help="weight of max|F| (default 1)")
+    p.add_argument("--w2", type=float, default=1.0, help="weight of the plate deviation term (default 1)")
+    p.add_argument("--ee-tolerance", type=float, nargs=2, metavar=("POSITION", "ROTATION"),
+                   help="let the EE move this far from the goal [m, rad] (default: fixed at the goal)")  # fmt: skip
+    p.add_argument("--max-iterations", type=int, default=200, help="solver iteration limit (default 200)")
+    p.add_argument("--ftol", type=float, default=1e-7, help="solver tolerance on the objective (default 1e-7)")
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="assembler-pin",
@@ -264,8 +321,15 @@ def build_parser() -> argparse.ArgumentParser:
                    help="helper-arm link-length scan step [m] (default 0.01)")  # fmt: skip
     p.add_argument("--max-attempts", type=int, default=15, metavar="N",
                    help="helper-arm recursion limit: link lengths tried (default 15)")  # fmt: skip
+    _add_optimize_arguments(p)
     p.add_argument("--json", action="store_true", help="print one JSON object")
     p.set_defaults(func=cmd_solve)
+
+    p = add("reproduce", "the paper's scenarios: initial vs optimized forces, tables, report with figures")
+    p.add_argument("--out", metavar="DIR", help="write report.md and PNG figures into DIR")
+    p.add_argument("--scenario", action="append", metavar="NAME", help="only this scenario (repeatable)")
+    _add_optimize_arguments(p)
+    p.set_defaults(func=cmd_reproduce)
 
     p = add("bench", "median time per call of the hot computations")
     p.add_argument("--json", action="store_true", help="print one JSON object")

@@ -69,7 +69,8 @@ class SolveResult:
             "goal": se3_to_taa(self.goal).tolist(),
             "success": self.success,
             "message": self.message,
-            "initial": self.initial.to_dict() if self.initial is not None else None,
+            # the helper arm's state: the home pose, flagged by success false, when it failed
+            "initial": self.initial_result.state.to_dict(),
         }
         if self.optimization is not None or "optimize" in self.timing_s:
             opt = self.optimization
@@ -80,8 +81,13 @@ class SolveResult:
             }
             out["timing_s"] = dict(self.timing_s)
             if opt is not None:
-                out["optimizer"] = {"method": opt.method, "status": opt.status, "message": opt.solver_message,
-                                    "iterations": opt.iterations, "evaluations": opt.evaluations}
+                out["optimizer"] = {
+                    "method": opt.method,
+                    "status": opt.status,
+                    "message": opt.solver_message,
+                    "iterations": opt.iterations,
+                    "evaluations": opt.evaluations,
+                }
         else:
             out["timing_s"] = dict(self.timing_s)
         return out

@@ -320,8 +320,8 @@ def test_cli_solve_unreachable_and_errors(capsys):
     assert main(["solve", "--goal", "nan", "0", "0.8", "0", "0", "0", "--no-optimize"]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "NaN" in err[0]
-    assert main(["solve", "--goal", "0", "0", "0.9", "0", "0", "0"]) == 2
-    assert "--no-optimize" in capsys.readouterr().err
+    assert main(["solve", "--goal", "0", "0", "0.9", "0", "0", "0", "--w1", "-1"]) == 2
+    assert "weights" in capsys.readouterr().err
     assert main(["solve", "--no-optimize"]) == 2
     assert main(["solve", "--goal", "0", "0", "0.9", "0", "0", "0", "--no-optimize", "--d-step", "-1"]) == 2
 

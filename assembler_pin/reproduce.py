@@ -1,0 +1,219 @@
+"""Reproduce the paper's §V: the representative scenarios, initial vs optimized.
+
+:func:`run_scenarios` solves every scenario goal (helper-arm initial condition, then the
+force optimization) and :func:`write_report` writes a markdown report with PNG figures:
+side and top views of the initial (green) and optimized poses, per-actuator force bars,
+force heatmaps. :func:`summary_table` and :func:`force_tables` give the text the
+``assembler-pin reproduce`` command prints — the summary the paper gives in prose and
+its Tables I–II layout — beside the paper's own figures.
+"""
+
+from __future__ import annotations
+
+import logging
+from collections.abc import Sequence
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from .model import AssemblerModel
+from .optimize import OptimizeOptions
+from .scenarios import SCENARIOS, Scenario
+from .solve import SolveResult, solve
+from .state import StackState
+
+__all__ = ["ScenarioOutcome", "force_tables", "run_scenarios", "summary_table", "write_report"]
+
+logger = logging.getLogger(__name__)
+
+
+@dataclass
+class ScenarioOutcome:
+    """One scenario solved: the scenario, its :class:`~assembler_pin.solve.SolveResult` and the
+    leg stroke it was solved with."""
+
+    scenario: Scenario
+    result: SolveResult
+    stroke: tuple[float, float]
+    """(min_length, max_length) of the legs [m]."""
+
+    @property
+    def initial(self) -> StackState | None:
+        return self.result.initial
+
+    @property
+    def optimized(self) -> StackState | None:
+        return self.result.optimized
+
+    @property
+    def reduction(self) -> float | None:
+        """Relative reduction of max |F| [fraction], None when not solved."""
+        if self.initial is None or self.optimized is None:
+            return None
+        return 1.0 - self.optimized.max_abs_force / self.initial.max_abs_force
+
+
+def run_scenarios(
+    am: AssemblerModel,
+    names: Sequence[str] | None = None,
+    options: OptimizeOptions | None = None,
+) -> list[ScenarioOutcome]:
+    """Solve the named scenarios (default: all, in the paper's order)."""
+    chosen = list(SCENARIOS) if names is None else list(names)
+    outcomes = []
+    for name in chosen:
+        scn = SCENARIOS[name]
+        result = solve(am, scn.goal, optimize=True, options=options)
+        logger.info("scenario %s: %s", name, result.message)
+        outcomes.append(ScenarioOutcome(scn, result, (am.config.leg.min_length, am.config.leg.max_length)))
+    return outcomes
+
+
+def _argmax_label(state: StackState) -> str:
+    j, i = np.unravel_index(np.abs(state.forces).argmax(), state.forces.shape)
+    return f"SP{j + 1}/{i + 1}"
+
+
+def _legs_at_stroke_end(state: StackState, stroke: tuple[float, float], tol: float = 1e-6) -> int:
+    """Legs within ``tol`` [m] of either end of their stroke: the limits that bind."""
+    lengths = state.leg_lengths
+    return int(np.sum((lengths <= stroke[0] + tol) | (lengths >= stroke[1] - tol)))
+
+
+def _paper_reduction(scn: Scenario) -> float:
+    return 1.0 - scn.paper_optimized_max_force / scn.paper_initial_max_force
+
+
+def summary_table(outcomes: Sequence[ScenarioOutcome], markdown: bool = False) -> str:
+    """Initial vs optimized max |F| (which actuator, SP/leg), reduction, mean |F| and time,
+    beside the paper's figures."""
+    header = [
+        "scenario",
+        "initial max|F| [N]",
+        "optimized max|F| [N]",
+        "reduction",
+        "paper",
+        "mean |F| init → opt [N]",
+        "paper mean [N]",
+        "legs at stroke end",
+        "time [s]",
+    ]
+    rows = []
+    for o in outcomes:
+        s = o.scenario
+        reduction = 100 * _paper_reduction(s)
+        paper = f"{s.paper_initial_max_force:.1f} → {s.paper_optimized_max_force:.1f} ({reduction:.0f}%)"
+        paper_mean = f"{s.paper_initial_mean_force:.1f} → {s.paper_optimized_mean_force:.1f}"
+        if o.initial is None or o.optimized is None:
+            rows.append([s.name, "—", "—", "—", paper, "—", paper_mean, "—", "—"])
+            continue
+        time_s = sum(o.result.timing_s.values())
+        rows.append(
+            [
+                s.name,
+                f"{o.initial.max_abs_force:.1f} ({_argmax_label(o.initial)})",
+                f"{o.optimized.max_abs_force:.1f} ({_argmax_label(o.optimized)})",
+                f"{100 * o.reduction:.0f}%",
+                paper,
+                f"{o.initial.mean_abs_force:.1f} → {o.optimized.mean_abs_force:.1f}",
+                paper_mean,
+                f"{_legs_at_stroke_end(o.initial, o.stroke)} → {_legs_at_stroke_end(o.optimized, o.stroke)}",
+                f"{time_s:.2f}",
+            ]
+        )
+    if markdown:
+        lines = ["| " + " | ".join(header) + " |", "|" + "---|" * len(header)]
+        lines += ["| " + " | ".join(r) + " |" for r in rows]
+        return "\n".join(lines)
+    widths = [max(len(str(r[c])) for r in [header, *rows]) for c in range(len(header))]
+    fmt = "  ".join(f"{{:<{w}}}" for w in widths)
+    return "\n".join([fmt.format(*header), fmt.format(*["-" * w for w in widths])] + [fmt.format(*r) for r in rows])
+
+
+def force_tables(outcome: ScenarioOutcome, markdown: bool = False) -> str:
+    """The 6×n initial and optimized force tables side by side (paper Tables I–II) [N]."""
+    if outcome.initial is None or outcome.optimized is None:
+        return f"{outcome.scenario.name}: not solved ({outcome.result.message})"
+    ini, opt = outcome.initial.forces, outcome.optimized.forces
+    n = ini.shape[0]
+    sps = [f"SP{j + 1}" for j in range(n)]
+    if markdown:
+        head = (
+            "| actuator | "
+            + " | ".join(f"initial {s}" for s in sps)
+            + " | "
+            + " | ".join(f"optimized {s}" for s in sps)
+            + " |"
+        )
+        lines = [head, "|" + "---|" * (2 * n + 1)]
+        for i in range(6):
+            lines.append(
+                f"| {i + 1} | "
+                + " | ".join(f"{ini[j, i]:.2f}" for j in range(n))
+                + " | "
+                + " | ".join(f"{opt[j, i]:.2f}" for j in range(n))
+                + " |"
+            )
+        return "\n".join(lines)
+    title = f"{outcome.scenario.title}: initial and optimized forces [N] (tension +)"
+    head = "    " + "".join(f"{s:>9}" for s in sps) + "   |" + "".join(f"{s:>9}" for s in sps)
+    lines = [title, head]
+    for i in range(6):
+        lines.append(
+            f"{i + 1:>3} "
+            + "".join(f"{ini[j, i]:9.2f}" for j in range(n))
+            + "   |"
+            + "".join(f"{opt[j, i]:9.2f}" for j in range(n))
+        )
+    return "\n".join(lines)
+
+
+def write_report(am: AssemblerModel, outcomes: Sequence[ScenarioOutcome], out_dir: str | Path) -> Path:
+    """Write ``report.md`` and its PNG figures into ``out_dir``; returns the report path."""
+    from . import plots
+
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    leg = am.config.leg
+    parts = [
+        "# Internal-pose optimization: the paper's scenarios",
+        "",
+        f"{am.n} platforms, payload {am.config.payload.mass:g} kg at {am.config.payload.offset:g} m, "
+        f"force limits {leg.max_tension:g} N tension / {leg.max_compression:g} N compression. "
+        "Forces in newtons, tension positive. Initial pose: helper-arm initial condition; "
+        "optimized: smooth SLSQP with analytic gradients.",
+        "",
+        summary_table(outcomes, markdown=True),
+        "",
+    ]
+    for o in outcomes:
+        s = o.scenario
+        parts += [f"## {s.title}", "", s.description, ""]
+        if o.initial is None or o.optimized is None:
+            parts += [f"Not solved: {o.result.message}", ""]
+            continue
+        arm = o.result.initial_result.arm_points
+        files = {
+            "views": plots.save(plots.pose_views(o.initial, o.optimized, arm_points=arm), out / f"{s.name}_views.png"),
+            "bars": plots.save(
+                plots.force_bars(o.initial, o.optimized, limits=(leg.max_tension, leg.max_compression)),
+                out / f"{s.name}_forces.png",
+            ),
+            "heatmap": plots.save(plots.force_heatmaps(o.initial, o.optimized), out / f"{s.name}_heatmap.png"),
+        }
+        parts += [
+            f"![{s.name} views]({files['views'].name})",
+            "",
+            f"![{s.name} forces]({files['bars'].name})",
+            "",
+            f"![{s.name} heatmap]({files['heatmap'].name})",
+            "",
+            force_tables(o, markdown=True),
+            "",
+            f"Result: {o.result.message}.",
+            "",
+        ]
+    path = out / "report.md"
+    path.write_text("\n".join(parts))
+    return path

@@ -1,0 +1,91 @@
+"""The goal → poses pipeline: solve(), `assembler-pin solve` (optimizing), `reproduce`."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pinocchio as pin
+import pytest
+
+from assembler_pin import leg_state, solve_statics, stack_forward_kinematics
+from assembler_pin.cli import main
+from assembler_pin.optimize import OptimizeOptions
+from assembler_pin.scenarios import SCENARIOS
+from assembler_pin.solve import solve
+
+STATE_KEYS = ["plates", "leg_lengths", "forces", "bottom_points", "top_points", "max_abs_force",
+              "mean_abs_force", "feasible", "violations"]  # fmt: skip
+
+
+def test_solve_round_trip_and_improvement(am):
+    goal = SCENARIOS["orientation_transition"].goal
+    result = solve(am, goal)
+    assert result.success and result.initial is not None and result.optimized is not None
+    opt = result.optimized
+    # the optimized leg lengths reproduce the goal through stack FK
+    fk = stack_forward_kinematics(am, opt.leg_lengths).raise_if_failed()
+    assert np.allclose(fk.as_matrices()[-1], goal.homogeneous, atol=1e-9)
+    # every constraint, recomputed independently
+    leg = am.config.leg
+    legs = leg_state(am, opt.plates)
+    forces = solve_statics(am, opt.plates).forces
+    assert leg.min_length <= legs.lengths.min() and legs.lengths.max() <= leg.max_length
+    assert legs.deflection.max() <= np.deg2rad(leg.max_deflection_deg)
+    assert np.all(forces <= leg.max_tension) and np.all(forces >= -leg.max_compression)
+    assert legs.rise.min() > 0
+    assert result.optimization.objective_optimized <= result.optimization.objective_initial
+    assert opt.max_abs_force <= result.initial.max_abs_force
+
+
+def test_unreachable_goal_is_a_clean_failure(am):
+    far = pin.SE3(np.eye(3), np.array([3.0, 0.0, 0.5]))
+    result = solve(am, far)
+    assert not result.success and result.optimized is None and result.optimization is None
+    assert result.message.startswith("no valid initial condition")
+    doc = result.to_dict()
+    assert doc["success"] is False and doc["optimized"] is None and doc["objective"]["optimized"] is None
+    behind = pin.SE3(np.eye(3), np.array([0.0, 0.0, -0.6]))  # below the base
+    assert not solve(am, behind).success
+
+
+def test_cli_solve_optimizes_by_default(capsys):
+    goal = SCENARIOS["ninety_degrees"].goal_taa
+    assert main(["solve", "--goal", *map(str, goal), "--json"]) == 0
+    doc = json.loads(capsys.readouterr().out)
+    assert list(doc)[:8] == ["goal", "success", "message", "initial", "optimized", "objective", "timing_s",
+                             "optimizer"]  # fmt: skip
+    assert doc["success"] is True
+    assert list(doc["optimized"])[: len(STATE_KEYS)] == STATE_KEYS
+    assert doc["objective"]["optimized"] <= doc["objective"]["initial"]
+    assert set(doc["timing_s"]) == {"initial", "optimize"}
+    assert doc["optimized"]["max_abs_force"] <= doc["initial"]["max_abs_force"]
+    # the paper baseline, and the table output
+    assert main(["solve", "--goal", *map(str, goal), "--method", "paper", "--max-iterations", "30"]) == 0
+    out = capsys.readouterr().out
+    assert "optimization (paper)" in out and "Optimized" in out
+
+
+def test_cli_solve_bad_options(capsys):
+    assert main(["solve", "--goal", "0.3", "0", "0.8", "0", "0.6", "0", "--ee-tolerance", "0", "0.1"]) == 2
+    assert "--ee-tolerance" in capsys.readouterr().err
+
+
+def test_reproduce_prints_tables_and_writes_report(tmp_path, capsys):
+    assert main(["reproduce", "--scenario", "orientation_transition", "--out", str(tmp_path)]) == 0
+    out = capsys.readouterr().out
+    assert "orientation_transition" in out and "66.2 → 31.3 (53%)" in out
+    report = (tmp_path / "report.md").read_text()
+    assert "| scenario |" in report and "orientation_transition_views.png" in report
+    for suffix in ("views", "forces", "heatmap"):
+        png = tmp_path / f"orientation_transition_{suffix}.png"
+        assert png.stat().st_size > 10_000 and png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    assert main(["reproduce", "--scenario", "nowhere"]) == 2
+
+
+@pytest.mark.parametrize("method", ["slsqp", "paper"])
+def test_both_methods_reach_feasible_improvements(am, method):
+    scn = SCENARIOS["ninety_degrees"]
+    result = solve(am, scn.goal, options=OptimizeOptions(method=method, max_iterations=40))
+    assert result.optimized.feasible
+    assert result.optimization.objective_optimized < result.optimization.objective_initial
