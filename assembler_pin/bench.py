@@ -10,6 +10,7 @@ from __future__ import annotations
 import statistics
 import time
 from collections.abc import Callable
+from typing import Any
 
 import numpy as np
 
@@ -17,7 +18,13 @@ from .kinematics import PlateArrays, q_from_plates, sp_forward_kinematics, stack
 from .model import AssemblerModel
 from .statics import solve_statics
 
-__all__ = ["benchmark_initial_condition", "median_time_us", "random_reachable_plates", "run_benchmarks"]
+__all__ = [
+    "benchmark_initial_condition",
+    "benchmark_optimization",
+    "median_time_us",
+    "random_reachable_plates",
+    "run_benchmarks",
+]
 
 
 def median_time_us(fn: Callable[[], object], repeat: int) -> float:
@@ -51,12 +58,16 @@ def random_reachable_plates(
             return lengths, fk.plates
 
 
-def run_benchmarks(am: AssemblerModel, repeat: int = 300, seed: int = 0) -> dict[str, float]:
+def run_benchmarks(
+    am: AssemblerModel, repeat: int = 300, seed: int = 0, optimize: bool = True, quick: bool = False
+) -> dict[str, Any]:
     """Median per-call times [µs] of statics, SP FK, stack FK and closed-form q, then the
     helper-arm initial condition (:func:`benchmark_initial_condition`: ``initial_scenarios_ms``,
-    ``initial_random_ms`` [ms], ``initial_success_rate``).
+    ``initial_random_ms`` [ms], ``initial_success_rate``), then the optimization of each
+    scenario by both methods (:func:`benchmark_optimization`).
 
     Each per-call figure is the median over ``repeat`` calls, cycling through 20 random poses.
+    ``quick`` cuts the goal sets to a minimum (for smoke tests, not for figures).
     """
     rng = np.random.default_rng(seed)
     samples = [random_reachable_plates(am, rng) for _ in range(20)]
@@ -71,8 +82,54 @@ def run_benchmarks(am: AssemblerModel, repeat: int = 300, seed: int = 0) -> dict
         "stack_fk_us": median_time_us(lambda: stack_forward_kinematics(am, pick()[0]), repeat),
         "q_from_plates_us": median_time_us(lambda: q_from_plates(am, pick()[1]), repeat),
     }
-    results.update(benchmark_initial_condition(am, seed=seed))
+    results.update(benchmark_initial_condition(am, n_random=3 if quick else 20, seed=seed))
+    if optimize:
+        results.update(benchmark_optimization(am, names=["orientation_transition"] if quick else None))
     return results
+
+
+def benchmark_optimization(am: AssemblerModel, names: list[str] | None = None) -> dict[str, Any]:
+    """Optimization of each scenario from its helper-arm initial condition, by the default
+    method (``slsqp``: smooth, analytic gradients) and the paper's (``paper``: non-smooth,
+    finite differences), in the same run.
+
+    Returns:
+        ``optimize_scenarios``: per scenario ``slsqp_s``, ``paper_s`` [s], ``speedup``
+        (paper / slsqp time), ``slsqp_objective``, ``paper_objective`` (Ω), ``initial_objective``;
+        ``optimize_slsqp_median_s``, ``optimize_paper_median_s``, ``optimize_speedup_median``;
+        ``optimize_objective_not_worse``: fraction of scenarios where slsqp's Ω <= paper's.
+    """
+    from .helper_arm import initial_condition
+    from .optimize import OptimizeOptions, optimize_internal_poses
+    from .scenarios import SCENARIOS
+
+    per: dict[str, dict[str, float]] = {}
+    for name in names or list(SCENARIOS):
+        goal = SCENARIOS[name].goal
+        init = initial_condition(am, goal)
+        if not init.success:
+            continue
+        smooth = optimize_internal_poses(am, init.state, goal, OptimizeOptions(method="slsqp"))
+        paper = optimize_internal_poses(am, init.state, goal, OptimizeOptions(method="paper"))
+        per[name] = {
+            "slsqp_s": smooth.time_s,
+            "paper_s": paper.time_s,
+            "speedup": paper.time_s / smooth.time_s,
+            "initial_objective": smooth.objective_initial,
+            "slsqp_objective": smooth.objective_optimized,
+            "paper_objective": paper.objective_optimized,
+        }
+    if not per:
+        return {"optimize_scenarios": {}}
+    return {
+        "optimize_scenarios": per,
+        "optimize_slsqp_median_s": statistics.median(v["slsqp_s"] for v in per.values()),
+        "optimize_paper_median_s": statistics.median(v["paper_s"] for v in per.values()),
+        "optimize_speedup_median": statistics.median(v["speedup"] for v in per.values()),
+        "optimize_objective_not_worse": float(
+            np.mean([v["slsqp_objective"] <= v["paper_objective"] + 1e-9 for v in per.values()])
+        ),
+    }
 
 
 def benchmark_initial_condition(am: AssemblerModel, n_random: int = 20, seed: int = 0) -> dict[str, float]:

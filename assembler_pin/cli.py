@@ -199,12 +199,21 @@ def cmd_bench(args: argparse.Namespace) -> int:
     from .bench import run_benchmarks
 
     am = AssemblerModel.from_config(_config(args))
-    results = run_benchmarks(am, repeat=args.repeat)
+    results = run_benchmarks(am, repeat=args.repeat, optimize=not args.no_optimize, quick=args.quick)
     if args.json:
         print(json.dumps(results))
-    else:
-        for key, value in results.items():
-            print(f"{key:>20}: {value:10.1f}")
+        return 0
+    scenarios = results.pop("optimize_scenarios", None)
+    for key, value in results.items():
+        print(f"{key:>30}: {value:10.3f}")
+    if scenarios:
+        print("\noptimization per scenario (same run): time [s] and objective Ω")
+        print(
+            f"{'scenario':<24}{'slsqp s':>9}{'paper s':>9}{'speedup':>9}{'Ω initial':>11}{'Ω slsqp':>9}{'Ω paper':>9}"
+        )
+        for name, v in scenarios.items():
+            print(f"{name:<24}{v['slsqp_s']:9.3f}{v['paper_s']:9.3f}{v['speedup']:9.1f}"
+                  f"{v['initial_objective']:11.2f}{v['slsqp_objective']:9.2f}{v['paper_objective']:9.2f}")  # fmt: skip
     return 0
 
 
@@ -334,6 +343,8 @@ def build_parser() -> argparse.ArgumentParser:
     p = add("bench", "median time per call of the hot computations")
     p.add_argument("--json", action="store_true", help="print one JSON object")
     p.add_argument("--repeat", type=int, default=300, help="calls per figure (default 300)")
+    p.add_argument("--no-optimize", action="store_true", help="skip the optimization comparison (slow: ~10 s)")
+    p.add_argument("--quick", action="store_true", help="minimal goal sets: a smoke test, not figures")
     p.set_defaults(func=cmd_bench)
 
     p = add("view", "show a pose in Meshcat (live server until Ctrl-C, or a standalone HTML page)")

@@ -105,8 +105,22 @@ def test_export_with_config(tmp_path):
 
 
 def test_bench_json_keys():
-    out = run("bench", "--json", "--repeat", "3")
+    out = run("bench", "--json", "--repeat", "3", "--quick")
     assert out.returncode == 0, out.stderr
     doc = json.loads(out.stdout)
-    for key in ("statics_us", "sp_fk_us", "stack_fk_us", "q_from_plates_us"):
-        assert doc[key] > 0
+    for key in (
+        "statics_us",
+        "sp_fk_us",
+        "stack_fk_us",
+        "q_from_plates_us",
+        "initial_scenarios_ms",
+        "initial_random_ms",
+        "optimize_slsqp_median_s",
+        "optimize_paper_median_s",
+        "optimize_speedup_median",
+    ):
+        assert doc[key] > 0, key
+    assert 0 <= doc["initial_success_rate"] <= 1
+    scn = doc["optimize_scenarios"]["orientation_transition"]
+    assert scn["speedup"] == pytest.approx(scn["paper_s"] / scn["slsqp_s"])
+    assert scn["slsqp_objective"] <= scn["initial_objective"]
