@@ -46,7 +46,9 @@ from .kinematics import (
     to_se3,
 )
 from .model import AssemblerModel
+from .optimize import OptimizeOptions, OptimizeResult, optimize_internal_poses
 from .scenarios import SCENARIOS, Scenario, scenario
+from .solve import SolveResult, solve
 from .state import StackState, evaluate_state
 from .statics import StaticsResult, solve_statics
 from .urdf import assembler_urdf, closure_sidecar, export_model_files
@@ -66,12 +68,15 @@ __all__ = [
     "LegConfig",
     "LegState",
     "ModelFileError",
+    "OptimizeOptions",
+    "OptimizeResult",
     "PayloadConfig",
     "PlateArrays",
     "PlateConfig",
     "PoseError",
     "Scenario",
     "SingularConfigurationError",
+    "SolveResult",
     "StackFKResult",
     "StackState",
     "StaticsResult",
@@ -88,11 +93,13 @@ __all__ = [
     "leg_geometry",
     "leg_state",
     "load_config",
+    "optimize_internal_poses",
     "plate_arrays",
     "plates_from_q",
     "q_from_plates",
     "scenario",
     "se3_to_taa",
+    "solve",
     "solve_statics",
     "sp_forward_kinematics",
     "stack_forward_kinematics",
