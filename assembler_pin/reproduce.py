@@ -123,9 +123,11 @@ def summary_table(outcomes: Sequence[ScenarioOutcome], markdown: bool = False) -
             ]
         )
     if markdown:
-        lines = ["| " + " | ".join(header) + " |", "|" + "---|" * len(header)]
-        lines += ["| " + " | ".join(r) + " |" for r in rows]
-        return "\n".join(lines)
+
+        def md(cells: list[str]) -> str:
+            return "| " + " | ".join(c.replace("|", "\\|") for c in cells) + " |"
+
+        return "\n".join([md(header), "|" + "---|" * len(header)] + [md(r) for r in rows])
     widths = [max(len(str(r[c])) for r in [header, *rows]) for c in range(len(header))]
     fmt = "  ".join(f"{{:<{w}}}" for w in widths)
     return "\n".join([fmt.format(*header), fmt.format(*["-" * w for w in widths])] + [fmt.format(*r) for r in rows])
