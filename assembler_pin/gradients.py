@@ -30,20 +30,12 @@ from dataclasses import dataclass
 import numpy as np
 
 from .kinematics import PlateArrays
+from .linalg import cross, skew
 from .model import AssemblerModel
 
 __all__ = ["PoseDerivatives", "pose_derivatives"]
 
 _I3 = np.eye(3)
-
-
-def _skew(v: np.ndarray) -> np.ndarray:
-    """(..., 3) → (..., 3, 3) with skew(a) @ b = a × b."""
-    out = np.zeros((*v.shape, 3))
-    out[..., 0, 1], out[..., 0, 2] = -v[..., 2], v[..., 1]
-    out[..., 1, 0], out[..., 1, 2] = v[..., 2], -v[..., 0]
-    out[..., 2, 0], out[..., 2, 1] = -v[..., 1], v[..., 0]
-    return out
 
 
 @dataclass(frozen=True)
@@ -74,13 +66,6 @@ class PoseDerivatives:
     d_plate_angles_sq: np.ndarray
 
 
-def _cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """Cross product along the last axis (numpy's ``np.cross`` is slow on small arrays)."""
-    a0, a1, a2 = a[..., 0], a[..., 1], a[..., 2]
-    b0, b1, b2 = b[..., 0], b[..., 1], b[..., 2]
-    return np.stack([a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0], axis=-1)
-
-
 def _point_jacobian(points: np.ndarray, first_plate: int, n: int) -> np.ndarray:
     """d(point)/d(world twists of plates 1..n) for points (m, ..., 3) with points[r] on
     plate ``first_plate + r``; returns (m, ..., 3, 6n).
@@ -96,7 +81,7 @@ def _point_jacobian(points: np.ndarray, first_plate: int, n: int) -> np.ndarray:
     rows, cols = rows[cols >= 0], cols[cols >= 0]
     sel = (rows, *([slice(None)] * len(inner)), slice(None), cols)
     out[(*sel, slice(0, 3))] = _I3
-    out[(*sel, slice(3, 6))] = -_skew(points[rows])
+    out[(*sel, slice(3, 6))] = -skew(points[rows])
     return out.reshape(*out.shape[:-2], 6 * n)
 
 
@@ -144,17 +129,17 @@ def pose_derivatives(am: AssemblerModel, pa: PlateArrays) -> PoseDerivatives:
     level_moment = np.zeros((n + 1, 3))  # level k: plate k, legs of SP k, payload (k = n)
     level_dmoment = np.zeros((n + 1, 3, C))
     level_force = np.zeros((n + 1, 3))
-    skew_g = _skew(g)
-    level_moment[1:] = _cross(p[1:], mg_plate)
+    skew_g = skew(g)
+    level_moment[1:] = cross(p[1:], mg_plate)
     dp_plates = _point_jacobian(p[1:], 1, n)
     level_dmoment[1:] = -cfg.plate.mass * np.matmul(skew_g, dp_plates)
     level_force[1:] = mg_plate
-    leg_moment = leg.motor_mass * _cross(motor_c, g) + leg.shaft_mass * _cross(shaft_c, g)
+    leg_moment = leg.motor_mass * cross(motor_c, g) + leg.shaft_mass * cross(shaft_c, g)
     leg_dmoment = -np.matmul(skew_g, leg.motor_mass * d_motor_c + leg.shaft_mass * d_shaft_c)
     level_moment[:n] += leg_moment.sum(axis=1)
     level_dmoment[:n] += leg_dmoment.sum(axis=1)
     level_force[:n] += 6 * (leg.motor_mass + leg.shaft_mass) * g
-    level_moment[n] += cfg.payload.mass * _cross(payload_point, g)
+    level_moment[n] += cfg.payload.mass * cross(payload_point, g)
     d_payload = _point_jacobian(payload_point[None], n, n)[0]
     level_dmoment[n] += -cfg.payload.mass * skew_g @ d_payload
     level_force[n] += cfg.payload.mass * g
@@ -163,15 +148,15 @@ def pose_derivatives(am: AssemblerModel, pa: PlateArrays) -> PoseDerivatives:
     up_moment = np.cumsum(level_moment[::-1], axis=0)[::-1][1:]
     up_dmoment = np.cumsum(level_dmoment[::-1], axis=0)[::-1][1:]
     # --- the 6x6 system of each platform -----------------------------------------------
-    t_cross_u = _cross(t, u)
+    t_cross_u = cross(t, u)
     K = np.concatenate([u, t_cross_u], axis=2).transpose(0, 2, 1)  # (n, 6 rows, 6 legs)
-    skew_t = _skew(t)
-    t_cross_f = _cross(t, f_perp)
+    skew_t = skew(t)
+    t_cross_f = cross(t, f_perp)
     rhs = np.concatenate([up_force - f_perp.sum(axis=1), up_moment - t_cross_f.sum(axis=1)], axis=1)
     a = np.linalg.solve(K, rhs[..., None])[..., 0]  # (n, 6)
     # d(t × f) = -[f]× dt + [t]× df ;  d(t × u) = -[u]× dt + [t]× du
-    d_t_cross_f = -np.matmul(_skew(f_perp), dt) + np.matmul(skew_t, df_perp)
-    d_t_cross_u = -np.matmul(_skew(u), dt) + np.matmul(skew_t, du)
+    d_t_cross_f = -np.matmul(skew(f_perp), dt) + np.matmul(skew_t, df_perp)
+    d_t_cross_u = -np.matmul(skew(u), dt) + np.matmul(skew_t, du)
     d_rhs = np.concatenate([-df_perp.sum(axis=1), up_dmoment - d_t_cross_f.sum(axis=1)], axis=1)
     dK_a = np.concatenate([np.einsum("ji,jikc->jkc", a, du), np.einsum("ji,jikc->jkc", a, d_t_cross_u)], axis=1)
     da = np.linalg.solve(K, d_rhs - dK_a)  # (n, 6, C)
@@ -186,8 +171,8 @@ def pose_derivatives(am: AssemblerModel, pa: PlateArrays) -> PoseDerivatives:
     d_cos_b = np.einsum("jik,jikc->jic", h_bottom, du)
     d_cos_t = np.einsum("jik,jikc->jic", h_top, du)
     # rotating plate k by ω turns h into h + ω × h: d(u·h) += u·(ω × h) = (h × u)·ω
-    hb_x_u = _cross(h_bottom, u)
-    ht_x_u = _cross(h_top, u)
+    hb_x_u = cross(h_bottom, u)
+    ht_x_u = cross(h_top, u)
     for j in range(n):
         if j >= 1:
             d_cos_b[j, :, 6 * (j - 1) + 3 : 6 * j] += hb_x_u[j]
@@ -195,7 +180,7 @@ def pose_derivatives(am: AssemblerModel, pa: PlateArrays) -> PoseDerivatives:
     z_bottom = R[:-1, :, 2]  # (n, 3)
     rise = np.einsum("jk,jik->ji", z_bottom, d)
     d_rise = np.einsum("jk,jikc->jic", z_bottom, dd)
-    z_x_d = _cross(z_bottom[:, None, :], d)
+    z_x_d = cross(z_bottom[:, None, :], d)
     for j in range(1, n):
         d_rise[j, :, 6 * (j - 1) + 3 : 6 * j] += z_x_d[j]
     # --- plate angular deviation λ_k (paper eq. 9) --------------------------------------
@@ -204,8 +189,7 @@ def pose_derivatives(am: AssemblerModel, pa: PlateArrays) -> PoseDerivatives:
     step = p[1:] - p[:-1]
     step_len = np.linalg.norm(step, axis=1)
     step_dir = step / step_len[:, None]
-    cross = _cross(step_dir, rest_dir)
-    sin_l = np.linalg.norm(cross, axis=1)
+    sin_l = np.linalg.norm(cross(step_dir, rest_dir), axis=1)
     cos_l = np.einsum("jk,jk->j", step_dir, rest_dir)
     lam = np.arctan2(sin_l, cos_l)
     # d(λ²) = 2 λ dλ;  dλ = -(c - cosλ â)·dâ / sinλ - (â - cosλ c)·dc / sinλ, λ/sinλ → 1
@@ -217,7 +201,7 @@ def pose_derivatives(am: AssemblerModel, pa: PlateArrays) -> PoseDerivatives:
         d_step[k] += dp_all[k]
         if k >= 1:
             d_step[k] -= dp_all[k - 1]
-            d_rest_dir[k, :, 6 * (k - 1) + 3 : 6 * k] = -_skew(rest_dir[k])
+            d_rest_dir[k, :, 6 * (k - 1) + 3 : 6 * k] = -skew(rest_dir[k])
     d_step_dir = np.matmul((_I3 - step_dir[:, :, None] * step_dir[:, None, :]) / step_len[:, None, None], d_step)
     g_a = -(rest_dir - cos_l[:, None] * step_dir)
     g_c = -(step_dir - cos_l[:, None] * rest_dir)

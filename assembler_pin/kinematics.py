@@ -400,34 +400,15 @@ def _batched_fk(
     residual = np.abs(np.sqrt((vec * vec).sum(axis=2)) - target).max(axis=1)
     results = []
     for k, j in enumerate(idx):
-        pose = pin.SE3(H[k])
         res_k = float(residual[k])
-        if failure[k] is not None:
-            results.append(FKResult(pose, False, iterations[k], res_k, failure[k]))
-        elif not res_k <= tol:
-            results.append(
-                FKResult(
-                    pose,
-                    False,
-                    iterations[k],
-                    res_k,
-                    f"platform {j}: FK did not converge in {max_iterations} iterations "
-                    f"(length residual {res_k:.3g} m > {tol:.1g} m)",
-                )
-            )
-        elif vec[k, :, 2].min() <= 0.0:
-            results.append(
-                FKResult(
-                    pose,
-                    False,
-                    iterations[k],
-                    res_k,
-                    f"platform {j}: converged to an assembly mode with a top joint "
-                    "below its bottom joint (not this mechanism's branch)",
-                )
-            )
-        else:
-            results.append(FKResult(pose, True, iterations[k], res_k, "converged"))
+        message = failure[k]
+        if message is None and not res_k <= tol:
+            message = (f"platform {j}: FK did not converge in {max_iterations} iterations "
+                       f"(length residual {res_k:.3g} m > {tol:.1g} m)")  # fmt: skip
+        elif message is None and vec[k, :, 2].min() <= 0.0:
+            message = (f"platform {j}: converged to an assembly mode with a top joint below its bottom "
+                       "joint (not this mechanism's branch)")  # fmt: skip
+        results.append(FKResult(pin.SE3(H[k]), message is None, iterations[k], res_k, message or "converged"))
     return results
 
 

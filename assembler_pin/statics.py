@@ -30,6 +30,7 @@ import pinocchio as pin
 
 from .exceptions import SingularConfigurationError
 from .kinematics import PlateArrays, _leg_vectors, _q_from_arrays, plate_arrays
+from .linalg import skew
 from .model import AssemblerModel
 
 __all__ = ["CONDITION_LIMIT", "StaticsResult", "closure_jacobian_blocks", "solve_statics"]
@@ -70,15 +71,6 @@ class StaticsResult:
         return float(np.abs(self.forces).mean())
 
 
-def _skew_batch(v: np.ndarray) -> np.ndarray:
-    """(..., 3) → (..., 3, 3) cross-product matrices."""
-    out = np.zeros((*v.shape, 3))
-    out[..., 0, 1], out[..., 0, 2] = -v[..., 2], v[..., 1]
-    out[..., 1, 0], out[..., 1, 2] = v[..., 2], -v[..., 0]
-    out[..., 2, 0], out[..., 2, 1] = -v[..., 1], v[..., 0]
-    return out
-
-
 def _point_jacobians(am: AssemblerModel, top_points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Closure Jacobian blocks from Pinocchio's joint Jacobians (``data.J``, world frame).
 
@@ -92,11 +84,11 @@ def _point_jacobians(am: AssemblerModel, top_points: np.ndarray) -> tuple[np.nda
         ``plate`` (n, 6, 3, 6): closure rows × plate j+1's free-flyer columns.
     """
     J = am.data.J
-    skew = _skew_batch(top_points)  # (n, 6, 3, 3)
+    t_skew = skew(top_points)  # (n, 6, 3, 3)
     legs = J[:, am.leg_idx_v]  # (6, n, 6, 3)
-    leg = legs[:3].transpose(1, 2, 0, 3) - np.matmul(skew, legs[3:].transpose(1, 2, 0, 3))
+    leg = legs[:3].transpose(1, 2, 0, 3) - np.matmul(t_skew, legs[3:].transpose(1, 2, 0, 3))
     ff = J[:, am.plate_rows_ff]  # (6, n, 6)
-    plate = np.matmul(skew, ff[3:].transpose(1, 0, 2)[:, None]) - ff[:3].transpose(1, 0, 2)[:, None]
+    plate = np.matmul(t_skew, ff[3:].transpose(1, 0, 2)[:, None]) - ff[:3].transpose(1, 0, 2)[:, None]
     return leg, plate
 
 
