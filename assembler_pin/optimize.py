@@ -20,7 +20,7 @@ Methods:
   kept as the baseline to compare against.
 
 Constraints (all methods): leg lengths, joint deflection (as cosines, smooth), tension and
-compression limits (each also capped by the start's max|F|, so max|F| never increases),
+compression limits (for ``slsqp`` also capped by the start's max|F|, so max|F| never increases),
 continuous translation (every top joint at least ``rise_margin``
 above its bottom joint in the bottom plate's frame), end effector within tolerance.
 
@@ -133,8 +133,24 @@ def objective_value(am: AssemblerModel, state: StackState, w1: float = 1.0, w2: 
     return float(w1 * state.max_abs_force + w2 * np.sqrt(np.sum(lam**2)))
 
 
+@dataclass(frozen=True)
+class _Values:
+    """What the constraints and the objective read at one point."""
+
+    plates: PlateArrays
+    forces: np.ndarray  # (n, 6) [N], Pinocchio statics
+    lengths: np.ndarray
+    cos_deflection: np.ndarray  # (n, 6, 2)
+    rise: np.ndarray
+    plate_angles: np.ndarray  # (n,) [rad]
+
+
 class _Problem:
-    """Maps decision vectors to plate poses and evaluates the constraint set."""
+    """Maps decision vectors to plate poses and evaluates objective and constraints.
+
+    Values come from the Pinocchio statics and the plain kinematics; derivatives (only
+    where the solver asks for them) from :func:`~assembler_pin.gradients.pose_derivatives`.
+    """
 
     def __init__(self, am: AssemblerModel, start: PlateArrays, goal: pin.SE3, opts: OptimizeOptions):
         self.am, self.opts, self.goal = am, opts, goal
@@ -146,14 +162,19 @@ class _Problem:
         self.nx_pose = 6 * len(self.movable)
         leg = am.config.leg
         self.cos_max = np.cos(leg.max_deflection)
-        # never accept a larger max|F| than the start: cap both force limits by it
-        start_max = float(np.abs(solve_statics(am, start).forces).max())
-        self.tension_limit = min(leg.max_tension, start_max)
-        self.compression_limit = min(leg.max_compression, start_max)
+        # the smooth method never accepts a larger max|F| than the start: both force limits
+        # are capped by it (the paper's literal formulation keeps the plain limits)
+        self.start_max_force = float(np.abs(solve_statics(am, start).forces).max())
+        cap = self.start_max_force if opts.method == "slsqp" else np.inf
+        self.tension_limit = min(leg.max_tension, cap) - 1e-6
+        self.compression_limit = min(leg.max_compression, cap) - 1e-6
+        # with equal limits the epigraph variable s carries them: one row s <= limit
+        self.symmetric_limits = self.tension_limit == self.compression_limit
         self.best: tuple[float, np.ndarray] | None = None
         self.evaluations = 0
         self.gradient_evaluations = 0
-        self._cache: dict[bytes, object] = {}
+        self._values: tuple[bytes, _Values] | None = None
+        self._derivs: tuple[bytes, PoseDerivatives, np.ndarray] | None = None
 
     # ----------------------------------------------------------- pose maps
     def plates_local(self, x: np.ndarray) -> PlateArrays:
@@ -177,22 +198,68 @@ class _Problem:
             [np.concatenate([self.ref[k].translation, pin.log3(self.ref[k].rotation)]) for k in self.movable]
         )
 
-    # ----------------------------------------------------------- constraints
-    def _physical(self, forces, lengths, cos_defl, rise) -> np.ndarray:
-        """Every physical constraint as g(x) >= 0 (with tiny margins inside the limits)."""
+    # ----------------------------------------------------------- evaluation
+    def values(self, x_pose: np.ndarray) -> _Values:
+        """Values at the pose part of x (cached for the last point); tracks the best feasible."""
+        key = x_pose.tobytes()
+        if self._values is not None and self._values[0] == key:
+            return self._values[1]
+        pa = self.plates_taa(x_pose) if self.opts.method == "paper" else self.plates_local(x_pose)
+        legs = leg_state(self.am, pa)
+        v = _Values(pa, solve_statics(self.am, pa).forces, legs.lengths, np.cos(legs.deflection), legs.rise,
+                    plate_deviation(pa, self.am))  # fmt: skip
+        self._values = (key, v)
+        self.evaluations += 1
+        omega = self.opts.w1 * np.abs(v.forces).max() + self.opts.w2 * np.sqrt(np.sum(v.plate_angles**2))
+        feasible = (
+            np.all(self._geometric(v) >= 0)
+            and np.all(self._force_rows(v.forces) >= 0)
+            and np.all(self._ee(v.plates, x_pose) >= 0)
+        )
+        if feasible and (self.best is None or omega < self.best[0]):
+            self.best = (omega, x_pose.copy())
+        return v
+
+    def derivatives(self, x_pose: np.ndarray) -> tuple[PoseDerivatives, np.ndarray]:
+        """Derivatives at x and B = d(world twists of plates 1..n)/d(chart coordinates)."""
+        key = x_pose.tobytes()
+        if self._derivs is not None and self._derivs[0] == key:
+            return self._derivs[1], self._derivs[2]
+        pa = self.values(x_pose).plates
+        d = pose_derivatives(self.am, pa)
+        # world twist of plate k per chart coordinate: Ad(T_k) · Jexp6(x_k)
+        B = np.zeros((6 * self.n, self.nx_pose))
+        for slot, k in enumerate(self.movable):
+            B[6 * (k - 1) : 6 * k, 6 * slot : 6 * slot + 6] = pa.se3(k).action @ pin.Jexp6(
+                x_pose[6 * slot : 6 * slot + 6]
+            )
+        self._derivs = (key, d, B)
+        self.gradient_evaluations += 1
+        return d, B
+
+    # ----------------------------------------------------------- constraint rows (>= 0)
+    def _geometric(self, v: _Values) -> np.ndarray:
+        """Stroke, deflection and rise (with tiny margins inside the limits)."""
         leg = self.am.config.leg
         return np.concatenate(
             [
-                (leg.max_tension - 1e-6) - forces.ravel(),
-                forces.ravel() + (leg.max_compression - 1e-6),
-                lengths.ravel() - (leg.min_length + 1e-9),
-                (leg.max_length - 1e-9) - lengths.ravel(),
-                cos_defl.ravel() - (self.cos_max + 1e-9),
-                rise.ravel() - self.opts.rise_margin,
+                v.lengths.ravel() - (leg.min_length + 1e-9),
+                (leg.max_length - 1e-9) - v.lengths.ravel(),
+                v.cos_deflection.ravel() - (self.cos_max + 1e-9),
+                v.rise.ravel() - self.opts.rise_margin,
             ]
         )
 
-    def _ee(self, pa: PlateArrays, x: np.ndarray) -> np.ndarray:
+    def _geometric_jac(self, d: PoseDerivatives, B: np.ndarray) -> np.ndarray:
+        C = 6 * self.n
+        dL = d.d_lengths.reshape(-1, C) @ B
+        return np.vstack([dL, -dL, d.d_cos_deflection.reshape(-1, C) @ B, d.d_rise.reshape(-1, C) @ B])
+
+    def _force_rows(self, forces: np.ndarray) -> np.ndarray:
+        F = forces.ravel()
+        return np.concatenate([self.tension_limit - F, F + self.compression_limit])
+
+    def _ee(self, pa: PlateArrays, x_pose: np.ndarray) -> np.ndarray:
         if not self.free_ee:
             return np.zeros(0)
         tol = self.opts.ee_tolerance
@@ -200,103 +267,67 @@ class _Problem:
         if self.opts.method == "paper":
             rot = pin.log3(self.goal.rotation.T @ pa.R[self.n])
         else:
-            rot = x[self.nx_pose - 3 : self.nx_pose]
+            rot = x_pose[self.nx_pose - 3 : self.nx_pose]
         shrink = 1.0 - 1e-6  # stay strictly inside the tolerance the final check applies
         return np.array([(shrink * tol.position) ** 2 - dp @ dp, (shrink * tol.rotation) ** 2 - rot @ rot])
 
-    def _track(self, x: np.ndarray, physical: np.ndarray, ee: np.ndarray, omega: float) -> None:
-        if np.all(physical >= 0) and np.all(ee >= 0) and (self.best is None or omega < self.best[0]):
-            self.best = (omega, x.copy())
+    def _ee_jac(self, pa: PlateArrays, x_pose: np.ndarray, B: np.ndarray) -> np.ndarray:
+        k = self.n
+        dp = pa.p[k] - self.goal.translation
+        # d p_n / d(world twist) = [I, -[p_n]x]
+        jp = np.hstack([np.eye(3), -pin.skew(pa.p[k])]) @ B[6 * (k - 1) : 6 * k]
+        ee = np.zeros((2, self.nx_pose))
+        ee[0] = -2.0 * dp @ jp
+        ee[1, self.nx_pose - 3 :] = -2.0 * x_pose[self.nx_pose - 3 :]
+        return ee
 
-    # ----------------------------------------------------------- smooth method
-    def smooth(self, x: np.ndarray) -> tuple[PoseDerivatives, PlateArrays, np.ndarray]:
-        key = x.tobytes()
-        hit = self._cache.get(key)
-        if hit is None:
-            pa = self.plates_local(x)
-            d = pose_derivatives(self.am, pa)
-            # world twist of plate k per chart coordinate: Ad(T_k) · Jexp6(x_k)
-            B = np.zeros((6 * self.n, self.nx_pose))
-            for slot, k in enumerate(self.movable):
-                xk = x[6 * slot : 6 * slot + 6]
-                B[6 * (k - 1) : 6 * k, 6 * slot : 6 * slot + 6] = pa.se3(k).action @ pin.Jexp6(xk)
-            hit = (d, pa, B)
-            self._cache = {key: hit}
-            self.evaluations += 1
-            o = self.opts
-            omega = o.w1 * np.abs(d.forces).max() + o.w2 * np.sqrt(np.sum(d.plate_angles**2))
-            self._track(x[:-1], self._physical(d.forces, d.lengths, d.cos_deflection, d.rise), self._ee(pa, x), omega)
-        return hit
-
+    # ----------------------------------------------------------- smooth method (x = [poses, s])
     def smooth_fun(self, x: np.ndarray) -> float:
-        d, _, _ = self.smooth(x)
-        return float(self.opts.w1 * x[-1] + self.opts.w2 * np.sqrt(np.sum(d.plate_angles**2)))
+        v = self.values(x[:-1])
+        return float(self.opts.w1 * x[-1] + self.opts.w2 * np.sqrt(np.sum(v.plate_angles**2)))
 
     def smooth_grad(self, x: np.ndarray) -> np.ndarray:
-        d, _, B = self.smooth(x)
-        self.gradient_evaluations += 1
+        v = self.values(x[:-1])
+        d, B = self.derivatives(x[:-1])
         grad = np.zeros_like(x)
-        s = np.sqrt(np.sum(d.plate_angles**2))
+        s = np.sqrt(np.sum(v.plate_angles**2))
         if s > 1e-12:
             grad[:-1] = self.opts.w2 * (0.5 / s) * (d.d_plate_angles_sq.sum(axis=0) @ B)
         grad[-1] = self.opts.w1
         return grad
 
     def smooth_cons(self, x: np.ndarray) -> np.ndarray:
-        d, pa, _ = self.smooth(x)
-        F = d.forces.ravel()
-        return np.concatenate(
-            [x[-1] - F, x[-1] + F, self._physical(d.forces, d.lengths, d.cos_deflection, d.rise), self._ee(pa, x[:-1])]
-        )
+        v = self.values(x[:-1])
+        F, s = v.forces.ravel(), x[-1]
+        limits = np.array([self.tension_limit - s]) if self.symmetric_limits else self._force_rows(v.forces)
+        return np.concatenate([s - F, s + F, limits, self._geometric(v), self._ee(v.plates, x[:-1])])
 
     def smooth_cons_jac(self, x: np.ndarray) -> np.ndarray:
-        d, pa, B = self.smooth(x)
-        C = 6 * self.n
-        dF = d.d_forces.reshape(-1, C) @ B
-        dL = d.d_lengths.reshape(-1, C) @ B
-        dc = d.d_cos_deflection.reshape(-1, C) @ B
-        dr = d.d_rise.reshape(-1, C) @ B
-        m = dF.shape[0]
-        ones = np.ones((m, 1))
-        zeros = np.zeros((m, 1))
-        rows = [
-            np.hstack([-dF, ones]),
-            np.hstack([dF, ones]),
-            np.hstack([-dF, zeros]),
-            np.hstack([dF, zeros]),
-            np.hstack([dL, zeros]),
-            np.hstack([-dL, zeros]),
-            np.hstack([dc, np.zeros((dc.shape[0], 1))]),
-            np.hstack([dr, zeros]),
-        ]
+        v = self.values(x[:-1])
+        d, B = self.derivatives(x[:-1])
+        dF = d.d_forces.reshape(-1, 6 * self.n) @ B
+
+        def with_s(block: np.ndarray, ds: float) -> np.ndarray:
+            return np.hstack([block, np.full((block.shape[0], 1), ds)])
+
+        if self.symmetric_limits:
+            limits = np.zeros((1, x.size))
+            limits[0, -1] = -1.0
+        else:
+            limits = with_s(np.vstack([-dF, dF]), 0.0)
+        rows = [with_s(-dF, 1.0), with_s(dF, 1.0), limits, with_s(self._geometric_jac(d, B), 0.0)]
         if self.free_ee:
-            k = self.n
-            dp = pa.p[k] - self.goal.translation
-            # d p_n / d(world twist) = [I, -[p_n]x]
-            jp = np.hstack([np.eye(3), -pin.skew(pa.p[k])]) @ B[6 * (k - 1) : 6 * k]
-            ee = np.zeros((2, x.size))
-            ee[0, :-1] = -2.0 * dp @ jp
-            ee[1, self.nx_pose - 3 : self.nx_pose] = -2.0 * x[self.nx_pose - 3 : self.nx_pose]
-            rows.append(ee)
+            rows.append(with_s(self._ee_jac(v.plates, x[:-1], B), 0.0))
         return np.vstack(rows)
 
-    # ----------------------------------------------------------- paper method
-    def paper_values(self, x: np.ndarray) -> tuple[float, np.ndarray]:
-        key = x.tobytes()
-        hit = self._cache.get(key)
-        if hit is None:
-            pa = self.plates_taa(x)
-            legs = leg_state(self.am, pa)
-            forces = solve_statics(self.am, pa).forces
-            lam = plate_deviation(pa, self.am)
-            omega = self.opts.w1 * np.abs(forces).max() + self.opts.w2 * np.sqrt(np.sum(lam**2))
-            physical = self._physical(forces, legs.lengths, np.cos(legs.deflection), legs.rise)
-            ee = self._ee(pa, x)
-            self._track(x, physical, ee, omega)
-            hit = (float(omega), np.concatenate([physical, ee]))
-            self._cache = {key: hit}
-            self.evaluations += 1
-        return hit
+    # ----------------------------------------------------------- paper method (x = TAA poses)
+    def paper_fun(self, x: np.ndarray) -> float:
+        v = self.values(x)
+        return float(self.opts.w1 * np.abs(v.forces).max() + self.opts.w2 * np.sqrt(np.sum(v.plate_angles**2)))
+
+    def paper_cons(self, x: np.ndarray) -> np.ndarray:
+        v = self.values(x)
+        return np.concatenate([self._force_rows(v.forces), self._geometric(v), self._ee(v.plates, x)])
 
 
 def optimize_internal_poses(
@@ -337,10 +368,10 @@ def optimize_internal_poses(
     else:
         x0 = problem.taa_start()
         res = minimize(
-            lambda x: problem.paper_values(x)[0],
+            problem.paper_fun,
             x0,
             method="SLSQP",
-            constraints=[{"type": "ineq", "fun": lambda x: problem.paper_values(x)[1]}],
+            constraints=[{"type": "ineq", "fun": problem.paper_cons}],
             options={"maxiter": opts.max_iterations, "ftol": opts.ftol},
         )
         to_plates = problem.plates_taa
