@@ -222,7 +222,6 @@ def cmd_view(args: argparse.Namespace) -> int:
     import time
     import webbrowser
 
-    from .kinematics import taa_to_se3
     from .viewer import StackViewer
 
     am = AssemblerModel.from_config(_config(args))
@@ -234,9 +233,7 @@ def cmd_view(args: argparse.Namespace) -> int:
             except ImportError as exc:
                 raise CLIError(f"--goal needs assembler_pin.solve, which cannot be imported: {exc}") from None
 
-            degrees = args.goal is None
-            goal = taa_to_se3(args.goal_deg if degrees else args.goal, degrees=degrees)
-            result = solve(am, goal)
+            result = solve(am, _goal_from_args(args))
             if result.initial is None and result.optimized is None:
                 raise CLIError(f"no pose to show: {result.message}")
             arm = getattr(getattr(result, "initial_result", None), "arm_points", None)
@@ -283,6 +280,15 @@ def cmd_view(args: argparse.Namespace) -> int:
         viewer.close()
 
 
+def _add_goal_arguments(group: argparse._MutuallyExclusiveGroup, note: str = "") -> None:
+    """``--goal`` (rotation vector in rad) and ``--goal-deg``, read by :func:`_goal_from_args`."""
+    taa = ("X", "Y", "Z", "RX", "RY", "RZ")
+    group.add_argument("--goal", nargs=6, type=float, metavar=taa,
+                       help="EE goal: position [m] and rotation vector [rad], world frame" + note)  # fmt: skip
+    group.add_argument("--goal-deg", nargs=6, type=float, metavar=taa,
+                       help="as --goal with the rotation vector in degrees")  # fmt: skip
+
+
 def _add_optimize_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--method", choices=["slsqp", "paper"], default="slsqp",
                    help="slsqp: smooth epigraph form, analytic gradients (default); paper: the paper's "
@@ -320,11 +326,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.set_defaults(func=cmd_statics)
 
     p = add("solve", "a valid pose of the whole stack for an end-effector goal")
-    goal = p.add_mutually_exclusive_group()
-    goal.add_argument("--goal", nargs=6, type=float, metavar=("X", "Y", "Z", "RX", "RY", "RZ"),
-                      help="EE goal: position [m] and rotation vector [rad], world frame")  # fmt: skip
-    goal.add_argument("--goal-deg", nargs=6, type=float, metavar=("X", "Y", "Z", "RX", "RY", "RZ"),
-                      help="EE goal with the rotation vector in degrees")  # fmt: skip
+    _add_goal_arguments(p.add_mutually_exclusive_group())
     p.add_argument("--no-optimize", action="store_true", help="only the helper-arm initial condition")
     p.add_argument("--d-step", type=float, default=0.01, metavar="M",
                    help="helper-arm link-length scan step [m] (default 0.01)")  # fmt: skip
@@ -349,20 +351,7 @@ def build_parser() -> argparse.ArgumentParser:
 
     p = add("view", "show a pose in Meshcat (live server until Ctrl-C, or a standalone HTML page)")
     src = p.add_mutually_exclusive_group(required=True)
-    src.add_argument(
-        "--goal",
-        type=float,
-        nargs=6,
-        metavar=("X", "Y", "Z", "RX", "RY", "RZ"),
-        help="EE goal: translation [m] and rotation vector [rad]; shows initial and optimized poses",
-    )
-    src.add_argument(
-        "--goal-deg",
-        type=float,
-        nargs=6,
-        metavar=("X", "Y", "Z", "RX", "RY", "RZ"),
-        help="as --goal with the rotation vector in degrees",
-    )
+    _add_goal_arguments(src, " (shows the initial and optimized poses)")
     src.add_argument("--plates", metavar="FILE", help='JSON {"plates": [n+1 4x4]} file, or - for stdin')
     src.add_argument("--home", action="store_true", help="show the home pose")
     p.add_argument("--html", metavar="FILE", help="write a standalone HTML page instead of serving")

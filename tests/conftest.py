@@ -77,3 +77,12 @@ def random_se3(rng: np.random.Generator, scale: float = 1.0) -> pin.SE3:
 def massless_am() -> AssemblerModel:
     cfg = load_config({"leg": {"motor_mass": 0.0, "shaft_mass": 0.0}})
     return AssemblerModel.from_config(cfg)
+
+
+@pytest.fixture(scope="session")
+def bent_plates(am):
+    """A reachable bent pose (stack FK of uneven leg lengths), for drawing tests."""
+    lengths = np.full((am.n, 6), 0.275)
+    lengths[0, :3] = 0.22
+    lengths[1, 3:] = 0.33
+    return stack_forward_kinematics(am, lengths).raise_if_failed()

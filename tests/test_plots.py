@@ -7,18 +7,13 @@ import pinocchio as pin
 import pytest
 from matplotlib.colors import to_rgb
 
-from assembler_pin import evaluate_state, plots, stack_forward_kinematics
+from assembler_pin import evaluate_state, plots
 from assembler_pin.exceptions import AssemblerError
 
 
 @pytest.fixture(scope="module")
-def two_states(am):
-    lengths = np.full((am.n, 6), 0.275)
-    lengths[0, :3] = 0.23
-    lengths[2, 3:] = 0.32
-    fk = stack_forward_kinematics(am, lengths)
-    assert fk.success
-    return evaluate_state(am, am.home), evaluate_state(am, fk.plates)
+def two_states(am, bent_plates):
+    return evaluate_state(am, am.home), evaluate_state(am, bent_plates)
 
 
 def test_force_heatmaps_show_the_forces(two_states):

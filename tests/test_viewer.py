@@ -38,14 +38,8 @@ CHROMIUM = shutil.which("chromium") or shutil.which("chromium-browser")
 
 
 @pytest.fixture(scope="module")
-def bent(am):
-    """A reachable bent pose (from stack FK of uneven leg lengths)."""
-    lengths = np.full((am.n, 6), 0.275)
-    lengths[0, :3] = 0.22
-    lengths[1, 3:] = 0.33
-    fk = stack_forward_kinematics(am, lengths)
-    assert fk.success
-    return fk.plates
+def bent(bent_plates):
+    return bent_plates
 
 
 @pytest.fixture(scope="module")
