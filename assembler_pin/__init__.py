@@ -8,7 +8,7 @@ Quick start::
     import assembler_pin as ap
     am = ap.AssemblerModel.from_config()          # default 4-platform stack
     state = ap.evaluate_state(am, am.home)        # statics of the home pose
-    print(state.forces)                           # (4, 6) [N], tension positive
+    state.forces                                  # (4, 6) [N], tension positive
 """
 
 from .config import AssemblerConfig, LegConfig, PayloadConfig, PlateConfig, load_config

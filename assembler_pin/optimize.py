@@ -206,7 +206,7 @@ class _Problem:
             return self._values[1]
         pa = self.plates_taa(x_pose) if self.opts.method == "paper" else self.plates_local(x_pose)
         legs = leg_state(self.am, pa)
-        v = _Values(pa, solve_statics(self.am, pa).forces, legs.lengths, np.cos(legs.deflection), legs.rise,
+        v = _Values(pa, solve_statics(self.am, pa, legs=legs).forces, legs.lengths, np.cos(legs.deflection), legs.rise,
                     plate_deviation(pa, self.am))  # fmt: skip
         self._values = (key, v)
         self.evaluations += 1

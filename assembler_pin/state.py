@@ -98,6 +98,6 @@ def evaluate_state(
     """
     pa = plate_arrays(am, plates)
     legs = leg_state(am, pa)
-    statics = solve_statics(am, pa)
+    statics = solve_statics(am, pa, legs=legs)
     violations = evaluate_constraints(am.config, legs, statics, pa, goal, tolerance)
     return StackState(pa, legs, statics, violations, goal)

@@ -29,7 +29,7 @@ import numpy as np
 import pinocchio as pin
 
 from .exceptions import SingularConfigurationError
-from .kinematics import PlateArrays, _leg_vectors, _q_from_arrays, plate_arrays
+from .kinematics import LegState, PlateArrays, _leg_vectors, _q_from_arrays, plate_arrays
 from .linalg import skew
 from .model import AssemblerModel
 
@@ -113,6 +113,7 @@ def solve_statics(
     am: AssemblerModel,
     plates: PlateArrays | Sequence | np.ndarray,
     raise_on_singular: bool = False,
+    legs: LegState | None = None,
 ) -> StaticsResult:
     """Actuator and ball-joint forces holding the stack still at the given plate poses.
 
@@ -125,9 +126,15 @@ def solve_statics(
         plates: world poses of plates 0..n (see :func:`~assembler_pin.kinematics.plate_arrays`).
         raise_on_singular: raise :class:`SingularConfigurationError` instead of returning
             a result flagged ``singular``.
+        legs: the leg state of these plates when the caller has it already (saves
+            recomputing the joint centres).
     """
     pa = plate_arrays(am, plates)
-    _, top, vec, lengths = _leg_vectors(am, pa)
+    if legs is None:
+        _, top, vec, lengths = _leg_vectors(am, pa)
+    else:
+        top, lengths = legs.top_points, legs.lengths
+        vec = legs.top_points - legs.bottom_points
     q = _q_from_arrays(am, pa, vec, lengths)
     model, data = am.model, am.data
     g = pin.computeGeneralizedGravity(model, data, q)
