@@ -153,9 +153,9 @@ def solve_statics(
         ) from None
     axis = vec / lengths[..., None]
     # free-flyer rows: g_ff = Σ_i plateᵀ λ_i = Σ_i plateᵀ own_i - Σ_i τ_i plateᵀ axis_i
-    plate_t = plate.transpose(0, 1, 3, 2)  # (n, 6 legs, 6 ff, 3)
-    reduced = np.matmul(plate_t, axis[..., None])[..., 0].transpose(0, 2, 1)  # (n, 6 ff, 6 legs)
-    rhs = np.matmul(plate_t, own[..., None])[..., 0].sum(axis=1) - g[am.plate_rows_ff]
+    both = np.matmul(plate.transpose(0, 1, 3, 2), np.stack([axis, own], axis=-1))  # (n, 6 legs, 6 ff, 2)
+    reduced = both[..., 0].transpose(0, 2, 1)  # (n, 6 ff, 6 legs)
+    rhs = both[..., 1].sum(axis=1) - g[am.plate_rows_ff]
     inverse = np.linalg.inv(reduced)
     tau = np.matmul(inverse, rhs[..., None])[..., 0]
     condition = np.abs(reduced).sum(axis=1).max(axis=1) * np.abs(inverse).sum(axis=1).max(axis=1)
@@ -169,6 +169,5 @@ def solve_statics(
             worst,
         )
     ball = own - tau[..., None] * axis
-    R0 = pa.R[0]
-    base = np.concatenate([R0 @ g[:3], R0 @ g[3:6]])
+    base = (g[:6].reshape(2, 3) @ pa.R[0].T).ravel()  # root free-flyer wrench, in world axes
     return StaticsResult(-tau, ball, base, condition, q, singular)
