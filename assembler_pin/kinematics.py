@@ -11,6 +11,7 @@ centre); angles in radians; twists ordered ``[v, ω]`` as in Pinocchio.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 
@@ -42,6 +43,7 @@ __all__ = [
 ]
 
 ORTHONORMAL_TOL = 1e-6
+_ONES3 = np.ones(3)
 
 
 @dataclass(frozen=True)
@@ -305,7 +307,7 @@ def _check_lengths(lengths: npt.ArrayLike, shape: tuple[int, ...]) -> np.ndarray
         raise PoseError(f"leg lengths must be numbers of shape {shape}") from None
     if arr.shape != shape:
         raise PoseError(f"leg lengths must have shape {shape}, got {arr.shape}")
-    if not arr.min() > 0 or not np.isfinite(arr).all():  # NaN fails the first test
+    if not all(0.0 < x < math.inf for x in arr.ravel().tolist()):  # NaN fails the test
         raise PoseError("leg lengths must be finite and > 0 [m]")
     return arr
 
@@ -333,91 +335,60 @@ def sp_forward_kinematics(
     target = _check_lengths(lengths, (LEGS_PER_PLATFORM,))
     if not 0 <= j < am.n:
         raise PoseError(f"platform index must be in 0..{am.n - 1}, got {j}")
-    return _batched_fk(am, [j], target[None], [guess], tol, max_iterations)[0]
+    return _platform_fk(am, j, target, guess, tol, max_iterations)
 
 
-def _batched_fk(
-    am: AssemblerModel,
-    platforms: Sequence[int],
-    target: np.ndarray,
-    guesses: Sequence[pin.SE3 | None],
-    tol: float,
-    max_iterations: int,
-) -> list[FKResult]:
-    """Newton FK of several platforms at once (they are independent in relative poses).
+def _platform_fk(
+    am: AssemblerModel, j: int, target: np.ndarray, guess: pin.SE3 | None, tol: float, max_iterations: int
+) -> FKResult:
+    """Newton FK of platform j for validated target lengths (6,).
 
     Residual ``f_i = |x_i - b_i|² - L_i²`` (no square roots in the loop). The pose is
     perturbed on the left, ``T ← exp6(ξ) T`` with ξ a twist in the bottom plate's frame,
     so that the Jacobian rows are ``2 [v_i, b_i × v_i]`` with ``v_i = x_i - b_i`` and the
-    bottom anchors ``b_i`` constant. The reported residual is the exact length error.
+    bottom anchors ``b_i`` constant (one product with ``am.fk_jacobian_map[j]``). The
+    reported residual is the exact length error.
     """
-    geo = am.geometry
-    idx = list(platforms)
-    m = len(idx)
-    top_h = am.top_anchor_homogeneous[idx]  # (m, 6, 4)
-    bottom = geo.bottom_in_plate[idx]
-    bottom_skew = am.bottom_anchor_skew[idx]
-    H = np.array(
-        [(am.plate_joint_placement[j + 1] if g is None else g).homogeneous for j, g in zip(idx, guesses, strict=True)]
-    )
-    # without a guess, start from the home pose moved by one linearized step
-    # (the inverse of the home Jacobian is a constant per platform)
-    home_step = am.fk_home_inverse_jacobian[idx] @ (target - am.config.leg.mid_length)[..., None]
-    for k, g in enumerate(guesses):
-        if g is None:
-            H[k] = pin.exp6(home_step[k, :, 0]).homogeneous @ H[k]
+    top_h = am.top_anchor_homogeneous[j]  # (6, 4)
+    bottom = am.geometry.bottom_in_plate[j]
+    jacobian_map = am.fk_jacobian_map[j]
+    if guess is None:
+        # start from the home pose moved by one linearized step
+        # (the inverse of the home Jacobian is a constant per platform)
+        home_step = am.fk_home_inverse_jacobian[j].dot(target - am.config.leg.mid_length)
+        pose = pin.exp6(home_step) * am.plate_joint_placement[j + 1]
+    else:
+        pose = pin.SE3(guess)
     target_sq = target * target
     # |L - L*| <= |L² - L*²| / (L + L*) <= |f| / L*: converged when max |f| / L* <= tol
     inv_target = 1.0 / target
-    jac = np.empty((m, 6, 6))
-    iterations = [max_iterations] * m
-    converged = [False] * m
-    failure: list[str | None] = [None] * m
+    iterations, failure = max_iterations, None
     for it in range(max_iterations + 1):
-        vec = np.matmul(top_h, H.transpose(0, 2, 1))[..., :3] - bottom
-        err = target_sq - (vec * vec).sum(axis=2)
-        bound = (np.abs(err) * inv_target).max(axis=1).tolist()
-        for k in range(m):
-            if not converged[k] and bound[k] <= tol:
-                converged[k], iterations[k] = True, it
-        if all(converged) or it == max_iterations:
+        vec = top_h.dot(pose.homogeneous[:3].T) - bottom  # x_i - b_i, (6, 3)
+        length_sq = (vec * vec).dot(_ONES3)
+        err = target_sq - length_sq
+        # (a NaN here can only mean a non-finite pose, which fails the final residual test)
+        if max(map(abs, (err * inv_target).tolist())) <= tol:
+            iterations = it
             break
-        jac[..., :3] = vec
-        jac[..., 3:] = np.matmul(bottom_skew, vec[..., None])[..., 0]
-        try:
-            step = lapack_solve(jac[0], err[0])[None] if m == 1 else np.linalg.solve(jac, err[..., None])[..., 0]
-        except np.linalg.LinAlgError:
-            step = np.full((m, 6), np.nan)
-        step *= 0.5
-        finite = [True] * m if np.isfinite(step).all() else np.isfinite(step).all(axis=1).tolist()
-        for k in range(m):
-            if not finite[k]:
-                failure[k] = failure[k] or f"platform {idx[k]}: singular Jacobian or divergence in FK"
-                converged[k] = True
-            else:  # converged platforms take their (vanishing) step too: vec stays in sync
-                H[k] = pin.exp6(step[k]).homogeneous @ H[k]
-    # the loop always leaves right after evaluating vec at the current poses
-    residual = np.abs(np.sqrt((vec * vec).sum(axis=2)) - target).max(axis=1)
-    results = []
-    for k, j in enumerate(idx):
-        res_k = float(residual[k])
-        message = failure[k]
-        if message is None and not res_k <= tol:
-            message = (f"platform {j}: FK did not converge in {max_iterations} iterations "
-                       f"(length residual {res_k:.3g} m > {tol:.1g} m)")  # fmt: skip
-        elif message is None and vec[k, :, 2].min() <= 0.0:
-            message = (f"platform {j}: converged to an assembly mode with a top joint below its bottom "
-                       "joint (not this mechanism's branch)")  # fmt: skip
-        results.append(FKResult(pin.SE3(H[k]), message is None, iterations[k], res_k, message or "converged"))
-    return results
-
-
-def lapack_solve(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """Solve one small dense system with LAPACK's dgesv (less overhead than numpy's)."""
-    _, _, x, info = _dgesv(a, b)
-    if info != 0:
-        raise np.linalg.LinAlgError("singular matrix")
-    return x
+        if it == max_iterations:
+            break
+        # ξ solves 2 [v_i, b_i × v_i] ξ = f
+        _, _, step, info = _dgesv(jacobian_map.dot(vec.ravel()).reshape(6, 6), err)
+        if info != 0 or not math.isfinite(step.dot(step)):  # a step beyond 1e154 counts as divergence
+            failure = f"platform {j}: singular Jacobian or divergence in FK"
+            break
+        pose = pin.exp6(step) * pose
+    # the loop always leaves right after evaluating vec at the current pose
+    residual = float(np.abs(np.sqrt(length_sq) - target).max())
+    message = failure
+    if message is None and not residual <= tol:
+        message = (f"platform {j}: FK did not converge in {max_iterations} iterations "
+                   f"(length residual {residual:.3g} m > {tol:.1g} m)")  # fmt: skip
+    elif message is None and vec[:, 2].min() <= 0.0:
+        message = (f"platform {j}: converged to an assembly mode with a top joint below its bottom "
+                   "joint (not this mechanism's branch)")  # fmt: skip
+    return FKResult(pose, message is None, iterations, residual, message or "converged")
 
 
 @dataclass
@@ -475,8 +446,8 @@ def stack_forward_kinematics(
     if guess is not None:
         ga = plate_arrays(am, guess)
         guesses = [ga.se3(j).actInv(ga.se3(j + 1)) for j in range(am.n)]
-    # relative poses are independent given the lengths: solve all platforms at once
-    results = _batched_fk(am, range(am.n), L, guesses, tol, max_iterations)
+    # relative poses are independent given the lengths: solve each platform alone
+    results = [_platform_fk(am, j, L[j], guesses[j], tol, max_iterations) for j in range(am.n)]
     plates = [base_pose]
     for res in results:
         plates.append(plates[-1] * res.pose)

@@ -78,7 +78,6 @@ class AssemblerModel:
         self.n = n
         self.data = model.createData()
         self.geometry: LegGeometry = leg_geometry(cfg)
-        self.bottom_anchor_skew = np.array([[pin.skew(b) for b in sp] for sp in self.geometry.bottom_in_plate])
         self.top_anchor_homogeneous = np.concatenate(
             [self.geometry.top_in_plate, np.ones((*self.geometry.top_in_plate.shape[:2], 1))], axis=2
         )
@@ -112,6 +111,7 @@ class AssemblerModel:
         )
         self.plate_rows_ff = self.plate_idx_v[1:, None] + np.arange(6)
         self.fk_home_inverse_jacobian = self._home_inverse_jacobians()
+        self.fk_jacobian_map = self._fk_jacobian_maps()
         self._check_order()
         self._build_constraints()
         self.home = home_plates(cfg)
@@ -188,6 +188,16 @@ class AssemblerModel:
         u = geo.home_direction
         rows = np.concatenate([u, np.cross(geo.bottom_in_plate, u)], axis=2)
         return np.linalg.inv(rows)
+
+    def _fk_jacobian_maps(self) -> np.ndarray:
+        """(n, 36, 18): per platform, the linear map from the leg vectors ``v`` (6, 3),
+        flattened, to the FK Newton matrix ``2 [v_i, b_i × v_i]`` (6, 6), flattened."""
+        out = np.zeros((self.n, 6, 6, 6, 3))
+        for j, anchors in enumerate(self.geometry.bottom_in_plate):
+            for i, b in enumerate(anchors):
+                out[j, i, :3, i] = 2.0 * np.eye(3)
+                out[j, i, 3:, i] = 2.0 * pin.skew(b)
+        return out.reshape(self.n, 36, 18)
 
     def _check_order(self) -> None:
         """Each platform's legs must precede the next plate's free-flyer (depth-first)."""
