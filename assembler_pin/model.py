@@ -78,6 +78,14 @@ class AssemblerModel:
         self.n = n
         self.data = model.createData()
         self.geometry: LegGeometry = leg_geometry(cfg)
+        # row map a ↦ [a, t × a] of each top anchor t (plate frame): (n, 6, 3, 6)
+        self.top_line_map = np.concatenate(
+            [
+                np.broadcast_to(np.eye(3), (*self.geometry.top_in_plate.shape[:2], 3, 3)),
+                np.array([[pin.skew(t).T for t in sp] for sp in self.geometry.top_in_plate]),
+            ],
+            axis=3,
+        )
         self.top_anchor_homogeneous = np.concatenate(
             [self.geometry.top_in_plate, np.ones((*self.geometry.top_in_plate.shape[:2], 1))], axis=2
         )

@@ -71,25 +71,32 @@ class StaticsResult:
         return float(np.abs(self.forces).mean())
 
 
-def _point_jacobians(am: AssemblerModel, top_points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Closure Jacobian blocks from Pinocchio's joint Jacobians (``data.J``, world frame).
+def _leg_jacobians_t(am: AssemblerModel, top_points: np.ndarray) -> np.ndarray:
+    """Transposed closure Jacobian blocks of the legs' own joints, from Pinocchio's joint
+    Jacobians (``data.J``, world frame).
 
     Requires ``pin.computeJointJacobians`` at the pose whose world ball-joint centres are
     ``top_points`` (n, 6, 3). The closure of leg (j, i) is the shaft tip minus the top
     plate's anchor, in world axes; only leg (j, i)'s own joints and plate j+1's
-    free-flyer move one of the two points without the other.
+    free-flyer move one of the two points without the other. A joint column ``[v, ω]``
+    moves the tip by ``v + ω × t``, i.e. the row ``vᵀ + ωᵀ skew(t)`` of the transpose.
 
     Returns:
-        ``leg`` (n, 6, 3, 3): closure rows × the leg's (ux, uy, actuator) columns;
-        ``plate`` (n, 6, 3, 6): closure rows × plate j+1's free-flyer columns.
+        (n, 6, 3, 3): the leg's (ux, uy, actuator) rows × closure columns (world axes).
     """
-    J = am.data.J
-    t_skew = skew(top_points)  # (n, 6, 3, 3)
-    legs = J[:, am.leg_idx_v]  # (6, n, 6, 3)
-    leg = legs[:3].transpose(1, 2, 0, 3) - np.matmul(t_skew, legs[3:].transpose(1, 2, 0, 3))
-    ff = J[:, am.plate_rows_ff]  # (6, n, 6)
-    plate = np.matmul(t_skew, ff[3:].transpose(1, 0, 2)[:, None]) - ff[:3].transpose(1, 0, 2)[:, None]
-    return leg, plate
+    columns = am.data.J.T[am.leg_idx_v]  # (n, 6, 3 joints, 6)
+    return columns[..., :3] + np.matmul(columns[..., 3:], skew(top_points))
+
+
+def _plate_jacobians(am: AssemblerModel, top_points: np.ndarray) -> np.ndarray:
+    """Closure Jacobian blocks of the top plates' free-flyers (see :func:`_leg_jacobians_t`;
+    the anchor moves by ``v + ω × t`` and enters the closure with a minus sign).
+
+    Returns:
+        (n, 6, 3, 6): closure rows × plate j+1's free-flyer columns.
+    """
+    ff = am.data.J[:, am.plate_rows_ff]  # (6, n, 6)
+    return np.matmul(skew(top_points), ff[3:].transpose(1, 0, 2)[:, None]) - ff[:3].transpose(1, 0, 2)[:, None]
 
 
 def closure_jacobian_blocks(am: AssemblerModel, top_points: np.ndarray) -> np.ndarray:
@@ -100,7 +107,8 @@ def closure_jacobian_blocks(am: AssemblerModel, top_points: np.ndarray) -> np.nd
         velocity coordinates ``am.platform_rows_v[j]`` (18 leg joints, then the top plate's
         free-flyer).
     """
-    leg, plate = _point_jacobians(am, top_points)
+    leg = _leg_jacobians_t(am, top_points).swapaxes(2, 3)
+    plate = _plate_jacobians(am, top_points)
     n = am.n
     out = np.zeros((n, 6, 3, 24))
     for i in range(6):
@@ -139,12 +147,11 @@ def solve_statics(
     model, data = am.model, am.data
     g = pin.computeGeneralizedGravity(model, data, q)
     pin.computeJointJacobians(model, data, q)
-    leg, plate = _point_jacobians(am, top)
     # Each leg's rows: J_legᵀ λ_i = g_leg - e_z τ_i, with J_leg's columns the tip
     # velocities of (ux, uy, actuator). The actuator's column is the leg axis u and the
     # other two are orthogonal to it, so J_legᵀ⁻¹ e_z = u: λ_i = own_i - τ_i u_i.
     try:
-        own = np.linalg.solve(leg.transpose(0, 1, 3, 2), g[am.leg_idx_v][..., None])[..., 0]  # leg weight alone
+        own = np.linalg.solve(_leg_jacobians_t(am, top), g[am.leg_idx_v][..., None])[..., 0]  # leg weight alone
     except np.linalg.LinAlgError:
         raise SingularConfigurationError(
             "a universal joint is at gimbal lock (a leg at 90° from its home direction); its forces are not defined",
@@ -152,13 +159,19 @@ def solve_statics(
             -1,
         ) from None
     axis = vec / lengths[..., None]
-    # free-flyer rows: g_ff = Σ_i plateᵀ λ_i = Σ_i plateᵀ own_i - Σ_i τ_i plateᵀ axis_i
-    both = np.matmul(plate.transpose(0, 1, 3, 2), np.stack([axis, own], axis=-1))  # (n, 6 legs, 6 ff, 2)
-    reduced = both[..., 0].transpose(0, 2, 1)  # (n, 6 ff, 6 legs)
-    rhs = both[..., 1].sum(axis=1) - g[am.plate_rows_ff]
-    inverse = np.linalg.inv(reduced)
-    tau = np.matmul(inverse, rhs[..., None])[..., 0]
-    condition = np.abs(reduced).sum(axis=1).max(axis=1) * np.abs(inverse).sum(axis=1).max(axis=1)
+    # Plate j+1's free-flyer rows (its local frame, moments about its origin): the shafts
+    # push the plate with -λ_i at the anchors t_i, so g_ff = -Σ_i [λ_i; t_i × λ_i] (anchors
+    # and forces in the plate's axes). With λ_i = own_i - τ_i u_i this is W τ = F + g_ff,
+    # W's columns the legs' lines [u_i; t_i × u_i] and F the wrench of the own_i. W is the
+    # negated block of the former reduced system J_ffᵀ J_c, so its condition number is the same.
+    local = np.matmul(np.stack([axis, own], axis=2), pa.R[1:, None])  # (n, 6, 2, 3): Rᵀ u_i, Rᵀ own_i
+    lines = np.matmul(local, am.top_line_map)  # (n, 6, 2, 6): rows [a, t_i × a]
+    lines_t = lines[:, :, 0]  # Wᵀ
+    rhs = lines[:, :, 1].sum(axis=1) + g[am.plate_rows_ff]
+    inverse_t = np.linalg.inv(lines_t)
+    tau = np.matmul(rhs[:, None], inverse_t)[:, 0]
+    # ‖W‖₁ ‖W⁻¹‖₁ from the transposes' row sums
+    condition = np.abs(lines_t).sum(axis=2).max(axis=1) * np.abs(inverse_t).sum(axis=2).max(axis=1)
     singular = not condition.max() <= CONDITION_LIMIT  # NaN counts as singular
     if singular and raise_on_singular:
         worst = int(np.argmax(np.where(np.isfinite(condition), condition, np.inf)))
