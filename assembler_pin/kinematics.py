@@ -229,30 +229,26 @@ def q_from_plates(am: AssemblerModel, plates: PlateArrays | Sequence | np.ndarra
 
 
 def _q_from_arrays(am: AssemblerModel, pa: PlateArrays, vec: np.ndarray, lengths: np.ndarray) -> np.ndarray:
-    q = am.q_template.copy()
+    n = am.n
+    q = np.empty(am.nq)
     R, p = pa.R, pa.p
     Rb_T = R[:-1].transpose(0, 2, 1)
-    # pose of plate k+1 relative to plate k, composed after the joint's home placement
-    place_T = am.plate_placement_R.transpose(0, 2, 1)
-    rel_R = np.matmul(place_T, np.matmul(Rb_T, R[1:]))
-    rel_p = np.matmul(
-        place_T, (np.matmul(Rb_T, (p[1:] - p[:-1])[..., None])[..., 0] - am.plate_placement_p)[..., None]
-    )[..., 0]
-    free = np.empty((am.n + 1, 7))
-    free[0, :3], free[1:, :3] = p[0], rel_p
-    free[0, 3:] = pin.Quaternion(R[0]).coeffs()
-    for j in range(am.n):
-        free[j + 1, 3:] = pin.Quaternion(rel_R[j]).coeffs()
-    q[am.plate_q_flat] = free.ravel()
+    # root free-flyer: plate 0's world pose
+    q[0:3] = p[0]
+    q[3:7] = pin.Quaternion(R[0]).coeffs()
+    # then per platform (see AssemblerModel._check_order): 6 legs x (ux, uy, L), plate j+1 free-flyer
+    body = q[7:].reshape(n, 25)
+    legs = body[:, :18].reshape(n, 6, 3)
+    # plate j+1 relative to plate j, after the joint's home placement (a pure translation)
+    body[:, 18:21] = np.matmul(Rb_T, (p[1:] - p[:-1])[..., None])[..., 0] - am.plate_placement_p
+    rel_R = np.matmul(Rb_T, R[1:])
+    for j in range(n):
+        body[j, 21:25] = pin.Quaternion(rel_R[j]).coeffs()
     # leg direction in each universal joint's base frame: d = R_baseᵀ R_bottomᵀ vec
     d = np.matmul(np.matmul(vec, R[:-1])[:, :, None, :], am.geometry.leg_base_rotation)[:, :, 0, :]
-    q[am.leg_q_flat] = np.concatenate(
-        [
-            np.arctan2(-d[..., 1], d[..., 2]).ravel(),
-            np.arctan2(d[..., 0], np.hypot(d[..., 1], d[..., 2])).ravel(),
-            lengths.ravel(),
-        ]
-    )
+    legs[..., 0] = np.arctan2(-d[..., 1], d[..., 2])
+    legs[..., 1] = np.arctan2(d[..., 0], np.hypot(d[..., 1], d[..., 2]))
+    legs[..., 2] = lengths
     return q
 
 

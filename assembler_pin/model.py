@@ -110,8 +110,6 @@ class AssemblerModel:
         self.leg_joint_ids = leg_ids
         self.leg_idx_q = np.vectorize(lambda k: model.idx_qs[int(k)])(leg_ids)
         self.leg_idx_v = np.vectorize(lambda k: model.idx_vs[int(k)])(leg_ids)
-        self.plate_q_flat = (self.plate_idx_q[:, None] + np.arange(7)).ravel()
-        self.leg_q_flat = np.concatenate([self.leg_idx_q[:, :, k].ravel() for k in range(3)])
         self.actuator_idx_v = self.leg_idx_v[:, :, 2]
         self.shaft_joint_ids = leg_ids[:, :, 2]
         self.platform_rows_v = np.concatenate(
@@ -208,13 +206,23 @@ class AssemblerModel:
         return out.reshape(self.n, 36, 18)
 
     def _check_order(self) -> None:
-        """Each platform's legs must precede the next plate's free-flyer (depth-first)."""
+        """The configuration layout the kinematics rely on: the root free-flyer (7), then per
+        platform j its legs' (ux, uy, actuator) for legs 0..5 and plate j+1's free-flyer
+        (25 coordinates) — depth-first, legs before the next plate — and plate free-flyers
+        whose home placement is a pure translation (plates parallel at home)."""
         for j in range(self.n):
             if self.leg_idx_v[j].max() > self.plate_idx_v[j + 1]:
                 raise ModelFileError(
                     f"joint order: the legs of platform {j} must come before joint "
                     f"'{names.plate_joint(j)}' in the URDF (depth-first order)"
                 )
+        block = 7 + 25 * np.arange(self.n)
+        expected_legs = block[:, None, None] + 3 * np.arange(6)[None, :, None] + np.arange(3)[None, None, :]
+        if not (np.array_equal(self.leg_idx_q, expected_legs) and np.array_equal(self.plate_idx_q[1:], block + 18)):
+            raise ModelFileError("joint order: each platform's legs 0..5 (ux, uy, actuator) must be followed by the "
+                                 "next plate's floating joint, depth-first from plate 0")  # fmt: skip
+        if not np.allclose(self.plate_placement_R, np.eye(3), atol=1e-12):
+            raise ModelFileError("the plates' floating joints must have a pure translation as origin (home pose)")
         if not self.model.check(self.data):
             raise ModelFileError("model.check(data) failed on the loaded URDF")
 
