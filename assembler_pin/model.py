@@ -102,7 +102,6 @@ class AssemblerModel:
         self.plate_joint_placement = [model.jointPlacements[int(k)].copy() for k in self.plate_joint_ids]
         self.plate_placement_R = np.array([m.rotation for m in self.plate_joint_placement[1:]])
         self.plate_placement_p = np.array([m.translation for m in self.plate_joint_placement[1:]])
-        self.q_template = pin.neutral(model)
         parts = ("ux", "uy", "actuator")
         leg_ids = np.array(
             [[[joint(names.leg(j, i, p)) for p in parts] for i in range(LEGS_PER_PLATFORM)] for j in range(n)]

@@ -17,7 +17,7 @@ import pinocchio as pin
 
 from .kinematics import se3_to_taa, to_se3
 from .model import AssemblerModel
-from .optimize import OptimizeOptions, OptimizeResult, objective_value, optimize_internal_poses
+from .optimize import OptimizeOptions, OptimizeResult, optimize_internal_poses
 from .state import StackState
 
 if TYPE_CHECKING:
@@ -127,9 +127,3 @@ def solve(
     timing["optimize"] = result.time_s
     message = result.message
     return SolveResult(goal, result.success, message, init, result, timing)
-
-
-def state_objective(am: AssemblerModel, state: StackState, options: OptimizeOptions | None = None) -> float:
-    """Ω of a state with the weights of ``options`` (default 1, 1)."""
-    opts = options or OptimizeOptions()
-    return objective_value(am, state, opts.w1, opts.w2)
