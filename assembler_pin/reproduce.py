@@ -137,37 +137,22 @@ def force_tables(outcome: ScenarioOutcome, markdown: bool = False) -> str:
     """The 6×n initial and optimized force tables side by side (paper Tables I–II) [N]."""
     if outcome.initial is None or outcome.optimized is None:
         return f"{outcome.scenario.name}: not solved ({outcome.result.message})"
-    ini, opt = outcome.initial.forces, outcome.optimized.forces
-    n = ini.shape[0]
+    n = outcome.initial.forces.shape[0]
     sps = [f"SP{j + 1}" for j in range(n)]
+    # one row per actuator: its force in every platform, initial then optimized
+    rows = np.concatenate([outcome.initial.forces.T, outcome.optimized.forces.T], axis=1)  # (6, 2n)
     if markdown:
-        head = (
-            "| actuator | "
-            + " | ".join(f"initial {s}" for s in sps)
-            + " | "
-            + " | ".join(f"optimized {s}" for s in sps)
-            + " |"
-        )
-        lines = [head, "|" + "---|" * (2 * n + 1)]
-        for i in range(6):
-            lines.append(
-                f"| {i + 1} | "
-                + " | ".join(f"{ini[j, i]:.2f}" for j in range(n))
-                + " | "
-                + " | ".join(f"{opt[j, i]:.2f}" for j in range(n))
-                + " |"
-            )
+        header = ["actuator"] + [f"initial {s}" for s in sps] + [f"optimized {s}" for s in sps]
+        lines = ["| " + " | ".join(header) + " |", "|" + "---|" * (2 * n + 1)]
+        lines += [f"| {i + 1} | " + " | ".join(f"{f:.2f}" for f in row) + " |" for i, row in enumerate(rows)]
         return "\n".join(lines)
-    title = f"{outcome.scenario.title}: initial and optimized forces [N] (tension +)"
-    head = "    " + "".join(f"{s:>9}" for s in sps) + "   |" + "".join(f"{s:>9}" for s in sps)
-    lines = [title, head]
-    for i in range(6):
-        lines.append(
-            f"{i + 1:>3} "
-            + "".join(f"{ini[j, i]:9.2f}" for j in range(n))
-            + "   |"
-            + "".join(f"{opt[j, i]:9.2f}" for j in range(n))
-        )
+
+    def half(values: Sequence) -> str:
+        return "".join(f"{v:>9}" if isinstance(v, str) else f"{v:9.2f}" for v in values)
+
+    lines = [f"{outcome.scenario.title}: initial and optimized forces [N] (tension +)",
+             "    " + half(sps) + "   |" + half(sps)]  # fmt: skip
+    lines += [f"{i + 1:>3} " + half(row[:n]) + "   |" + half(row[n:]) for i, row in enumerate(rows)]
     return "\n".join(lines)
 
 
