@@ -924,7 +924,7 @@ def initial_condition(
                 closest = f"closest: {ik.position_error:.3g} m, {ik.rotation_error:.3g} rad away at d = {d:.4f} m"
             logger.debug("initial condition: %s", ik.message)
             continue
-        pa = PlateArrays(np.array([m.rotation for m in plates]), np.array([m.translation for m in plates]))
+        pa = PlateArrays.from_se3(plates)
         state, why = _kinematic_problems(am, pa, goal_se3, opts.tolerance)
         if state is None:
             broken.append(f"d={d:.4f}: {why}")

@@ -56,6 +56,11 @@ class PlateArrays:
     def __len__(self) -> int:
         return self.R.shape[0]
 
+    @classmethod
+    def from_se3(cls, poses: Sequence[pin.SE3]) -> PlateArrays:
+        """From a list of world poses (trusted: no validation, see :func:`plate_arrays`)."""
+        return cls(np.array([m.rotation for m in poses]), np.array([m.translation for m in poses]))
+
     def se3(self, k: int) -> pin.SE3:
         """Pose of plate k in the world as ``pin.SE3``."""
         return pin.SE3(self.R[k].copy(), self.p[k].copy())
@@ -152,7 +157,7 @@ def plate_arrays(am: AssemblerModel, plates: PlateArrays | Sequence | np.ndarray
     if len(items) != am.n + 1:
         raise PoseError(f"expected {am.n + 1} plate poses (plates 0..{am.n}), got {len(items)}")
     poses = [to_se3(m, f"plate {k}") for k, m in enumerate(items)]
-    return PlateArrays(np.array([m.rotation for m in poses]), np.array([m.translation for m in poses]))
+    return PlateArrays.from_se3(poses)
 
 
 # ---------------------------------------------------------------------- legs (IK)
@@ -256,7 +261,7 @@ def plates_from_q(am: AssemblerModel, q: np.ndarray) -> PlateArrays:
     """World poses of the plates for a configuration (Pinocchio forward kinematics)."""
     pin.forwardKinematics(am.model, am.data, q)
     oM = [am.data.oMi[int(k)] for k in am.plate_joint_ids]
-    return PlateArrays(np.array([m.rotation for m in oM]), np.array([m.translation for m in oM]))
+    return PlateArrays.from_se3(oM)
 
 
 # ---------------------------------------------------------------------- forward kinematics
@@ -447,7 +452,7 @@ def stack_forward_kinematics(
     plates = [base_pose]
     for res in results:
         plates.append(plates[-1] * res.pose)
-    pa = PlateArrays(np.array([m.rotation for m in plates]), np.array([m.translation for m in plates]))
+    pa = PlateArrays.from_se3(plates)
     failed = [r for r in results if not r.success]
     return StackFKResult(pa, not failed, results, failed[0].message if failed else "converged")
 

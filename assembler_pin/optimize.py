@@ -182,7 +182,7 @@ class _Problem:
         poses = list(self.ref)
         for slot, k in enumerate(self.movable):
             poses[k] = self.ref[k] * pin.exp6(x[6 * slot : 6 * slot + 6])
-        return PlateArrays(np.array([m.rotation for m in poses]), np.array([m.translation for m in poses]))
+        return PlateArrays.from_se3(poses)
 
     def plates_taa(self, x: np.ndarray) -> PlateArrays:
         """Chart of the paper method: world TAA (p, rotation vector) of each movable plate."""
