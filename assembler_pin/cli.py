@@ -222,10 +222,11 @@ def cmd_view(args: argparse.Namespace) -> int:
     import time
     import webbrowser
 
-    from .viewer import StackViewer
+    from .viewer import StackViewer, interrupt_on_signals
 
     am = AssemblerModel.from_config(_config(args))
-    viewer = StackViewer(am)
+    restore_signals = interrupt_on_signals()  # kill / a closed terminal stop it as Ctrl-C does
+    viewer = StackViewer(am, host=args.host)
     try:
         if args.goal is not None or args.goal_deg is not None:
             try:
@@ -268,16 +269,17 @@ def cmd_view(args: argparse.Namespace) -> int:
                 webbrowser.open(path.as_uri())
             return 0
         viewer.frame()
-        print(viewer.url, flush=True)
-        if args.open:
-            webbrowser.open(viewer.url)
         try:
+            print(viewer.url, flush=True)
+            if args.open:
+                webbrowser.open(viewer.url)
             while True:
                 time.sleep(0.5)
         except KeyboardInterrupt:
             return 0
     finally:
         viewer.close()
+        restore_signals()
 
 
 def _add_goal_arguments(group: argparse._MutuallyExclusiveGroup, note: str = "") -> None:
@@ -364,6 +366,9 @@ def build_parser() -> argparse.ArgumentParser:
         help="with --goal: animate initial -> optimized in STEPS leg-length steps",
     )
     p.add_argument("--no-arm", action="store_true", help="with --goal: do not draw the helper arm")
+    p.add_argument("--host", default="127.0.0.1",
+                   help="interface the live page listens on (default 127.0.0.1: this machine only; "
+                        "0.0.0.0: every interface)")  # fmt: skip
     p.set_defaults(func=cmd_view)
     return parser
 

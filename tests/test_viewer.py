@@ -7,7 +7,9 @@ is, and two different poses must give different pictures.
 
 from __future__ import annotations
 
+import contextlib
 import math
+import select
 import shutil
 import signal
 import subprocess
@@ -178,29 +180,106 @@ def test_cli_view_errors(tmp_path):
     assert out.returncode == 2  # argparse: one source is required
 
 
-def test_cli_view_serves_until_interrupted():
+# ---------------------------------------------------------------------- the live server's lifetime
+def _proc_stat(pid: int) -> tuple[str, int] | None:
+    """(state letter, parent pid) of a process from /proc, None when it no longer exists."""
+    try:
+        text = Path(f"/proc/{pid}/stat").read_text()
+    except OSError:
+        return None
+    fields = text[text.rindex(")") + 2 :].split()  # after "pid (comm) "
+    return fields[0], int(fields[1])
+
+
+def _running(pid: int) -> bool:
+    """The process exists and is not a zombie (a dead child nobody reaped yet)."""
+    stat = _proc_stat(pid)
+    return stat is not None and stat[0] not in "ZX"
+
+
+def _children(pid: int) -> list[int]:
+    out = []
+    for entry in Path("/proc").iterdir():
+        if entry.name.isdigit():
+            stat = _proc_stat(int(entry.name))
+            if stat is not None and stat[1] == pid and stat[0] not in "ZX":
+                out.append(int(entry.name))
+    return out
+
+
+def _listening_addresses(port: int) -> list[str]:
+    """Local addresses of the TCP sockets listening on ``port`` (IPv4 dotted, IPv6 hex)."""
+    found = []
+    for table in ("/proc/net/tcp", "/proc/net/tcp6"):
+        with contextlib.suppress(OSError):
+            for line in Path(table).read_text().splitlines()[1:]:
+                local, state = line.split()[1], line.split()[3]
+                address, port_hex = local.rsplit(":", 1)
+                if state == "0A" and int(port_hex, 16) == port:  # 0A: LISTEN
+                    if len(address) == 8:  # IPv4, little-endian hex
+                        address = ".".join(str(b) for b in reversed(bytes.fromhex(address)))
+                    found.append(address)
+    return found
+
+
+def _wait_for(predicate, timeout: float) -> bool:
+    """Poll ``predicate`` until true or ``timeout`` [s] passes (a deadline, not a measurement)."""
+    deadline = time.monotonic() + timeout
+    while not predicate():
+        if time.monotonic() > deadline:
+            return False
+        time.sleep(0.2)
+    return True
+
+
+def _start_live_view(*extra: str) -> tuple[subprocess.Popen, str]:
     proc = subprocess.Popen(
-        [sys.executable, "-m", "assembler_pin.cli", "view", "--home"],
+        [sys.executable, "-m", "assembler_pin.cli", "view", "--home", *extra],
         stdout=subprocess.PIPE,
         stderr=subprocess.PIPE,
         text=True,
     )
+    ready, _, _ = select.select([proc.stdout], [], [], 180)  # generous: a loaded 2-core machine
+    url = proc.stdout.readline().strip() if ready else ""
+    return proc, url
+
+
+@pytest.mark.skipif(not Path("/proc/net/tcp").exists(), reason="reads processes and sockets from Linux's /proc")
+@pytest.mark.parametrize("sig", ["SIGINT", "SIGTERM", "SIGHUP", "SIGKILL"])
+def test_cli_view_server_stops_with_the_command(sig):
+    """Whatever ends ``view`` — Ctrl-C, kill, a closed terminal, even SIGKILL — its meshcat
+    server ends too, and while it runs its page listens on this machine only."""
+    proc, url = _start_live_view()
     try:
-        url = proc.stdout.readline().strip()
-        assert url.startswith("http://127.0.0.1:"), url
-        with urllib.request.urlopen(url, timeout=10) as page:
-            assert b"MeshCat" in page.read() or page.status == 200
-        time.sleep(1.0)  # let it reach its serving loop
-        proc.send_signal(signal.SIGINT)
-        # generous: a loaded 2-core machine (the rest of the suite) can be slow to tear down
-        assert proc.wait(timeout=90) == 0
+        assert url.startswith("http://127.0.0.1:"), (url, proc.stderr.read() if proc.poll() is not None else "")
+        port = int(url.split(":")[2].split("/")[0])
+        servers = _children(proc.pid)
+        assert len(servers) == 1, servers
+        server = servers[0]  # the meshcat server
+        assert _listening_addresses(port) == ["127.0.0.1"]  # not 0.0.0.0, not [::]
+        with urllib.request.urlopen(url, timeout=30) as page:
+            assert page.status == 200 and b"MeshCat" in page.read()
+
+        proc.send_signal(getattr(signal, sig))
+        code = proc.wait(timeout=120)
+        assert code == (-signal.SIGKILL if sig == "SIGKILL" else 0), proc.stderr.read()
+        assert "Traceback" not in proc.stderr.read()
+        assert _wait_for(lambda: not _running(server), timeout=60), f"meshcat server {server} still running"
+        assert _wait_for(lambda: not _listening_addresses(port), timeout=60)
     finally:
         if proc.poll() is None:
             proc.kill()
             proc.wait()
-    # the meshcat server it started is gone too
-    with pytest.raises(OSError):
-        urllib.request.urlopen(url, timeout=2)
+
+
+def test_viewer_close_stops_its_server(am):
+    v = StackViewer(am)
+    server = v.server
+    assert server is not None and server.running()
+    assert server.web_url.startswith("http://127.0.0.1:") and server.zmq_url.startswith("tcp://127.0.0.1:")
+    v.close()
+    assert server.process.returncode is not None  # reaped: close() waits for it
+    v.close()  # twice is fine
 
 
 @pytest.mark.skipif(
