@@ -20,6 +20,7 @@ from pathlib import Path
 
 import matplotlib.image as mpimg
 import numpy as np
+import pinocchio as pin
 import pytest
 
 from assembler_pin import evaluate_state, stack_forward_kinematics
@@ -158,6 +159,71 @@ def test_animation_in_static_html(am, viewer, bent, tmp_path):
     times = [k["time"] for k in tracks[0]["clip"]["tracks"][0]["keys"]]
     assert times == list(range(5))
     assert (tmp_path / "anim.html").stat().st_size > 100_000
+
+
+def page_end_transforms(html: str) -> dict[str, np.ndarray]:
+    """The 4×4 transform of every meshcat path once a static page has run its commands
+    and played its animation to the end.
+
+    As meshcat's viewer does: a ``set_animation`` replaces the previous one, an animation
+    with ``play`` runs once and stays on its last frame (``clampWhenFinished``), and its
+    ``position``/``quaternion`` tracks then override the node's last ``set_transform``.
+    """
+    transforms: dict[str, np.ndarray] = {}
+    animation = None
+    for cmd in page_commands(html):
+        if cmd["type"] == "set_transform":
+            transforms[cmd["path"]] = np.array(cmd["matrix"], dtype=float).reshape(4, 4).T  # column-major
+        elif cmd["type"] == "set_animation":
+            animation = cmd
+        elif cmd["type"] == "delete":
+            transforms = {p: T for p, T in transforms.items() if not (p + "/").startswith(cmd["path"] + "/")}
+    if animation is not None and animation["options"]["play"]:
+        for clip in animation["animations"]:
+            last = {track["name"]: track["keys"][-1]["value"] for track in clip["clip"]["tracks"]}
+            T = transforms.get(clip["path"], np.eye(4)).copy()
+            if ".position" in last:
+                T[:3, 3] = last[".position"]
+            if ".quaternion" in last:
+                x, y, z, w = last[".quaternion"]
+                T[:3, :3] = pin.Quaternion(w, x, y, z).toRotationMatrix()
+            transforms[clip["path"]] = T
+    return transforms
+
+
+def _leg_geometry_offsets(viewer: StackViewer, transforms: dict[str, np.ndarray], state) -> np.ndarray:
+    """Distance [m] of each drawn motor and shaft centre from its leg's axis in ``state``."""
+    out = []
+    for (j, i), gids in viewer._leg_geoms.items():
+        b, t = state.legs.bottom_points[j, i], state.legs.top_points[j, i]
+        u = (t - b) / np.linalg.norm(t - b)
+        for gid in gids:
+            path = viewer.viz.getViewerNodeName(viewer.visual_model.geometryObjects[gid], pin.GeometryType.VISUAL)
+            c = transforms["/meshcat/" + path][:3, 3] - b  # node frames are world frames under the root
+            out.append(np.linalg.norm(c - (c @ u) * u))
+    return np.array(out)
+
+
+def test_a_pose_shown_after_an_animation_is_what_the_page_ends_on(am, bent, tmp_path):
+    lengths = np.full((am.n, 6), 0.275)
+    lengths[2, ::2] = 0.31
+    lengths[3, 1::2] = 0.24
+    other = evaluate_state(am, stack_forward_kinematics(am, lengths).raise_if_failed())
+    bent_state = evaluate_state(am, bent)
+    with StackViewer(am) as v:
+        v.animate(interpolate_states(am, am.home, bent, steps=4))
+        animated = page_end_transforms(v.static_html(tmp_path / "animated.html"))
+        # the reading of the page is right: an animation ends on its last frame (the bent pose)
+        assert _leg_geometry_offsets(v, animated, bent_state).max() < 1e-9
+        v.show_comparison(evaluate_state(am, am.home), other)
+        html = v.static_html(tmp_path / "comparison.html")
+        shown = page_end_transforms(html)
+        offsets_other = _leg_geometry_offsets(v, shown, other)
+        offsets_bent = _leg_geometry_offsets(v, shown, bent_state)
+    assert offsets_other.max() < 1e-9, "the page does not end on the pose shown last"
+    assert offsets_bent.max() > 1e-3
+    played = [c for c in page_commands(html) if c["type"] == "set_animation" and c["options"]["play"]]
+    assert all(not c["animations"] for c in played)
 
 
 def test_notebook_inline_cell(viewer, bent):
@@ -330,7 +396,9 @@ def project(cam, points: np.ndarray) -> np.ndarray:
     return np.stack([u, v], axis=1)
 
 
-def screenshot(html: Path, tmp_path: Path) -> np.ndarray:
+def screenshot(html: Path, tmp_path: Path, virtual_time_ms: int | None = None) -> np.ndarray:
+    """The page as headless Chromium draws it; ``virtual_time_ms`` lets animations run
+    that long (in the browser's virtual time) before the picture is taken."""
     png = html.with_suffix(".png")
     cmd = [
         CHROMIUM,
@@ -347,7 +415,12 @@ def screenshot(html: Path, tmp_path: Path) -> np.ndarray:
         f"--window-size={WIDTH},{HEIGHT}",
         html.resolve().as_uri(),
     ]
-    subprocess.run(cmd, capture_output=True, timeout=60, check=False)
+    if virtual_time_ms is not None:
+        cmd.insert(1, f"--virtual-time-budget={virtual_time_ms}")
+    for _ in range(2):  # a profile still held by the previous run can make one attempt fail
+        subprocess.run(cmd, capture_output=True, timeout=120, check=False)
+        if png.exists():
+            break
     assert png.exists(), "chromium wrote no screenshot"
     img = mpimg.imread(png)[..., :3]
     assert img.shape[:2] == (HEIGHT, WIDTH)
@@ -399,3 +472,33 @@ def test_html_page_draws_the_stack_in_a_real_browser(am, bent, tmp_path):
     # a different pose gives a different picture
     differ = np.abs(home - bent_img).max(axis=2) > 0.12
     assert differ.mean() > 0.01
+
+
+@pytest.mark.skipif(CHROMIUM is None, reason="chromium not installed (.ci/run installs it)")
+def test_pose_shown_after_an_animation_in_a_real_browser(am, bent, tmp_path):
+    """The browser lets the animation run out, then shows the page: after animate() and
+    show_comparison(), it is the picture of show_comparison() alone."""
+    lengths = np.full((am.n, 6), 0.275)
+    lengths[2, ::2] = 0.35
+    lengths[3, 1::2] = 0.21
+    other = evaluate_state(am, stack_forward_kinematics(am, lengths).raise_if_failed())
+    home = evaluate_state(am, am.home)
+    motion = interpolate_states(am, am.home, bent, steps=5)
+    pages = {name: tmp_path / f"{name}.html" for name in ("still", "played", "after", "plain")}
+    with StackViewer(am) as v:
+        v.animate(motion, fps=10, play=False)
+        v.static_html(pages["still"])
+        v.animate(motion, fps=10, play=True)
+        v.static_html(pages["played"])
+        v.show_comparison(home, other)
+        v.static_html(pages["after"])
+    with StackViewer(am) as v:
+        v.show_comparison(home, other)
+        v.static_html(pages["plain"])
+    img = {name: screenshot(page, tmp_path, virtual_time_ms=5000) for name, page in pages.items()}
+
+    def changed(a: str, b: str) -> float:
+        return float((np.abs(img[a] - img[b]).max(axis=2) > 0.12).mean())
+
+    assert changed("still", "played") > 0.01  # the animation does run in the browser before the picture
+    assert changed("after", "plain") < 1e-3  # and a pose shown afterwards is not replayed over
