@@ -18,6 +18,7 @@ import numpy as np
 
 from .config import AssemblerConfig, load_config
 from .exceptions import AssemblerError, PoseError
+from .labels import leg_label, platform_label
 from .model import AssemblerModel
 from .state import StackState, evaluate_state
 from .urdf import export_model_files
@@ -45,17 +46,21 @@ def _read_json(source: str) -> object:
 
 
 def format_state_table(state: StackState, title: str = "") -> str:
-    """A readable table of a state: forces and lengths per actuator, then summary lines."""
+    """A readable table of a state: forces and lengths per actuator, then summary lines.
+
+    Row ``i``, column ``SPj`` is leg ``i`` of platform ``j``, both 0-based
+    (:mod:`~assembler_pin.labels`), the indices of ``forces[j, i]`` and of the JSON.
+    """
     n = state.forces.shape[0]
     lines = [title] if title else []
-    header = "leg | " + " | ".join(f"SP{j + 1} F [N]  L [mm]" for j in range(n))
+    header = "leg | " + " | ".join(f"{platform_label(j)} F [N]  L [mm]" for j in range(n))
     lines += [header, "-" * len(header)]
     for i in range(6):
         cells = [f"{state.forces[j, i]:9.3f} {1e3 * state.leg_lengths[j, i]:7.2f}" for j in range(n)]
-        lines.append(f"{i + 1:>3} | " + " | ".join(cells))
+        lines.append(f"{i:>3} | " + " | ".join(cells))
     j, i = np.unravel_index(np.abs(state.forces).argmax(), state.forces.shape)
     lines.append(
-        f"max |F| = {state.max_abs_force:.3f} N (SP{j + 1} leg {i + 1}), "
+        f"max |F| = {state.max_abs_force:.3f} N ({leg_label(j, i)}), "
         f"mean |F| = {state.mean_abs_force:.3f} N   (tension positive)"
     )
     w = state.statics.base_wrench

@@ -370,7 +370,9 @@ class StackViewer:
             pose: a :class:`StackState`, or world plate poses (their state is computed).
             color_forces: color motor and shaft by the actuator force (else URDF colors).
             mark_violations: put a yellow marker at the middle of every leg that
-                violates a constraint (length, deflection, force, rise).
+                violates a constraint (length, deflection, force, rise), at the meshcat
+                path ``{prefix}_violations/sp{j}_leg{i}`` (0-based, as the URDF's names
+                and :mod:`~assembler_pin.labels`: ``sp1_leg2`` marks ``SP1 leg 2``).
 
         Returns:
             The state shown.
