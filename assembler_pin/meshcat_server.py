@@ -14,17 +14,21 @@ This module runs the same ZMQ–WebSocket bridge with:
   pipe closes — which the kernel does whenever the parent ends, however it ends;
 * a clean stop on SIGTERM, SIGHUP and SIGINT.
 
-:func:`start_server` starts it as a subprocess (``python -m assembler_pin.meshcat_server``)
-and returns a :class:`ServerProcess` with its URLs; :meth:`ServerProcess.stop` ends it.
-Only meshcat's server modules are imported here (no Pinocchio), so it starts quickly.
+:func:`start_server` runs this file as a script in a subprocess and returns a
+:class:`ServerProcess` with its URLs; :meth:`ServerProcess.stop` ends it. The script is
+run by path, not as part of the package, so the server imports only meshcat's server
+modules (not Pinocchio): it starts in a fraction of a second and stays small.
 """
 
 from __future__ import annotations
 
 import argparse
 import contextlib
+import importlib.util
+import operator
 import os
 import signal
+import socket
 import subprocess
 import sys
 import tempfile
@@ -99,14 +103,20 @@ def start_server(host: str = DEFAULT_HOST, port: int | None = None, timeout: flo
         timeout: how long to wait for the server to announce its URLs [s].
 
     Raises:
-        RuntimeError: the server exited before announcing its URLs (its stderr is quoted).
+        ViewerError: ``host`` is not an interface of this machine, ``port`` is out of
+            range, or the server exited before announcing its URLs (its stderr is quoted).
     """
-    args = [sys.executable, "-u", "-m", "assembler_pin.meshcat_server", "--host", host]
+    _check_host_and_port(host, port)
+    script = os.path.abspath(__file__)
+    run = f"import runpy, sys; sys.argv[0] = {script!r}; runpy.run_path({script!r}, run_name='__main__')"
+    args = [sys.executable, "-u", "-c", run, "--host", host]
     if port is not None:
-        args += ["--port", str(int(port))]
+        args += ["--port", str(operator.index(port))]
     env = dict(os.environ)
-    package_root = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-    env["PYTHONPATH"] = os.pathsep.join(p for p in (package_root, env.get("PYTHONPATH", "")) if p)
+    spec = importlib.util.find_spec("meshcat")  # found by this process: let the server find it too
+    if spec is not None and spec.origin:
+        meshcat_root = os.path.dirname(os.path.dirname(spec.origin))
+        env["PYTHONPATH"] = os.pathsep.join(p for p in (meshcat_root, env.get("PYTHONPATH", "")) if p)
     stderr = tempfile.TemporaryFile()  # not a pipe: nobody reads it while the server runs
     proc = subprocess.Popen(
         args,
@@ -122,14 +132,43 @@ def start_server(host: str = DEFAULT_HOST, port: int | None = None, timeout: flo
     reader.start()
     reader.join(timeout)
     if "zmq_url" not in urls or "web_url" not in urls:
+        from .exceptions import ViewerError
+
+        server._stderr = None  # read it once the server has ended, then close it here
         server.stop()
-        stderr.seek(0)
-        tail = stderr.read().decode("utf-8", "replace").strip().splitlines()[-5:]
-        raise RuntimeError(
-            f"the meshcat server did not start (exit code {proc.returncode}): {' | '.join(tail) or 'no output'}"
+        with stderr:
+            stderr.seek(0)
+            tail = stderr.read().decode("utf-8", "replace").strip().splitlines()[-1:]  # the error itself
+        raise ViewerError(
+            f"the meshcat server did not start (exit code {proc.returncode}): {''.join(tail) or 'no output'}"
         )
     server.zmq_url, server.web_url = urls["zmq_url"], urls["web_url"]
     return server
+
+
+def _check_host_and_port(host: str, port: int | None) -> None:
+    """Refuse a host this machine cannot listen on, or a port out of range (ViewerError)."""
+    from .exceptions import ViewerError
+
+    allowed = "e.g. 127.0.0.1 (this machine only) or 0.0.0.0 (every interface)"
+    if port is not None:
+        try:
+            number = None if isinstance(port, bool) else operator.index(port)  # numpy integers too
+        except TypeError:
+            number = None
+        if number is None or not 1 <= number <= 65535:
+            raise ViewerError(f"viewer port must be an integer in 1..65535, got {port!r}")
+    if not isinstance(host, str) or not host or "\x00" in host:
+        raise ViewerError(f"viewer host must be an interface address, {allowed}; got {host!r}")
+    try:
+        family, kind, proto, _, address = socket.getaddrinfo(host, 0, type=socket.SOCK_STREAM)[0]
+        with socket.socket(family, kind, proto) as probe:
+            probe.bind(address)
+    except (OSError, UnicodeError) as exc:
+        reason = getattr(exc, "strerror", None) or exc
+        raise ViewerError(
+            f"cannot listen on viewer host {host!r} ({reason}): give an address of this machine, {allowed}"
+        ) from None
 
 
 def _read_urls(proc: subprocess.Popen, urls: dict[str, str]) -> None:

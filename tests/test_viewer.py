@@ -244,6 +244,25 @@ def test_cli_view_errors(tmp_path):
     assert out.returncode == 2 and out.stderr.count("\n") == 1 and "cannot read" in out.stderr
     out = run_cli("view", "--html", str(tmp_path / "x.html"))
     assert out.returncode == 2  # argparse: one source is required
+    for host in ("256.1.1.1", "no-such-host.invalid"):
+        out = run_cli("view", "--home", "--host", host)
+        assert out.returncode == 2 and out.stderr.count("\n") == 1 and f"viewer host '{host}'" in out.stderr
+
+
+def test_server_host_and_port_checked():
+    from assembler_pin.exceptions import ViewerError
+    from assembler_pin.meshcat_server import start_server
+
+    for host, port in (("", None), ("8.8.8.8", None), ("127.0.0.1", 0), ("127.0.0.1", 70000), ("127.0.0.1", "80")):
+        with pytest.raises(ViewerError, match=r"viewer (host|port)"):
+            start_server(host, port)
+    first = start_server()
+    try:
+        port = int(first.web_url.split(":")[2].split("/")[0])
+        with pytest.raises(ViewerError, match=r"did not start.*Address already in use"):
+            start_server(port=port)  # a port asked for explicitly is not moved
+    finally:
+        first.stop()
 
 
 # ---------------------------------------------------------------------- the live server's lifetime
