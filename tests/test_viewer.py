@@ -292,18 +292,18 @@ def _children(pid: int) -> list[int]:
     return out
 
 
-def _listening_addresses(port: int) -> list[str]:
-    """Local addresses of the TCP sockets listening on ``port`` (IPv4 dotted, IPv6 hex)."""
-    found = []
+def _listening(port: int) -> dict[int, str]:
+    """TCP sockets listening on ``port``: socket inode -> local address (IPv4 dotted, IPv6 hex)."""
+    found = {}
     for table in ("/proc/net/tcp", "/proc/net/tcp6"):
         with contextlib.suppress(OSError):
             for line in Path(table).read_text().splitlines()[1:]:
-                local, state = line.split()[1], line.split()[3]
-                address, port_hex = local.rsplit(":", 1)
-                if state == "0A" and int(port_hex, 16) == port:  # 0A: LISTEN
+                fields = line.split()
+                address, port_hex = fields[1].rsplit(":", 1)
+                if fields[3] == "0A" and int(port_hex, 16) == port:  # 0A: LISTEN
                     if len(address) == 8:  # IPv4, little-endian hex
                         address = ".".join(str(b) for b in reversed(bytes.fromhex(address)))
-                    found.append(address)
+                    found[int(fields[9])] = address
     return found
 
 
@@ -341,7 +341,8 @@ def test_cli_view_server_stops_with_the_command(sig):
         servers = _children(proc.pid)
         assert len(servers) == 1, servers
         server = servers[0]  # the meshcat server
-        assert _listening_addresses(port) == ["127.0.0.1"]  # not 0.0.0.0, not [::]
+        sockets = _listening(port)
+        assert list(sockets.values()) == ["127.0.0.1"]  # not 0.0.0.0, not [::]
         with urllib.request.urlopen(url, timeout=30) as page:
             assert page.status == 200 and b"MeshCat" in page.read()
 
@@ -350,7 +351,8 @@ def test_cli_view_server_stops_with_the_command(sig):
         assert code == (-signal.SIGKILL if sig == "SIGKILL" else 0), proc.stderr.read()
         assert "Traceback" not in proc.stderr.read()
         assert _wait_for(lambda: not _running(server), timeout=60), f"meshcat server {server} still running"
-        assert _wait_for(lambda: not _listening_addresses(port), timeout=60)
+        # its socket is closed (the port itself may be taken again by another program meanwhile)
+        assert _wait_for(lambda: not set(sockets) & set(_listening(port)), timeout=60)
     finally:
         if proc.poll() is None:
             proc.kill()
