@@ -231,8 +231,9 @@ def cmd_view(args: argparse.Namespace) -> int:
 
     am = AssemblerModel.from_config(_config(args))
     restore_signals = interrupt_on_signals()  # kill / a closed terminal stop it as Ctrl-C does
-    viewer = StackViewer(am, host=args.host)
+    viewer = None
     try:
+        viewer = StackViewer(am, host=args.host)
         if args.goal is not None or args.goal_deg is not None:
             try:
                 from .solve import solve  # lazy: the solver is only needed for --goal
@@ -281,9 +282,13 @@ def cmd_view(args: argparse.Namespace) -> int:
             while True:
                 time.sleep(0.5)
         except KeyboardInterrupt:
-            return 0
+            return 0  # serving until stopped: stopping is the normal end
+    except KeyboardInterrupt as stop:  # stopped before the view was ready
+        print(f"assembler-pin view: {stop or 'interrupted'} before the view was ready", file=sys.stderr)
+        return 128 + getattr(stop, "signum", 2)  # the shell's status for a signal (SIGINT = 2)
     finally:
-        viewer.close()
+        if viewer is not None:
+            viewer.close()
         restore_signals()
 
 

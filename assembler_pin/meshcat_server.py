@@ -130,7 +130,11 @@ def start_server(host: str = DEFAULT_HOST, port: int | None = None, timeout: flo
     urls: dict[str, str] = {}
     reader = threading.Thread(target=_read_urls, args=(proc, urls), daemon=True)
     reader.start()
-    reader.join(timeout)
+    try:
+        reader.join(timeout)
+    except BaseException:  # interrupted while waiting: do not leave it behind
+        server.stop()
+        raise
     if "zmq_url" not in urls or "web_url" not in urls:
         from .exceptions import ViewerError
 

@@ -60,6 +60,7 @@ __all__ = [
     "NEUTRAL_RGB",
     "TENSION_RGB",
     "StackViewer",
+    "StopRequested",
     "camera_for_points",
     "force_color",
     "interpolate_states",
@@ -225,8 +226,20 @@ def interpolate_states(
     return states
 
 
+class StopRequested(KeyboardInterrupt):
+    """A stop signal turned into an interrupt by :func:`interrupt_on_signals`.
+
+    Attributes:
+        signum: the signal received (``128 + signum`` is the shell's exit status for it).
+    """
+
+    def __init__(self, signum: int) -> None:
+        super().__init__(f"stopped by {signal.Signals(signum).name}")
+        self.signum = signum
+
+
 def interrupt_on_signals(names: Sequence[str] = ("SIGTERM", "SIGHUP")) -> Callable[[], None]:
-    """Make the named signals raise :class:`KeyboardInterrupt`, as Ctrl-C does.
+    """Make the named signals raise :class:`StopRequested` (a ``KeyboardInterrupt``), as Ctrl-C does.
 
     A program that serves a viewer until it is stopped then unwinds the same way for
     ``kill``, a closed terminal and Ctrl-C, running its ``finally`` blocks (which stop the
@@ -238,7 +251,7 @@ def interrupt_on_signals(names: Sequence[str] = ("SIGTERM", "SIGHUP")) -> Callab
     """
 
     def interrupt(signum: int, frame: object) -> None:
-        raise KeyboardInterrupt(f"stopped by {signal.Signals(signum).name}")
+        raise StopRequested(signum)
 
     previous: dict[int, object] = {}
     if threading.current_thread() is threading.main_thread():

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import contextlib
 import math
+import os
 import select
 import shutil
 import signal
@@ -357,6 +358,29 @@ def test_cli_view_server_stops_with_the_command(sig):
         if proc.poll() is None:
             proc.kill()
             proc.wait()
+
+
+def test_cli_view_stopped_before_it_is_ready(monkeypatch, capsys):
+    """A SIGTERM while the pose is being computed ends ``view`` with one line and status
+    128 + 15, its server stopped and reaped, the previous signal handlers back."""
+    import assembler_pin.viewer as viewer_mod
+    from assembler_pin.cli import main
+
+    servers = []
+    real_display = viewer_mod.StackViewer.display
+
+    def display_then_terminated(self, *args, **kwargs):
+        servers.append(self.server)
+        os.kill(os.getpid(), signal.SIGTERM)  # the handler raises at the next bytecode
+        time.sleep(30)  # not reached; a sleep is interrupted by the handler anyway
+        return real_display(self, *args, **kwargs)
+
+    before = {sig: signal.getsignal(sig) for sig in (signal.SIGTERM, signal.SIGHUP)}
+    monkeypatch.setattr(viewer_mod.StackViewer, "display", display_then_terminated)
+    assert main(["view", "--home"]) == 128 + signal.SIGTERM
+    assert capsys.readouterr().err.splitlines() == ["assembler-pin view: stopped by SIGTERM before the view was ready"]
+    assert len(servers) == 1 and servers[0].process.returncode is not None  # stopped and reaped
+    assert {sig: signal.getsignal(sig) for sig in before} == before
 
 
 def test_viewer_close_stops_its_server(am):
