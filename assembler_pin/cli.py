@@ -18,6 +18,7 @@ import numpy as np
 
 from .config import AssemblerConfig, load_config
 from .exceptions import AssemblerError, PoseError
+from .labels import leg_label, platform_label
 from .model import AssemblerModel
 from .state import StackState, evaluate_state
 from .urdf import export_model_files
@@ -45,17 +46,21 @@ def _read_json(source: str) -> object:
 
 
 def format_state_table(state: StackState, title: str = "") -> str:
-    """A readable table of a state: forces and lengths per actuator, then summary lines."""
+    """A readable table of a state: forces and lengths per actuator, then summary lines.
+
+    Row ``i``, column ``SPj`` is leg ``i`` of platform ``j``, both 0-based
+    (:mod:`~assembler_pin.labels`), the indices of ``forces[j, i]`` and of the JSON.
+    """
     n = state.forces.shape[0]
     lines = [title] if title else []
-    header = "leg | " + " | ".join(f"SP{j + 1} F [N]  L [mm]" for j in range(n))
+    header = "leg | " + " | ".join(f"{platform_label(j)} F [N]  L [mm]" for j in range(n))
     lines += [header, "-" * len(header)]
     for i in range(6):
         cells = [f"{state.forces[j, i]:9.3f} {1e3 * state.leg_lengths[j, i]:7.2f}" for j in range(n)]
-        lines.append(f"{i + 1:>3} | " + " | ".join(cells))
+        lines.append(f"{i:>3} | " + " | ".join(cells))
     j, i = np.unravel_index(np.abs(state.forces).argmax(), state.forces.shape)
     lines.append(
-        f"max |F| = {state.max_abs_force:.3f} N (SP{j + 1} leg {i + 1}), "
+        f"max |F| = {state.max_abs_force:.3f} N ({leg_label(j, i)}), "
         f"mean |F| = {state.mean_abs_force:.3f} N   (tension positive)"
     )
     w = state.statics.base_wrench
@@ -222,11 +227,13 @@ def cmd_view(args: argparse.Namespace) -> int:
     import time
     import webbrowser
 
-    from .viewer import StackViewer
+    from .viewer import StackViewer, interrupt_on_signals
 
     am = AssemblerModel.from_config(_config(args))
-    viewer = StackViewer(am)
+    restore_signals = interrupt_on_signals()  # kill / a closed terminal stop it as Ctrl-C does
+    viewer = None
     try:
+        viewer = StackViewer(am, host=args.host)
         if args.goal is not None or args.goal_deg is not None:
             try:
                 from .solve import solve  # lazy: the solver is only needed for --goal
@@ -268,16 +275,21 @@ def cmd_view(args: argparse.Namespace) -> int:
                 webbrowser.open(path.as_uri())
             return 0
         viewer.frame()
-        print(viewer.url, flush=True)
-        if args.open:
-            webbrowser.open(viewer.url)
         try:
+            print(viewer.url, flush=True)
+            if args.open:
+                webbrowser.open(viewer.url)
             while True:
                 time.sleep(0.5)
         except KeyboardInterrupt:
-            return 0
+            return 0  # serving until stopped: stopping is the normal end
+    except KeyboardInterrupt as stop:  # stopped before the view was ready
+        print(f"assembler-pin view: {stop or 'interrupted'} before the view was ready", file=sys.stderr)
+        return 128 + getattr(stop, "signum", 2)  # the shell's status for a signal (SIGINT = 2)
     finally:
-        viewer.close()
+        if viewer is not None:
+            viewer.close()
+        restore_signals()
 
 
 def _add_goal_arguments(group: argparse._MutuallyExclusiveGroup, note: str = "") -> None:
@@ -364,6 +376,9 @@ def build_parser() -> argparse.ArgumentParser:
         help="with --goal: animate initial -> optimized in STEPS leg-length steps",
     )
     p.add_argument("--no-arm", action="store_true", help="with --goal: do not draw the helper arm")
+    p.add_argument("--host", default="127.0.0.1",
+                   help="interface the live page listens on (default 127.0.0.1: this machine only; "
+                        "0.0.0.0: every interface)")  # fmt: skip
     p.set_defaults(func=cmd_view)
     return parser
 

@@ -20,6 +20,7 @@ import pinocchio as pin
 
 from .config import AssemblerConfig
 from .kinematics import LegState, PlateArrays
+from .labels import leg_label, platform_label
 from .statics import CONDITION_LIMIT, StaticsResult
 
 __all__ = ["DEFAULT_GOAL_TOLERANCE", "GoalTolerance", "Violation", "evaluate_constraints"]
@@ -71,9 +72,13 @@ class Violation:
         return asdict(self)
 
     def __str__(self) -> str:
-        where = "end effector" if self.platform is None else f"platform {self.platform}"
-        if self.leg is not None:
-            where += f" leg {self.leg}"
+        """``max_length at SP1 leg 2: 0.36 (limit 0.35)`` — 0-based, as :mod:`~assembler_pin.labels`."""
+        if self.platform is None:
+            where = "end effector"
+        elif self.leg is None:
+            where = platform_label(self.platform)
+        else:
+            where = leg_label(self.platform, self.leg)
         return f"{self.kind} at {where}: {self.value:.6g} (limit {self.limit:.6g})"
 
 

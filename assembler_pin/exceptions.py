@@ -49,3 +49,7 @@ class SingularConfigurationError(AssemblerError, RuntimeError):
         super().__init__(message)
         self.condition_number = condition_number
         self.platform = platform
+
+
+class ViewerError(AssemblerError, RuntimeError):
+    """The viewer's meshcat server cannot start (unusable host or port, or it exited)."""

@@ -25,6 +25,7 @@ from matplotlib.colors import Normalize, TwoSlopeNorm
 from matplotlib.figure import Figure
 
 from .exceptions import AssemblerError
+from .labels import leg_label, platform_label
 from .model import AssemblerModel
 from .state import StackState
 
@@ -72,12 +73,13 @@ def force_heatmaps(
     limit: float | None = None,
     fmt: str = "{:.1f}",
 ) -> Figure:
-    """Annotated heatmaps of the actuator forces, actuator × platform, side by side.
+    """Annotated heatmaps of the actuator forces, leg × platform, side by side.
 
-    Rows are actuators 1..6, columns platforms (SP) 1..n; each cell is annotated with
-    its force [N]. The colormap is diverging and centred at 0 (red tension, blue
-    compression) with one symmetric scale for both panels: ±``limit`` if given, else
-    ±max |F| over the states shown.
+    Rows are legs 0..5, columns platforms SP0..SP(n-1) (0-based, as the arrays:
+    :mod:`~assembler_pin.labels`); each cell is annotated with its force [N]. The
+    colormap is diverging and centred at 0 (red tension, blue compression) with one
+    symmetric scale for both panels: ±``limit`` if given, else ±max |F| over the states
+    shown.
     """
     states = _named_states(initial, optimized, titles)
     vmax = limit if limit is not None else max(float(np.abs(s.forces).max()) for _, s in states)
@@ -88,7 +90,7 @@ def force_heatmaps(
     axes = fig.subplots(1, len(states), squeeze=False)[0]
     image = None
     for ax, (title, state) in zip(axes, states, strict=True):
-        table = state.forces.T  # (6, n): actuator × platform
+        table = state.forces.T  # (6, n): leg × platform
         image = ax.imshow(table, cmap=FORCE_CMAP, norm=norm, aspect="auto")
         for i in range(table.shape[0]):
             for j in range(table.shape[1]):
@@ -97,10 +99,10 @@ def force_heatmaps(
                 ax.text(
                     j, i, fmt.format(value), ha="center", va="center", fontsize=8, color="white" if dark else "black"
                 )
-        ax.set_xticks(range(n), [f"SP{j + 1}" for j in range(n)])
-        ax.set_yticks(range(6), [str(i + 1) for i in range(6)])
+        ax.set_xticks(range(n), [platform_label(j) for j in range(n)])
+        ax.set_yticks(range(6), [f"leg {i}" for i in range(6)])
         ax.set_xlabel("platform")
-        ax.set_ylabel("actuator")
+        ax.set_ylabel("leg")
         ax.set_title(f"{title}: max |F| {state.max_abs_force:.1f} N, mean {state.mean_abs_force:.1f} N", fontsize=9)
     fig.colorbar(image, ax=list(axes), label="force [N] (tension +, compression −)", shrink=0.9)
     return fig
@@ -112,7 +114,7 @@ def force_bars(
     titles: Sequence[str] = ("initial", "optimized"),
     limits: tuple[float, float] | None = None,
 ) -> Figure:
-    """Per-actuator force bars [N], initial (green) next to optimized (red).
+    """Per-actuator force bars [N], initial (green) next to optimized (red), labelled ``SPj leg i``.
 
     Args:
         limits: optional ``(max_tension, max_compression)`` [N] drawn as dashed lines.
@@ -133,8 +135,8 @@ def force_bars(
         ax.axhline(-limits[1], color="gray", ls="--", lw=0.8)
     for j in range(1, n):
         ax.axvline(6 * j - 0.5, color="0.85", lw=0.8)
-    ax.set_xticks(x, [f"{j + 1}.{i + 1}" for j in range(n) for i in range(6)], fontsize=7, rotation=90)
-    ax.set_xlabel("actuator (platform.leg)")
+    ax.set_xticks(x, [leg_label(j, i) for j in range(n) for i in range(6)], fontsize=7, rotation=90)
+    ax.set_xlabel("leg")
     ax.set_ylabel("force [N] (tension +)")
     ax.legend(fontsize=8)
     return fig

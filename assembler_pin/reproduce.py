@@ -17,6 +17,7 @@ from pathlib import Path
 
 import numpy as np
 
+from .labels import leg_label, platform_label
 from .model import AssemblerModel
 from .optimize import OptimizeOptions
 from .scenarios import SCENARIOS, Scenario
@@ -71,8 +72,9 @@ def run_scenarios(
 
 
 def _argmax_label(state: StackState) -> str:
+    """``SPj leg i`` of the largest |F| (0-based, :mod:`~assembler_pin.labels`)."""
     j, i = np.unravel_index(np.abs(state.forces).argmax(), state.forces.shape)
-    return f"SP{j + 1}/{i + 1}"
+    return leg_label(j, i)
 
 
 def _legs_at_stroke_end(state: StackState, stroke: tuple[float, float], tol: float = 1e-6) -> int:
@@ -86,8 +88,8 @@ def _paper_reduction(scn: Scenario) -> float:
 
 
 def summary_table(outcomes: Sequence[ScenarioOutcome], markdown: bool = False) -> str:
-    """Initial vs optimized max |F| (which actuator, SP/leg), reduction, mean |F| and time,
-    beside the paper's figures."""
+    """Initial vs optimized max |F| (which leg: ``SPj leg i``, 0-based), reduction, mean |F|
+    and time, beside the paper's figures."""
     header = [
         "scenario",
         "initial max|F| [N]",
@@ -134,25 +136,28 @@ def summary_table(outcomes: Sequence[ScenarioOutcome], markdown: bool = False) -
 
 
 def force_tables(outcome: ScenarioOutcome, markdown: bool = False) -> str:
-    """The 6×n initial and optimized force tables side by side (paper Tables I–II) [N]."""
+    """The 6×n initial and optimized force tables side by side (paper Tables I–II) [N].
+
+    Row ``i``, column ``SPj``: leg ``i`` of platform ``j``, both 0-based (:mod:`~assembler_pin.labels`).
+    """
     if outcome.initial is None or outcome.optimized is None:
         return f"{outcome.scenario.name}: not solved ({outcome.result.message})"
     n = outcome.initial.forces.shape[0]
-    sps = [f"SP{j + 1}" for j in range(n)]
+    sps = [platform_label(j) for j in range(n)]
     # one row per actuator: its force in every platform, initial then optimized
     rows = np.concatenate([outcome.initial.forces.T, outcome.optimized.forces.T], axis=1)  # (6, 2n)
     if markdown:
-        header = ["actuator"] + [f"initial {s}" for s in sps] + [f"optimized {s}" for s in sps]
+        header = ["leg"] + [f"initial {s}" for s in sps] + [f"optimized {s}" for s in sps]
         lines = ["| " + " | ".join(header) + " |", "|" + "---|" * (2 * n + 1)]
-        lines += [f"| {i + 1} | " + " | ".join(f"{f:.2f}" for f in row) + " |" for i, row in enumerate(rows)]
+        lines += [f"| {i} | " + " | ".join(f"{f:.2f}" for f in row) + " |" for i, row in enumerate(rows)]
         return "\n".join(lines)
 
     def half(values: Sequence) -> str:
         return "".join(f"{v:>9}" if isinstance(v, str) else f"{v:9.2f}" for v in values)
 
     lines = [f"{outcome.scenario.title}: initial and optimized forces [N] (tension +)",
-             "    " + half(sps) + "   |" + half(sps)]  # fmt: skip
-    lines += [f"{i + 1:>3} " + half(row[:n]) + "   |" + half(row[n:]) for i, row in enumerate(rows)]
+             "leg " + half(sps) + "   |" + half(sps)]  # fmt: skip
+    lines += [f"{i:>3} " + half(row[:n]) + "   |" + half(row[n:]) for i, row in enumerate(rows)]
     return "\n".join(lines)
 
 

@@ -14,8 +14,10 @@ plate discs and node spheres, motor and shaft cylinders, payload cube). It adds:
 * animations of a sequence of states (:func:`interpolate_states`), stored as meshcat
   animation tracks so that they play in a standalone HTML page too.
 
-Everything is in the world frame O (z up) and SI units. The meshcat server is a local
-subprocess bound to 127.0.0.1; :meth:`StackViewer.close` stops it. The static page
+Everything is in the world frame O (z up) and SI units. The meshcat server is a
+subprocess (:mod:`assembler_pin.meshcat_server`) whose page listens on 127.0.0.1 unless
+another ``host`` is asked for; :meth:`StackViewer.close` stops it, and it stops by itself
+when the Python process that started it ends, by any signal. The static page
 (:meth:`StackViewer.static_html`) needs no server to be opened.
 
 Display note: meshcat's orbit camera always turns about the world origin, so to frame
@@ -30,7 +32,9 @@ import contextlib
 import io
 import logging
 import math
-from collections.abc import Sequence
+import signal
+import threading
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -45,6 +49,7 @@ from pinocchio.visualize import MeshcatVisualizer
 from .exceptions import AssemblerError, ConvergenceError
 from .geometry import DIMENSIONS
 from .kinematics import PlateArrays, leg_state, plate_arrays, q_from_plates, stack_forward_kinematics
+from .meshcat_server import DEFAULT_HOST, ServerProcess, start_server
 from .model import AssemblerModel
 from .state import StackState, evaluate_state
 from .urdf import names
@@ -55,9 +60,11 @@ __all__ = [
     "NEUTRAL_RGB",
     "TENSION_RGB",
     "StackViewer",
+    "StopRequested",
     "camera_for_points",
     "force_color",
     "interpolate_states",
+    "interrupt_on_signals",
 ]
 
 logger = logging.getLogger(__name__)
@@ -219,18 +226,65 @@ def interpolate_states(
     return states
 
 
+class StopRequested(KeyboardInterrupt):
+    """A stop signal turned into an interrupt by :func:`interrupt_on_signals`.
+
+    Attributes:
+        signum: the signal received (``128 + signum`` is the shell's exit status for it).
+    """
+
+    def __init__(self, signum: int) -> None:
+        super().__init__(f"stopped by {signal.Signals(signum).name}")
+        self.signum = signum
+
+
+def interrupt_on_signals(names: Sequence[str] = ("SIGTERM", "SIGHUP")) -> Callable[[], None]:
+    """Make the named signals raise :class:`StopRequested` (a ``KeyboardInterrupt``), as Ctrl-C does.
+
+    A program that serves a viewer until it is stopped then unwinds the same way for
+    ``kill``, a closed terminal and Ctrl-C, running its ``finally`` blocks (which stop the
+    meshcat server). Signals this platform lacks are skipped; outside the main thread
+    nothing is installed.
+
+    Returns:
+        A function restoring the previous handlers.
+    """
+
+    def interrupt(signum: int, frame: object) -> None:
+        raise StopRequested(signum)
+
+    previous: dict[int, object] = {}
+    if threading.current_thread() is threading.main_thread():
+        for name in names:
+            sig = getattr(signal, name, None)
+            if sig is not None:
+                previous[sig] = signal.signal(sig, interrupt)
+
+    def restore() -> None:
+        for sig, handler in previous.items():
+            signal.signal(sig, handler)
+
+    return restore
+
+
 class StackViewer:
     """Meshcat view of an Assembler.
 
     Args:
         am: the model to draw.
-        viewer: an existing ``meshcat.Visualizer`` to draw into; default: start a local
-            meshcat server (127.0.0.1) owned by this object, stopped by :meth:`close`.
+        viewer: an existing ``meshcat.Visualizer`` to draw into; default: start a meshcat
+            server owned by this object (:func:`~assembler_pin.meshcat_server.start_server`),
+            stopped by :meth:`close`, or with this process however it ends.
         prefix: meshcat path of the main stack.
         open: open the viewer's URL in a web browser.
+        host: interface the started server's web page listens on: ``127.0.0.1`` (this
+            machine only, the default) or e.g. ``0.0.0.0`` (every interface: anyone who
+            can reach this machine sees the page).
+        port: web port of the started server (default: the first free one from 7000).
 
     Attributes:
         viz: the :class:`pinocchio.visualize.MeshcatVisualizer` of the main stack.
+        server: the meshcat server subprocess this viewer started (None when borrowed).
         meshcat: the underlying ``meshcat.Visualizer`` (``viewer.meshcat.jupyter_cell()``
             or :meth:`jupyter_static` for notebooks).
         scene_offset: translation applied to the whole scene for framing [m].
@@ -242,12 +296,19 @@ class StackViewer:
         viewer: meshcat.Visualizer | None = None,
         prefix: str = "assembler",
         open: bool = False,
+        host: str = DEFAULT_HOST,
+        port: int | None = None,
     ) -> None:
         self.am = am
-        self._owns_server = viewer is None
+        self.server: ServerProcess | None = None
         if viewer is None:
-            with contextlib.redirect_stdout(io.StringIO()):  # meshcat prints its URL
-                viewer = meshcat.Visualizer()
+            self.server = start_server(host, port)
+            try:
+                with contextlib.redirect_stdout(io.StringIO()):  # meshcat prints its URL
+                    viewer = meshcat.Visualizer(zmq_url=self.server.zmq_url)
+            except BaseException:
+                self.server.stop()
+                raise
         self.meshcat: meshcat.Visualizer = viewer
         self.visual_model = pin.buildGeomFromUrdfString(am.model, am.urdf_text, pin.GeometryType.VISUAL)
         self.prefix = prefix
@@ -256,6 +317,7 @@ class StackViewer:
         self._extra_points: dict[str, np.ndarray] = {}
         self._roots: list[str] = [prefix, f"{prefix}_violations"]
         self.state: StackState | None = None
+        self._animated = False
         self.viz = self._make_visualizer(prefix)
         self._leg_geoms = self._index_leg_geometries()
         if open:
@@ -284,18 +346,20 @@ class StackViewer:
 
     @property
     def url(self) -> str:
-        """URL of the live viewer (served by the meshcat server on 127.0.0.1)."""
+        """URL of the live viewer (served on ``host``, 127.0.0.1 by default)."""
         return self.meshcat.url()
 
     def close(self) -> None:
-        """Stop the meshcat server this viewer started (no-op for a borrowed viewer)."""
-        window = self.meshcat.window
-        proc = getattr(window, "server_proc", None)
-        if self._owns_server and proc is not None and proc.poll() is None:
-            proc.kill()
-            proc.wait(timeout=10)
-        with contextlib.suppress(Exception):
-            window.zmq_socket.close(linger=0)
+        """Stop the meshcat server this viewer started and wait for it to end.
+
+        A borrowed viewer (``viewer=`` given) is left running. Safe to call twice. The
+        server also stops by itself when this Python process ends, however it ends
+        (see :mod:`assembler_pin.meshcat_server`).
+        """
+        if self.server is not None:
+            with contextlib.suppress(Exception):
+                self.meshcat.window.zmq_socket.close(linger=0)
+            self.server.stop()
 
     def __enter__(self) -> StackViewer:
         return self
@@ -312,17 +376,23 @@ class StackViewer:
     ) -> StackState:
         """Show a pose; color each leg by its force and mark violating legs.
 
+        An animation stored before (:meth:`animate`) is removed first: it moves the same
+        bodies and would otherwise replay over this pose in the live and static pages.
+
         Args:
             pose: a :class:`StackState`, or world plate poses (their state is computed).
             color_forces: color motor and shaft by the actuator force (else URDF colors).
             mark_violations: put a yellow marker at the middle of every leg that
-                violates a constraint (length, deflection, force, rise).
+                violates a constraint (length, deflection, force, rise), at the meshcat
+                path ``{prefix}_violations/sp{j}_leg{i}`` (0-based, as the URDF's names
+                and :mod:`~assembler_pin.labels`: ``sp1_leg2`` marks ``SP1 leg 2``).
 
         Returns:
             The state shown.
         """
         state = pose if isinstance(pose, StackState) else evaluate_state(self.am, pose)
         self.state = state
+        self._clear_animation()
         self.viz.display(q_from_plates(self.am, state.plates))
         leg_cfg = self.am.config.leg
         colors = force_color(state.forces, leg_cfg.max_tension, leg_cfg.max_compression)
@@ -444,8 +514,9 @@ class StackViewer:
         """Store the sequence as a meshcat animation (plays in the live and static viewer).
 
         The stack is displayed at the first state (leg colors of that state); each frame
-        moves every body of the main stack. Build ``states`` with
-        :func:`interpolate_states`.
+        moves every body of the main stack, and the page ends on the last state. A later
+        :meth:`display` (or :meth:`show_comparison`) removes the animation. Build
+        ``states`` with :func:`interpolate_states`.
         """
         if len(states) < 2:
             raise AssemblerError("an animation needs at least two states")
@@ -465,7 +536,21 @@ class StackViewer:
                     )
             self._extra_points[f"anim{k}"] = self._stack_points(plates)
         self.meshcat.set_animation(anim, play=play, repetitions=repetitions)
+        self._animated = True
         self.viz.display(q_from_plates(self.am, _as_plates(self.am, first)))
+
+    def _clear_animation(self) -> None:
+        """Replace a stored animation by an empty one (meshcat has no command to delete it).
+
+        Sent before any new transform: in the browser, stopping an animation restores the
+        bodies to where they were when it started.
+        """
+        if not self._animated:
+            return
+        self.meshcat.set_animation(meshcat.animation.Animation(), play=False)
+        self._animated = False
+        for key in [k for k in self._extra_points if k.startswith("anim")]:
+            del self._extra_points[key]
 
     # ------------------------------------------------------------------ camera / export
     def _stack_points(self, pose: StackState | PlateArrays) -> np.ndarray:

@@ -61,7 +61,7 @@ def test_statics_stdin_table_and_violations(capsys):
     plates[1][2][3] += 0.12  # first platform far past its stroke
     out = run("statics", "--plates", "-", stdin=json.dumps({"plates": plates}))
     assert out.returncode == 0
-    assert "feasible: NO" in out.stdout and "max_length at platform 0" in out.stdout
+    assert "feasible: NO" in out.stdout and "max_length at SP0 leg" in out.stdout
     assert main(["statics", "--home"]) == 0
     assert "feasible: yes" in capsys.readouterr().out
 

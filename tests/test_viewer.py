@@ -7,7 +7,10 @@ is, and two different poses must give different pictures.
 
 from __future__ import annotations
 
+import contextlib
 import math
+import os
+import select
 import shutil
 import signal
 import subprocess
@@ -18,6 +21,7 @@ from pathlib import Path
 
 import matplotlib.image as mpimg
 import numpy as np
+import pinocchio as pin
 import pytest
 
 from assembler_pin import evaluate_state, stack_forward_kinematics
@@ -158,6 +162,71 @@ def test_animation_in_static_html(am, viewer, bent, tmp_path):
     assert (tmp_path / "anim.html").stat().st_size > 100_000
 
 
+def page_end_transforms(html: str) -> dict[str, np.ndarray]:
+    """The 4×4 transform of every meshcat path once a static page has run its commands
+    and played its animation to the end.
+
+    As meshcat's viewer does: a ``set_animation`` replaces the previous one, an animation
+    with ``play`` runs once and stays on its last frame (``clampWhenFinished``), and its
+    ``position``/``quaternion`` tracks then override the node's last ``set_transform``.
+    """
+    transforms: dict[str, np.ndarray] = {}
+    animation = None
+    for cmd in page_commands(html):
+        if cmd["type"] == "set_transform":
+            transforms[cmd["path"]] = np.array(cmd["matrix"], dtype=float).reshape(4, 4).T  # column-major
+        elif cmd["type"] == "set_animation":
+            animation = cmd
+        elif cmd["type"] == "delete":
+            transforms = {p: T for p, T in transforms.items() if not (p + "/").startswith(cmd["path"] + "/")}
+    if animation is not None and animation["options"]["play"]:
+        for clip in animation["animations"]:
+            last = {track["name"]: track["keys"][-1]["value"] for track in clip["clip"]["tracks"]}
+            T = transforms.get(clip["path"], np.eye(4)).copy()
+            if ".position" in last:
+                T[:3, 3] = last[".position"]
+            if ".quaternion" in last:
+                x, y, z, w = last[".quaternion"]
+                T[:3, :3] = pin.Quaternion(w, x, y, z).toRotationMatrix()
+            transforms[clip["path"]] = T
+    return transforms
+
+
+def _leg_geometry_offsets(viewer: StackViewer, transforms: dict[str, np.ndarray], state) -> np.ndarray:
+    """Distance [m] of each drawn motor and shaft centre from its leg's axis in ``state``."""
+    out = []
+    for (j, i), gids in viewer._leg_geoms.items():
+        b, t = state.legs.bottom_points[j, i], state.legs.top_points[j, i]
+        u = (t - b) / np.linalg.norm(t - b)
+        for gid in gids:
+            path = viewer.viz.getViewerNodeName(viewer.visual_model.geometryObjects[gid], pin.GeometryType.VISUAL)
+            c = transforms["/meshcat/" + path][:3, 3] - b  # node frames are world frames under the root
+            out.append(np.linalg.norm(c - (c @ u) * u))
+    return np.array(out)
+
+
+def test_a_pose_shown_after_an_animation_is_what_the_page_ends_on(am, bent, tmp_path):
+    lengths = np.full((am.n, 6), 0.275)
+    lengths[2, ::2] = 0.31
+    lengths[3, 1::2] = 0.24
+    other = evaluate_state(am, stack_forward_kinematics(am, lengths).raise_if_failed())
+    bent_state = evaluate_state(am, bent)
+    with StackViewer(am) as v:
+        v.animate(interpolate_states(am, am.home, bent, steps=4))
+        animated = page_end_transforms(v.static_html(tmp_path / "animated.html"))
+        # the reading of the page is right: an animation ends on its last frame (the bent pose)
+        assert _leg_geometry_offsets(v, animated, bent_state).max() < 1e-9
+        v.show_comparison(evaluate_state(am, am.home), other)
+        html = v.static_html(tmp_path / "comparison.html")
+        shown = page_end_transforms(html)
+        offsets_other = _leg_geometry_offsets(v, shown, other)
+        offsets_bent = _leg_geometry_offsets(v, shown, bent_state)
+    assert offsets_other.max() < 1e-9, "the page does not end on the pose shown last"
+    assert offsets_bent.max() > 1e-3
+    played = [c for c in page_commands(html) if c["type"] == "set_animation" and c["options"]["play"]]
+    assert all(not c["animations"] for c in played)
+
+
 def test_notebook_inline_cell(viewer, bent):
     viewer.display(bent)
     cell = viewer.jupyter_static(height=300)
@@ -176,31 +245,152 @@ def test_cli_view_errors(tmp_path):
     assert out.returncode == 2 and out.stderr.count("\n") == 1 and "cannot read" in out.stderr
     out = run_cli("view", "--html", str(tmp_path / "x.html"))
     assert out.returncode == 2  # argparse: one source is required
+    for host in ("256.1.1.1", "no-such-host.invalid"):
+        out = run_cli("view", "--home", "--host", host)
+        assert out.returncode == 2 and out.stderr.count("\n") == 1 and f"viewer host '{host}'" in out.stderr
 
 
-def test_cli_view_serves_until_interrupted():
+def test_server_host_and_port_checked():
+    from assembler_pin.exceptions import ViewerError
+    from assembler_pin.meshcat_server import start_server
+
+    for host, port in (("", None), ("8.8.8.8", None), ("127.0.0.1", 0), ("127.0.0.1", 70000), ("127.0.0.1", "80")):
+        with pytest.raises(ViewerError, match=r"viewer (host|port)"):
+            start_server(host, port)
+    first = start_server()
+    try:
+        port = int(first.web_url.split(":")[2].split("/")[0])
+        with pytest.raises(ViewerError, match=r"did not start.*Address already in use"):
+            start_server(port=port)  # a port asked for explicitly is not moved
+    finally:
+        first.stop()
+
+
+# ---------------------------------------------------------------------- the live server's lifetime
+def _proc_stat(pid: int) -> tuple[str, int] | None:
+    """(state letter, parent pid) of a process from /proc, None when it no longer exists."""
+    try:
+        text = Path(f"/proc/{pid}/stat").read_text()
+    except OSError:
+        return None
+    fields = text[text.rindex(")") + 2 :].split()  # after "pid (comm) "
+    return fields[0], int(fields[1])
+
+
+def _running(pid: int) -> bool:
+    """The process exists and is not a zombie (a dead child nobody reaped yet)."""
+    stat = _proc_stat(pid)
+    return stat is not None and stat[0] not in "ZX"
+
+
+def _children(pid: int) -> list[int]:
+    out = []
+    for entry in Path("/proc").iterdir():
+        if entry.name.isdigit():
+            stat = _proc_stat(int(entry.name))
+            if stat is not None and stat[1] == pid and stat[0] not in "ZX":
+                out.append(int(entry.name))
+    return out
+
+
+def _listening(port: int) -> dict[int, str]:
+    """TCP sockets listening on ``port``: socket inode -> local address (IPv4 dotted, IPv6 hex)."""
+    found = {}
+    for table in ("/proc/net/tcp", "/proc/net/tcp6"):
+        with contextlib.suppress(OSError):
+            for line in Path(table).read_text().splitlines()[1:]:
+                fields = line.split()
+                address, port_hex = fields[1].rsplit(":", 1)
+                if fields[3] == "0A" and int(port_hex, 16) == port:  # 0A: LISTEN
+                    if len(address) == 8:  # IPv4, little-endian hex
+                        address = ".".join(str(b) for b in reversed(bytes.fromhex(address)))
+                    found[int(fields[9])] = address
+    return found
+
+
+def _wait_for(predicate, timeout: float) -> bool:
+    """Poll ``predicate`` until true or ``timeout`` [s] passes (a deadline, not a measurement)."""
+    deadline = time.monotonic() + timeout
+    while not predicate():
+        if time.monotonic() > deadline:
+            return False
+        time.sleep(0.2)
+    return True
+
+
+def _start_live_view(*extra: str) -> tuple[subprocess.Popen, str]:
     proc = subprocess.Popen(
-        [sys.executable, "-m", "assembler_pin.cli", "view", "--home"],
+        [sys.executable, "-m", "assembler_pin.cli", "view", "--home", *extra],
         stdout=subprocess.PIPE,
         stderr=subprocess.PIPE,
         text=True,
     )
+    ready, _, _ = select.select([proc.stdout], [], [], 180)  # generous: a loaded 2-core machine
+    url = proc.stdout.readline().strip() if ready else ""
+    return proc, url
+
+
+@pytest.mark.skipif(not Path("/proc/net/tcp").exists(), reason="reads processes and sockets from Linux's /proc")
+@pytest.mark.parametrize("sig", ["SIGINT", "SIGTERM", "SIGHUP", "SIGKILL"])
+def test_cli_view_server_stops_with_the_command(sig):
+    """Whatever ends ``view`` — Ctrl-C, kill, a closed terminal, even SIGKILL — its meshcat
+    server ends too, and while it runs its page listens on this machine only."""
+    proc, url = _start_live_view()
     try:
-        url = proc.stdout.readline().strip()
-        assert url.startswith("http://127.0.0.1:"), url
-        with urllib.request.urlopen(url, timeout=10) as page:
-            assert b"MeshCat" in page.read() or page.status == 200
-        time.sleep(1.0)  # let it reach its serving loop
-        proc.send_signal(signal.SIGINT)
-        # generous: a loaded 2-core machine (the rest of the suite) can be slow to tear down
-        assert proc.wait(timeout=90) == 0
+        assert url.startswith("http://127.0.0.1:"), (url, proc.stderr.read() if proc.poll() is not None else "")
+        port = int(url.split(":")[2].split("/")[0])
+        servers = _children(proc.pid)
+        assert len(servers) == 1, servers
+        server = servers[0]  # the meshcat server
+        sockets = _listening(port)
+        assert list(sockets.values()) == ["127.0.0.1"]  # not 0.0.0.0, not [::]
+        with urllib.request.urlopen(url, timeout=30) as page:
+            assert page.status == 200 and b"MeshCat" in page.read()
+
+        proc.send_signal(getattr(signal, sig))
+        code = proc.wait(timeout=120)
+        assert code == (-signal.SIGKILL if sig == "SIGKILL" else 0), proc.stderr.read()
+        assert "Traceback" not in proc.stderr.read()
+        assert _wait_for(lambda: not _running(server), timeout=60), f"meshcat server {server} still running"
+        # its socket is closed (the port itself may be taken again by another program meanwhile)
+        assert _wait_for(lambda: not set(sockets) & set(_listening(port)), timeout=60)
     finally:
         if proc.poll() is None:
             proc.kill()
             proc.wait()
-    # the meshcat server it started is gone too
-    with pytest.raises(OSError):
-        urllib.request.urlopen(url, timeout=2)
+
+
+def test_cli_view_stopped_before_it_is_ready(monkeypatch, capsys):
+    """A SIGTERM while the pose is being computed ends ``view`` with one line and status
+    128 + 15, its server stopped and reaped, the previous signal handlers back."""
+    import assembler_pin.viewer as viewer_mod
+    from assembler_pin.cli import main
+
+    servers = []
+    real_display = viewer_mod.StackViewer.display
+
+    def display_then_terminated(self, *args, **kwargs):
+        servers.append(self.server)
+        os.kill(os.getpid(), signal.SIGTERM)  # the handler raises at the next bytecode
+        time.sleep(30)  # not reached; a sleep is interrupted by the handler anyway
+        return real_display(self, *args, **kwargs)
+
+    before = {sig: signal.getsignal(sig) for sig in (signal.SIGTERM, signal.SIGHUP)}
+    monkeypatch.setattr(viewer_mod.StackViewer, "display", display_then_terminated)
+    assert main(["view", "--home"]) == 128 + signal.SIGTERM
+    assert capsys.readouterr().err.splitlines() == ["assembler-pin view: stopped by SIGTERM before the view was ready"]
+    assert len(servers) == 1 and servers[0].process.returncode is not None  # stopped and reaped
+    assert {sig: signal.getsignal(sig) for sig in before} == before
+
+
+def test_viewer_close_stops_its_server(am):
+    v = StackViewer(am)
+    server = v.server
+    assert server is not None and server.running()
+    assert server.web_url.startswith("http://127.0.0.1:") and server.zmq_url.startswith("tcp://127.0.0.1:")
+    v.close()
+    assert server.process.returncode is not None  # reaped: close() waits for it
+    v.close()  # twice is fine
 
 
 @pytest.mark.skipif(
@@ -251,7 +441,9 @@ def project(cam, points: np.ndarray) -> np.ndarray:
     return np.stack([u, v], axis=1)
 
 
-def screenshot(html: Path, tmp_path: Path) -> np.ndarray:
+def screenshot(html: Path, tmp_path: Path, virtual_time_ms: int | None = None) -> np.ndarray:
+    """The page as headless Chromium draws it; ``virtual_time_ms`` lets animations run
+    that long (in the browser's virtual time) before the picture is taken."""
     png = html.with_suffix(".png")
     cmd = [
         CHROMIUM,
@@ -268,7 +460,12 @@ def screenshot(html: Path, tmp_path: Path) -> np.ndarray:
         f"--window-size={WIDTH},{HEIGHT}",
         html.resolve().as_uri(),
     ]
-    subprocess.run(cmd, capture_output=True, timeout=60, check=False)
+    if virtual_time_ms is not None:
+        cmd.insert(1, f"--virtual-time-budget={virtual_time_ms}")
+    for _ in range(2):  # a profile still held by the previous run can make one attempt fail
+        subprocess.run(cmd, capture_output=True, timeout=120, check=False)
+        if png.exists():
+            break
     assert png.exists(), "chromium wrote no screenshot"
     img = mpimg.imread(png)[..., :3]
     assert img.shape[:2] == (HEIGHT, WIDTH)
@@ -320,3 +517,33 @@ def test_html_page_draws_the_stack_in_a_real_browser(am, bent, tmp_path):
     # a different pose gives a different picture
     differ = np.abs(home - bent_img).max(axis=2) > 0.12
     assert differ.mean() > 0.01
+
+
+@pytest.mark.skipif(CHROMIUM is None, reason="chromium not installed (.ci/run installs it)")
+def test_pose_shown_after_an_animation_in_a_real_browser(am, bent, tmp_path):
+    """The browser lets the animation run out, then shows the page: after animate() and
+    show_comparison(), it is the picture of show_comparison() alone."""
+    lengths = np.full((am.n, 6), 0.275)
+    lengths[2, ::2] = 0.35
+    lengths[3, 1::2] = 0.21
+    other = evaluate_state(am, stack_forward_kinematics(am, lengths).raise_if_failed())
+    home = evaluate_state(am, am.home)
+    motion = interpolate_states(am, am.home, bent, steps=5)
+    pages = {name: tmp_path / f"{name}.html" for name in ("still", "played", "after", "plain")}
+    with StackViewer(am) as v:
+        v.animate(motion, fps=10, play=False)
+        v.static_html(pages["still"])
+        v.animate(motion, fps=10, play=True)
+        v.static_html(pages["played"])
+        v.show_comparison(home, other)
+        v.static_html(pages["after"])
+    with StackViewer(am) as v:
+        v.show_comparison(home, other)
+        v.static_html(pages["plain"])
+    img = {name: screenshot(page, tmp_path, virtual_time_ms=5000) for name, page in pages.items()}
+
+    def changed(a: str, b: str) -> float:
+        return float((np.abs(img[a] - img[b]).max(axis=2) > 0.12).mean())
+
+    assert changed("still", "played") > 0.01  # the animation does run in the browser before the picture
+    assert changed("after", "plain") < 1e-3  # and a pose shown afterwards is not replayed over
