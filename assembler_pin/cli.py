@@ -157,7 +157,7 @@ def cmd_solve(args: argparse.Namespace) -> int:
         return 0
     taa = se3_to_taa(result.goal)
     print(
-        f"goal: p = ({taa[0]:.4f}, {taa[1]:.4f}, {taa[2]:.4f}) m, "
+        f"goal: p = ({', '.join(f'{x:.4f}' if abs(x) < 1e6 else f'{x:.4g}' for x in taa[:3])}) m, "
         f"rotation vector = ({np.rad2deg(taa[3]):.2f}, {np.rad2deg(taa[4]):.2f}, {np.rad2deg(taa[5]):.2f}) deg"
     )
     init = result.initial_result
@@ -168,9 +168,13 @@ def cmd_solve(args: argparse.Namespace) -> int:
     opt = result.optimization
     if opt is not None:
         print()
-        print(f"optimization ({opt.method}): {'success' if result.success else 'FAILED'} — {opt.message}; "
+        print(f"optimization ({opt.method}): {'success' if result.success else 'FAILED'} — {result.message}; "
               f"{opt.iterations} iterations, {opt.evaluations} evaluations, {opt.time_s:.3f} s")  # fmt: skip
-        print(f"objective Ω = w1·max|F| + w2·sqrt(Σλ²): {opt.objective_initial:.3f} -> {opt.objective_optimized:.3f}")
+        starts = ", ".join(f"{name} {r.optimized.max_abs_force:.1f} N{'' if r.success else ' (failed)'}"
+                           for name, r in result.runs.items())  # fmt: skip
+        print(f"starts (max|F| reached): {starts}; kept: {result.start}")
+        print(f"objective Ω = w1·max|F| + w2·sqrt(Σλ²): {opt.objective_initial:.3f} (start) -> "
+              f"{opt.objective_optimized:.3f}")  # fmt: skip
         print(format_state_table(opt.optimized, "Optimized"))
     elif not args.no_optimize:
         print(f"\nno optimization: {result.message}")

@@ -13,6 +13,7 @@
 
 from __future__ import annotations
 
+import math
 from dataclasses import asdict, dataclass
 
 import numpy as np
@@ -49,7 +50,8 @@ class Violation:
     Attributes:
         kind: ``min_length``, ``max_length``, ``deflection_bottom``, ``deflection_top``,
             ``tension``, ``compression``, ``continuous_translation``, ``ee_position``,
-            ``ee_rotation`` or ``singular``.
+            ``ee_rotation``, ``singular`` or ``non_finite_force`` (a force that overflowed:
+            never feasible).
         platform: platform index j (``None`` for end-effector constraints).
         leg: leg index i within the platform (``None`` when not about one leg).
         value: the offending value, in the constraint's unit ([m], [rad], [N], or the
@@ -117,6 +119,7 @@ def evaluate_constraints(
     out += _per_leg("continuous_translation", legs.rise <= 0.0, legs.rise, 0.0)
     if statics is not None:
         F = statics.forces
+        out += _per_leg("non_finite_force", ~np.isfinite(F), F, float("inf"))
         out += _per_leg("tension", F > leg.max_tension, F, leg.max_tension)
         out += _per_leg("compression", F < -leg.max_compression, F, -leg.max_compression)
         for j in np.nonzero(~(statics.condition <= CONDITION_LIMIT))[0]:
@@ -125,7 +128,7 @@ def evaluate_constraints(
         if plates is None:
             raise ValueError("evaluate_constraints: a goal needs the plate poses")
         ee = plates.se3(len(plates) - 1)
-        dist = float(np.linalg.norm(ee.translation - goal.translation))
+        dist = math.hypot(*(ee.translation - goal.translation))  # no overflow warning for huge goals
         angle = float(np.linalg.norm(pin.log3(goal.rotation.T @ ee.rotation)))
         if dist > tolerance.position:
             out.append(Violation("ee_position", None, None, dist, tolerance.position))

@@ -26,6 +26,7 @@ __all__ = [
     "LegGeometry",
     "home_plates",
     "leg_geometry",
+    "reach_bound",
     "rotation_z_to",
 ]
 
@@ -125,3 +126,14 @@ def home_plates(cfg: AssemblerConfig, base: pin.SE3 | None = None) -> list[pin.S
     for _ in range(cfg.platforms):
         plates.append(plates[-1] * step)
     return plates
+
+
+def reach_bound(cfg: AssemblerConfig) -> float:
+    """An upper bound on the distance from plate 0's origin to plate n's [m].
+
+    Plate j+1's origin is ``p_j + b_i + L_i u_i - R_{j+1} t_i`` for any of its legs, so one
+    platform spans at most ``|b_i| + max_length + |t_i|``; a goal farther away is unreachable.
+    """
+    geo = leg_geometry(cfg)
+    span = np.linalg.norm(geo.bottom_in_plate, axis=-1) + np.linalg.norm(geo.top_in_plate, axis=-1)
+    return float(np.sum(span.max(axis=1) + cfg.leg.max_length))

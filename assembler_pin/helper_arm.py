@@ -95,7 +95,7 @@ from scipy.optimize import least_squares
 
 from .config import AssemblerConfig
 from .constraints import GoalTolerance, evaluate_constraints
-from .geometry import LegGeometry, leg_geometry
+from .geometry import LegGeometry, leg_geometry, reach_bound
 from .kinematics import PlateArrays, leg_state, to_se3
 from .model import AssemblerModel
 from .state import StackState, evaluate_state
@@ -726,6 +726,8 @@ class HelperArmOptions:
         repair_starts: after a scan without success, how many of the arm's closest poses
             (fewest goal error plus leg violation) are repaired on the stack itself
             (0: no repair).
+        perturbed_starts: how many randomly perturbed copies of the even screw pose are
+            repaired too, after the even pose itself (seeded).
     """
 
     d_step: float = 0.01
@@ -737,12 +739,15 @@ class HelperArmOptions:
     restarts: int = 0
     free_link_length: bool = True
     repair_starts: int = 2
+    perturbed_starts: int = 4
 
     def __post_init__(self) -> None:
         if not (math.isfinite(self.d_step) and self.d_step > 0.0):
             raise ValueError(f"d_step must be a positive number of metres, got {self.d_step!r}")
         if int(self.max_attempts) < 1:
             raise ValueError(f"max_attempts must be >= 1, got {self.max_attempts!r}")
+        if int(self.perturbed_starts) < 0:
+            raise ValueError(f"perturbed_starts must be >= 0, got {self.perturbed_starts!r}")
         if int(self.repair_starts) < 0:
             raise ValueError(f"repair_starts must be >= 0, got {self.repair_starts!r}")
 
@@ -783,6 +788,23 @@ class InitialConditionResult:
     time_s: float
     arm_points: np.ndarray | None = None
     repaired: bool = False
+
+    def plates_if_valid(self) -> PlateArrays | None:
+        """The valid state's plate poses, None when no valid initial condition was found."""
+        return self.state.plates if self.success else None
+
+
+def _perturbed(plates: list[pin.SE3], count: int, seed: int = 0) -> list[list[pin.SE3]]:
+    """``count`` copies of ``plates`` with plates 1..n-1 moved by random twists
+    (±5 cm, ±0.3 rad per axis; seeded, so results are reproducible)."""
+    rng = np.random.default_rng(seed)
+    out = []
+    for _ in range(count):
+        moved = [m.copy() for m in plates]
+        for k in range(1, len(plates) - 1):
+            moved[k] = moved[k] * pin.exp6(np.concatenate([rng.uniform(-0.05, 0.05, 3), rng.uniform(-0.3, 0.3, 3)]))
+        out.append(moved)
+    return out
 
 
 def _d_sequence(d0: float, step: float, d_range: tuple[float, float]) -> Iterator[float]:
@@ -861,7 +883,17 @@ def initial_condition(
     n = am.n
     d0 = cfg.home_height
     d_range = height_range(cfg)
-    distance = float(np.linalg.norm(goal_se3.translation - base.translation))
+    distance = math.hypot(*(goal_se3.translation - base.translation))  # no overflow for huge goals
+    reach = reach_bound(cfg)
+    if not distance <= reach:
+        state = evaluate_state(am, am.home, goal=goal_se3, tolerance=opts.tolerance)
+        message = (
+            f"the goal is out of reach: {distance:.4g} m from the base, farther than the stack can span ({reach:.4g} m)"
+        )
+        logger.info("initial condition failed: %s", message)
+        return InitialConditionResult(
+            False, message, goal_se3, state, state.leg_lengths.copy(), None, None, 0, time.perf_counter() - t0
+        )
     attempts = 0
     broken: list[str] = []  # attempts where the arm reached the goal but the plates were invalid
     closest, closest_error = "", math.inf
@@ -941,6 +973,9 @@ def initial_condition(
         even = [base * pin.exp6(screw * (k / n)) for k in range(n + 1)]
         even[n] = goal_se3.copy()
         repairs.append((math.inf, even, None, None, None))
+        # the even pose is often a saddle of the leg limits (every platform alike): also
+        # repair it with its internal plates moved by seeded random twists
+        repairs += [(math.inf, plates, None, None, None) for plates in _perturbed(even, opts.perturbed_starts)]
     for _, plates, q, d, points in repairs:
         pa, viol = _repair(am, plates)
         if viol > 0.0:
@@ -964,7 +999,10 @@ def initial_condition(
     else:
         why = f"the goal is out of the helper arm's reach within its joint limits ({closest})"
     if repairs:
-        why += f"; repairing {len(repairs) - 1} of its closest pose(s) and the even screw pose on the stack failed"
+        why += (
+            f"; repairing {len(repairs) - 1 - opts.perturbed_starts} of its closest pose(s), the even screw pose "
+            f"and {opts.perturbed_starts} perturbed copies on the stack failed"
+        )
     message = (
         f"no valid initial condition after {attempts} attempt(s) (d from {d0:.4f} m, then from "
         f"{min(max(distance / n, d_range[0]), d_range[1]):.4f} m, step {opts.d_step} m): {why}"

@@ -40,8 +40,9 @@ import pinocchio as pin
 from scipy.optimize import minimize
 
 from .constraints import GoalTolerance
+from .exceptions import SingularConfigurationError
 from .gradients import PoseDerivatives, pose_derivatives
-from .kinematics import PlateArrays, leg_state, plate_arrays
+from .kinematics import LegState, PlateArrays, leg_state, plate_arrays
 from .model import AssemblerModel
 from .state import StackState, evaluate_state
 from .statics import solve_statics
@@ -51,6 +52,15 @@ __all__ = ["METHODS", "OptimizeOptions", "OptimizeResult", "objective_value", "o
 logger = logging.getLogger(__name__)
 
 METHODS = ("slsqp", "paper")
+
+#: How far inside the stroke and deflection limits the optimizer's rows keep a point [m, and
+#: cosine units]. SLSQP satisfies its rows only to ~1e-8; with a smaller margin its optimum can
+#: sit just outside a limit, be rejected by the strict final check and cost the whole solve.
+GEOMETRIC_MARGIN = 1e-7
+
+#: Forces [N] standing in for the statics at a singular trial point: finite (SLSQP cannot
+#: handle NaN) and far outside every force limit, so such a step is infeasible.
+SINGULAR_FORCE = 1e6
 
 
 @dataclass(frozen=True)
@@ -145,6 +155,10 @@ class _Values:
     plate_angles: np.ndarray  # (n,) [rad]
 
 
+class _SingularIterateError(Exception):
+    """The solver accepted an iterate whose statics (or their derivatives) are singular."""
+
+
 class _Problem:
     """Maps decision vectors to plate poses and evaluates objective and constraints.
 
@@ -152,7 +166,9 @@ class _Problem:
     where the solver asks for them) from :func:`~assembler_pin.gradients.pose_derivatives`.
     """
 
-    def __init__(self, am: AssemblerModel, start: PlateArrays, goal: pin.SE3, opts: OptimizeOptions):
+    def __init__(
+        self, am: AssemblerModel, start: PlateArrays, goal: pin.SE3, opts: OptimizeOptions, start_feasible: bool
+    ):
         self.am, self.opts, self.goal = am, opts, goal
         self.n = am.n
         self.free_ee = opts.ee_tolerance is not None
@@ -162,10 +178,10 @@ class _Problem:
         self.nx_pose = 6 * len(self.movable)
         leg = am.config.leg
         self.cos_max = np.cos(leg.max_deflection)
-        # the smooth method never accepts a larger max|F| than the start: both force limits
-        # are capped by it (the paper's literal formulation keeps the plain limits)
-        self.start_max_force = float(np.abs(solve_statics(am, start).forces).max())
-        cap = self.start_max_force if opts.method == "slsqp" else np.inf
+        # from a feasible start the smooth method never accepts a larger max|F|: both force
+        # limits are capped by it (the paper's literal formulation keeps the plain limits)
+        self.start_max_force = float(np.abs(self._forces(start, leg_state(am, start))).max())
+        cap = self.start_max_force if opts.method == "slsqp" and start_feasible else np.inf
         self.tension_limit = min(leg.max_tension, cap) - 1e-6
         self.compression_limit = min(leg.max_compression, cap) - 1e-6
         # with equal limits the epigraph variable s carries them: one row s <= limit
@@ -206,7 +222,7 @@ class _Problem:
             return self._values[1]
         pa = self.plates_taa(x_pose) if self.opts.method == "paper" else self.plates_local(x_pose)
         legs = leg_state(self.am, pa)
-        v = _Values(pa, solve_statics(self.am, pa, legs=legs).forces, legs.lengths, np.cos(legs.deflection), legs.rise,
+        v = _Values(pa, self._forces(pa, legs), legs.lengths, np.cos(legs.deflection), legs.rise,
                     plate_deviation(pa, self.am))  # fmt: skip
         self._values = (key, v)
         self.evaluations += 1
@@ -220,13 +236,25 @@ class _Problem:
             self.best = (omega, x_pose.copy())
         return v
 
+    def _forces(self, pa: PlateArrays, legs: LegState) -> np.ndarray:
+        """Actuator forces [N]; :data:`SINGULAR_FORCE` where the statics are not defined, so
+        that a singular trial point is an infeasible step rather than an exception or NaN."""
+        try:
+            forces = solve_statics(self.am, pa, legs=legs).forces
+        except (np.linalg.LinAlgError, SingularConfigurationError):
+            return np.full((self.n, 6), SINGULAR_FORCE)
+        return np.where(np.isfinite(forces), forces, SINGULAR_FORCE)
+
     def derivatives(self, x_pose: np.ndarray) -> tuple[PoseDerivatives, np.ndarray]:
         """Derivatives at x and B = d(world twists of plates 1..n)/d(chart coordinates)."""
         key = x_pose.tobytes()
         if self._derivs is not None and self._derivs[0] == key:
             return self._derivs[1], self._derivs[2]
         pa = self.values(x_pose).plates
-        d = pose_derivatives(self.am, pa)
+        try:
+            d = pose_derivatives(self.am, pa)
+        except (np.linalg.LinAlgError, SingularConfigurationError) as exc:
+            raise _SingularIterateError(str(exc)) from None
         # world twist of plate k per chart coordinate: Ad(T_k) · Jexp6(x_k)
         B = np.zeros((6 * self.n, self.nx_pose))
         for slot, k in enumerate(self.movable):
@@ -243,9 +271,9 @@ class _Problem:
         leg = self.am.config.leg
         return np.concatenate(
             [
-                v.lengths.ravel() - (leg.min_length + 1e-9),
-                (leg.max_length - 1e-9) - v.lengths.ravel(),
-                v.cos_deflection.ravel() - (self.cos_max + 1e-9),
+                v.lengths.ravel() - (leg.min_length + GEOMETRIC_MARGIN),
+                (leg.max_length - GEOMETRIC_MARGIN) - v.lengths.ravel(),
+                v.cos_deflection.ravel() - (self.cos_max + GEOMETRIC_MARGIN),
                 v.rise.ravel() - self.opts.rise_margin,
             ]
         )
@@ -336,7 +364,12 @@ def optimize_internal_poses(
     goal: pin.SE3 | None = None,
     options: OptimizeOptions | None = None,
 ) -> OptimizeResult:
-    """Minimize Ω over the intermediate plate poses, from a valid initial state.
+    """Minimize Ω over the intermediate plate poses, from a starting pose.
+
+    The start need not be valid (the solver may reach a feasible point from outside); the
+    result is a success only when the solver converged to a point that meets every
+    constraint. A converged point just outside a limit is pulled back inside along the
+    segment to the best feasible point met; when that fails the result says so.
 
     Args:
         initial: the starting pose (a state or plate poses), e.g. the helper-arm initial
@@ -350,66 +383,37 @@ def optimize_internal_poses(
     check_tol = opts.ee_tolerance or opts.goal_tolerance
     initial_state = evaluate_state(am, start, goal=goal, tolerance=check_tol)
     omega0 = objective_value(am, initial_state, opts.w1, opts.w2)
-    problem = _Problem(am, start, goal, opts)
+    problem = _Problem(am, start, goal, opts, initial_state.feasible)
+    if problem.nx_pose == 0:
+        return _nothing_to_optimize(initial_state, omega0, opts.method)
     t0 = time.perf_counter()
-    if opts.method == "slsqp":
-        x0 = np.zeros(problem.nx_pose + 1)
-        x0[-1] = np.abs(initial_state.forces).max()
-        res = minimize(
-            problem.smooth_fun,
-            x0,
-            jac=problem.smooth_grad,
-            method="SLSQP",
-            constraints=[{"type": "ineq", "fun": problem.smooth_cons, "jac": problem.smooth_cons_jac}],
-            options={"maxiter": opts.max_iterations, "ftol": opts.ftol},
-        )
-        to_plates = problem.plates_local
-        x_final = res.x[:-1]
-    else:
-        x0 = problem.taa_start()
-        res = minimize(
-            problem.paper_fun,
-            x0,
-            method="SLSQP",
-            constraints=[{"type": "ineq", "fun": problem.paper_cons}],
-            options={"maxiter": opts.max_iterations, "ftol": opts.ftol},
-        )
-        to_plates = problem.plates_taa
-        x_final = res.x
+    res, to_plates, x_final, singular = _run_solver(problem, initial_state)
     elapsed = time.perf_counter() - t0
 
-    # candidates: the solver's answer and the best feasible point met; keep the best
-    # one that the Pinocchio statics confirm feasible, never worse than the start
-    candidates = [x_final] + ([problem.best[1]] if problem.best is not None else [])
-    chosen, omega_chosen = initial_state, omega0
-    for x in candidates:
+    def state_at(x: np.ndarray) -> StackState:
         pad = np.concatenate([x, [0.0]]) if opts.method == "slsqp" else x
-        state = evaluate_state(am, to_plates(pad), goal=goal, tolerance=check_tol)
+        return evaluate_state(am, to_plates(pad), goal=goal, tolerance=check_tol)
+
+    final_state = state_at(x_final)
+    converged = bool(res.success) and not singular
+    if converged and not final_state.feasible:
+        # SLSQP honours its rows to ~1e-8: step back towards the best feasible point met
+        x_inside = problem.best[1] if problem.best is not None else np.zeros_like(x_final)
+        for t in (1e-4, 1e-3, 1e-2, 1e-1):
+            trial = state_at(x_final + t * (x_inside - x_final))
+            if trial.feasible:
+                final_state = trial
+                break
+    candidates = [final_state] + ([state_at(problem.best[1])] if problem.best is not None else [])
+    chosen, omega_chosen = initial_state, omega0
+    for state in candidates:
         omega = objective_value(am, state, opts.w1, opts.w2)
-        no_worse = state.max_abs_force <= initial_state.max_abs_force + 1e-9
+        no_worse = not initial_state.feasible or state.max_abs_force <= initial_state.max_abs_force + 1e-9
         if state.feasible and (not chosen.feasible or (omega < omega_chosen and no_worse)):
             chosen, omega_chosen = state, omega
-    converged = bool(res.success)
-    if chosen is initial_state:
-        if not initial_state.feasible:
-            message = "no feasible state found: " + ("; ".join(str(v) for v in initial_state.violations[:3]))
-        else:
-            message = "the optimizer found no better feasible state than the initial one"
-        if not converged:
-            message += f" (solver: {res.message})"
-        success = False if not initial_state.feasible else converged
-    else:
-        success = converged and chosen.feasible
-        message = "converged" if success else f"solver did not converge ({res.message}); best feasible state returned"
-    logger.info(
-        "optimize[%s]: %s, Ω %.4g -> %.4g in %.3f s, %d iterations",
-        opts.method,
-        message,
-        omega0,
-        omega_chosen,
-        elapsed,
-        res.nit,
-    )
+    success, message = _verdict(res, singular, converged, final_state, chosen, initial_state)
+    logger.info("optimize[%s]: %s, Ω %.4g -> %.4g in %.3f s, %d iterations",
+                opts.method, message, omega0, omega_chosen, elapsed, res.nit)  # fmt: skip
     return OptimizeResult(
         success=success,
         message=message,
@@ -425,3 +429,79 @@ def optimize_internal_poses(
         objective_optimized=omega_chosen,
         method=opts.method,
     )
+
+
+def _run_solver(
+    problem: _Problem, initial_state: StackState
+) -> tuple[OptimizeResult | object, object, np.ndarray, str]:
+    """Run SLSQP in the method's chart; returns (scipy result, chart map, final pose point,
+    the reason when it stopped at a singular iterate else "")."""
+    opts = problem.opts
+    if opts.method == "slsqp":
+        x0 = np.zeros(problem.nx_pose + 1)
+        x0[-1] = np.abs(initial_state.forces).max() if np.all(np.isfinite(initial_state.forces)) else 0.0
+        fun, jac, cons = (
+            problem.smooth_fun,
+            problem.smooth_grad,
+            {"fun": problem.smooth_cons, "jac": problem.smooth_cons_jac},
+        )
+        to_plates = problem.plates_local
+    else:
+        x0 = problem.taa_start()
+        fun, jac, cons = problem.paper_fun, None, {"fun": problem.paper_cons}
+        to_plates = problem.plates_taa
+    try:
+        res = minimize(fun, x0, jac=jac, method="SLSQP", constraints=[{"type": "ineq", **cons}],
+                       options={"maxiter": opts.max_iterations, "ftol": opts.ftol})  # fmt: skip
+        singular = ""
+    except _SingularIterateError as exc:
+        singular = f"stopped at a singular iterate: {exc}"
+        res = _StoppedEarly(x0, singular)
+    x_final = res.x[:-1] if opts.method == "slsqp" else res.x
+    return res, to_plates, x_final, singular
+
+
+@dataclass
+class _StoppedEarly:
+    """Stands in for scipy's result when the solve stopped early (no converged point)."""
+
+    x: np.ndarray
+    message: str
+    success: bool = False
+    status: int = -1
+    nit: int = 0
+
+
+def _verdict(
+    res: object, singular: str, converged: bool, final: StackState, chosen: StackState, initial: StackState
+) -> tuple[bool, str]:
+    """(success, message) of an optimization: success only when the solver converged to a
+    point that meets every constraint (or was pulled back inside) and that point was kept."""
+    solver = f" (solver: {singular or res.message})"
+    if not converged:
+        if not chosen.feasible:
+            worst = "; ".join(str(v) for v in chosen.violations[:3])
+            return False, f"no feasible state found{solver}: {worst}"
+        if chosen is initial:
+            return False, f"the solver did not converge{solver}; no better feasible state than the start"
+        return False, f"the solver did not converge{solver}; best feasible state met returned"
+    if not final.feasible:
+        worst = "; ".join(str(v) for v in final.violations[:2])
+        kept = "best feasible state met returned" if chosen.feasible else "no feasible state found"
+        return False, f"the solver's converged point breaks a limit ({worst}); {kept}"
+    return True, "converged"
+
+
+def _nothing_to_optimize(initial_state: StackState, omega0: float, method: str) -> OptimizeResult:
+    """A stack without movable plates (one platform, EE fixed): the start is the optimum."""
+    if initial_state.feasible:
+        message = "nothing to optimize (no internal plates): the start is the optimum"
+    else:
+        message = "nothing to optimize (no internal plates) and the start is not feasible: " + "; ".join(
+            str(v) for v in initial_state.violations[:3]
+        )
+    return OptimizeResult(
+        success=initial_state.feasible, message=message, status=0, solver_message="", iterations=0,
+        evaluations=0, gradient_evaluations=0, time_s=0.0, initial=initial_state, optimized=initial_state,
+        objective_initial=omega0, objective_optimized=omega0, method=method,
+    )  # fmt: skip

@@ -15,7 +15,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 import pinocchio as pin
 
-from .kinematics import se3_to_taa, to_se3
+from .kinematics import PlateArrays, se3_to_taa, to_se3
 from .model import AssemblerModel
 from .optimize import OptimizeOptions, OptimizeResult, optimize_internal_poses
 from .state import StackState
@@ -23,7 +23,16 @@ from .state import StackState
 if TYPE_CHECKING:
     from .helper_arm import HelperArmOptions, InitialConditionResult
 
-__all__ = ["SolveResult", "solve"]
+__all__ = ["STARTS", "SolveResult", "solve"]
+
+#: The starts the optimizer runs from, in order: the helper arm's valid initial condition,
+#: the home pose's internal plates, and the even screw pose (every platform the same
+#: relative transform). Each converges in a few tens of ms; the best feasible optimum wins.
+STARTS = ("helper_arm", "home", "screw")
+
+#: Extra starts tried only when every start in :data:`STARTS` failed: the screw pose with
+#: its internal plates perturbed (seeded, so the answer is reproducible).
+FALLBACK_STARTS = 4
 
 
 @dataclass
@@ -36,9 +45,12 @@ class SolveResult:
             converged to a state that satisfies every constraint.
         message: what happened, or why not.
         initial_result: the helper-arm result (arm configuration, d used, attempts).
-        optimization: the optimizer's result (None with ``optimize=False`` or when the
-            initial condition failed).
-        timing_s: wall times ``initial`` and ``optimize`` [s].
+        optimization: the optimizer's result from the winning start (None with
+            ``optimize=False`` or when no start gave a feasible state).
+        timing_s: wall times ``initial`` and ``optimize`` (all starts) [s].
+        start: name of the start the returned optimum came from (see :data:`STARTS`;
+            ``screw_perturbed_k`` for a fallback start), None without one.
+        runs: every start tried → its optimization result.
     """
 
     goal: pin.SE3
@@ -47,6 +59,8 @@ class SolveResult:
     initial_result: InitialConditionResult
     optimization: OptimizeResult | None = None
     timing_s: dict[str, float] = field(default_factory=dict)
+    start: str | None = None
+    runs: dict[str, OptimizeResult] = field(default_factory=dict)
 
     @property
     def initial(self) -> StackState | None:
@@ -74,9 +88,11 @@ class SolveResult:
         }
         if self.optimization is not None or "optimize" in self.timing_s:
             opt = self.optimization
+            helper_run = self.runs.get("helper_arm")
             out["optimized"] = self.optimized.to_dict() if self.optimized is not None else None
             out["objective"] = {
-                "initial": opt.objective_initial if opt else None,
+                # Ω of the helper arm's initial condition (None when it found none)
+                "initial": helper_run.objective_initial if helper_run else None,
                 "optimized": opt.objective_optimized if opt else None,
             }
             out["timing_s"] = dict(self.timing_s)
@@ -88,6 +104,11 @@ class SolveResult:
                     "iterations": opt.iterations,
                     "evaluations": opt.evaluations,
                 }
+            out["start"] = self.start
+            out["starts"] = {
+                name: {"success": r.success, "max_abs_force": r.optimized.max_abs_force, "message": r.message}
+                for name, r in self.runs.items()
+            }
         else:
             out["timing_s"] = dict(self.timing_s)
         return out
@@ -101,6 +122,11 @@ def solve(
     helper_options: HelperArmOptions | None = None,
 ) -> SolveResult:
     """Internal poses of the stack for an EE goal pose.
+
+    The helper arm gives a valid initial condition; the optimizer then runs from it and from
+    the cheap starts of :data:`STARTS` (and, when every one fails, from perturbed screw
+    starts), and the best feasible optimum is returned with the name of its start. A goal the
+    helper arm cannot reach may still be solved from another start.
 
     Args:
         goal: EE pose in the base (world) frame, ``pin.SE3`` or 4×4.
@@ -116,14 +142,66 @@ def solve(
     t0 = time.perf_counter()
     init = initial_condition(am, goal, helper_options)
     timing = {"initial": time.perf_counter() - t0}
-    if not init.success:
-        if optimize:
-            timing["optimize"] = 0.0
-        return SolveResult(goal, False, f"no valid initial condition: {init.message}", init, None, timing)
     if not optimize:
-        return SolveResult(goal, True, init.message, init, None, timing)
+        message = init.message if init.success else f"no valid initial condition: {init.message}"
+        return SolveResult(goal, init.success, message, init, None, timing)
+    if init.attempts == 0 and not init.success:  # out of reach: nothing to start from
+        timing["optimize"] = 0.0
+        return SolveResult(goal, False, f"no valid initial condition: {init.message}", init, None, timing)
     opts = options or OptimizeOptions()
-    result = optimize_internal_poses(am, init.state, goal, opts)
-    timing["optimize"] = result.time_s
-    message = result.message
-    return SolveResult(goal, result.success, message, init, result, timing)
+    t1 = time.perf_counter()
+    runs = {
+        name: optimize_internal_poses(am, start, goal, opts)
+        for name, start in _starts(am, goal, init.plates_if_valid()).items()
+    }
+    if not any(r.success for r in runs.values()):
+        for name, start in _fallback_starts(am, goal).items():
+            runs[name] = optimize_internal_poses(am, start, goal, opts)
+            if runs[name].success:
+                break
+    timing["optimize"] = time.perf_counter() - t1
+    name, best = _best_run(runs)
+    if best is None:
+        why = "; ".join(f"{k}: {r.message}" for k, r in list(runs.items())[:3])
+        prefix = "" if init.success else f"no valid initial condition ({init.message}); "
+        return SolveResult(goal, False, f"{prefix}no start reached a feasible pose ({why})", init, None, timing,
+                           None, runs)  # fmt: skip
+    message = f"{best.message} (from the {name} start)"
+    if not init.success:
+        message += f"; the helper arm found no valid initial condition: {init.message}"
+    return SolveResult(goal, best.success, message, init, best, timing, name, runs)
+
+
+def _starts(am: AssemblerModel, goal: pin.SE3, helper_plates: PlateArrays | None) -> dict[str, PlateArrays]:
+    """The optimizer's starts (:data:`STARTS`): plate 0 at home, plate n at the goal."""
+    n, base = am.n, am.home[0]
+    home = list(am.home)
+    home[n] = goal
+    screw = pin.log6(base.actInv(goal))
+    even = [base * pin.exp6(screw * (k / n)) for k in range(n)] + [goal]
+    starts = {"home": PlateArrays.from_se3(home), "screw": PlateArrays.from_se3(even)}
+    if helper_plates is not None:
+        starts = {"helper_arm": helper_plates, **starts}
+    return starts
+
+
+def _fallback_starts(am: AssemblerModel, goal: pin.SE3) -> dict[str, PlateArrays]:
+    """Screw starts with each internal plate moved by a random twist (±2 cm, ±0.1 rad; seeded)."""
+    rng = np.random.default_rng(0)
+    screw = _starts(am, goal, None)["screw"]
+    out = {}
+    for k in range(FALLBACK_STARTS):
+        plates = [screw.se3(j) for j in range(am.n + 1)]
+        for j in range(1, am.n):
+            plates[j] = plates[j] * pin.exp6(np.concatenate([rng.uniform(-0.02, 0.02, 3), rng.uniform(-0.1, 0.1, 3)]))
+        out[f"screw_perturbed_{k}"] = PlateArrays.from_se3(plates)
+    return out
+
+
+def _best_run(runs: dict[str, OptimizeResult]) -> tuple[str | None, OptimizeResult | None]:
+    """The run whose returned state is feasible with the smallest Ω, successes first."""
+    feasible = [(not r.success, r.objective_optimized, name) for name, r in runs.items() if r.optimized.feasible]
+    if not feasible:
+        return None, None
+    _, _, name = min(feasible)
+    return name, runs[name]

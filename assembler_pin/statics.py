@@ -99,6 +99,21 @@ def _plate_jacobians(am: AssemblerModel, top_points: np.ndarray) -> np.ndarray:
     return np.matmul(skew(top_points), ff[3:].transpose(1, 0, 2)[:, None]) - ff[:3].transpose(1, 0, 2)[:, None]
 
 
+def _inverse_or_nan(blocks: np.ndarray) -> np.ndarray:
+    """Inverses of (n, 6, 6) blocks; an exactly singular block's inverse is NaN (its
+    condition number then reads as infinite, and the platform as singular)."""
+    try:
+        return np.linalg.inv(blocks)
+    except np.linalg.LinAlgError:
+        out = np.full_like(blocks, np.nan)
+        for j, block in enumerate(blocks):
+            try:
+                out[j] = np.linalg.inv(block)
+            except np.linalg.LinAlgError:
+                pass
+        return out
+
+
 def closure_jacobian_blocks(am: AssemblerModel, top_points: np.ndarray) -> np.ndarray:
     """The closure Jacobian restricted to each platform's block (for inspection and tests).
 
@@ -168,7 +183,7 @@ def solve_statics(
     lines = np.matmul(local, am.top_line_map)  # (n, 6, 2, 6): rows [a, t_i × a]
     lines_t = lines[:, :, 0]  # Wᵀ
     rhs = lines[:, :, 1].sum(axis=1) + g[am.plate_rows_ff]
-    inverse_t = np.linalg.inv(lines_t)
+    inverse_t = _inverse_or_nan(lines_t)
     tau = np.matmul(rhs[:, None], inverse_t)[:, 0]
     # ‖W‖₁ ‖W⁻¹‖₁ from the transposes' row sums
     condition = np.abs(lines_t).sum(axis=2).max(axis=1) * np.abs(inverse_t).sum(axis=2).max(axis=1)

@@ -343,10 +343,19 @@ def test_random_reachable_goals_mostly_succeed(am):
     assert solved == len(goals)
 
 
+def test_goals_beyond_any_span_are_answered_before_the_arm(am):
+    # one platform spans at most |b| + max_length + |t| (both anchors on the node circle)
+    cfg = am.config
+    span = cfg.platforms * (2 * cfg.plate.node_radius + cfg.leg.max_length)
+    for x in (1.01 * span, 1e200):
+        result = initial_condition(am, pin.SE3(np.eye(3), np.array([x, 0.0, 0.0])))
+        assert not result.success and result.attempts == 0
+        assert "out of reach" in result.message and "farther than the stack can span" in result.message
+
+
 @pytest.mark.parametrize(
     "xyz, rotvec, reason",
     [
-        ((3.0, 0.0, 0.8), (0.0, 0.0, 0.0), "out of the helper arm's reach"),  # far beyond the stack
         ((0.0, 0.0, -0.5), (np.pi, 0.0, 0.0), "no valid initial condition"),  # below the base
         ((-0.1, 0.0, 0.3), (0.0, 0.0, 0.0), "no valid initial condition"),  # inside the stack's own body
     ],
