@@ -15,11 +15,15 @@ from .config import AssemblerConfig, LegConfig, PayloadConfig, PlateConfig, load
 from .constraints import GoalTolerance, Violation, evaluate_constraints
 from .exceptions import (
     AssemblerError,
+    CLIError,
     ConfigError,
     ConvergenceError,
     ModelFileError,
+    OptionsError,
     PoseError,
     SingularConfigurationError,
+    UnknownScenarioError,
+    ViewerError,
 )
 from .geometry import home_plates, leg_geometry
 from .helper_arm import (
@@ -58,6 +62,7 @@ __all__ = [
     "AssemblerConfig",
     "AssemblerError",
     "AssemblerModel",
+    "CLIError",
     "ConfigError",
     "ConvergenceError",
     "FKResult",
@@ -70,6 +75,7 @@ __all__ = [
     "ModelFileError",
     "OptimizeOptions",
     "OptimizeResult",
+    "OptionsError",
     "PayloadConfig",
     "PlateArrays",
     "PlateConfig",
@@ -80,6 +86,8 @@ __all__ = [
     "StackFKResult",
     "StackState",
     "StaticsResult",
+    "UnknownScenarioError",
+    "ViewerError",
     "Violation",
     "assembler_urdf",
     "closure_sidecar",

@@ -19,8 +19,10 @@ from .model import AssemblerModel
 from .statics import solve_statics
 
 __all__ = [
+    "LEVEL_GRID",
     "benchmark_initial_condition",
     "benchmark_optimization",
+    "benchmark_solve_grid",
     "median_time_us",
     "random_reachable_plates",
     "run_benchmarks",
@@ -168,4 +170,48 @@ def benchmark_initial_condition(am: AssemblerModel, n_random: int = 20, seed: in
         "initial_scenarios_ms": statistics.median(t_scen) * 1e3,
         "initial_random_ms": statistics.median(t_rand) * 1e3,
         "initial_success_rate": (ok_scen + ok_rand) / (len(scenario_goals) + len(random_goals)),
+    }
+
+
+#: The level-EE goal grid of :func:`benchmark_solve_grid`: x = -0.4…0.5, y = 0, 0.2,
+#: z = 0.5…1.0 m, steps of 0.1 m, EE parallel to the base.
+LEVEL_GRID = tuple(
+    (round(x, 3), round(y, 3), round(z, 3))
+    for x in np.arange(-0.4, 0.55, 0.1)
+    for y in (0.0, 0.2)
+    for z in np.arange(0.5, 1.05, 0.1)
+)
+
+
+def benchmark_solve_grid(am: AssemblerModel, goals: tuple = LEVEL_GRID) -> dict[str, Any]:
+    """Whole ``solve`` (helper arm, then the optimizer from every start) on a goal grid.
+
+    Returns:
+        ``grid_goals``, ``grid_solved``; ``grid_p50_s``, ``grid_p95_s`` over every goal and
+        ``grid_solved_p95_s`` over the solved ones [s]; ``grid_starts_won``: how often
+        each start gave the kept optimum; ``grid_unsolved``: the goals without a feasible pose.
+    """
+    import pinocchio as pin
+
+    from .solve import solve
+
+    times, solved_times, won, unsolved = [], [], {}, []
+    for xyz in goals:
+        t0 = time.perf_counter()
+        result = solve(am, pin.SE3(np.eye(3), np.array(xyz)))
+        dt = time.perf_counter() - t0
+        times.append(dt)
+        if result.success:
+            solved_times.append(dt)
+            won[result.start] = won.get(result.start, 0) + 1
+        else:
+            unsolved.append(list(xyz))
+    return {
+        "grid_goals": len(goals),
+        "grid_solved": len(solved_times),
+        "grid_p50_s": float(np.percentile(times, 50)),
+        "grid_p95_s": float(np.percentile(times, 95)),
+        "grid_solved_p95_s": float(np.percentile(solved_times, 95)) if solved_times else float("nan"),
+        "grid_starts_won": won,
+        "grid_unsolved": unsolved,
     }

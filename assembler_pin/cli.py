@@ -10,14 +10,18 @@ from __future__ import annotations
 import argparse
 import json
 import logging
+import math
+import os
+import re
 import sys
 from collections.abc import Sequence
 from pathlib import Path
+from typing import NoReturn
 
 import numpy as np
 
 from .config import AssemblerConfig, load_config
-from .exceptions import AssemblerError, PoseError
+from .exceptions import AssemblerError, CLIError
 from .labels import leg_label, platform_label
 from .model import AssemblerModel
 from .state import StackState, evaluate_state
@@ -26,8 +30,44 @@ from .urdf import export_model_files
 logger = logging.getLogger("assembler_pin")
 
 
-class CLIError(AssemblerError):
-    """A command-line input problem (reported as one line, exit status 2)."""
+class _Parser(argparse.ArgumentParser):
+    """argparse with one-line refusals (a :class:`CLIError`, not a usage dump and exit) and
+    negative numbers in scientific notation read as numbers (``--goal -1e-3 ...``)."""
+
+    def __init__(self, *args, **kwargs) -> None:
+        super().__init__(*args, **kwargs)
+        self._negative_number_matcher = re.compile(r"^-(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?$|^-(?:inf|nan)$", re.I)
+
+    def error(self, message: str) -> NoReturn:
+        raise CLIError(f"{message} (see '{self.prog} --help')")
+
+
+def _dumps(doc: object) -> str:
+    """Strict JSON: a NaN or infinite number (a singular pose's forces) is written as null."""
+
+    def clean(x: object) -> object:
+        if isinstance(x, float):
+            return x if math.isfinite(x) else None
+        if isinstance(x, dict):
+            return {k: clean(v) for k, v in x.items()}
+        if isinstance(x, (list, tuple)):
+            return [clean(v) for v in x]
+        return x
+
+    return json.dumps(clean(doc), allow_nan=False)
+
+
+def _writable_parent(path: str, what: str) -> Path:
+    """``path`` whose directory exists and is writable, else a CLIError naming it."""
+    target = Path(path)
+    parent = target.parent if target.parent != Path("") else Path(".")
+    if not parent.is_dir():
+        raise CLIError(f"{what} '{path}': directory '{parent}' does not exist")
+    if not os.access(parent, os.W_OK):
+        raise CLIError(f"{what} '{path}': directory '{parent}' is not writable")
+    if target.is_dir() and what.endswith("file"):
+        raise CLIError(f"{what} '{path}' is a directory")
+    return target
 
 
 def _config(args: argparse.Namespace) -> AssemblerConfig:
@@ -36,13 +76,17 @@ def _config(args: argparse.Namespace) -> AssemblerConfig:
 
 def _read_json(source: str) -> object:
     try:
-        text = sys.stdin.read() if source == "-" else Path(source).read_text()
+        text = sys.stdin.read() if source == "-" else Path(source).read_text(encoding="utf-8")
     except OSError as exc:
         raise CLIError(f"cannot read '{source}': {exc.strerror or exc}") from None
+    except UnicodeDecodeError:
+        raise CLIError(f"'{source}' is not UTF-8 text") from None
     try:
         return json.loads(text)
     except json.JSONDecodeError as exc:
         raise CLIError(f"'{source}' is not valid JSON: {exc}") from None
+    except RecursionError:
+        raise CLIError(f"'{source}' is nested too deeply to be a plate file") from None
 
 
 def format_state_table(state: StackState, title: str = "") -> str:
@@ -77,6 +121,8 @@ def format_state_table(state: StackState, title: str = "") -> str:
 
 def cmd_export(args: argparse.Namespace) -> int:
     cfg = _config(args)
+    if Path(args.out).exists() and not Path(args.out).is_dir():
+        raise CLIError(f"--out '{args.out}' exists and is not a directory")
     paths = export_model_files(cfg, args.out)
     for role, path in paths.items():
         print(f"wrote {role}: {path}")
@@ -98,7 +144,7 @@ def cmd_statics(args: argparse.Namespace) -> int:
             raise CLIError('"plates" must be a list of n+1 4x4 matrices, plate 0 first')
     state = evaluate_state(am, plates)
     if args.json:
-        print(json.dumps(state.to_dict()))
+        print(_dumps(state.to_dict()))
     else:
         print(
             format_state_table(
@@ -153,7 +199,7 @@ def cmd_solve(args: argparse.Namespace) -> int:
     am = AssemblerModel.from_config(_config(args))
     result = solve(am, goal, optimize=not args.no_optimize, options=options, helper_options=helper)
     if args.json:
-        print(json.dumps(result.to_dict()))
+        print(_dumps(result.to_dict()))
         return 0
     taa = se3_to_taa(result.goal)
     print(
@@ -190,6 +236,8 @@ def cmd_reproduce(args: argparse.Namespace) -> int:
     unknown = [n for n in names if n not in SCENARIOS]
     if unknown:
         raise CLIError(f"unknown scenario {', '.join(unknown)}; valid: {', '.join(SCENARIOS)}")
+    if args.out:
+        _writable_parent(args.out, "--out directory")
     am = AssemblerModel.from_config(_config(args))
     outcomes = run_scenarios(am, names, _optimize_options(args))
     print(f"The paper's scenarios on {am.n} platforms, payload {am.config.payload.mass:g} kg "
@@ -207,14 +255,20 @@ def cmd_reproduce(args: argparse.Namespace) -> int:
 def cmd_bench(args: argparse.Namespace) -> int:
     from .bench import run_benchmarks
 
+    if args.repeat < 1:
+        raise CLIError(f"--repeat must be an integer >= 1, got {args.repeat}")
     am = AssemblerModel.from_config(_config(args))
     results = run_benchmarks(am, repeat=args.repeat, optimize=not args.no_optimize, quick=args.quick)
+    if args.grid:
+        from .bench import benchmark_solve_grid
+
+        results.update(benchmark_solve_grid(am))
     if args.json:
-        print(json.dumps(results))
+        print(_dumps(results))
         return 0
     scenarios = results.pop("optimize_scenarios", None)
     for key, value in results.items():
-        print(f"{key:>30}: {value:10.3f}")
+        print(f"{key:>30}: {value:10.3f}" if isinstance(value, float | int) else f"{key:>30}: {value}")
     if scenarios:
         print("\noptimization per scenario (same run): time [s] and objective Ω")
         print(
@@ -233,6 +287,8 @@ def cmd_view(args: argparse.Namespace) -> int:
 
     from .viewer import StackViewer, interrupt_on_signals
 
+    if args.html:
+        _writable_parent(args.html, "--html file")
     am = AssemblerModel.from_config(_config(args))
     restore_signals = interrupt_on_signals()  # kill / a closed terminal stop it as Ctrl-C does
     viewer = None
@@ -318,7 +374,7 @@ def _add_optimize_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def build_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(
+    parser = _Parser(
         prog="assembler-pin",
         description="Serialized Stewart platforms (the Assembler) on Pinocchio: model, statics, solve.",
     )
@@ -363,6 +419,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--repeat", type=int, default=300, help="calls per figure (default 300)")
     p.add_argument("--no-optimize", action="store_true", help="skip the optimization comparison (slow: ~10 s)")
     p.add_argument("--quick", action="store_true", help="minimal goal sets: a smoke test, not figures")
+    p.add_argument("--grid", action="store_true", help="also solve the 120-goal level-EE grid (~2 min)")
     p.set_defaults(func=cmd_bench)
 
     p = add("view", "show a pose in Meshcat (live server until Ctrl-C, or a standalone HTML page)")
@@ -388,16 +445,29 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def main(argv: Sequence[str] | None = None) -> int:
+    """Run the command; input problems end it with exit status 2 and one line on stderr."""
     parser = build_parser()
-    args = parser.parse_args(argv)
+    try:
+        args = parser.parse_args(argv)
+    except CLIError as exc:
+        print(f"assembler-pin: error: {_one_line(exc)}", file=sys.stderr)
+        return 2
     logging.basicConfig(
         level=logging.INFO if args.verbose else logging.WARNING, format="%(levelname)s %(name)s: %(message)s"
     )
     try:
         return int(args.func(args))
-    except (AssemblerError, PoseError) as exc:
-        print(f"assembler-pin {args.command}: error: {exc}", file=sys.stderr)
+    except AssemblerError as exc:
+        print(f"assembler-pin {args.command}: error: {_one_line(exc)}", file=sys.stderr)
         return 2
+    except OSError as exc:  # an output path that cannot be written
+        where = f" '{exc.filename}'" if exc.filename else ""
+        print(f"assembler-pin {args.command}: error: cannot write{where}: {exc.strerror or exc}", file=sys.stderr)
+        return 2
+
+
+def _one_line(exc: BaseException) -> str:
+    return " ".join(str(exc).split())
 
 
 if __name__ == "__main__":

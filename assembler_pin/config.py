@@ -29,6 +29,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import re
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -37,6 +38,7 @@ from typing import Any
 import yaml
 
 from .exceptions import ConfigError
+from .validation import is_number
 
 __all__ = [
     "AssemblerConfig",
@@ -159,8 +161,20 @@ _SECTIONS: dict[str, type] = {"plate": PlateConfig, "leg": LegConfig, "payload":
 _TOP_SCALARS = ("platforms", "gravity")
 
 
+#: Physically meaningful ranges beyond the per-key rules: every value is at most this
+#: large, so no product of them (forces ~ masses × gravity × lengths) overflows.
+LIMITS = {
+    "gravity": 1e3,  # [m/s^2], 100 g
+    "mass": 1e5,  # [kg], any plate, motor, shaft or payload mass
+    "length": 1e3,  # [m], radii, leg lengths, centres of mass, payload offset (absolute)
+    "force": 1e9,  # [N], force limits
+}
+_UNIT_OF = {"gravity": "gravity", "mass": "mass", "motor_mass": "mass", "shaft_mass": "mass",
+            "max_tension": "force", "max_compression": "force"}  # fmt: skip
+
+
 def _is_number(value: Any) -> bool:
-    return isinstance(value, (int, float)) and not isinstance(value, bool)
+    return is_number(value)
 
 
 def _check(condition: bool, key: str, value: Any, allowed: str) -> None:
@@ -183,6 +197,10 @@ def _validate(cfg: AssemblerConfig) -> None:
     numbers |= {f"payload.{f.name}": getattr(pl, f.name) for f in dataclasses.fields(pl)}
     for key, value in numbers.items():
         _check(_is_number(value) and math.isfinite(value), key, value, "must be a finite number")
+        name = key.rsplit(".", 1)[-1]
+        kind = _UNIT_OF.get(name, None if name.endswith("_deg") else "length")
+        if kind is not None:
+            _check(abs(value) <= LIMITS[kind], key, value, f"must be at most {LIMITS[kind]:g} in magnitude")
     _check(cfg.gravity >= 0, "gravity", cfg.gravity, "must be >= 0 [m/s^2]")
     _check(p.node_radius > 0, "plate.node_radius", p.node_radius, "must be > 0 [m]")
     _check(
@@ -241,6 +259,28 @@ def _section_from_mapping(name: str, cls: type, data: Any) -> Any:
     return cls(**{k: float(v) for k, v in data.items()})
 
 
+class _StrictLoader(yaml.SafeLoader):
+    """YAML with two fixes for configuration files: a key given twice is an error (not the
+    last one silently winning), and ``2e-1``/``1e5`` are numbers (YAML 1.1 reads a float
+    without a dot as a string)."""
+
+    def construct_mapping(self, node: yaml.MappingNode, deep: bool = False) -> dict:
+        seen = set()
+        for key_node, _ in node.value:
+            key = self.construct_object(key_node, deep=deep)
+            if key in seen:
+                raise ConfigError(f"config key '{key}' is given twice (line {key_node.start_mark.line + 1})")
+            seen.add(key)
+        return super().construct_mapping(node, deep=deep)
+
+
+_StrictLoader.add_implicit_resolver(
+    "tag:yaml.org,2002:float",
+    re.compile(r"^[-+]?(?:[0-9][0-9_]*)(?:\.[0-9_]*)?[eE][-+]?[0-9]+$"),
+    list("-+0123456789"),
+)
+
+
 def config_from_dict(data: Mapping[str, Any] | None) -> AssemblerConfig:
     """Build a validated configuration from a (possibly partial) mapping.
 
@@ -258,8 +298,8 @@ def config_from_dict(data: Mapping[str, Any] | None) -> AssemblerConfig:
     kwargs: dict[str, Any] = {}
     if "platforms" in data:
         value = data["platforms"]
-        if isinstance(value, float) and value.is_integer():
-            value = int(value)
+        if is_number(value) and float(value).is_integer() and abs(value) < 2**31:
+            value = int(value)  # 3.0 and numpy integers are the integer 3
         _check(
             isinstance(value, int) and not isinstance(value, bool),
             "platforms",
@@ -294,13 +334,18 @@ def load_config(source: str | Path | Mapping[str, Any] | AssemblerConfig | None 
         return config_from_dict(source)
     path = Path(source)
     try:
-        text = path.read_text()
+        text = path.read_text(encoding="utf-8")
     except OSError as exc:
         raise ConfigError(f"cannot read config file '{path}': {exc.strerror or exc}") from None
+    except UnicodeDecodeError:
+        raise ConfigError(f"config file '{path}' is not UTF-8 text") from None
     try:
-        data = yaml.safe_load(text)
+        data = yaml.load(text, Loader=_StrictLoader)
     except yaml.YAMLError as exc:
-        raise ConfigError(f"config file '{path}' is not valid YAML: {exc}") from None
+        first = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
+        raise ConfigError(f"config file '{path}' is not valid YAML: {first}") from None
+    except RecursionError:
+        raise ConfigError(f"config file '{path}' is nested too deeply") from None
     try:
         return config_from_dict(data)
     except ConfigError as exc:

@@ -20,6 +20,7 @@ import numpy as np
 import pinocchio as pin
 
 from .config import AssemblerConfig
+from .exceptions import PoseError
 from .kinematics import LegState, PlateArrays
 from .labels import leg_label, platform_label
 from .statics import CONDITION_LIMIT, StaticsResult
@@ -126,7 +127,7 @@ def evaluate_constraints(
             out.append(Violation("singular", int(j), None, float(statics.condition[j]), CONDITION_LIMIT))
     if goal is not None:
         if plates is None:
-            raise ValueError("evaluate_constraints: a goal needs the plate poses")
+            raise PoseError("evaluate_constraints: a goal needs the plate poses")
         ee = plates.se3(len(plates) - 1)
         dist = math.hypot(*(ee.translation - goal.translation))  # no overflow warning for huge goals
         angle = float(np.linalg.norm(pin.log3(goal.rotation.T @ ee.rotation)))

@@ -53,3 +53,18 @@ class SingularConfigurationError(AssemblerError, RuntimeError):
 
 class ViewerError(AssemblerError, RuntimeError):
     """The viewer's meshcat server cannot start (unusable host or port, or it exited)."""
+
+
+class OptionsError(AssemblerError, ValueError):
+    """An option of a solver (optimizer, helper arm, planner) is out of its allowed range."""
+
+
+class UnknownScenarioError(AssemblerError, KeyError):
+    """No scenario has the given name."""
+
+    def __str__(self) -> str:  # KeyError would quote the message
+        return str(self.args[0]) if self.args else ""
+
+
+class CLIError(AssemblerError):
+    """A command-line input problem (reported as one line, exit status 2)."""

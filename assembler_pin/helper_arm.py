@@ -83,6 +83,7 @@ from __future__ import annotations
 import functools
 import logging
 import math
+import numbers
 import time
 import xml.etree.ElementTree as ET
 from collections.abc import Iterator
@@ -91,14 +92,15 @@ from dataclasses import dataclass, field
 import numpy as np
 import numpy.typing as npt
 import pinocchio as pin
-from scipy.optimize import least_squares
 
 from .config import AssemblerConfig
 from .constraints import GoalTolerance, evaluate_constraints
+from .exceptions import OptionsError
 from .geometry import LegGeometry, leg_geometry, reach_bound
 from .kinematics import PlateArrays, leg_state, to_se3
 from .model import AssemblerModel
 from .state import StackState, evaluate_state
+from .validation import is_number
 
 __all__ = [
     "HELPER_ARM_URDF_FILENAME",
@@ -111,6 +113,8 @@ __all__ = [
     "height_range",
     "helper_arm_urdf",
     "initial_condition",
+    "perturbed_plates",
+    "repair_stack",
 ]
 
 logger = logging.getLogger(__name__)
@@ -281,7 +285,7 @@ def helper_arm_urdf(cfg: AssemblerConfig, link_length: float | None = None) -> s
     """
     d = cfg.home_height if link_length is None else float(link_length)
     if not (math.isfinite(d) and d > 0.0):
-        raise ValueError(f"helper arm link length must be a positive number of metres, got {link_length!r}")
+        raise OptionsError(f"helper arm link length must be a positive number of metres, got {link_length!r}")
     tilt, twist = cluster_limits(cfg, d)
     n = cfg.platforms
     robot = ET.Element("robot", name="helper_arm")
@@ -559,7 +563,7 @@ class HelperArm:
         if free_d:
             d_lo, d_hi = float(min(link_range)), float(max(link_range))
             if not d_lo <= d_arm <= d_hi:
-                raise ValueError(f"link_range {link_range!r} must contain the arm's link length {d_arm}")
+                raise OptionsError(f"link_range {link_range!r} must contain the arm's link length {d_arm}")
             lo, hi = np.append(lo, d_lo), np.append(hi, d_hi)
         evaluations = 0
         statuses: list[int] = []
@@ -600,6 +604,8 @@ class HelperArm:
 
             # the pulled solve only has to land near the spread-out solution; the exact one polishes
             tol = 1e-6 if loose else 1e-15
+            from scipy.optimize import least_squares  # on first use: fast start-up
+
             res = least_squares(
                 fun, np.clip(start, lo, hi), jac=jac, bounds=(lo, hi), method="trf",
                 ftol=tol, xtol=tol, gtol=tol, max_nfev=60 if loose else 100,
@@ -674,7 +680,7 @@ def _leg_hinge(am: AssemblerModel, pa: PlateArrays, margin: float) -> np.ndarray
     )
 
 
-def _repair(
+def repair_stack(
     am: AssemblerModel, start: list[pin.SE3], margin: float = 1e-6, max_nfev: int = 100
 ) -> tuple[PlateArrays, float]:
     """Move plates 1..n-1 from ``start`` until every leg of the stack is valid.
@@ -697,6 +703,8 @@ def _repair(
             m = start[k] * pin.exp6(x[6 * (k - 1) : 6 * k])
             rot[k], pos[k] = m.rotation, m.translation
         return PlateArrays(rot, pos)
+
+    from scipy.optimize import least_squares  # on first use: fast start-up
 
     res = least_squares(
         lambda x: _leg_hinge(am, plates(x), margin), np.zeros(6 * (n - 1)), method="trf",
@@ -739,17 +747,21 @@ class HelperArmOptions:
     restarts: int = 0
     free_link_length: bool = True
     repair_starts: int = 2
-    perturbed_starts: int = 4
+    perturbed_starts: int = 8
 
     def __post_init__(self) -> None:
-        if not (math.isfinite(self.d_step) and self.d_step > 0.0):
-            raise ValueError(f"d_step must be a positive number of metres, got {self.d_step!r}")
-        if int(self.max_attempts) < 1:
-            raise ValueError(f"max_attempts must be >= 1, got {self.max_attempts!r}")
-        if int(self.perturbed_starts) < 0:
-            raise ValueError(f"perturbed_starts must be >= 0, got {self.perturbed_starts!r}")
-        if int(self.repair_starts) < 0:
-            raise ValueError(f"repair_starts must be >= 0, got {self.repair_starts!r}")
+        for name in ("d_step", "regularization", "constraint_weight", "arm_tolerance"):
+            value = getattr(self, name)
+            if not (is_number(value) and math.isfinite(value) and value >= 0):
+                raise OptionsError(f"{name} must be a finite number >= 0, got {value!r}")
+        if not self.d_step > 0:
+            raise OptionsError(f"d_step must be a positive number of metres, got {self.d_step!r}")
+        for name, low in (("max_attempts", 1), ("restarts", 0), ("repair_starts", 0), ("perturbed_starts", 0)):
+            value = getattr(self, name)
+            if not (isinstance(value, numbers.Integral) and not isinstance(value, bool) and value >= low):
+                raise OptionsError(f"{name} must be an integer >= {low}, got {value!r}")
+        if not isinstance(self.tolerance, GoalTolerance):
+            raise OptionsError(f"tolerance must be a GoalTolerance, got {self.tolerance!r}")
 
 
 @dataclass
@@ -794,7 +806,7 @@ class InitialConditionResult:
         return self.state.plates if self.success else None
 
 
-def _perturbed(plates: list[pin.SE3], count: int, seed: int = 0) -> list[list[pin.SE3]]:
+def perturbed_plates(plates: list[pin.SE3], count: int, seed: int = 0) -> list[list[pin.SE3]]:
     """``count`` copies of ``plates`` with plates 1..n-1 moved by random twists
     (±5 cm, ±0.3 rad per axis; seeded, so results are reproducible)."""
     rng = np.random.default_rng(seed)
@@ -975,9 +987,9 @@ def initial_condition(
         repairs.append((math.inf, even, None, None, None))
         # the even pose is often a saddle of the leg limits (every platform alike): also
         # repair it with its internal plates moved by seeded random twists
-        repairs += [(math.inf, plates, None, None, None) for plates in _perturbed(even, opts.perturbed_starts)]
+        repairs += [(math.inf, plates, None, None, None) for plates in perturbed_plates(even, opts.perturbed_starts)]
     for _, plates, q, d, points in repairs:
-        pa, viol = _repair(am, plates)
+        pa, viol = repair_stack(am, plates)
         if viol > 0.0:
             logger.debug("repair from the pose at d=%s: %.3g left", d, viol)
             continue

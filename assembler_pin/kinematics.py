@@ -18,11 +18,11 @@ from dataclasses import dataclass, field
 import numpy as np
 import numpy.typing as npt
 import pinocchio as pin
-from scipy.linalg.lapack import dgesv as _dgesv
 
 from .exceptions import ConvergenceError, PoseError
 from .geometry import LEGS_PER_PLATFORM
 from .model import AssemblerModel
+from .validation import as_float_array
 
 __all__ = [
     "FKResult",
@@ -43,6 +43,10 @@ __all__ = [
 ]
 
 ORTHONORMAL_TOL = 1e-6
+
+#: Largest rotation-vector component accepted in a TAA pose [rad]: beyond it exp3 loses
+#: every digit of the angle (a rotation never needs more than π).
+MAX_ROTATION_VECTOR = 1e6
 _ONES3 = np.ones(3)
 
 
@@ -85,15 +89,7 @@ def to_se3(pose: pin.SE3 | npt.ArrayLike, what: str = "pose") -> pin.SE3:
     Raises:
         PoseError: not 4×4, not finite, last row not [0 0 0 1], or not a rotation.
     """
-    if isinstance(pose, pin.SE3):
-        matrix = pose.homogeneous
-    else:
-        try:
-            matrix = np.asarray(pose, dtype=float)
-        except (TypeError, ValueError):
-            raise PoseError(f"{what} must be a 4x4 homogeneous matrix of numbers") from None
-    if matrix.shape != (4, 4):
-        raise PoseError(f"{what} must be a 4x4 homogeneous matrix, got shape {matrix.shape}")
+    matrix = pose.homogeneous if isinstance(pose, pin.SE3) else as_float_array(pose, f"{what} (a 4x4 matrix)", (4, 4))
     if not np.all(np.isfinite(matrix)):
         raise PoseError(f"{what} contains NaN or infinite values")
     if not np.allclose(matrix[3], [0.0, 0.0, 0.0, 1.0], atol=1e-9):
@@ -121,15 +117,16 @@ def taa_to_se3(taa: npt.ArrayLike, degrees: bool = False, what: str = "goal") ->
     Raises:
         PoseError: not six finite numbers.
     """
-    try:
-        arr = np.asarray(taa, dtype=float)
-    except (TypeError, ValueError):
-        raise PoseError(f"{what} must be six numbers X Y Z RX RY RZ") from None
-    if arr.shape != (6,):
-        raise PoseError(f"{what} must be six numbers X Y Z RX RY RZ, got shape {arr.shape}")
+    arr = as_float_array(taa, f"{what} (six numbers X Y Z RX RY RZ)", (6,))
     if not np.all(np.isfinite(arr)):
         raise PoseError(f"{what} contains NaN or infinite values: {arr.tolist()}")
     rotvec = np.deg2rad(arr[3:]) if degrees else arr[3:]
+    angle = float(np.abs(rotvec).max())
+    if angle > MAX_ROTATION_VECTOR:
+        raise PoseError(
+            f"{what}: rotation vector component {angle:.3g} rad is out of range "
+            f"(at most {MAX_ROTATION_VECTOR:g} rad; a rotation needs no more than π)"
+        )
     return pin.SE3(pin.exp3(rotvec), arr[:3].copy())
 
 
@@ -302,12 +299,7 @@ def sp_inverse_jacobian(am: AssemblerModel, j: int, top_in_bottom: pin.SE3) -> n
 
 
 def _check_lengths(lengths: npt.ArrayLike, shape: tuple[int, ...]) -> np.ndarray:
-    try:
-        arr = np.asarray(lengths, dtype=float)
-    except (TypeError, ValueError):
-        raise PoseError(f"leg lengths must be numbers of shape {shape}") from None
-    if arr.shape != shape:
-        raise PoseError(f"leg lengths must have shape {shape}, got {arr.shape}")
+    arr = as_float_array(lengths, "leg lengths", shape)
     if not all(0.0 < x < math.inf for x in arr.ravel().tolist()):  # NaN fails the test
         raise PoseError("leg lengths must be finite and > 0 [m]")
     return arr
@@ -360,6 +352,8 @@ def _platform_fk(
         pose = pin.exp6(home_step) * am.plate_joint_placement[j + 1]
     else:
         pose = pin.SE3(guess)
+    from scipy.linalg.lapack import dgesv  # imported on first use: keeps `import assembler_pin` fast
+
     target_sq = target * target
     # |L - L*| <= |L² - L*²| / (L + L*) <= |f| / L*: converged when max |f| / L* <= tol
     inv_target = 1.0 / target
@@ -375,7 +369,7 @@ def _platform_fk(
         if it == max_iterations:
             break
         # ξ solves 2 [v_i, b_i × v_i] ξ = f
-        _, _, step, info = _dgesv(jacobian_map.dot(vec.ravel()).reshape(6, 6), err)
+        _, _, step, info = dgesv(jacobian_map.dot(vec.ravel()).reshape(6, 6), err)
         if info != 0 or not math.isfinite(step.dot(step)):  # a step beyond 1e154 counts as divergence
             failure = f"platform {j}: singular Jacobian or divergence in FK"
             break

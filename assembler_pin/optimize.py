@@ -32,20 +32,22 @@ nothing better was found, with the reason.
 from __future__ import annotations
 
 import logging
+import math
+import numbers
 import time
 from dataclasses import dataclass, field
 
 import numpy as np
 import pinocchio as pin
-from scipy.optimize import minimize
 
 from .constraints import GoalTolerance
-from .exceptions import SingularConfigurationError
+from .exceptions import OptionsError, SingularConfigurationError
 from .gradients import PoseDerivatives, pose_derivatives
 from .kinematics import LegState, PlateArrays, leg_state, plate_arrays
 from .model import AssemblerModel
 from .state import StackState, evaluate_state
 from .statics import solve_statics
+from .validation import is_number
 
 __all__ = ["METHODS", "OptimizeOptions", "OptimizeResult", "objective_value", "optimize_internal_poses"]
 
@@ -89,11 +91,23 @@ class OptimizeOptions:
 
     def __post_init__(self) -> None:
         if self.method not in METHODS:
-            raise ValueError(f"method must be one of {', '.join(METHODS)}, got {self.method!r}")
-        if self.w1 < 0 or self.w2 < 0 or self.w1 + self.w2 == 0:
-            raise ValueError("weights w1, w2 must be >= 0 and not both 0")
-        if self.max_iterations < 1:
-            raise ValueError("max_iterations must be >= 1")
+            raise OptionsError(f"method must be one of {', '.join(METHODS)}, got {self.method!r}")
+        for name, positive in (("w1", False), ("w2", False), ("ftol", True), ("rise_margin", False)):
+            value = getattr(self, name)
+            if not (is_number(value) and math.isfinite(value) and (value > 0 if positive else value >= 0)):
+                raise OptionsError(f"{name} must be a finite number {'>' if positive else '>='} 0, got {value!r}")
+        if self.w1 + self.w2 == 0:
+            raise OptionsError("weights w1, w2 must not both be 0")
+        if not (isinstance(self.max_iterations, numbers.Integral) and self.max_iterations >= 1):
+            raise OptionsError(f"max_iterations must be an integer >= 1, got {self.max_iterations!r}")
+        for name in ("ee_tolerance", "goal_tolerance"):
+            tol = getattr(self, name)
+            if tol is None and name == "ee_tolerance":
+                continue
+            if not isinstance(tol, GoalTolerance) or not all(
+                is_number(v) and 0 < v < math.inf for v in (tol.position, tol.rotation)
+            ):
+                raise OptionsError(f"{name} must be a GoalTolerance of two finite numbers > 0 (m, rad), got {tol!r}")
 
 
 @dataclass
@@ -450,6 +464,8 @@ def _run_solver(
         x0 = problem.taa_start()
         fun, jac, cons = problem.paper_fun, None, {"fun": problem.paper_cons}
         to_plates = problem.plates_taa
+    from scipy.optimize import minimize  # on first use: fast start-up
+
     try:
         res = minimize(fun, x0, jac=jac, method="SLSQP", constraints=[{"type": "ineq", **cons}],
                        options={"maxiter": opts.max_iterations, "ftol": opts.ftol})  # fmt: skip

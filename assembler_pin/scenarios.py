@@ -22,16 +22,9 @@ from dataclasses import dataclass
 import numpy as np
 import pinocchio as pin
 
-from .exceptions import AssemblerError
+from .exceptions import UnknownScenarioError
 
 __all__ = ["SCENARIOS", "Scenario", "UnknownScenarioError", "scenario"]
-
-
-class UnknownScenarioError(AssemblerError, KeyError):
-    """No scenario of that name (the message lists the valid names)."""
-
-    def __str__(self) -> str:  # KeyError would quote the message
-        return str(self.args[0]) if self.args else ""
 
 
 @dataclass(frozen=True)

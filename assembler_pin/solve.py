@@ -9,6 +9,7 @@ reason), not an exception.
 from __future__ import annotations
 
 import time
+from collections.abc import Iterator
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
@@ -30,8 +31,9 @@ __all__ = ["STARTS", "SolveResult", "solve"]
 #: relative transform). Each converges in a few tens of ms; the best feasible optimum wins.
 STARTS = ("helper_arm", "home", "screw")
 
-#: Extra starts tried only when every start in :data:`STARTS` failed: the screw pose with
-#: its internal plates perturbed (seeded, so the answer is reproducible).
+#: Extra starts tried only when every start in :data:`STARTS` failed: the helper arm's pose
+#: (or the screw pose) with its internal plates perturbed and repaired onto the leg limits
+#: (seeded, so the answer is reproducible).
 FALLBACK_STARTS = 4
 
 
@@ -49,7 +51,7 @@ class SolveResult:
             ``optimize=False`` or when no start gave a feasible state).
         timing_s: wall times ``initial`` and ``optimize`` (all starts) [s].
         start: name of the start the returned optimum came from (see :data:`STARTS`;
-            ``screw_perturbed_k`` for a fallback start), None without one.
+            ``perturbed_k`` for a fallback start), None without one.
         runs: every start tried → its optimization result.
     """
 
@@ -150,12 +152,11 @@ def solve(
         return SolveResult(goal, False, f"no valid initial condition: {init.message}", init, None, timing)
     opts = options or OptimizeOptions()
     t1 = time.perf_counter()
-    runs = {
-        name: optimize_internal_poses(am, start, goal, opts)
-        for name, start in _starts(am, goal, init.plates_if_valid()).items()
-    }
+    starts = _starts(am, goal, init.plates_if_valid())
+    runs = {name: optimize_internal_poses(am, start, goal, opts) for name, start in starts.items()}
     if not any(r.success for r in runs.values()):
-        for name, start in _fallback_starts(am, goal).items():
+        around = init.state.plates if init.success else starts["screw"]
+        for name, start in _fallback_starts(am, goal, around):
             runs[name] = optimize_internal_poses(am, start, goal, opts)
             if runs[name].success:
                 break
@@ -185,17 +186,21 @@ def _starts(am: AssemblerModel, goal: pin.SE3, helper_plates: PlateArrays | None
     return starts
 
 
-def _fallback_starts(am: AssemblerModel, goal: pin.SE3) -> dict[str, PlateArrays]:
-    """Screw starts with each internal plate moved by a random twist (±2 cm, ±0.1 rad; seeded)."""
-    rng = np.random.default_rng(0)
-    screw = _starts(am, goal, None)["screw"]
-    out = {}
-    for k in range(FALLBACK_STARTS):
-        plates = [screw.se3(j) for j in range(am.n + 1)]
-        for j in range(1, am.n):
-            plates[j] = plates[j] * pin.exp6(np.concatenate([rng.uniform(-0.02, 0.02, 3), rng.uniform(-0.1, 0.1, 3)]))
-        out[f"screw_perturbed_{k}"] = PlateArrays.from_se3(plates)
-    return out
+def _fallback_starts(am: AssemblerModel, goal: pin.SE3, around: PlateArrays) -> Iterator[tuple[str, PlateArrays]]:
+    """Valid starts near ``around`` (the helper arm's pose, else the screw pose): its internal
+    plates moved by seeded random twists, then repaired onto the leg limits; the copies that
+    cannot be repaired are skipped."""
+    from .helper_arm import perturbed_plates, repair_stack
+
+    for k, plates in enumerate(perturbed_plates(around.as_se3(), FALLBACK_STARTS, seed=_seed_of(around))):
+        repaired, violation = repair_stack(am, plates)
+        if violation <= 0.0:
+            yield f"perturbed_{k}", repaired
+
+
+def _seed_of(plates: PlateArrays) -> int:
+    """A seed that depends on the plates only (the same goal gives the same fallback)."""
+    return int(np.abs(plates.p).sum() * 1e6) % (2**31)
 
 
 def _best_run(runs: dict[str, OptimizeResult]) -> tuple[str | None, OptimizeResult | None]:

@@ -416,7 +416,7 @@ def test_cli_solve_unreachable_and_errors(capsys):
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "NaN" in err[0]
     assert main(["solve", "--goal", "0", "0", "0.9", "0", "0", "0", "--w1", "-1"]) == 2
-    assert "weights" in capsys.readouterr().err
+    assert "w1 must be a finite number >= 0" in capsys.readouterr().err
     assert main(["solve", "--no-optimize"]) == 2
     assert main(["solve", "--goal", "0", "0", "0.9", "0", "0", "0", "--no-optimize", "--d-step", "-1"]) == 2
 
