@@ -362,15 +362,32 @@ def _add_goal_arguments(group: argparse._MutuallyExclusiveGroup, note: str = "")
 
 
 def _add_optimize_arguments(p: argparse.ArgumentParser) -> None:
-    p.add_argument("--method", choices=["slsqp", "paper"], default="slsqp",
-                   help="slsqp: smooth epigraph form, analytic gradients (default); paper: the paper's "
-                        "non-smooth objective with finite differences")  # fmt: skip
-    p.add_argument("--w1", type=float, default=1.0, help="weight of max|F| (default 1)")
-    p.add_argument("--w2", type=float, default=1.0, help="weight of the plate deviation term (default 1)")
+    """The optimizer's options; defaults and choices come from :class:`OptimizeOptions`."""
+    from .optimize import METHODS, OptimizeOptions
+
+    d = OptimizeOptions()
+    p.add_argument("--method", choices=METHODS, default=d.method,
+                   help=f"slsqp: smooth epigraph form, analytic gradients; paper: the paper's non-smooth objective "
+                        f"with finite differences (default {d.method})")  # fmt: skip
+    p.add_argument("--w1", type=float, default=d.w1, help=f"weight of max|F| [1/N] (default {d.w1:g})")
+    p.add_argument("--w2", type=float, default=d.w2,
+                   help=f"weight of the plate deviation term [1/rad] (default {d.w2:g})")  # fmt: skip
     p.add_argument("--ee-tolerance", type=float, nargs=2, metavar=("POSITION", "ROTATION"),
                    help="let the EE move this far from the goal [m, rad] (default: fixed at the goal)")  # fmt: skip
-    p.add_argument("--max-iterations", type=int, default=200, help="solver iteration limit (default 200)")
-    p.add_argument("--ftol", type=float, default=1e-7, help="solver tolerance on the objective (default 1e-7)")
+    p.add_argument("--max-iterations", type=int, default=d.max_iterations,
+                   help=f"solver iteration limit (default {d.max_iterations})")  # fmt: skip
+    p.add_argument("--ftol", type=float, default=d.ftol, help=f"solver tolerance on the objective (default {d.ftol:g})")
+
+
+def _add_helper_arm_arguments(p: argparse.ArgumentParser) -> None:
+    """The helper arm's options; defaults come from :class:`HelperArmOptions`."""
+    from .helper_arm import HelperArmOptions
+
+    d = HelperArmOptions()
+    p.add_argument("--d-step", type=float, default=d.d_step, metavar="M",
+                   help=f"helper-arm link-length scan step [m] (default {d.d_step:g})")  # fmt: skip
+    p.add_argument("--max-attempts", type=int, default=d.max_attempts, metavar="N",
+                   help=f"helper-arm recursion limit: link lengths tried (default {d.max_attempts})")  # fmt: skip
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -400,10 +417,7 @@ def build_parser() -> argparse.ArgumentParser:
     p = add("solve", "a valid pose of the whole stack for an end-effector goal")
     _add_goal_arguments(p.add_mutually_exclusive_group())
     p.add_argument("--no-optimize", action="store_true", help="only the helper-arm initial condition")
-    p.add_argument("--d-step", type=float, default=0.01, metavar="M",
-                   help="helper-arm link-length scan step [m] (default 0.01)")  # fmt: skip
-    p.add_argument("--max-attempts", type=int, default=15, metavar="N",
-                   help="helper-arm recursion limit: link lengths tried (default 15)")  # fmt: skip
+    _add_helper_arm_arguments(p)
     _add_optimize_arguments(p)
     p.add_argument("--json", action="store_true", help="print one JSON object")
     p.set_defaults(func=cmd_solve)

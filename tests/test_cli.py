@@ -124,3 +124,15 @@ def test_bench_json_keys():
     scn = doc["optimize_scenarios"]["orientation_transition"]
     assert scn["speedup"] == pytest.approx(scn["paper_s"] / scn["slsqp_s"])
     assert scn["slsqp_objective"] <= scn["initial_objective"]
+
+
+def test_cli_defaults_come_from_the_options_dataclasses():
+    from assembler_pin import HelperArmOptions, OptimizeOptions
+    from assembler_pin.cli import build_parser
+
+    args = build_parser().parse_args(["solve", "--goal", "0", "0", "0.9", "0", "0", "0"])
+    d, h = OptimizeOptions(), HelperArmOptions()
+    assert (args.method, args.w1, args.w2, args.max_iterations, args.ftol) == (
+        d.method, d.w1, d.w2, d.max_iterations, d.ftol,
+    )  # fmt: skip
+    assert (args.d_step, args.max_attempts) == (h.d_step, h.max_attempts)

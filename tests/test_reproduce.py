@@ -1,0 +1,42 @@
+"""`reproduce`: the scenario table and its reference columns (random valid poses, multistart)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from assembler_pin import leg_state, solve_statics, stack_forward_kinematics
+from assembler_pin.reproduce import random_valid_poses, run_scenarios, summary_table
+
+
+@pytest.fixture(scope="module")
+def outcome(am):
+    return run_scenarios(am, ["orientation_transition"])[0]
+
+
+def test_random_valid_poses_are_valid_independently(am, outcome):
+    goal = outcome.scenario.goal
+    poses = random_valid_poses(am, goal, outcome.initial, 4)
+    assert poses
+    leg = am.config.leg
+    for state in poses:
+        legs = leg_state(am, state.plates)
+        forces = solve_statics(am, state.plates).forces
+        assert leg.min_length <= legs.lengths.min() and legs.lengths.max() <= leg.max_length
+        assert legs.deflection.max() <= np.deg2rad(leg.max_deflection_deg) and legs.rise.min() > 0
+        assert np.abs(forces).max() <= leg.max_tension
+        fk = stack_forward_kinematics(am, legs.lengths).raise_if_failed()
+        np.testing.assert_allclose(fk.as_matrices()[-1], goal.homogeneous, atol=1e-9)
+    # they are different poses, not one pose repeated
+    assert len({round(float(s.max_abs_force), 6) for s in poses}) == len(poses)
+
+
+def test_reference_columns(outcome):
+    ref, ours = outcome.reference, outcome.optimized.max_abs_force
+    assert ref is not None and ref.multistart_best <= ours + 1e-9
+    assert ref.worst >= ref.median
+    # the optimum is no worse than a typical valid pose, and the table shows both columns
+    assert ours <= ref.median
+    table = summary_table([outcome])
+    assert "vs median / worst random valid pose" in table and "gap to multistart" in table
+    assert f"{100 * (1 - ours / ref.median):.0f}%" in table
