@@ -25,6 +25,7 @@ from .exceptions import (
     UnknownScenarioError,
     ViewerError,
 )
+from .export import export_model_files
 from .geometry import home_plates, leg_geometry
 from .helper_arm import (
     HelperArm,
@@ -55,7 +56,7 @@ from .scenarios import SCENARIOS, Scenario, scenario
 from .solve import SolveResult, solve
 from .state import StackState, evaluate_state
 from .statics import StaticsResult, solve_statics
-from .urdf import assembler_urdf, closure_sidecar, export_model_files
+from .urdf import assembler_urdf, closure_sidecar
 
 __all__ = [
     "SCENARIOS",

@@ -22,10 +22,10 @@ import numpy as np
 
 from .config import AssemblerConfig, load_config
 from .exceptions import AssemblerError, CLIError
+from .export import export_model_files
 from .labels import leg_label, platform_label
 from .model import AssemblerModel
 from .state import StackState, evaluate_state
-from .urdf import export_model_files
 
 logger = logging.getLogger("assembler_pin")
 

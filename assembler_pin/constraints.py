@@ -19,13 +19,20 @@ from dataclasses import asdict, dataclass
 import numpy as np
 import pinocchio as pin
 
-from .config import AssemblerConfig
+from .config import AssemblerConfig, LegConfig
 from .exceptions import PoseError
 from .kinematics import LegState, PlateArrays
 from .labels import leg_label, platform_label
 from .statics import CONDITION_LIMIT, StaticsResult
 
-__all__ = ["DEFAULT_GOAL_TOLERANCE", "GoalTolerance", "Violation", "evaluate_constraints"]
+__all__ = [
+    "DEFAULT_GOAL_TOLERANCE",
+    "LEG_LIMIT_ROWS",
+    "GoalTolerance",
+    "Violation",
+    "evaluate_constraints",
+    "leg_limit_margins",
+]
 
 
 @dataclass(frozen=True)
@@ -85,6 +92,49 @@ class Violation:
         return f"{self.kind} at {where}: {self.value:.6g} (limit {self.limit:.6g})"
 
 
+#: The rows of :func:`leg_limit_margins`, in order.
+LEG_LIMIT_ROWS = ("min_length", "max_length", "deflection_bottom", "deflection_top", "continuous_translation")
+
+
+def leg_limit_margins(
+    leg: LegConfig,
+    lengths: np.ndarray,
+    cos_deflection: np.ndarray,
+    rise: np.ndarray,
+    margin: float = 0.0,
+    rise_margin: float | None = None,
+) -> np.ndarray:
+    """The one rule of a leg's kinematic limits, as signed margins (positive: inside).
+
+    Used by :func:`evaluate_constraints`, the optimizer's constraint rows, the helper arm's
+    joint limits and IK penalty, and the stack repair, each with its own margin.
+
+    Args:
+        leg: the limits.
+        lengths: (...) pin-to-pin lengths [m].
+        cos_deflection: (..., 2) cosine of the deflection at the bottom and top joint.
+        rise: (...) height of the top joint above the bottom joint in the bottom plate's
+            frame [m].
+        margin: how far inside the stroke [m] and the deflection limit [rad] to keep.
+        rise_margin: smallest rise [m] (default ``margin``).
+
+    Returns:
+        (5, ...) margins, rows :data:`LEG_LIMIT_ROWS`: ``L - (min_length + margin)``,
+        ``(max_length - margin) - L`` [m]; ``cos θ - cos(max_deflection - margin)`` at the
+        bottom and top joint (cosine form: smooth at θ = 0) [1]; ``rise - rise_margin`` [m].
+    """
+    cos_limit = math.cos(leg.max_deflection - margin)
+    return np.stack(
+        [
+            lengths - (leg.min_length + margin),
+            (leg.max_length - margin) - lengths,
+            cos_deflection[..., 0] - cos_limit,
+            cos_deflection[..., 1] - cos_limit,
+            rise - (margin if rise_margin is None else rise_margin),
+        ]
+    )
+
+
 def _per_leg(kind: str, mask: np.ndarray, values: np.ndarray, limit: float) -> list[Violation]:
     return [
         Violation(kind, int(j), int(i), float(values[j, i]), float(limit))
@@ -111,13 +161,13 @@ def evaluate_constraints(
     """
     leg = cfg.leg
     out: list[Violation] = []
-    L = legs.lengths
-    out += _per_leg("min_length", L < leg.min_length, L, leg.min_length)
-    out += _per_leg("max_length", L > leg.max_length, L, leg.max_length)
-    defl = legs.deflection
-    out += _per_leg("deflection_bottom", defl[..., 0] > leg.max_deflection, defl[..., 0], leg.max_deflection)
-    out += _per_leg("deflection_top", defl[..., 1] > leg.max_deflection, defl[..., 1], leg.max_deflection)
-    out += _per_leg("continuous_translation", legs.rise <= 0.0, legs.rise, 0.0)
+    L, defl = legs.lengths, legs.deflection
+    m = leg_limit_margins(leg, L, np.cos(defl), legs.rise)
+    out += _per_leg("min_length", m[0] < 0, L, leg.min_length)
+    out += _per_leg("max_length", m[1] < 0, L, leg.max_length)
+    out += _per_leg("deflection_bottom", m[2] < 0, defl[..., 0], leg.max_deflection)
+    out += _per_leg("deflection_top", m[3] < 0, defl[..., 1], leg.max_deflection)
+    out += _per_leg("continuous_translation", m[4] <= 0, legs.rise, 0.0)  # strictly above
     if statics is not None:
         F = statics.forces
         out += _per_leg("non_finite_force", ~np.isfinite(F), F, float("inf"))

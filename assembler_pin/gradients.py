@@ -29,7 +29,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .kinematics import PlateArrays
+from .kinematics import PlateArrays, plate_deviation
 from .linalg import cross, skew
 from .model import AssemblerModel
 
@@ -184,14 +184,15 @@ def pose_derivatives(am: AssemblerModel, pa: PlateArrays) -> PoseDerivatives:
     for j in range(1, n):
         d_rise[j, :, 6 * (j - 1) + 3 : 6 * j] += z_x_d[j]
     # --- plate angular deviation λ_k (paper eq. 9) --------------------------------------
-    rest = np.array([m.translation for m in am.plate_joint_placement[1:]])
-    rest_dir = np.matmul(R[:-1], (rest / np.linalg.norm(rest, axis=1, keepdims=True))[..., None])[..., 0]
-    step = p[1:] - p[:-1]
-    step_len = np.linalg.norm(step, axis=1)
-    step_dir = step / step_len[:, None]
-    sin_l = np.linalg.norm(cross(step_dir, rest_dir), axis=1)
-    cos_l = np.einsum("jk,jk->j", step_dir, rest_dir)
-    lam = np.arctan2(sin_l, cos_l)
+    dev = plate_deviation(am, pa)
+    lam, step_dir, step_len, rest_dir, sin_l, cos_l = (
+        dev.angles,
+        dev.step_dir,
+        dev.step_length,
+        dev.rest_dir,
+        dev.sin,
+        dev.cos,
+    )
     # d(λ²) = 2 λ dλ;  dλ = -(c - cosλ â)·dâ / sinλ - (â - cosλ c)·dc / sinλ, λ/sinλ → 1
     ratio = np.where(sin_l > 1e-12, lam / np.maximum(sin_l, 1e-300), 1.0)
     d_step = np.zeros((n, 3, C))

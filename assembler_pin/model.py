@@ -15,6 +15,7 @@ from __future__ import annotations
 import logging
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pinocchio as pin
@@ -71,6 +72,9 @@ class AssemblerModel:
     closures: list[Closure]
     urdf_text: str
     data: pin.Data = field(init=False, repr=False)
+    helper_arms: Any = field(default=None, init=False, repr=False)
+    """The helper arms built for this configuration (an
+    :class:`~assembler_pin.helper_arm.ArmCache`, made by the first initial condition)."""
 
     def __post_init__(self) -> None:
         cfg, model = self.config, self.model

@@ -40,10 +40,10 @@ from dataclasses import dataclass, field
 import numpy as np
 import pinocchio as pin
 
-from .constraints import GoalTolerance
+from .constraints import GoalTolerance, leg_limit_margins
 from .exceptions import OptionsError, SingularConfigurationError
 from .gradients import PoseDerivatives, pose_derivatives
-from .kinematics import LegState, PlateArrays, leg_state, plate_arrays
+from .kinematics import LegState, PlateArrays, leg_state, plate_arrays, plate_deviation
 from .model import AssemblerModel
 from .state import StackState, evaluate_state
 from .statics import solve_statics
@@ -141,19 +141,9 @@ class OptimizeResult:
     method: str
 
 
-def plate_deviation(pa: PlateArrays, am: AssemblerModel) -> np.ndarray:
-    """λ_k, k = 1..n: angle between ``p_k - p_{k-1}`` and plate k's rest direction on
-    plate k-1 (paper eq. 9) [rad]."""
-    rest = np.array([m.translation for m in am.plate_joint_placement[1:]])
-    rest_dir = np.matmul(pa.R[:-1], (rest / np.linalg.norm(rest, axis=1, keepdims=True))[..., None])[..., 0]
-    step = pa.p[1:] - pa.p[:-1]
-    cross = np.linalg.norm(np.cross(step, rest_dir), axis=1)
-    return np.arctan2(cross, np.einsum("jk,jk->j", step, rest_dir))
-
-
 def objective_value(am: AssemblerModel, state: StackState, w1: float = 1.0, w2: float = 1.0) -> float:
     """Ω = w1·max|F| + w2·sqrt(Σ λ_k²) of a state (paper eq. 10)."""
-    lam = plate_deviation(state.plates, am)
+    lam = plate_deviation(am, state.plates).angles
     return float(w1 * state.max_abs_force + w2 * np.sqrt(np.sum(lam**2)))
 
 
@@ -191,7 +181,6 @@ class _Problem:
         self.ref[self.n] = goal
         self.nx_pose = 6 * len(self.movable)
         leg = am.config.leg
-        self.cos_max = np.cos(leg.max_deflection)
         # from a feasible start the smooth method never accepts a larger max|F|: both force
         # limits are capped by it (the paper's literal formulation keeps the plain limits)
         self.start_max_force = float(np.abs(self._forces(start, leg_state(am, start))).max())
@@ -237,7 +226,7 @@ class _Problem:
         pa = self.plates_taa(x_pose) if self.opts.method == "paper" else self.plates_local(x_pose)
         legs = leg_state(self.am, pa)
         v = _Values(pa, self._forces(pa, legs), legs.lengths, np.cos(legs.deflection), legs.rise,
-                    plate_deviation(pa, self.am))  # fmt: skip
+                    plate_deviation(self.am, pa).angles)  # fmt: skip
         self._values = (key, v)
         self.evaluations += 1
         omega = self.opts.w1 * np.abs(v.forces).max() + self.opts.w2 * np.sqrt(np.sum(v.plate_angles**2))
@@ -281,21 +270,18 @@ class _Problem:
 
     # ----------------------------------------------------------- constraint rows (>= 0)
     def _geometric(self, v: _Values) -> np.ndarray:
-        """Stroke, deflection and rise (with tiny margins inside the limits)."""
-        leg = self.am.config.leg
-        return np.concatenate(
-            [
-                v.lengths.ravel() - (leg.min_length + GEOMETRIC_MARGIN),
-                (leg.max_length - GEOMETRIC_MARGIN) - v.lengths.ravel(),
-                v.cos_deflection.ravel() - (self.cos_max + GEOMETRIC_MARGIN),
-                v.rise.ravel() - self.opts.rise_margin,
-            ]
-        )
+        """Stroke, deflection and rise rows (:func:`leg_limit_margins`, :data:`GEOMETRIC_MARGIN` inside)."""
+        margins = leg_limit_margins(self.am.config.leg, v.lengths, v.cos_deflection, v.rise,
+                                    GEOMETRIC_MARGIN, rise_margin=self.opts.rise_margin)  # fmt: skip
+        return margins.ravel()
 
     def _geometric_jac(self, d: PoseDerivatives, B: np.ndarray) -> np.ndarray:
+        """Rows of :meth:`_geometric` differentiated, in its order (see :data:`LEG_LIMIT_ROWS`)."""
         C = 6 * self.n
         dL = d.d_lengths.reshape(-1, C) @ B
-        return np.vstack([dL, -dL, d.d_cos_deflection.reshape(-1, C) @ B, d.d_rise.reshape(-1, C) @ B])
+        d_cos = d.d_cos_deflection  # (n, 6, 2, C)
+        bottom, top = d_cos[:, :, 0].reshape(-1, C) @ B, d_cos[:, :, 1].reshape(-1, C) @ B
+        return np.vstack([dL, -dL, bottom, top, d.d_rise.reshape(-1, C) @ B])
 
     def _force_rows(self, forces: np.ndarray) -> np.ndarray:
         F = forces.ravel()

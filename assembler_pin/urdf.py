@@ -31,7 +31,6 @@ from __future__ import annotations
 import functools
 import math
 import xml.etree.ElementTree as ET
-from pathlib import Path
 
 import numpy as np
 import pinocchio as pin
@@ -45,8 +44,9 @@ __all__ = [
     "URDF_FILENAME",
     "assembler_urdf",
     "closure_sidecar",
-    "export_model_files",
     "names",
+    "xml_number",
+    "xml_vector",
 ]
 
 URDF_FILENAME = "assembler.urdf"
@@ -74,35 +74,37 @@ class names:  # noqa: N801 - a namespace of name builders
     payload_joint = "payload_mount"
 
 
-def _fmt(x: float) -> str:
+def xml_number(x: float) -> str:
+    """A number as URDF text: 15 significant decimals, ``0`` for zero (shared by every URDF writer)."""
     x = float(x)
     if x == 0.0:
         return "0"
     return repr(round(x, 15))
 
 
-def _vec(v: np.ndarray) -> str:
-    return " ".join(_fmt(x) for x in v)
+def xml_vector(v: np.ndarray) -> str:
+    """A vector as space-separated numbers (:func:`xml_number`)."""
+    return " ".join(xml_number(x) for x in v)
 
 
 def _origin(parent: ET.Element, xyz: np.ndarray, rotation: np.ndarray | None = None) -> None:
     rpy = np.zeros(3) if rotation is None else pin.rpy.matrixToRpy(rotation)
-    ET.SubElement(parent, "origin", xyz=_vec(xyz), rpy=_vec(rpy))
+    ET.SubElement(parent, "origin", xyz=xml_vector(xyz), rpy=xml_vector(rpy))
 
 
 def _inertial(link: ET.Element, mass: float, com: np.ndarray, diag: np.ndarray) -> None:
     inertial = ET.SubElement(link, "inertial")
     _origin(inertial, com)
-    ET.SubElement(inertial, "mass", value=_fmt(mass))
+    ET.SubElement(inertial, "mass", value=xml_number(mass))
     ET.SubElement(
         inertial,
         "inertia",
-        ixx=_fmt(diag[0]),
+        ixx=xml_number(diag[0]),
         ixy="0",
         ixz="0",
-        iyy=_fmt(diag[1]),
+        iyy=xml_number(diag[1]),
         iyz="0",
-        izz=_fmt(diag[2]),
+        izz=xml_number(diag[2]),
     )
 
 
@@ -148,7 +150,9 @@ def _joint(
         ET.SubElement(joint, "axis", xyz=axis)
     if limit is not None:
         lower, upper, effort = limit
-        ET.SubElement(joint, "limit", lower=_fmt(lower), upper=_fmt(upper), effort=_fmt(effort), velocity="0")
+        ET.SubElement(
+            joint, "limit", lower=xml_number(lower), upper=xml_number(upper), effort=xml_number(effort), velocity="0"
+        )
 
 
 def assembler_urdf(cfg: AssemblerConfig) -> str:
@@ -177,10 +181,10 @@ def assembler_urdf(cfg: AssemblerConfig) -> str:
     def add_plate(k: int) -> None:
         link = ET.SubElement(robot, "link", name=names.plate(k))
         _inertial(link, cfg.plate.mass, zero, plate_inertia)
-        _shape(link, zero, ("cylinder", {"radius": _fmt(r), "length": _fmt(dim.plate_thickness)}), "plate")
+        _shape(link, zero, ("cylinder", {"radius": xml_number(r), "length": xml_number(dim.plate_thickness)}), "plate")
         for a in node_angles_deg[k]:
             p = np.array([r * math.cos(math.radians(a)), r * math.sin(math.radians(a)), 0.0])
-            _shape(link, p, ("sphere", {"radius": _fmt(dim.node_sphere_radius)}), "node", collision=False)
+            _shape(link, p, ("sphere", {"radius": xml_number(dim.node_sphere_radius)}), "node", collision=False)
 
     add_plate(0)
     for j in range(cfg.platforms):
@@ -211,7 +215,7 @@ def assembler_urdf(cfg: AssemblerConfig) -> str:
                 _shape(
                     motor,
                     leg.motor_com * z_axis,
-                    ("cylinder", {"radius": _fmt(dim.motor_radius), "length": _fmt(motor_len)}),
+                    ("cylinder", {"radius": xml_number(dim.motor_radius), "length": xml_number(motor_len)}),
                     "motor",
                 )
             _joint(robot, n_("uy"), "revolute", n_("cross"), n_("motor"), zero, None, "0 1 0", (-defl, defl, 0.0))
@@ -227,7 +231,7 @@ def assembler_urdf(cfg: AssemblerConfig) -> str:
                 _shape(
                     shaft,
                     -leg.shaft_com * z_axis,
-                    ("cylinder", {"radius": _fmt(dim.shaft_radius), "length": _fmt(shaft_len)}),
+                    ("cylinder", {"radius": xml_number(dim.shaft_radius), "length": xml_number(shaft_len)}),
                     "shaft",
                 )
             _joint(
@@ -264,7 +268,7 @@ def assembler_urdf(cfg: AssemblerConfig) -> str:
     payload = ET.SubElement(robot, "link", name=names.payload)
     m = cfg.payload.mass
     _inertial(payload, m, zero, np.full(3, m * dim.payload_size**2 / 6.0))
-    _shape(payload, zero, ("box", {"size": _vec(np.full(3, dim.payload_size))}), "payload")
+    _shape(payload, zero, ("box", {"size": xml_vector(np.full(3, dim.payload_size))}), "payload")
     _joint(
         robot,
         names.payload_joint,
@@ -301,21 +305,3 @@ def closure_sidecar(cfg: AssemblerConfig) -> str:
         "# name_mot: actuated (prismatic) joints; assembler_config: the generating config.\n"
     )
     return header + yaml.safe_dump(data, sort_keys=False, default_flow_style=None, width=100)
-
-
-def export_model_files(cfg: AssemblerConfig, out_dir: str | Path) -> dict[str, Path]:
-    """Write the stack URDF, its closure sidecar and the helper arm's URDF into ``out_dir``.
-
-    Returns:
-        A mapping from file role (``urdf``, ``sidecar``, ``helper_arm``) to the written path.
-    """
-    from .helper_arm import HELPER_ARM_URDF_FILENAME, helper_arm_urdf  # lazy: helper_arm imports the model
-
-    out = Path(out_dir)
-    out.mkdir(parents=True, exist_ok=True)
-    paths = {"urdf": out / URDF_FILENAME, "sidecar": out / SIDECAR_FILENAME}
-    paths["urdf"].write_text(assembler_urdf(cfg))
-    paths["sidecar"].write_text(closure_sidecar(cfg))
-    paths["helper_arm"] = out / HELPER_ARM_URDF_FILENAME
-    paths["helper_arm"].write_text(helper_arm_urdf(cfg))
-    return paths

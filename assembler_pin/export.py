@@ -1,0 +1,31 @@
+"""Write the model files of a configuration: the stack URDF, its closure sidecar and the
+helper arm's URDF (``assembler-pin export``)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from .config import AssemblerConfig
+from .helper_arm import HELPER_ARM_URDF_FILENAME, helper_arm_urdf
+from .urdf import SIDECAR_FILENAME, URDF_FILENAME, assembler_urdf, closure_sidecar
+
+__all__ = ["export_model_files"]
+
+
+def export_model_files(cfg: AssemblerConfig, out_dir: str | Path) -> dict[str, Path]:
+    """Write the stack URDF, its closure sidecar and the helper arm's URDF into ``out_dir``.
+
+    Returns:
+        A mapping from file role (``urdf``, ``sidecar``, ``helper_arm``) to the written path.
+    """
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    paths = {
+        "urdf": out / URDF_FILENAME,
+        "sidecar": out / SIDECAR_FILENAME,
+        "helper_arm": out / HELPER_ARM_URDF_FILENAME,
+    }
+    paths["urdf"].write_text(assembler_urdf(cfg))
+    paths["sidecar"].write_text(closure_sidecar(cfg))
+    paths["helper_arm"].write_text(helper_arm_urdf(cfg))
+    return paths

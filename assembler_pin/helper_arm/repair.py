@@ -1,0 +1,73 @@
+"""The stack repair: move the internal plates until every leg is within its limits.
+
+Used by the initial condition when no arm pose gives a valid stack, and by ``solve`` for its
+fallback starts. Units: metres and radians.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pinocchio as pin
+
+from ..constraints import leg_limit_margins
+from ..kinematics import PlateArrays, leg_state
+from ..model import AssemblerModel
+
+__all__ = ["perturbed_plates", "repair_stack"]
+
+
+def _leg_hinge(am: AssemblerModel, pa: PlateArrays, margin: float) -> np.ndarray:
+    """Amounts by which every leg breaks a kinematic constraint, each bound tightened by
+    ``margin`` (the negated :func:`~assembler_pin.constraints.leg_limit_margins`, clipped at
+    0): [m] for stroke and rise, cosine for the deflection. Zero where valid."""
+    legs = leg_state(am, pa)
+    return np.maximum(
+        -leg_limit_margins(am.config.leg, legs.lengths, np.cos(legs.deflection), legs.rise, margin), 0.0
+    ).ravel()
+
+
+def repair_stack(
+    am: AssemblerModel, start: list[pin.SE3], margin: float = 1e-6, max_nfev: int = 100
+) -> tuple[PlateArrays, float]:
+    """Move plates 1..n-1 from ``start`` until every leg of the stack is valid.
+
+    Plates 0 and n stay where ``start`` has them (the base and the goal). Plate k becomes
+    ``start_k·exp6(x_k)``; ``scipy.optimize.least_squares`` (``trf``, forward-difference
+    Jacobian) drives the leg constraints' violation (:func:`_leg_hinge`, ``margin`` [m or
+    rad] inside every bound) to zero from x = 0, so the plates move little.
+
+    Returns:
+        (the plates reached, the largest remaining violation [m or rad]; 0 means valid).
+    """
+    n = len(start) - 1
+    rot0 = np.array([m.rotation for m in start])
+    pos0 = np.array([m.translation for m in start])
+
+    def plates(x: np.ndarray) -> PlateArrays:
+        rot, pos = rot0.copy(), pos0.copy()
+        for k in range(1, n):
+            m = start[k] * pin.exp6(x[6 * (k - 1) : 6 * k])
+            rot[k], pos[k] = m.rotation, m.translation
+        return PlateArrays(rot, pos)
+
+    from scipy.optimize import least_squares  # on first use: fast start-up
+
+    res = least_squares(
+        lambda x: _leg_hinge(am, plates(x), margin), np.zeros(6 * (n - 1)), method="trf",
+        ftol=1e-15, xtol=1e-15, gtol=1e-15, max_nfev=max_nfev,
+    )  # fmt: skip
+    pa = plates(res.x)
+    return pa, float(_leg_hinge(am, pa, 0.0).max())
+
+
+def perturbed_plates(plates: list[pin.SE3], count: int, seed: int = 0) -> list[list[pin.SE3]]:
+    """``count`` copies of ``plates`` with plates 1..n-1 moved by random twists
+    (±5 cm, ±0.3 rad per axis; seeded, so results are reproducible)."""
+    rng = np.random.default_rng(seed)
+    out = []
+    for _ in range(count):
+        moved = [m.copy() for m in plates]
+        for k in range(1, len(plates) - 1):
+            moved[k] = moved[k] * pin.exp6(np.concatenate([rng.uniform(-0.05, 0.05, 3), rng.uniform(-0.3, 0.3, 3)]))
+        out.append(moved)
+    return out
