@@ -31,11 +31,14 @@ __all__ = [
     "PlateArrays",
     "PlateDeviation",
     "StackFKResult",
+    "checked_rotations",
     "ee_jacobian_wrt_lengths",
     "leg_state",
+    "leg_vectors",
     "plate_arrays",
     "plate_deviation",
     "plates_from_q",
+    "platform_configurations",
     "q_from_plates",
     "se3_to_taa",
     "sp_forward_kinematics",
@@ -148,16 +151,49 @@ def plate_arrays(am: AssemblerModel, plates: PlateArrays | Sequence | np.ndarray
         if len(plates) != am.n + 1:
             raise PoseError(f"expected {am.n + 1} plate poses (plates 0..{am.n}), got {len(plates)}")
         return plates
-    if isinstance(plates, np.ndarray) and plates.ndim == 3 and plates.shape[1:] == (4, 4):
-        items: Sequence = list(plates)
-    elif isinstance(plates, (list, tuple)):
-        items = plates
+    if isinstance(plates, (list, tuple)) and plates and all(isinstance(m, pin.SE3) for m in plates):
+        matrices = np.array([m.homogeneous for m in plates])
+    elif isinstance(plates, (list, tuple, np.ndarray)):
+        matrices = as_float_array(plates, "plate poses (n+1 4x4 matrices)")
     else:
         raise PoseError("plate poses must be a list of n+1 SE3 poses or 4x4 matrices, plate 0 first")
-    if len(items) != am.n + 1:
-        raise PoseError(f"expected {am.n + 1} plate poses (plates 0..{am.n}), got {len(items)}")
-    poses = [to_se3(m, f"plate {k}") for k, m in enumerate(items)]
-    return PlateArrays.from_se3(poses)
+    if matrices.ndim != 3 or matrices.shape[1:] != (4, 4):
+        raise PoseError(f"plate poses must be n+1 4x4 matrices, plate 0 first; got shape {matrices.shape}")
+    if matrices.shape[0] != am.n + 1:
+        raise PoseError(f"expected {am.n + 1} plate poses (plates 0..{am.n}), got {matrices.shape[0]}")
+    return PlateArrays(*checked_rotations(matrices))
+
+
+def checked_rotations(matrices: np.ndarray, what: str = "plate") -> tuple[np.ndarray, np.ndarray]:
+    """(m, 4, 4) homogeneous matrices → (R (m, 3, 3), p (m, 3)), checked all at once: finite,
+    last row ``[0, 0, 0, 1]``, rotation orthonormal to :data:`ORTHONORMAL_TOL` with det +1
+    (then projected onto SO(3) where not exact to 1e-14).
+
+    Raises:
+        PoseError: naming the first pose that fails.
+    """
+    bad = ~np.isfinite(matrices).all(axis=(1, 2))
+    if bad.any():
+        raise PoseError(f"{what} {int(np.argmax(bad))} contains NaN or infinite values")
+    last = np.abs(matrices[:, 3] - np.array([0.0, 0.0, 0.0, 1.0])).max(axis=1) > 1e-9
+    if last.any():
+        k = int(np.argmax(last))
+        raise PoseError(f"{what} {k}: the last row must be [0, 0, 0, 1], got {matrices[k, 3].tolist()}")
+    R = matrices[:, :3, :3].copy()
+    err = np.abs(np.matmul(R.transpose(0, 2, 1), R) - np.eye(3)).max(axis=(1, 2))
+    det = np.linalg.det(R)
+    wrong = (err > ORTHONORMAL_TOL) | (det <= 0)
+    if wrong.any():
+        k = int(np.argmax(wrong))
+        raise PoseError(
+            f"{what} {k}: the 3x3 block is not a rotation (|RᵀR - I| = {err[k]:.2g}, det = {det[k]:.3g}); "
+            f"it must be orthonormal to {ORTHONORMAL_TOL} with det +1"
+        )
+    inexact = err > 1e-14
+    if inexact.any():
+        u, _, vt = np.linalg.svd(R[inexact])
+        R[inexact] = np.matmul(u, vt)
+    return R, matrices[:, :3, 3].copy()
 
 
 # ---------------------------------------------------------------------- legs (IK)
@@ -194,8 +230,13 @@ def _angle_between(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     return np.arccos(np.clip(np.einsum("...k,...k->...", a, b), -1.0, 1.0))
 
 
-def _leg_vectors(am: AssemblerModel, pa: PlateArrays) -> tuple[np.ndarray, ...]:
-    """World joint centres (n, 6, 3), bottom→top vectors and lengths (n, 6)."""
+def leg_vectors(am: AssemblerModel, pa: PlateArrays) -> tuple[np.ndarray, ...]:
+    """Bottom and top joint centres (n, 6, 3), bottom→top vectors (n, 6, 3) and lengths (n, 6),
+    world frame [m].
+
+    Raises:
+        PoseError: two joint centres of a leg coincide.
+    """
     geo = am.geometry
     bottom = np.matmul(geo.bottom_in_plate, pa.R[:-1].transpose(0, 2, 1)) + pa.p[:-1, None, :]
     top = np.matmul(geo.top_in_plate, pa.R[1:].transpose(0, 2, 1)) + pa.p[1:, None, :]
@@ -209,7 +250,7 @@ def _leg_vectors(am: AssemblerModel, pa: PlateArrays) -> tuple[np.ndarray, ...]:
 def leg_state(am: AssemblerModel, plates: PlateArrays | Sequence | np.ndarray) -> LegState:
     """Leg lengths, directions, deflections and rise of every leg for given plate poses."""
     pa = plate_arrays(am, plates)
-    bottom, top, vec, lengths = _leg_vectors(am, pa)
+    bottom, top, vec, lengths = leg_vectors(am, pa)
     directions = vec / lengths[..., None]
     in_bottom = np.matmul(directions, pa.R[:-1])
     in_top = np.matmul(directions, pa.R[1:])
@@ -229,11 +270,11 @@ def q_from_plates(am: AssemblerModel, plates: PlateArrays | Sequence | np.ndarra
     pin-to-pin length.
     """
     pa = plate_arrays(am, plates)
-    _, _, vec, lengths = _leg_vectors(am, pa)
-    return _q_from_arrays(am, pa, vec, lengths)
+    _, _, vec, lengths = leg_vectors(am, pa)
+    return q_from_arrays(am, pa, vec, lengths)
 
 
-def _q_from_arrays(am: AssemblerModel, pa: PlateArrays, vec: np.ndarray, lengths: np.ndarray) -> np.ndarray:
+def q_from_arrays(am: AssemblerModel, pa: PlateArrays, vec: np.ndarray, lengths: np.ndarray) -> np.ndarray:
     n = am.n
     q = np.empty(am.nq)
     R, p = pa.R, pa.p
@@ -258,10 +299,71 @@ def _q_from_arrays(am: AssemblerModel, pa: PlateArrays, vec: np.ndarray, lengths
 
 
 def plates_from_q(am: AssemblerModel, q: np.ndarray) -> PlateArrays:
-    """World poses of the plates for a configuration (Pinocchio forward kinematics)."""
-    pin.forwardKinematics(am.model, am.data, q)
-    oM = [am.data.oMi[int(k)] for k in am.plate_joint_ids]
-    return PlateArrays.from_se3(oM)
+    """World poses of the plates for a whole-stack configuration (the inverse of
+    :func:`q_from_plates`): plate 0 from the root free-flyer, plate j+1 = plate j · its joint's
+    home placement · its free-flyer, in closed form (no Pinocchio data of the whole stack)."""
+    q = as_float_array(q, "q", (am.nq,))
+    poses = [pin.XYZQUATToSE3(q[0:7])]
+    for j in range(am.n):
+        k = int(am.plate_idx_q[j + 1])
+        poses.append(poses[-1] * am.plate_joint_placement[j + 1] * pin.XYZQUATToSE3(q[k : k + 7]))
+    return PlateArrays.from_se3(poses)
+
+
+def rotations_to_quaternions(R: np.ndarray) -> np.ndarray:
+    """(m, 3, 3) rotation matrices → (m, 4) unit quaternions ``(x, y, z, w)`` (Pinocchio's
+    order), vectorized (the largest of the four candidate denominators per matrix)."""
+    if R.shape[0] <= 32:  # a few matrices: Pinocchio's own conversion is faster than the vectorized one
+        return np.array([pin.Quaternion(r).coeffs() for r in R]).reshape(-1, 4)
+    m00, m11, m22 = R[:, 0, 0], R[:, 1, 1], R[:, 2, 2]
+    trace = m00 + m11 + m22
+    cand = np.stack([trace, m00, m11, m22], axis=1)
+    k = np.argmax(cand, axis=1)
+    out = np.empty((R.shape[0], 4))
+    for case in range(4):
+        sel = k == case
+        if not sel.any():
+            continue
+        r = R[sel]
+        if case == 0:
+            s = 2.0 * np.sqrt(1.0 + trace[sel])
+            out[sel] = np.stack([(r[:, 2, 1] - r[:, 1, 2]) / s, (r[:, 0, 2] - r[:, 2, 0]) / s,
+                                 (r[:, 1, 0] - r[:, 0, 1]) / s, 0.25 * s], axis=1)  # fmt: skip
+        else:
+            a, b, c = case - 1, case % 3, (case + 1) % 3
+            s = 2.0 * np.sqrt(1.0 + r[:, a, a] - r[:, b, b] - r[:, c, c])
+            vec = np.empty((r.shape[0], 3))
+            vec[:, a] = 0.25 * s
+            vec[:, b] = (r[:, b, a] + r[:, a, b]) / s
+            vec[:, c] = (r[:, c, a] + r[:, a, c]) / s
+            out[sel] = np.concatenate([vec, ((r[:, c, b] - r[:, b, c]) / s)[:, None]], axis=1)
+    return out
+
+
+def platform_configurations(am: AssemblerModel, pa: PlateArrays, vec: np.ndarray, lengths: np.ndarray) -> np.ndarray:
+    """(n, nq) the configuration of each platform's own model
+    (:class:`~assembler_pin.platform_model.PlatformModel`), its plate frames turned by
+    ``Rz(60°·j)``: root free-flyer = plate j, the legs' (ux, uy, length), top free-flyer =
+    plate j+1 relative to plate j after the joint's home placement."""
+    pm = am.platform_models[0]
+    n = am.n
+    turns = am.stack_plan.turns
+    Rb = np.matmul(pa.R[:-1], turns)  # turned bottom frames
+    Rt = np.matmul(pa.R[1:], turns)
+    q = np.empty((n, pm.model.nq))
+    q[:, 0:3] = pa.p[:-1]
+    rel_R = np.matmul(Rb.transpose(0, 2, 1), Rt)
+    quats = rotations_to_quaternions(np.concatenate([Rb, rel_R]))
+    q[:, 3:7] = quats[:n]
+    # leg direction in each universal joint's base frame
+    d = np.matmul(np.matmul(vec, Rb)[:, :, None, :], pm.leg_base_rotation)[:, :, 0, :]
+    q[:, pm.leg_idx_q[:, 0]] = np.arctan2(-d[..., 1], d[..., 2])
+    q[:, pm.leg_idx_q[:, 1]] = np.arctan2(d[..., 0], np.hypot(d[..., 1], d[..., 2]))
+    q[:, pm.leg_idx_q[:, 2]] = lengths
+    k = pm.top_idx_q
+    q[:, k : k + 3] = np.matmul(Rb.transpose(0, 2, 1), (pa.p[1:] - pa.p[:-1])[..., None])[..., 0] - pm.rest_offset
+    q[:, k + 3 : k + 7] = quats[n:]
+    return q
 
 
 # ---------------------------------------------------------------------- forward kinematics

@@ -21,12 +21,16 @@ import numpy as np
 import pinocchio as pin
 import yaml
 
-from .config import AssemblerConfig, load_config
+from .config import AssemblerConfig, PayloadConfig, load_config
 from .exceptions import ConfigError, ModelFileError
 from .geometry import LEGS_PER_PLATFORM, LegGeometry, home_plates, leg_geometry
+from .platform_model import PlatformModel, StackPlan
 from .urdf import SIDECAR_FILENAME, URDF_FILENAME, assembler_urdf, closure_sidecar, names
 
-__all__ = ["AssemblerModel", "Closure"]
+__all__ = ["WHOLE_DATA_MAX_PLATFORMS", "AssemblerModel", "Closure"]
+
+#: Largest stack whose whole-stack Pinocchio ``Data`` is created (its size grows as nv² and nv³).
+WHOLE_DATA_MAX_PLATFORMS = 8
 
 logger = logging.getLogger(__name__)
 
@@ -53,14 +57,16 @@ class AssemblerModel:
     Build with :meth:`from_config` or :meth:`from_files`. Attributes:
 
     * ``config``: the :class:`AssemblerConfig`; ``n``: number of platforms.
-    * ``model``, ``data``: Pinocchio model (free-flyer root) and its data.
+    * ``model``: the whole-stack Pinocchio model (free-flyer root), the exported format;
+      ``data``: its data, created on first use for stacks up to 8 platforms.
+    * ``platform_models``: the per-platform models the statics run on
+      (:mod:`~assembler_pin.platform_model`).
     * ``constraint_models`` / ``constraint_datas``: the 6n point-anchor closures as
       ``pin.StdVec_ConstraintModel`` / ``StdVec_ConstraintData``, ordered ``[j, i]``.
     * ``geometry``: :class:`~assembler_pin.geometry.LegGeometry`.
     * ``plate_joint_ids`` (n+1): joint of plate k (root free-flyer for plate 0).
     * ``plate_idx_q`` / ``plate_idx_v`` (n+1): first q / v index of each plate joint.
     * ``leg_idx_q`` / ``leg_idx_v`` (n, 6, 3): q / v indices of (ux, uy, actuator).
-    * ``actuator_idx_v`` (n, 6): v index of each prismatic actuator.
     * ``platform_rows_v`` (n, 24): v indices of SP j's leg joints then plate j+1's
       free-flyer — the rows of SP j's statics block.
     * ``plate_joint_placement`` (n+1): placement of each plate joint in its parent.
@@ -71,7 +77,11 @@ class AssemblerModel:
     model: pin.Model
     closures: list[Closure]
     urdf_text: str
-    data: pin.Data = field(init=False, repr=False)
+    _data: pin.Data | None = field(default=None, init=False, repr=False)
+    platform_models: tuple[PlatformModel, PlatformModel] = field(init=False, repr=False)
+    """The models every computation runs on: (inner platforms, last platform with the payload)."""
+    stack_plan: StackPlan = field(init=False, repr=False)
+    """Their constants for this stack (:class:`~assembler_pin.platform_model.StackPlan`)."""
     helper_arms: Any = field(default=None, init=False, repr=False)
     """The helper arms built for this configuration (an
     :class:`~assembler_pin.helper_arm.ArmCache`, made by the first initial condition)."""
@@ -80,7 +90,11 @@ class AssemblerModel:
         cfg, model = self.config, self.model
         n = cfg.platforms
         self.n = n
-        self.data = model.createData()
+        self.platform_models = (
+            PlatformModel(cfg, PayloadConfig(mass=0.0, offset=cfg.payload.offset)),
+            PlatformModel(cfg, cfg.payload),
+        )
+        self.stack_plan = StackPlan(*self.platform_models, n)
         self.geometry: LegGeometry = leg_geometry(cfg)
         # row map a ↦ [a, t × a] of each top anchor t (plate frame): (n, 6, 3, 6)
         self.top_line_map = np.concatenate(
@@ -110,10 +124,8 @@ class AssemblerModel:
         leg_ids = np.array(
             [[[joint(names.leg(j, i, p)) for p in parts] for i in range(LEGS_PER_PLATFORM)] for j in range(n)]
         )
-        self.leg_joint_ids = leg_ids
         self.leg_idx_q = np.vectorize(lambda k: model.idx_qs[int(k)])(leg_ids)
         self.leg_idx_v = np.vectorize(lambda k: model.idx_vs[int(k)])(leg_ids)
-        self.actuator_idx_v = self.leg_idx_v[:, :, 2]
         self.shaft_joint_ids = leg_ids[:, :, 2]
         self.platform_rows_v = np.concatenate(
             [self.leg_idx_v.reshape(n, 18), self.plate_idx_v[1:, None] + np.arange(6)[None, :]], axis=1
@@ -226,7 +238,7 @@ class AssemblerModel:
                                  "next plate's floating joint, depth-first from plate 0")  # fmt: skip
         if not np.allclose(self.plate_placement_R, np.eye(3), atol=1e-12):
             raise ModelFileError("the plates' floating joints must have a pure translation as origin (home pose)")
-        if not self.model.check(self.data):
+        if self.n <= WHOLE_DATA_MAX_PLATFORMS and not self.model.check(self.data):
             raise ModelFileError("model.check(data) failed on the loaded URDF")
 
     def _build_constraints(self) -> None:
@@ -254,6 +266,26 @@ class AssemblerModel:
             self.constraint_datas.append(cm.createData())
 
     # ------------------------------------------------------------------ helpers
+    @property
+    def data(self) -> pin.Data:
+        """Pinocchio ``Data`` of the whole-stack model, created on first use.
+
+        No computation of the package needs it (they run on :attr:`platform_models`); it is
+        for inspecting the exported model, and is refused above
+        :data:`WHOLE_DATA_MAX_PLATFORMS` platforms, where it takes gigabytes.
+
+        Raises:
+            ConfigError: the stack has more than :data:`WHOLE_DATA_MAX_PLATFORMS` platforms.
+        """
+        if self._data is None:
+            if self.n > WHOLE_DATA_MAX_PLATFORMS:
+                raise ConfigError(
+                    f"the whole-stack Pinocchio data of {self.n} platforms (nv = {self.model.nv}) would take "
+                    f"gigabytes; it is available up to {WHOLE_DATA_MAX_PLATFORMS} platforms"
+                )
+            self._data = self.model.createData()
+        return self._data
+
     @property
     def nq(self) -> int:
         return self.model.nq

@@ -26,14 +26,14 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
-import pinocchio as pin
 
 from .exceptions import SingularConfigurationError
-from .kinematics import LegState, PlateArrays, _leg_vectors, _q_from_arrays, plate_arrays
+from .kinematics import LegState, PlateArrays, leg_vectors, plate_arrays, platform_configurations
 from .linalg import skew
 from .model import AssemblerModel
+from .platform_model import PlatformStatics, stack_gravity_terms
 
-__all__ = ["CONDITION_LIMIT", "StaticsResult", "closure_jacobian_blocks", "solve_statics"]
+__all__ = ["CONDITION_LIMIT", "StaticsResult", "closure_jacobian_blocks", "gravity_terms", "solve_statics"]
 
 CONDITION_LIMIT = 1e8
 """Largest 1-norm condition number of a platform's reduced 6×6 statics system trusted."""
@@ -50,7 +50,6 @@ class StaticsResult:
         base_wrench: (6,) wrench ``[f, m]`` the base mount applies to plate 0, world
             axes, moment about plate 0's origin [N, N·m].
         condition: (n,) 1-norm condition number of each platform's statics block.
-        q: the configuration the statics were solved at.
         singular: True when a block's condition number exceeds :data:`CONDITION_LIMIT`
             (the forces are then not trustworthy).
     """
@@ -59,7 +58,6 @@ class StaticsResult:
     ball_forces: np.ndarray
     base_wrench: np.ndarray
     condition: np.ndarray
-    q: np.ndarray
     singular: bool
 
     @property
@@ -71,32 +69,33 @@ class StaticsResult:
         return float(np.abs(self.forces).mean())
 
 
-def _leg_jacobians_t(am: AssemblerModel, top_points: np.ndarray) -> np.ndarray:
-    """Transposed closure Jacobian blocks of the legs' own joints, from Pinocchio's joint
-    Jacobians (``data.J``, world frame).
+def _leg_jacobians_t(columns: np.ndarray, top_points: np.ndarray) -> np.ndarray:
+    """Transposed closure Jacobian blocks of the legs' own joints.
 
-    Requires ``pin.computeJointJacobians`` at the pose whose world ball-joint centres are
-    ``top_points`` (n, 6, 3). The closure of leg (j, i) is the shaft tip minus the top
-    plate's anchor, in world axes; only leg (j, i)'s own joints and plate j+1's
-    free-flyer move one of the two points without the other. A joint column ``[v, ω]``
-    moves the tip by ``v + ω × t``, i.e. the row ``vᵀ + ωᵀ skew(t)`` of the transpose.
+    ``columns`` (n, 6, 3, 6) are the world-frame Jacobian columns ``[v, ω]`` of each leg's
+    (ux, uy, actuator) joints (:class:`~assembler_pin.platform_model.PlatformStatics`) at the
+    pose whose world ball-joint centres are ``top_points`` (n, 6, 3). The closure of leg
+    (j, i) is the shaft tip minus the top plate's anchor, in world axes; only leg (j, i)'s own
+    joints and plate j+1's free-flyer move one of the two points without the other. A joint
+    column moves the tip by ``v + ω × t``, i.e. the row ``vᵀ + ωᵀ skew(t)`` of the transpose.
 
     Returns:
         (n, 6, 3, 3): the leg's (ux, uy, actuator) rows × closure columns (world axes).
     """
-    columns = am.data.J.T[am.leg_idx_v]  # (n, 6, 3 joints, 6)
     return columns[..., :3] + np.matmul(columns[..., 3:], skew(top_points))
 
 
-def _plate_jacobians(am: AssemblerModel, top_points: np.ndarray) -> np.ndarray:
+def _plate_jacobians(top_columns: np.ndarray, top_points: np.ndarray) -> np.ndarray:
     """Closure Jacobian blocks of the top plates' free-flyers (see :func:`_leg_jacobians_t`;
     the anchor moves by ``v + ω × t`` and enters the closure with a minus sign).
+
+    Args:
+        top_columns: (n, 6, 6) world-frame Jacobian rows × each top plate's free-flyer columns.
 
     Returns:
         (n, 6, 3, 6): closure rows × plate j+1's free-flyer columns.
     """
-    ff = am.data.J[:, am.plate_rows_ff]  # (6, n, 6)
-    return np.matmul(skew(top_points), ff[3:].transpose(1, 0, 2)[:, None]) - ff[:3].transpose(1, 0, 2)[:, None]
+    return np.matmul(skew(top_points), top_columns[:, None, 3:]) - top_columns[:, None, :3]
 
 
 def _inverse_or_nan(blocks: np.ndarray) -> np.ndarray:
@@ -114,22 +113,31 @@ def _inverse_or_nan(blocks: np.ndarray) -> np.ndarray:
         return out
 
 
-def closure_jacobian_blocks(am: AssemblerModel, top_points: np.ndarray) -> np.ndarray:
+def closure_jacobian_blocks(am: AssemblerModel, plates: PlateArrays | Sequence | np.ndarray) -> np.ndarray:
     """The closure Jacobian restricted to each platform's block (for inspection and tests).
 
     Returns:
-        (n, 18, 24): rows (leg i, world axis) of platform j's closures; columns the
-        velocity coordinates ``am.platform_rows_v[j]`` (18 leg joints, then the top plate's
-        free-flyer).
+        (n, 18, 24): rows (leg i, world axis) of platform j's closures; columns its 18 leg
+        joints (ux, uy, actuator per leg) then the top plate's free-flyer (its own frame).
     """
-    leg = _leg_jacobians_t(am, top_points).swapaxes(2, 3)
-    plate = _plate_jacobians(am, top_points)
+    pa = plate_arrays(am, plates)
+    _, top, vec, lengths = leg_vectors(am, pa)
+    terms = gravity_terms(am, pa, vec, lengths)
+    leg = _leg_jacobians_t(terms.leg_columns, top).swapaxes(2, 3)
+    plate = _plate_jacobians(terms.top_columns, top)
     n = am.n
     out = np.zeros((n, 6, 3, 24))
     for i in range(6):
         out[:, i, :, 3 * i : 3 * i + 3] = leg[:, i]
     out[:, :, :, 18:] = plate
     return out.reshape(n, 18, 24)
+
+
+def gravity_terms(am: AssemblerModel, pa: PlateArrays, vec: np.ndarray, lengths: np.ndarray) -> PlatformStatics:
+    """The Pinocchio terms of the statics: one small model per platform, top down
+    (:func:`~assembler_pin.platform_model.stack_gravity_terms`)."""
+    q = platform_configurations(am, pa, vec, lengths)
+    return stack_gravity_terms(am.stack_plan, pa.R, q)
 
 
 def solve_statics(
@@ -154,19 +162,17 @@ def solve_statics(
     """
     pa = plate_arrays(am, plates)
     if legs is None:
-        _, top, vec, lengths = _leg_vectors(am, pa)
+        _, top, vec, lengths = leg_vectors(am, pa)
     else:
         top, lengths = legs.top_points, legs.lengths
         vec = legs.top_points - legs.bottom_points
-    q = _q_from_arrays(am, pa, vec, lengths)
-    model, data = am.model, am.data
-    g = pin.computeGeneralizedGravity(model, data, q)
-    pin.computeJointJacobians(model, data, q)
+    terms = gravity_terms(am, pa, vec, lengths)
     # Each leg's rows: J_legᵀ λ_i = g_leg - e_z τ_i, with J_leg's columns the tip
     # velocities of (ux, uy, actuator). The actuator's column is the leg axis u and the
     # other two are orthogonal to it, so J_legᵀ⁻¹ e_z = u: λ_i = own_i - τ_i u_i.
     try:
-        own = np.linalg.solve(_leg_jacobians_t(am, top), g[am.leg_idx_v][..., None])[..., 0]  # leg weight alone
+        jac_t = _leg_jacobians_t(terms.leg_columns, top)
+        own = np.linalg.solve(jac_t, terms.g_legs[..., None])[..., 0]  # leg weight alone
     except np.linalg.LinAlgError:
         raise SingularConfigurationError(
             "a universal joint is at gimbal lock (a leg at 90° from its home direction); its forces are not defined",
@@ -182,7 +188,7 @@ def solve_statics(
     local = np.matmul(np.stack([axis, own], axis=2), pa.R[1:, None])  # (n, 6, 2, 3): Rᵀ u_i, Rᵀ own_i
     lines = np.matmul(local, am.top_line_map)  # (n, 6, 2, 6): rows [a, t_i × a]
     lines_t = lines[:, :, 0]  # Wᵀ
-    rhs = lines[:, :, 1].sum(axis=1) + g[am.plate_rows_ff]
+    rhs = lines[:, :, 1].sum(axis=1) + terms.g_top
     inverse_t = _inverse_or_nan(lines_t)
     tau = np.matmul(rhs[:, None], inverse_t)[:, 0]
     # ‖W‖₁ ‖W⁻¹‖₁ from the transposes' row sums
@@ -197,5 +203,5 @@ def solve_statics(
             worst,
         )
     ball = own - tau[..., None] * axis
-    base = (g[:6].reshape(2, 3) @ pa.R[0].T).ravel()  # root free-flyer wrench, in world axes
-    return StaticsResult(-tau, ball, base, condition, q, singular)
+    base = (terms.base_wrench_local.reshape(2, 3) @ pa.R[0].T).ravel()  # root free-flyer wrench, world axes
+    return StaticsResult(-tau, ball, base, condition, singular)

@@ -56,7 +56,7 @@ def test_a_non_finite_force_is_never_feasible(am):
         forces = state.forces.copy()
         forces[1, 2] = bad
         statics = StaticsResult(forces, state.statics.ball_forces, state.statics.base_wrench,
-                                state.statics.condition, state.statics.q, False)  # fmt: skip
+                                state.statics.condition, False)  # fmt: skip
         kinds = {v.kind for v in evaluate_constraints(am.config, state.legs, statics)}
         assert "non_finite_force" in kinds
 
