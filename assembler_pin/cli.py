@@ -257,6 +257,12 @@ def cmd_bench(args: argparse.Namespace) -> int:
 
     if args.repeat < 1:
         raise CLIError(f"--repeat must be an integer >= 1, got {args.repeat}")
+    if args.platforms_sweep:
+        from .bench import benchmark_platforms_sweep, format_sweep
+
+        rows = benchmark_platforms_sweep()
+        print(_dumps(rows) if args.json else format_sweep(rows))
+        return 0
     am = AssemblerModel.from_config(_config(args))
     results = run_benchmarks(am, repeat=args.repeat, optimize=not args.no_optimize, quick=args.quick)
     if args.grid:
@@ -434,6 +440,9 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--no-optimize", action="store_true", help="skip the optimization comparison (slow: ~10 s)")
     p.add_argument("--quick", action="store_true", help="minimal goal sets: a smoke test, not figures")
     p.add_argument("--grid", action="store_true", help="also solve the 120-goal level-EE grid (~2 min)")
+    p.add_argument("--platforms-sweep", action="store_true",
+                   help="only the cost of each stack size n = 1..64: build, memory, statics, FK, "
+                        "initial condition, optimization (~5 min)")  # fmt: skip
     p.set_defaults(func=cmd_bench)
 
     p = add("view", "show a pose in Meshcat (live server until Ctrl-C, or a standalone HTML page)")

@@ -238,8 +238,7 @@ class AssemblerModel:
                                  "next plate's floating joint, depth-first from plate 0")  # fmt: skip
         if not np.allclose(self.plate_placement_R, np.eye(3), atol=1e-12):
             raise ModelFileError("the plates' floating joints must have a pure translation as origin (home pose)")
-        if self.n <= WHOLE_DATA_MAX_PLATFORMS and not self.model.check(self.data):
-            raise ModelFileError("model.check(data) failed on the loaded URDF")
+
 
     def _build_constraints(self) -> None:
         model = self.model

@@ -5,6 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pinocchio as pin
 import pytest
+from checks import design_anchors
 
 from assembler_pin import AssemblerModel, load_config, stack_forward_kinematics
 
@@ -27,22 +28,6 @@ def random_poses(am):
         if fk.success:
             out.append((lengths, fk.plates))
     return out
-
-
-def design_anchors(cfg, j: int) -> tuple[np.ndarray, np.ndarray]:
-    """Bottom (plate j frame) and top (plate j+1 frame) joint centres of SP j, (6, 3) each,
-    written out again from the design notes (independent of assembler_pin.geometry)."""
-    r = cfg.plate.node_radius
-    half = np.deg2rad(cfg.plate.node_spacing_deg) / 2
-    bottom, top = [], []
-    for m in range(3):
-        node = np.deg2rad(90 + 60 * j + 120 * m)
-        for sign in (+1, -1):
-            a_b = node + sign * half
-            a_t = node + sign * (np.pi / 3 - half)
-            bottom.append([r * np.cos(a_b), r * np.sin(a_b), 0.0])
-            top.append([r * np.cos(a_t), r * np.sin(a_t), 0.0])
-    return np.array(bottom), np.array(top)
 
 
 def potential_energy(cfg, plates) -> float:

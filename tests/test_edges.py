@@ -8,9 +8,10 @@ import json
 import numpy as np
 import pinocchio as pin
 import pytest
+from checks import assert_feasible
 
 import assembler_pin.optimize as optimize_module
-from assembler_pin import AssemblerModel, leg_state, solve_statics, stack_forward_kinematics, taa_to_se3
+from assembler_pin import AssemblerModel, solve_statics, taa_to_se3
 from assembler_pin.cli import main
 from assembler_pin.optimize import OptimizeOptions, optimize_internal_poses
 from assembler_pin.solve import STARTS, solve
@@ -20,25 +21,11 @@ from assembler_pin.solve import STARTS, solve
 DEGRADED_GOAL = [-0.067917, 0.231621, 0.923905, 0.190194, -0.388074, 0.041778]
 
 
-def _assert_feasible(am, state, goal):
-    """Every constraint recomputed from the plates: lengths, deflection, forces, rise, EE."""
-    leg = am.config.leg
-    legs = leg_state(am, state.plates)
-    forces = solve_statics(am, state.plates).forces
-    assert np.all(np.isfinite(forces))
-    assert leg.min_length <= legs.lengths.min() and legs.lengths.max() <= leg.max_length
-    assert legs.deflection.max() <= np.deg2rad(leg.max_deflection_deg)
-    assert np.all(forces <= leg.max_tension) and np.all(forces >= -leg.max_compression)
-    assert legs.rise.min() > 0
-    fk = stack_forward_kinematics(am, legs.lengths).raise_if_failed()
-    assert np.allclose(fk.as_matrices()[-1], goal.homogeneous, atol=1e-9)
-
-
 def test_a_converged_optimum_is_not_lost_to_the_strict_check(am):
     goal = taa_to_se3(DEGRADED_GOAL)
     result = solve(am, goal)
     assert result.success
-    _assert_feasible(am, result.optimized, goal)
+    assert_feasible(am, result.optimized, goal)
     # an independent restart from the returned optimum finds nothing better
     again = optimize_internal_poses(am, result.optimized, goal)
     assert again.optimized.max_abs_force >= result.optimized.max_abs_force * (1 - 1e-3)
@@ -51,7 +38,7 @@ def test_a_rejected_converged_point_is_never_a_success(am, monkeypatch):
     init = solve(am, goal, optimize=False).initial
     result = optimize_internal_poses(am, init, goal)
     assert result.optimized.feasible
-    _assert_feasible(am, result.optimized, goal)
+    assert_feasible(am, result.optimized, goal)
     if not result.success:
         assert "breaks a limit" in result.message
 
@@ -71,7 +58,7 @@ def test_low_level_goals_the_helper_arm_alone_missed_are_solved(am, xyz):
     goal = pin.SE3(np.eye(3), np.array(xyz))
     result = solve(am, goal)
     assert result.success, result.message
-    _assert_feasible(am, result.optimized, goal)
+    assert_feasible(am, result.optimized, goal)
 
 
 @pytest.fixture(scope="module")
@@ -86,7 +73,7 @@ def test_one_platform_the_start_is_the_optimum(one_platform, method):
     assert result.success, result.message
     assert "nothing to optimize" in result.message
     np.testing.assert_allclose(result.optimized.plates.as_matrices(), result.initial.plates.as_matrices())
-    _assert_feasible(one_platform, result.optimized, goal)
+    assert_feasible(one_platform, result.optimized, goal)
 
 
 def test_one_platform_from_the_cli(tmp_path, capsys):
@@ -113,7 +100,7 @@ def test_a_singular_trial_point_is_an_infeasible_step(am, monkeypatch):
     monkeypatch.setattr(optimize_module, "solve_statics", sometimes_singular)
     result = optimize_internal_poses(am, init, goal)  # no exception escapes
     assert result.optimized.feasible
-    _assert_feasible(am, result.optimized, goal)
+    assert_feasible(am, result.optimized, goal)
 
 
 def test_singular_derivatives_end_the_solve_with_the_reason(am, monkeypatch):

@@ -14,7 +14,7 @@ from pathlib import Path
 import numpy as np
 import pinocchio as pin
 import pytest
-from conftest import design_anchors
+from checks import design_anchors
 
 from assembler_pin import (
     HelperArm,

@@ -5,7 +5,8 @@ from __future__ import annotations
 import numpy as np
 import pinocchio as pin
 import pytest
-from conftest import design_anchors, random_se3
+from checks import design_anchors
+from conftest import random_se3
 
 from assembler_pin import (
     ConvergenceError,

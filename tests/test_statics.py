@@ -5,10 +5,11 @@ from __future__ import annotations
 import numpy as np
 import pinocchio as pin
 import pytest
-from conftest import design_anchors, potential_energy, random_se3
+from checks import design_anchors
+from conftest import potential_energy, random_se3
 
 from assembler_pin import SingularConfigurationError, solve_statics, stack_forward_kinematics
-from assembler_pin.kinematics import PlateArrays, leg_state, q_from_plates
+from assembler_pin.kinematics import PlateArrays, q_from_plates
 from assembler_pin.statics import closure_jacobian_blocks
 
 

@@ -1,0 +1,84 @@
+"""Any number of platforms: the per-platform statics against an independent whole-stack
+solve, stacks of 1..8 platforms solved end to end, and a 64-platform stack."""
+
+from __future__ import annotations
+
+import numpy as np
+import pinocchio as pin
+import pytest
+
+import assembler_pin as ap
+from assembler_pin.bench import random_reachable_plates
+
+
+def whole_stack_forces(am: ap.AssemblerModel, plates) -> np.ndarray:
+    """Actuator forces from the whole-stack Pinocchio model: g(q) = Sᵀτ + J_cᵀλ with Pinocchio's
+    own constraint Jacobian of the 6n ball joints, solved as one dense system (rows of every
+    joint but the root). Tension positive."""
+    model, data = am.model, am.data
+    q = ap.q_from_plates(am, plates)
+    g = pin.computeGeneralizedGravity(model, data, q)
+    pin.computeJointJacobians(model, data, q)
+    for cm, cd in zip(am.constraint_models, am.constraint_datas, strict=True):
+        cm.calc(model, data, cd)
+    jc = pin.getConstraintsJacobian(model, data, am.constraint_models, am.constraint_datas)
+    select = np.zeros((6 * am.n, model.nv))
+    select[np.arange(6 * am.n), am.leg_idx_v[:, :, 2].ravel()] = 1.0
+    system = np.hstack([select.T, jc.T])[6:]
+    tau = np.linalg.solve(system, g[6:])[: 6 * am.n]
+    return -tau.reshape(am.n, 6)
+
+
+@pytest.mark.parametrize("n", [1, 2, 3, 4, 5, 6])
+def test_per_platform_statics_equal_the_whole_stack(n):
+    am = ap.AssemblerModel.from_config({"platforms": n})
+    rng = np.random.default_rng(n)
+    for _ in range(4):
+        _, plates = random_reachable_plates(am, rng, spread=0.8)
+        np.testing.assert_allclose(ap.solve_statics(am, plates).forces, whole_stack_forces(am, plates), atol=1e-9)
+
+
+def _total_weight(cfg) -> float:
+    """Every mass of the stack from the configuration alone [N]."""
+    n = cfg.platforms
+    masses = (n + 1) * cfg.plate.mass + 6 * n * (cfg.leg.motor_mass + cfg.leg.shaft_mass) + cfg.payload.mass
+    return masses * cfg.gravity
+
+
+def test_a_64_platform_stack_builds_and_holds_its_weight():
+    am = ap.AssemblerModel.from_config({"platforms": 64})
+    result = ap.solve_statics(am, am.home)
+    assert result.forces.shape == (64, 6) and np.all(np.isfinite(result.forces))
+    # the mount carries the whole weight, straight up, with no moment (the home pose is symmetric)
+    np.testing.assert_allclose(result.base_wrench[:3], [0.0, 0.0, _total_weight(am.config)], rtol=1e-12, atol=1e-9)
+    np.testing.assert_allclose(result.base_wrench[3:], 0.0, atol=1e-9)
+    # at home each platform's six legs share the weight above their top plate equally
+    cfg = am.config
+    geo = ap.leg_geometry(cfg)
+    axial_z = geo.home_direction[0, 0, 2]
+    above = [cfg.payload.mass + (64 - j) * cfg.plate.mass + 6 * (63 - j) * (cfg.leg.motor_mass + cfg.leg.shaft_mass)
+             for j in range(64)]  # fmt: skip
+    # legs' own weight adds to the compression; bounds: without and with the whole leg weight
+    low = -np.array(above) * cfg.gravity / (6 * axial_z)
+    legs = (cfg.leg.motor_mass + cfg.leg.shaft_mass) * cfg.gravity / axial_z
+    assert np.all(result.forces.max(axis=1) <= low + 1e-9) and np.all(result.forces.min(axis=1) >= low - legs)
+    with pytest.raises(ap.ConfigError, match="gigabytes"):
+        _ = am.data
+
+
+@pytest.mark.parametrize("n", [1, 2, 3, 6, 8])
+def test_stacks_of_any_size_solve_their_own_reachable_goals(n):
+    am = ap.AssemblerModel.from_config({"platforms": n})
+    rng = np.random.default_rng(10 + n)
+    _, plates = random_reachable_plates(am, rng, spread=0.5)
+    goal = plates.se3(n)
+    result = ap.solve(am, goal)
+    assert result.success, result.message
+    state = result.optimized
+    fk = ap.stack_forward_kinematics(am, state.leg_lengths).raise_if_failed()
+    np.testing.assert_allclose(fk.as_matrices()[-1], goal.homogeneous, atol=1e-9)
+    leg = am.config.leg
+    assert leg.min_length <= state.leg_lengths.min() and state.leg_lengths.max() <= leg.max_length
+    np.testing.assert_allclose(state.forces, ap.solve_statics(am, fk).forces, atol=1e-6)
+    if n <= 6:
+        np.testing.assert_allclose(state.forces, whole_stack_forces(am, state.plates), atol=1e-9)
