@@ -55,7 +55,7 @@ from .optimize import OptimizeOptions, OptimizeResult, optimize_internal_poses
 from .scenarios import SCENARIOS, Scenario, scenario
 from .solve import SolveResult, solve
 from .state import StackState, evaluate_state
-from .statics import StaticsResult, solve_statics
+from .statics import StaticsResult, solve_statics, solve_statics_batch
 from .urdf import assembler_urdf, closure_sidecar
 
 __all__ = [
@@ -110,6 +110,7 @@ __all__ = [
     "se3_to_taa",
     "solve",
     "solve_statics",
+    "solve_statics_batch",
     "sp_forward_kinematics",
     "stack_forward_kinematics",
     "taa_to_se3",

@@ -16,7 +16,7 @@ import numpy as np
 
 from .kinematics import PlateArrays, q_from_plates, sp_forward_kinematics, stack_forward_kinematics
 from .model import AssemblerModel
-from .statics import solve_statics
+from .statics import solve_statics, solve_statics_batch
 
 __all__ = [
     "LEVEL_GRID",
@@ -83,7 +83,12 @@ def run_benchmarks(
         "sp_fk_us": median_time_us(lambda: sp_forward_kinematics(am, 0, pick()[0][0]), repeat),
         "stack_fk_us": median_time_us(lambda: stack_forward_kinematics(am, pick()[0]), repeat),
         "q_from_plates_us": median_time_us(lambda: q_from_plates(am, pick()[1]), repeat),
+        "statics_from_matrices_us": median_time_us(lambda: solve_statics(am, pick()[1].as_matrices()), repeat),
     }
+    batch = np.array([s[1].as_matrices() for s in samples] * 10)
+    results["statics_batch_stacks_per_s"] = len(batch) / (
+        1e-6 * median_time_us(lambda: solve_statics_batch(am, batch), 5)
+    )
     results.update(benchmark_initial_condition(am, n_random=3 if quick else 20, seed=seed))
     if optimize:
         results.update(benchmark_optimization(am, names=["orientation_transition"] if quick else None))

@@ -239,7 +239,6 @@ class AssemblerModel:
         if not np.allclose(self.plate_placement_R, np.eye(3), atol=1e-12):
             raise ModelFileError("the plates' floating joints must have a pure translation as origin (home pose)")
 
-
     def _build_constraints(self) -> None:
         model = self.model
         self.constraint_models = pin.StdVec_ConstraintModel()

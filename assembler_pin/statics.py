@@ -26,14 +26,23 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
+import numpy.typing as npt
 
-from .exceptions import SingularConfigurationError
-from .kinematics import LegState, PlateArrays, leg_vectors, plate_arrays, platform_configurations
+from .exceptions import PoseError, SingularConfigurationError
+from .kinematics import LegState, PlateArrays, checked_rotations, leg_vectors, plate_arrays, platform_configurations
 from .linalg import skew
 from .model import AssemblerModel
 from .platform_model import PlatformStatics, stack_gravity_terms
+from .validation import as_float_array
 
-__all__ = ["CONDITION_LIMIT", "StaticsResult", "closure_jacobian_blocks", "gravity_terms", "solve_statics"]
+__all__ = [
+    "CONDITION_LIMIT",
+    "StaticsResult",
+    "closure_jacobian_blocks",
+    "gravity_terms",
+    "solve_statics",
+    "solve_statics_batch",
+]
 
 CONDITION_LIMIT = 1e8
 """Largest 1-norm condition number of a platform's reduced 6×6 statics system trusted."""
@@ -205,3 +214,29 @@ def solve_statics(
     ball = own - tau[..., None] * axis
     base = (terms.base_wrench_local.reshape(2, 3) @ pa.R[0].T).ravel()  # root free-flyer wrench, world axes
     return StaticsResult(-tau, ball, base, condition, singular)
+
+
+def solve_statics_batch(am: AssemblerModel, plates: npt.ArrayLike) -> np.ndarray:
+    """Actuator forces of B stacks at once, for maps and sweeps.
+
+    Args:
+        plates: (B, n+1, 4, 4) world poses of the plates of each stack (validated all at once).
+
+    Returns:
+        (B, n, 6) forces [N], tension positive; NaN rows for a stack whose statics are
+        singular (see :func:`solve_statics`).
+
+    Raises:
+        PoseError: the array is not B stacks of n+1 poses.
+    """
+    matrices = as_float_array(plates, "plate poses of B stacks (B, n+1, 4, 4)")
+    if matrices.ndim != 4 or matrices.shape[1:] != (am.n + 1, 4, 4):
+        raise PoseError(f"plate poses of B stacks must have shape (B, {am.n + 1}, 4, 4), got {matrices.shape}")
+    B = matrices.shape[0]
+    R, p = checked_rotations(matrices.reshape(-1, 4, 4), "pose")
+    R, p = R.reshape(B, am.n + 1, 3, 3), p.reshape(B, am.n + 1, 3)
+    out = np.empty((B, am.n, 6))
+    for b in range(B):
+        result = solve_statics(am, PlateArrays(R[b], p[b]))
+        out[b] = np.where(result.singular, np.nan, result.forces)
+    return out

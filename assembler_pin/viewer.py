@@ -46,11 +46,11 @@ import numpy.typing as npt
 import pinocchio as pin
 from pinocchio.visualize import MeshcatVisualizer
 
-from .exceptions import AssemblerError, ConvergenceError
+from .exceptions import AssemblerError, ConvergenceError, ViewerError
 from .geometry import DIMENSIONS
 from .kinematics import PlateArrays, leg_state, plate_arrays, q_from_plates, stack_forward_kinematics
 from .meshcat_server import DEFAULT_HOST, ServerProcess, start_server
-from .model import AssemblerModel
+from .model import WHOLE_DATA_MAX_PLATFORMS, AssemblerModel
 from .state import StackState, evaluate_state
 from .urdf import names
 
@@ -299,6 +299,11 @@ class StackViewer:
         host: str = DEFAULT_HOST,
         port: int | None = None,
     ) -> None:
+        if am.n > WHOLE_DATA_MAX_PLATFORMS:
+            raise ViewerError(
+                f"the viewer draws stacks of up to {WHOLE_DATA_MAX_PLATFORMS} platforms (it runs on the "
+                f"whole-stack Pinocchio data); this one has {am.n}"
+            )
         self.am = am
         self.server: ServerProcess | None = None
         if viewer is None:

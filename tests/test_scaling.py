@@ -82,3 +82,15 @@ def test_stacks_of_any_size_solve_their_own_reachable_goals(n):
     np.testing.assert_allclose(state.forces, ap.solve_statics(am, fk).forces, atol=1e-6)
     if n <= 6:
         np.testing.assert_allclose(state.forces, whole_stack_forces(am, state.plates), atol=1e-9)
+
+
+def test_batched_statics_equal_the_single_path(am):
+    rng = np.random.default_rng(3)
+    stacks = [random_reachable_plates(am, rng)[1] for _ in range(5)]
+    batch = np.array([s.as_matrices() for s in stacks])
+    forces = ap.solve_statics_batch(am, batch)
+    assert forces.shape == (5, am.n, 6)
+    for b, plates in enumerate(stacks):
+        np.testing.assert_allclose(forces[b], whole_stack_forces(am, plates), atol=1e-9)
+    with pytest.raises(ap.PoseError, match="shape"):
+        ap.solve_statics_batch(am, batch[:, :-1])
