@@ -16,7 +16,7 @@ import pinocchio as pin
 from ..config import AssemblerConfig
 from ..constraints import leg_limit_margins
 from ..exceptions import OptionsError
-from .limits import _geometry, cluster_limits, relative_leg_measures
+from .limits import cached_leg_geometry, cluster_limits, relative_leg_measures
 from .options import HelperArmOptions
 from .urdf import helper_arm_urdf
 
@@ -80,7 +80,7 @@ class HelperArm:
         self.plate_frames = [self.model.getFrameId(f"plate_{k}") for k in range(n + 1)]
         self.tip_frame = self.plate_frames[-1]
         self.cluster_joints = [self.model.getJointId(f"sp{j}_rx") for j in range(n)]
-        self._geometry = _geometry(config)
+        self.geometry = cached_leg_geometry(config)
 
     @property
     def nq(self) -> int:
@@ -140,7 +140,7 @@ class HelperArm:
         rot = _xyz_rotations(q)
         d = self.link_length if link_length is None else float(link_length)
         half = np.array([0.0, 0.0, 0.5 * d])
-        lengths, cos, rise = relative_leg_measures(self._geometry, rot, half + rot @ half)
+        lengths, cos, rise = relative_leg_measures(self.geometry, rot, half + rot @ half)
         return np.maximum(-leg_limit_margins(self.config.leg, lengths, cos, rise, margin), 0.0)
 
     def _penalty_jacobian(

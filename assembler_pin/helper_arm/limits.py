@@ -18,7 +18,7 @@ from ..config import AssemblerConfig
 from ..constraints import leg_limit_margins
 from ..geometry import LegGeometry, leg_geometry
 
-__all__ = ["cluster_limits", "height_range", "relative_leg_measures"]
+__all__ = ["cached_leg_geometry", "cluster_limits", "height_range", "relative_leg_measures"]
 
 _AXIS_COUNT = 24  # horizontal tilt axes tried by cluster_limits (every 15 degrees)
 _BISECTION_TOL = 1e-10  # [rad] and [m]
@@ -26,7 +26,8 @@ _BISECTION_TOL = 1e-10  # [rad] and [m]
 
 # ---------------------------------------------------------------------- SP validity
 @functools.lru_cache(maxsize=64)
-def _geometry(cfg: AssemblerConfig) -> LegGeometry:
+def cached_leg_geometry(cfg: AssemblerConfig) -> LegGeometry:
+    """:func:`~assembler_pin.geometry.leg_geometry`, cached per configuration (immutable)."""
     return leg_geometry(cfg)
 
 
@@ -76,7 +77,7 @@ def _sp_valid(cfg: AssemblerConfig, rotations: np.ndarray, translations: np.ndar
     Returns:
         (m,) booleans.
     """
-    lengths, cos, rise = relative_leg_measures(_geometry(cfg), rotations[:, None], translations[:, None])
+    lengths, cos, rise = relative_leg_measures(cached_leg_geometry(cfg), rotations[:, None], translations[:, None])
     m = leg_limit_margins(cfg.leg, lengths, cos, rise)
     ok = (m[:4] >= 0).all(axis=0) & (m[4] > 0)
     return ok.reshape(ok.shape[0], -1).all(axis=1)
