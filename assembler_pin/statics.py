@@ -27,9 +27,18 @@ from dataclasses import dataclass
 
 import numpy as np
 import numpy.typing as npt
+import pinocchio as pin
 
 from .exceptions import PoseError, SingularConfigurationError
-from .kinematics import LegState, PlateArrays, checked_rotations, leg_vectors, plate_arrays, platform_configurations
+from .kinematics import (
+    LegState,
+    PlateArrays,
+    checked_rotations,
+    leg_vectors,
+    plate_arrays,
+    platform_configurations,
+    q_from_arrays,
+)
 from .linalg import skew
 from .model import AssemblerModel
 from .platform_model import PlatformStatics, stack_gravity_terms
@@ -37,6 +46,7 @@ from .validation import as_float_array
 
 __all__ = [
     "CONDITION_LIMIT",
+    "WHOLE_STACK_STATICS_MAX_PLATFORMS",
     "StaticsResult",
     "closure_jacobian_blocks",
     "gravity_terms",
@@ -142,11 +152,33 @@ def closure_jacobian_blocks(am: AssemblerModel, plates: PlateArrays | Sequence |
     return out.reshape(n, 18, 24)
 
 
-def gravity_terms(am: AssemblerModel, pa: PlateArrays, vec: np.ndarray, lengths: np.ndarray) -> PlatformStatics:
-    """The Pinocchio terms of the statics: one small model per platform, top down
-    (:func:`~assembler_pin.platform_model.stack_gravity_terms`)."""
-    q = platform_configurations(am, pa, vec, lengths)
-    return stack_gravity_terms(am.stack_plan, pa.R, q)
+#: Up to this many platforms the statics run on the whole-stack model (one Pinocchio call for
+#: all platforms, its ``Data`` a few MB); above, on one model per platform (linear in n).
+WHOLE_STACK_STATICS_MAX_PLATFORMS = 4
+
+
+def gravity_terms(
+    am: AssemblerModel, pa: PlateArrays, vec: np.ndarray, lengths: np.ndarray, per_platform: bool | None = None
+) -> PlatformStatics:
+    """The Pinocchio terms of the statics: generalized gravity and joint Jacobians.
+
+    Args:
+        per_platform: True: one small model per platform, top down
+            (:func:`~assembler_pin.platform_model.stack_gravity_terms`); False: the whole-stack
+            model (``pin.computeGeneralizedGravity`` and ``pin.computeJointJacobians`` on
+            ``am.data``); None: the whole stack up to :data:`WHOLE_STACK_STATICS_MAX_PLATFORMS`
+            platforms. Both give the same terms (the tests hold them together).
+    """
+    if per_platform is None:
+        per_platform = am.n > WHOLE_STACK_STATICS_MAX_PLATFORMS
+    if per_platform:
+        return stack_gravity_terms(am.stack_plan, pa.R, platform_configurations(am, pa, vec, lengths))
+    model, data = am.model, am.data
+    q = q_from_arrays(am, pa, vec, lengths)
+    g = pin.computeGeneralizedGravity(model, data, q)
+    J = pin.computeJointJacobians(model, data, q)
+    top_columns = J[:, am.plate_rows_ff].transpose(1, 0, 2)
+    return PlatformStatics(g[am.leg_idx_v], g[am.plate_rows_ff], J.T[am.leg_idx_v], top_columns, g[:6])
 
 
 def solve_statics(

@@ -37,30 +37,41 @@ def home_height(cfg) -> float:
     return float(np.sqrt(mid**2 - chord**2))
 
 
+def home_directions(cfg, j: int) -> np.ndarray:
+    """Home leg directions of SP j (bottom frame), from the design anchors and home height."""
+    bottom, top = design_anchors(cfg, j)
+    v = top + np.array([0.0, 0.0, home_height(cfg)]) - bottom
+    return v / np.linalg.norm(v, axis=1, keepdims=True)
+
+
+def sp_legs(cfg, j: int, Rb, pb, Rt, pt) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Lengths [m], bottom and top deflections [rad], rise [m] of SP j's legs for world plate poses."""
+    bottom, top = design_anchors(cfg, j)
+    b = bottom @ Rb.T + pb
+    t = top @ Rt.T + pt
+    v = t - b
+    lengths = np.linalg.norm(v, axis=1)
+    u = v / lengths[:, None]
+    home = home_directions(cfg, j)
+    defl_b = np.arccos(np.clip(np.sum((u @ Rb) * home, axis=1), -1, 1))
+    defl_t = np.arccos(np.clip(np.sum((u @ Rt) * home, axis=1), -1, 1))
+    rise = (v @ Rb)[:, 2]
+    return lengths, defl_b, defl_t, rise
+
+
 def kinematic_problems(cfg, plates, goal: pin.SE3 | None = None, tol: float = 1e-9) -> list[str]:
-    """Every broken kinematic constraint of plate poses (``PlateArrays``), recomputed from
-    the design: stroke, deflection at both joints, top joint above bottom joint, EE at goal."""
+    """Every broken kinematic constraint of plate poses (``PlateArrays``), recomputed from the
+    design: stroke, deflection at both joints, top joint above bottom joint, EE at the goal."""
     leg = cfg.leg
-    h = home_height(cfg)
     out = []
     for j in range(cfg.platforms):
-        b_loc, t_loc = design_anchors(cfg, j)
-        home = t_loc + np.array([0.0, 0.0, h]) - b_loc
-        home /= np.linalg.norm(home, axis=1, keepdims=True)
-        Rb, Rt = plates.R[j], plates.R[j + 1]
-        for i in range(6):
-            b = Rb @ b_loc[i] + plates.p[j]
-            t = Rt @ t_loc[i] + plates.p[j + 1]
-            length = np.linalg.norm(t - b)
-            u = (t - b) / length
-            if not leg.min_length - 1e-12 <= length <= leg.max_length + 1e-12:
-                out.append(f"SP{j} leg {i}: length {length}")
-            for where, R in (("bottom", Rb), ("top", Rt)):
-                angle = np.arccos(np.clip((R.T @ u) @ home[i], -1, 1))
-                if angle > np.deg2rad(leg.max_deflection_deg) + 1e-9:
-                    out.append(f"SP{j} leg {i}: {where} deflection {np.rad2deg(angle)} deg")
-            if (Rb.T @ (t - b))[2] <= 0:
-                out.append(f"SP{j} leg {i}: top joint not above the bottom joint")
+        L, db, dt, rise = sp_legs(cfg, j, plates.R[j], plates.p[j], plates.R[j + 1], plates.p[j + 1])
+        if L.min() < leg.min_length - 1e-12 or L.max() > leg.max_length + 1e-12:
+            out.append(f"SP{j} length {L.min():.4f}..{L.max():.4f}")
+        if max(db.max(), dt.max()) > np.deg2rad(leg.max_deflection_deg) + 1e-9:
+            out.append(f"SP{j} deflection {np.rad2deg(max(db.max(), dt.max())):.2f} deg")
+        if rise.min() <= 0:
+            out.append(f"SP{j} rise {rise.min():.4f}")
     if goal is not None:
         n = cfg.platforms
         if np.linalg.norm(plates.p[n] - goal.translation) > tol:

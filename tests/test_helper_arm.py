@@ -14,7 +14,7 @@ from pathlib import Path
 import numpy as np
 import pinocchio as pin
 import pytest
-from checks import design_anchors
+from checks import design_anchors, kinematic_problems, sp_legs
 
 from assembler_pin import (
     HelperArm,
@@ -67,48 +67,6 @@ def arm_fk_numpy(q: np.ndarray, d: float) -> tuple[list[np.ndarray], list[np.nda
     return plates, clusters
 
 
-def home_directions(cfg, j: int) -> np.ndarray:
-    """Home leg directions of SP j (bottom frame), from the design anchors and home height."""
-    bottom, top = design_anchors(cfg, j)
-    v = top + np.array([0.0, 0.0, cfg.home_height]) - bottom
-    return v / np.linalg.norm(v, axis=1, keepdims=True)
-
-
-def sp_legs(cfg, j: int, Rb, pb, Rt, pt) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """Lengths, bottom and top deflections [rad], rise [m] of SP j's legs for world plate poses."""
-    bottom, top = design_anchors(cfg, j)
-    b = bottom @ Rb.T + pb
-    t = top @ Rt.T + pt
-    v = t - b
-    lengths = np.linalg.norm(v, axis=1)
-    u = v / lengths[:, None]
-    home = home_directions(cfg, j)
-    defl_b = np.arccos(np.clip(np.sum((u @ Rb) * home, axis=1), -1, 1))
-    defl_t = np.arccos(np.clip(np.sum((u @ Rt) * home, axis=1), -1, 1))
-    rise = (v @ Rb)[:, 2]
-    return lengths, defl_b, defl_t, rise
-
-
-def independent_kinematic_problems(cfg, plates, goal: pin.SE3, tol: float = 1e-9) -> list[str]:
-    """Every kinematic constraint recomputed from the design anchors (empty: valid)."""
-    leg = cfg.leg
-    out = []
-    for j in range(cfg.platforms):
-        L, db, dt, rise = sp_legs(cfg, j, plates.R[j], plates.p[j], plates.R[j + 1], plates.p[j + 1])
-        if L.min() < leg.min_length or L.max() > leg.max_length:
-            out.append(f"SP{j} length {L.min():.4f}..{L.max():.4f}")
-        if max(db.max(), dt.max()) > leg.max_deflection:
-            out.append(f"SP{j} deflection {np.rad2deg(max(db.max(), dt.max())):.2f} deg")
-        if rise.min() <= 0:
-            out.append(f"SP{j} rise {rise.min():.4f}")
-    n = cfg.platforms
-    if np.linalg.norm(plates.p[n] - goal.translation) > tol:
-        out.append("EE position")
-    if np.linalg.norm(pin.log3(goal.rotation.T @ plates.R[n])) > tol:
-        out.append("EE rotation")
-    return out
-
-
 def sp_valid_about_mid(cfg, R: np.ndarray, d: float) -> bool:
     """An SP tilted by R about its mid-height point at height d is valid (all platforms)."""
     half = np.array([0.0, 0.0, d / 2])
@@ -139,7 +97,7 @@ def check_result(am, result) -> None:
     assert np.linalg.norm(ee.translation - result.goal.translation) < 1e-9
     assert np.linalg.norm(pin.log3(result.goal.rotation.T @ ee.rotation)) < 1e-9
     np.testing.assert_allclose(fk.plates.p, result.state.plates.p, atol=1e-9)
-    assert independent_kinematic_problems(am.config, result.state.plates, result.goal) == []
+    assert kinematic_problems(am.config, result.state.plates, result.goal) == []
     kinds = {v.kind for v in result.state.violations}
     assert not kinds - {"tension", "compression"}
 

@@ -5,24 +5,15 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from checks import assert_feasible
 
-from assembler_pin import AssemblerModel, GoalTolerance, leg_state, load_config, solve_statics
+from assembler_pin import AssemblerModel, GoalTolerance, load_config
 from assembler_pin.optimize import OptimizeOptions, objective_value, optimize_internal_poses
 
 
 def _assert_feasible_independently(am, state, goal=None, tol=1e-9):
-    """Every constraint of the paper, recomputed from the plates with the config limits."""
-    cfg = am.config.leg
-    legs = leg_state(am, state.plates)
-    forces = solve_statics(am, state.plates).forces
-    assert np.all(legs.lengths >= cfg.min_length) and np.all(legs.lengths <= cfg.max_length)
-    assert np.all(legs.deflection <= np.deg2rad(am.config.leg.max_deflection_deg))
-    assert np.all(forces <= cfg.max_tension) and np.all(forces >= -cfg.max_compression)
-    bottom_z = state.plates.R[:-1, :, 2]
-    assert np.all(np.einsum("jk,jik->ji", bottom_z, legs.top_points - legs.bottom_points) > 0)
-    if goal is not None:
-        assert np.linalg.norm(state.plates.p[-1] - goal.translation) <= tol
-        assert np.linalg.norm(state.plates.R[-1] - goal.rotation) <= 10 * tol
+    """Every constraint of the paper, recomputed from the design (:mod:`checks`)."""
+    assert_feasible(am, state, goal, tol)
 
 
 @pytest.fixture(scope="module")

@@ -8,6 +8,7 @@ import pinocchio as pin
 import pytest
 
 import assembler_pin as ap
+import assembler_pin.statics as statics_module
 from assembler_pin.bench import random_reachable_plates
 
 
@@ -30,12 +31,16 @@ def whole_stack_forces(am: ap.AssemblerModel, plates) -> np.ndarray:
 
 
 @pytest.mark.parametrize("n", [1, 2, 3, 4, 5, 6])
-def test_per_platform_statics_equal_the_whole_stack(n):
+@pytest.mark.parametrize("whole_stack_max", [0, 64])
+def test_per_platform_statics_equal_the_whole_stack(n, whole_stack_max, monkeypatch):
+    # both engines of solve_statics: one model per platform (0) and the whole-stack model (64)
+    monkeypatch.setattr(statics_module, "WHOLE_STACK_STATICS_MAX_PLATFORMS", whole_stack_max)
     am = ap.AssemblerModel.from_config({"platforms": n})
     rng = np.random.default_rng(n)
     for _ in range(4):
         _, plates = random_reachable_plates(am, rng, spread=0.8)
-        np.testing.assert_allclose(ap.solve_statics(am, plates).forces, whole_stack_forces(am, plates), atol=1e-9)
+        result = ap.solve_statics(am, plates)
+        np.testing.assert_allclose(result.forces, whole_stack_forces(am, plates), atol=1e-9)
 
 
 def _total_weight(cfg) -> float:
