@@ -1,0 +1,22 @@
+"""bench: the figures are measured on real calls (their results checked), in a quick run."""
+
+from __future__ import annotations
+
+import numpy as np
+
+import assembler_pin as ap
+from assembler_pin.bench import benchmark_platform_count, format_sweep, random_reachable_plates
+
+
+def test_random_reachable_plates_are_the_fk_of_their_lengths(am):
+    lengths, plates = random_reachable_plates(am, np.random.default_rng(0))
+    legs = ap.leg_state(am, plates)
+    np.testing.assert_allclose(legs.lengths, lengths, atol=1e-9)
+
+
+def test_one_stack_size_row():
+    row = benchmark_platform_count(2, repeat=3)
+    assert row["platforms"] == 2 and row["initial_success"] and row["optimize_success"]
+    assert all(row[k] > 0 for k in ("build_s", "resident_mb", "statics_us", "stack_fk_us", "initial_s"))
+    table = format_sweep([row, {**row, "platforms": 3, "optimize_note": "skipped: test"}])
+    assert "n = 3: skipped: test" in table and len(table.splitlines()) == 5
