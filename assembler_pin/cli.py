@@ -288,6 +288,7 @@ def cmd_bench(args: argparse.Namespace) -> int:
 
 def cmd_view(args: argparse.Namespace) -> int:
     """Show a pose in Meshcat: write a standalone page (--html) or serve until Ctrl-C."""
+    # Long by design: the live server's start, signal handling and serving loop read as one flow.
     import time
     import webbrowser
 
@@ -397,6 +398,8 @@ def _add_helper_arm_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def build_parser() -> argparse.ArgumentParser:
+    """The ``assembler-pin`` argument parser (one-line refusals, see :class:`_Parser`)."""
+    # Long by design: a declarative list of the subcommands and their options.
     parser = _Parser(
         prog="assembler-pin",
         description="Serialized Stewart platforms (the Assembler) on Pinocchio: model, statics, solve.",

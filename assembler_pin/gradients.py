@@ -92,6 +92,8 @@ def pose_derivatives(am: AssemblerModel, pa: PlateArrays) -> PoseDerivatives:
         pa: world poses of plates 0..n (validated, e.g. by
             :func:`~assembler_pin.kinematics.plate_arrays`).
     """
+    # Long by design: one chained pass whose intermediates (leg vectors, directions, forces) every
+    # derivative shares; split up, it would recompute them or pass dozens of arrays around.
     cfg, geo = am.config, am.geometry
     n = am.n
     C = 6 * n

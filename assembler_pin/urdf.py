@@ -157,6 +157,7 @@ def _joint(
 
 def assembler_urdf(cfg: AssemblerConfig) -> str:
     """The URDF text of the stack described by ``cfg`` (see module docstring)."""
+    # Long by design: it writes the URDF in document order, plate by plate and leg by leg.
     geo = leg_geometry(cfg)
     dim = DIMENSIONS
     leg = cfg.leg
