@@ -293,3 +293,60 @@ def format_sweep(rows: list[dict]) -> str:
                      f"{r['stack_fk_us']:12.0f} {r['initial_s']:10.2f} {opt}")  # fmt: skip
     notes = [f"n = {r['platforms']}: {r['optimize_note']}" for r in rows if "optimize_note" in r]
     return "\n".join(lines + notes)
+
+
+def benchmark_mujoco(am: AssemblerModel, n_random: int = 8, seed: int = 42, seconds: float = 1.5) -> list[dict]:
+    """MuJoCo against our statics, per pose (home, random stacks, each scenario's optimized
+    pose): the inverse statics' gap [N], the held pose's gap as a fraction of the tolerance
+    max(1% of max|F|, 0.5 N), the same at MuJoCo's settled pose, the EE sag [m], the largest
+    ball-joint gap [m] and the wall time of the simulation [s] (``assembler-pin bench --mujoco``)."""
+    from .scenarios import SCENARIOS
+    from .simulate import MujocoStack, hold_pose, mujoco_statics
+    from .solve import solve
+
+    rng = np.random.default_rng(seed)
+    poses: dict[str, PlateArrays] = {"home": PlateArrays.from_se3(am.home)}
+    for k in range(n_random):
+        poses[f"random {k}"] = random_reachable_plates(am, rng, spread=0.8)[1]
+    for name, s in SCENARIOS.items():
+        result = solve(am, s.goal)
+        if result.optimized is not None:
+            poses[name] = result.optimized.plates
+    stack = MujocoStack(am)
+    rows = []
+    for name, plates in poses.items():
+        ours = solve_statics(am, plates).forces
+        tol = max(0.01 * float(np.abs(ours).max()), 0.5)
+        inverse = mujoco_statics(am, plates, stack)
+        t0 = time.perf_counter()
+        held = hold_pose(am, plates, seconds=seconds, samples=10, joint_limits=False, stack=stack)
+        wall = time.perf_counter() - t0
+        settled = solve_statics(am, held.plates).forces
+        rows.append({
+            "pose": name,
+            "max_abs_force_n": float(np.abs(ours).max()),
+            "inverse_gap_n": float(np.abs(inverse.forces - ours).max()),
+            "held": held.held,
+            "held_gap_of_tolerance": float(np.abs(held.final_forces - ours).max() / tol),
+            "settled_gap_of_tolerance": float(np.abs(held.final_forces - settled).max() / tol),
+            "ee_sag_m": float(held.ee_drift[-1]),
+            "ball_gap_m": float(held.closure_residual.max()),
+            "wall_s": wall,
+        })  # fmt: skip
+    return rows
+
+
+def format_mujoco(rows: list[dict]) -> str:
+    """The table of :func:`benchmark_mujoco`."""
+    lines = [
+        f"{'pose':<24}{'max|F| N':>9}{'inverse N':>11}{'held':>6}{'held/tol':>9}{'settled/tol':>12}"
+        f"{'sag mm':>8}{'ball mm':>8}{'wall s':>7}",
+    ]
+    for r in rows:
+        lines.append(
+            f"{r['pose']:<24}{r['max_abs_force_n']:9.2f}{r['inverse_gap_n']:11.1e}{'yes' if r['held'] else 'NO':>6}"
+            f"{r['held_gap_of_tolerance']:9.2f}{r['settled_gap_of_tolerance']:12.3f}{1e3 * r['ee_sag_m']:8.2f}"
+            f"{1e3 * r['ball_gap_m']:8.3f}{r['wall_s']:7.2f}"
+        )
+    lines.append("tolerance = max(1% of max|F|, 0.5 N); held/tol ≤ 1 meets it")
+    return "\n".join(lines)

@@ -89,6 +89,17 @@ def _read_json(source: str) -> object:
         raise CLIError(f"'{source}' is nested too deeply to be a plate file") from None
 
 
+def _plates_from_file(source: str) -> list:
+    """The ``plates`` list of a JSON plate file (``{"plates": [n+1 4x4 world transforms]}``)."""
+    doc = _read_json(source)
+    if not isinstance(doc, dict) or "plates" not in doc:
+        raise CLIError('the input must be a JSON object {"plates": [n+1 4x4 world transforms]}')
+    plates = doc["plates"]
+    if not isinstance(plates, list):
+        raise CLIError('"plates" must be a list of n+1 4x4 matrices, plate 0 first')
+    return plates
+
+
 def format_state_table(state: StackState, title: str = "") -> str:
     """A readable table of a state: forces and lengths per actuator, then summary lines.
 
@@ -123,7 +134,7 @@ def cmd_export(args: argparse.Namespace) -> int:
     cfg = _config(args)
     if Path(args.out).exists() and not Path(args.out).is_dir():
         raise CLIError(f"--out '{args.out}' exists and is not a directory")
-    paths = export_model_files(cfg, args.out)
+    paths = export_model_files(cfg, args.out, mjcf=args.mjcf)
     for role, path in paths.items():
         print(f"wrote {role}: {path}")
     return 0
@@ -136,12 +147,7 @@ def cmd_statics(args: argparse.Namespace) -> int:
     else:
         if args.plates is None:
             raise CLIError("give --plates FILE (or - for stdin) or --home")
-        doc = _read_json(args.plates)
-        if not isinstance(doc, dict) or "plates" not in doc:
-            raise CLIError('the input must be a JSON object {"plates": [n+1 4x4 world transforms]}')
-        plates = doc["plates"]
-        if not isinstance(plates, list):
-            raise CLIError('"plates" must be a list of n+1 4x4 matrices, plate 0 first')
+        plates = _plates_from_file(args.plates)
     state = evaluate_state(am, plates)
     if args.json:
         print(_dumps(state.to_dict()))
@@ -264,6 +270,12 @@ def cmd_bench(args: argparse.Namespace) -> int:
         print(_dumps(rows) if args.json else format_sweep(rows))
         return 0
     am = AssemblerModel.from_config(_config(args))
+    if args.mujoco:
+        from .bench import benchmark_mujoco, format_mujoco
+
+        rows = benchmark_mujoco(am)
+        print(_dumps(rows) if args.json else format_mujoco(rows))
+        return 0
     results = run_benchmarks(am, repeat=args.repeat, optimize=not args.no_optimize, quick=args.quick)
     if args.grid:
         from .bench import benchmark_solve_grid
@@ -283,6 +295,51 @@ def cmd_bench(args: argparse.Namespace) -> int:
         for name, v in scenarios.items():
             print(f"{name:<24}{v['slsqp_s']:9.3f}{v['paper_s']:9.3f}{v['speedup']:9.1f}"
                   f"{v['initial_objective']:11.2f}{v['slsqp_objective']:9.2f}{v['paper_objective']:9.2f}")  # fmt: skip
+    return 0
+
+
+def cmd_simulate(args: argparse.Namespace) -> int:
+    """Hold a pose with MuJoCo's position actuators: EE drift and actuator forces over time."""
+    from .simulate import hold_pose
+
+    if args.html:
+        _writable_parent(args.html, "--html file")
+    am = AssemblerModel.from_config(_config(args))
+    if args.home:
+        plates = am.home
+    elif args.plates is not None:
+        plates = _plates_from_file(args.plates)
+    else:
+        raise CLIError("give --plates FILE (or - for stdin) or --home")
+    ours = evaluate_state(am, plates)
+    result = hold_pose(am, ours.plates, seconds=args.seconds, samples=args.samples,
+                       drift_tolerance=1e-3 * args.drift_tolerance)  # fmt: skip
+    gap = np.abs(result.final_forces - ours.forces)
+    if args.json:
+        doc = result.to_dict()
+        doc["statics_forces"] = ours.forces.tolist()
+        doc["max_force_difference_n"] = float(gap.max())
+        print(_dumps(doc))
+    else:
+        print(f"MuJoCo holding the pose for {result.times[-1]:.2f} s ({am.n} platforms, actuators at our leg lengths)")
+        print(f"{'t [s]':>7} {'EE drift [mm]':>14} {'EE turn [deg]':>14} {'max|F| [N]':>11} {'at limit':>9}")
+        for k in np.unique(np.linspace(0, len(result.times) - 1, 11).round().astype(int)):
+            turn_deg = np.rad2deg(result.ee_rotation_drift[k])
+            print(f"{result.times[k]:7.3f} {1e3 * result.ee_drift[k]:14.3f} {turn_deg:14.3f} "
+                  f"{np.abs(result.forces[k]).max():11.3f} {int(result.saturated[k].sum()):9d}")  # fmt: skip
+        j, i = np.unravel_index(gap.argmax(), gap.shape)
+        print(f"final forces vs statics: max difference {gap.max():.3f} N ({leg_label(j, i)}), "
+              f"statics max|F| = {ours.max_abs_force:.3f} N")  # fmt: skip
+        print(f"held: {'yes' if result.held else 'NO'} — {result.message}")
+    if args.html:
+        from .viewer import StackViewer
+
+        with StackViewer(am) as viewer:
+            viewer.animate([evaluate_state(am, pa) for pa in result.samples])
+            viewer.frame()
+            path = Path(args.html).resolve()
+            viewer.static_html(path)
+        print(f"wrote {path}")
     return 0
 
 
@@ -322,10 +379,7 @@ def cmd_view(args: argparse.Namespace) -> int:
             if args.home:
                 plates = am.home
             elif args.plates is not None:
-                doc = _read_json(args.plates)
-                if not isinstance(doc, dict) or not isinstance(doc.get("plates"), list):
-                    raise CLIError('the input must be a JSON object {"plates": [n+1 4x4 world transforms]}')
-                plates = doc["plates"]
+                plates = _plates_from_file(args.plates)
             else:
                 raise CLIError("give one of --goal, --goal-deg, --plates FILE or --home")
             shown = viewer.display(plates)
@@ -412,8 +466,9 @@ def build_parser() -> argparse.ArgumentParser:
         p.add_argument("--config", metavar="FILE", help="YAML configuration (default: built-in)")
         return p
 
-    p = add("export", "write assembler.urdf and its closure sidecar assembler.yaml")
+    p = add("export", "write assembler.urdf, its closure sidecar assembler.yaml and the helper arm's URDF")
     p.add_argument("--out", default="urdf", metavar="DIR", help="output directory (default: urdf)")
+    p.add_argument("--mjcf", action="store_true", help="also write assembler.xml, the MuJoCo model (loops closed)")
     p.set_defaults(func=cmd_export)
 
     p = add("statics", "actuator forces of given plate poses (tension positive, newtons)")
@@ -446,7 +501,21 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--platforms-sweep", action="store_true",
                    help="only the cost of each stack size n = 1..64: build, memory, statics, FK, "
                         "initial condition, optimization (~5 min)")  # fmt: skip
+    p.add_argument("--mujoco", action="store_true",
+                   help="only MuJoCo against our statics: inverse statics and held poses (~15 s)")  # fmt: skip
     p.set_defaults(func=cmd_bench)
+
+    p = add("simulate", "hold a pose in MuJoCo with force-limited position actuators: EE drift, forces over time")
+    src = p.add_mutually_exclusive_group(required=True)
+    src.add_argument("--plates", metavar="FILE", help='JSON {"plates": [n+1 4x4]} file, or - for stdin')
+    src.add_argument("--home", action="store_true", help="hold the home pose")
+    p.add_argument("--seconds", type=float, default=2.0, help="simulated time [s] (default 2)")
+    p.add_argument("--samples", type=int, default=50, help="stored samples (default 50)")
+    p.add_argument("--drift-tolerance", type=float, default=5.0, metavar="MM",
+                   help="largest EE displacement of a held pose [mm] (default 5)")  # fmt: skip
+    p.add_argument("--json", action="store_true", help="print one JSON object")
+    p.add_argument("--html", metavar="FILE", help="also write the simulated motion as a standalone viewer page")
+    p.set_defaults(func=cmd_simulate)
 
     p = add("view", "show a pose in Meshcat (live server until Ctrl-C, or a standalone HTML page)")
     src = p.add_mutually_exclusive_group(required=True)

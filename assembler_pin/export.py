@@ -1,5 +1,5 @@
-"""Write the model files of a configuration: the stack URDF, its closure sidecar and the
-helper arm's URDF (``assembler-pin export``)."""
+"""Write the model files of a configuration: the stack URDF, its closure sidecar, the
+helper arm's URDF and, on request, the MuJoCo MJCF (``assembler-pin export``)."""
 
 from __future__ import annotations
 
@@ -7,16 +7,19 @@ from pathlib import Path
 
 from .config import AssemblerConfig
 from .helper_arm import HELPER_ARM_URDF_FILENAME, helper_arm_urdf
+from .mjcf import MJCF_FILENAME, assembler_mjcf
 from .urdf import SIDECAR_FILENAME, URDF_FILENAME, assembler_urdf, closure_sidecar
 
 __all__ = ["export_model_files"]
 
 
-def export_model_files(cfg: AssemblerConfig, out_dir: str | Path) -> dict[str, Path]:
-    """Write the stack URDF, its closure sidecar and the helper arm's URDF into ``out_dir``.
+def export_model_files(cfg: AssemblerConfig, out_dir: str | Path, mjcf: bool = False) -> dict[str, Path]:
+    """Write the stack URDF, its closure sidecar and the helper arm's URDF into ``out_dir``;
+    with ``mjcf``, also the MuJoCo model ``assembler.xml`` (:mod:`assembler_pin.mjcf`).
 
     Returns:
-        A mapping from file role (``urdf``, ``sidecar``, ``helper_arm``) to the written path.
+        A mapping from file role (``urdf``, ``sidecar``, ``helper_arm``, ``mjcf``) to the
+        written path.
     """
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
@@ -28,4 +31,7 @@ def export_model_files(cfg: AssemblerConfig, out_dir: str | Path) -> dict[str, P
     paths["urdf"].write_text(assembler_urdf(cfg))
     paths["sidecar"].write_text(closure_sidecar(cfg))
     paths["helper_arm"].write_text(helper_arm_urdf(cfg))
+    if mjcf:
+        paths["mjcf"] = out / MJCF_FILENAME
+        paths["mjcf"].write_text(assembler_mjcf(cfg))
     return paths

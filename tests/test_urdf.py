@@ -17,10 +17,10 @@ REPO_URDF = Path(__file__).resolve().parents[1] / "urdf"
 
 
 def test_repository_urdf_matches_export(tmp_path):
-    assert main(["export", "--out", str(tmp_path)]) == 0
-    for name in ("assembler.urdf", "assembler.yaml", "helper_arm.urdf"):
+    assert main(["export", "--mjcf", "--out", str(tmp_path)]) == 0
+    for name in ("assembler.urdf", "assembler.yaml", "helper_arm.urdf", "assembler.xml"):
         assert (REPO_URDF / name).read_text() == (tmp_path / name).read_text(), (
-            f"urdf/{name} is stale: run 'assembler-pin export --out urdf'"
+            f"urdf/{name} is stale: run 'assembler-pin export --mjcf --out urdf'"
         )
 
 

@@ -1,0 +1,282 @@
+"""MJCF export of the stack: the same bodies as the URDF, its loops closed by MuJoCo
+equality constraints, one position actuator per leg.
+
+Layout (chosen so that both MuJoCo and Pinocchio's MJCF parser load the same file):
+
+* ``plate_0`` is the only top-level body and has no joint: the base is fixed to the world.
+  (Pinocchio's parser reads the first top-level body only, and MuJoCo allows free joints at
+  the top level only, so the plates cannot be free bodies.)
+* Plate k+1 is nested in plate k at the home offset, with three slides (``sp{k}_plate_x``,
+  ``_y``, ``_z``, along plate k's axes) and a ball ``sp{k}_plate``: the same six coordinates
+  as the URDF's free-flyer (the ball's quaternion is ``w x y z`` in MuJoCo).
+* Leg i of platform j is the body ``sp{j}_leg{i}_motor`` in plate j at the bottom joint
+  centre, turned so that its z axis is the leg's home direction, with the two hinges of the
+  universal joint (``_ux`` about x, then ``_uy`` about the turned y, as the URDF's cross
+  link), and the body ``sp{j}_leg{i}_shaft`` on the slide ``sp{j}_leg{i}_actuator`` along z.
+  The shaft frame sits at the top joint centre and the slide's ``ref`` is the home length,
+  so the slide's position *is* the pin-to-pin length [m], as in the URDF.
+* The ball joints are ``<equality><connect body1="…_shaft" body2="plate_{j+1}" anchor="0 0
+  0"/>``: the shaft frame origin and the top joint centre coincide in the reference
+  configuration (the home pose), where MuJoCo computes the anchor in the plate's frame.
+* One ``<position>`` actuator per leg on its slide: ``ctrl`` is the commanded pin-to-pin
+  length [m] (``ctrlrange`` the stroke), gain :data:`ACTUATOR_KP`, damping
+  :data:`ACTUATOR_KV`, ``forcerange`` the config's force limits. MuJoCo's actuator force is
+  positive when it pushes the shaft out, i.e. compression: the package's leg force (tension
+  positive) is its negative.
+* Inertias and primitive geometry equal the URDF's (explicit ``<inertial>`` everywhere, so
+  geoms add no mass). Geoms do not collide (``contype = conaffinity = 0``): the model is for
+  the mechanism's statics and dynamics, not for contact.
+
+Constraint softness: MuJoCo's equality constraints are soft. ``solref`` = (timeconst
+:data:`EQUALITY_SOLREF`\\[0\\], damping ratio 1) and ``solimp`` = :data:`EQUALITY_SOLIMP` make
+the loops stiff enough that the closure residual of a held pose stays well under a
+millimetre at the default timestep :data:`TIMESTEP` (timeconst must stay above two
+timesteps for MuJoCo to keep it). The statics cross-check does not depend on them
+(see :mod:`assembler_pin.simulate`).
+"""
+
+from __future__ import annotations
+
+import functools
+import xml.etree.ElementTree as ET
+from dataclasses import dataclass
+
+import numpy as np
+import pinocchio as pin
+
+from .config import AssemblerConfig
+from .geometry import DIMENSIONS, LEGS_PER_PLATFORM, leg_geometry
+from .urdf import names, xml_number, xml_vector
+
+__all__ = [
+    "ACTUATOR_ARMATURE",
+    "ACTUATOR_KP",
+    "ACTUATOR_KV",
+    "EQUALITY_SOLIMP",
+    "EQUALITY_SOLREF",
+    "MJCF_FILENAME",
+    "TIMESTEP",
+    "MjcfLayout",
+    "assembler_mjcf",
+]
+
+MJCF_FILENAME = "assembler.xml"
+#: Position gain of each leg actuator [N/m]: a stiff servo, 0.1 mm of length error per 100 N.
+ACTUATOR_KP = 1.0e6
+#: Velocity damping of each leg actuator [N s/m] (critically damps the slide's armature).
+ACTUATOR_KV = 2.0e4
+#: Reflected inertia of each actuator's drive on its slide [kg] (MuJoCo ``armature``): it
+#: keeps the stiff position loop stable at :data:`TIMESTEP`; it has no effect on statics.
+ACTUATOR_ARMATURE = 1.0
+#: Integration timestep [s].
+TIMESTEP = 1.0e-3
+#: Equality (ball-joint) constraint reference: time constant [s] and damping ratio.
+EQUALITY_SOLREF = (2.0e-3, 1.0)
+#: Equality constraint impedance (dmin, dmax, width [m]).
+EQUALITY_SOLIMP = (0.99, 0.999, 1.0e-3)
+
+_MATERIALS = {
+    "plate": "0.55 0.6 0.7 1",
+    "motor": "0.2 0.25 0.3 1",
+    "shaft": "0.8 0.8 0.8 1",
+    "node": "0.15 0.35 0.8 1",
+    "payload": "0.85 0.55 0.1 1",
+}
+
+
+@dataclass(frozen=True)
+class MjcfLayout:
+    """Names in the MJCF, in the order MuJoCo numbers them.
+
+    Attributes:
+        plate_joints: (n, 4) names per moving plate: the x, y, z slides and the ball.
+        leg_joints: (n, 6, 3) names per leg: ``ux``, ``uy`` hinges and the actuator slide.
+        actuators: (6n,) actuator names, platform-major (``sp{j}_leg{i}``).
+    """
+
+    plate_joints: list[list[str]]
+    leg_joints: list[list[list[str]]]
+    actuators: list[str]
+
+    @classmethod
+    def of(cls, platforms: int) -> MjcfLayout:
+        plate = [[f"{names.plate_joint(j)}_{a}" for a in "xyz"] + [names.plate_joint(j)] for j in range(platforms)]
+        legs = [
+            [[names.leg(j, i, part) for part in ("ux", "uy", "actuator")] for i in range(LEGS_PER_PLATFORM)]
+            for j in range(platforms)
+        ]
+        acts = [f"sp{j}_leg{i}" for j in range(platforms) for i in range(LEGS_PER_PLATFORM)]
+        return cls(plate, legs, acts)
+
+
+def _quat_wxyz(rotation: np.ndarray) -> str:
+    x, y, z, w = pin.Quaternion(rotation).coeffs()
+    return xml_vector(np.array([w, x, y, z]))
+
+
+def _inertial(body: ET.Element, mass: float, com: np.ndarray, diag: np.ndarray) -> None:
+    # MuJoCo rejects a zero inertia on a moving body; massless links of the URDF (the cross
+    # link, the top mounts) do not exist here.
+    ET.SubElement(body, "inertial", pos=xml_vector(com), mass=xml_number(mass), diaginertia=xml_vector(diag))
+
+
+def _cylinder_inertia(mass: float, radius: float, length: float) -> np.ndarray:
+    ixx = mass * (3.0 * radius**2 + length**2) / 12.0
+    return np.array([ixx, ixx, 0.5 * mass * radius**2])
+
+
+def assembler_mjcf(cfg: AssemblerConfig) -> str:
+    """The MJCF text of the stack described by ``cfg`` (see module docstring)."""
+    # Long by design: it writes the MJCF in document order, plate by plate and leg by leg.
+    geo = leg_geometry(cfg)
+    dim = DIMENSIONS
+    leg = cfg.leg
+    home_lengths = np.linalg.norm(
+        geo.top_in_plate + cfg.home_height * np.array([0.0, 0.0, 1.0]) - geo.bottom_in_plate, axis=-1
+    )
+    defl = leg.max_deflection
+    root = ET.Element("mujoco", model="assembler")
+    ET.SubElement(root, "compiler", angle="radian", autolimits="true")
+    ET.SubElement(
+        root,
+        "option",
+        timestep=xml_number(TIMESTEP),
+        gravity=xml_vector(np.array([0.0, 0.0, -cfg.gravity])),
+        integrator="implicitfast",
+    )
+    default = ET.SubElement(root, "default")
+    ET.SubElement(default, "geom", contype="0", conaffinity="0")
+    ET.SubElement(
+        default, "equality", solref=xml_vector(np.array(EQUALITY_SOLREF)), solimp=xml_vector(np.array(EQUALITY_SOLIMP))
+    )
+    asset = ET.SubElement(root, "asset")
+    for name, rgba in _MATERIALS.items():
+        ET.SubElement(asset, "material", name=name, rgba=rgba)
+    world = ET.SubElement(root, "worldbody")
+    ET.SubElement(world, "light", name="sun", pos="0 0 3", dir="0 0 -1", directional="true")
+    r = cfg.plate.node_radius
+    plate_inertia = _cylinder_inertia(cfg.plate.mass, r, dim.plate_thickness)
+    zero = np.zeros(3)
+    z_axis = np.array([0.0, 0.0, 1.0])
+
+    def add_plate(parent: ET.Element, k: int) -> ET.Element:
+        if k == 0:
+            body = ET.SubElement(parent, "body", name=names.plate(0), pos="0 0 0")
+        else:
+            body = ET.SubElement(parent, "body", name=names.plate(k), pos=xml_vector(cfg.home_height * z_axis))
+            j = k - 1
+            for a, axis in zip("xyz", ("1 0 0", "0 1 0", "0 0 1"), strict=True):
+                ET.SubElement(
+                    body, "joint", name=f"{names.plate_joint(j)}_{a}", type="slide", axis=axis, limited="false"
+                )
+            ET.SubElement(body, "joint", name=names.plate_joint(j), type="ball", limited="false")
+        _inertial(body, cfg.plate.mass, zero, plate_inertia)
+        ET.SubElement(
+            body, "geom", type="cylinder", size=xml_vector(np.array([r, 0.5 * dim.plate_thickness])), material="plate"
+        )
+        for m in range(3):
+            a = np.deg2rad(90.0 + 60.0 * k + 120.0 * m)
+            p = np.array([r * np.cos(a), r * np.sin(a), 0.0])
+            ET.SubElement(
+                body, "geom", type="sphere", size=xml_number(dim.node_sphere_radius), pos=xml_vector(p), material="node"
+            )
+        return body
+
+    parent = add_plate(world, 0)
+    for j in range(cfg.platforms):
+        for i in range(LEGS_PER_PLATFORM):
+            n_ = functools.partial(names.leg, j, i)
+            motor = ET.SubElement(
+                parent,
+                "body",
+                name=n_("motor"),
+                pos=xml_vector(geo.bottom_in_plate[j, i]),
+                quat=_quat_wxyz(geo.leg_base_rotation[j, i]),
+            )
+            ET.SubElement(
+                motor, "joint", name=n_("ux"), type="hinge", axis="1 0 0", range=xml_vector(np.array([-defl, defl]))
+            )
+            ET.SubElement(
+                motor, "joint", name=n_("uy"), type="hinge", axis="0 1 0", range=xml_vector(np.array([-defl, defl]))
+            )
+            motor_len = 2.0 * leg.motor_com
+            _inertial(
+                motor,
+                leg.motor_mass,
+                leg.motor_com * z_axis,
+                _cylinder_inertia(leg.motor_mass, dim.motor_radius, motor_len),
+            )
+            if motor_len > 0:
+                ET.SubElement(
+                    motor,
+                    "geom",
+                    type="cylinder",
+                    size=xml_vector(np.array([dim.motor_radius, 0.5 * motor_len])),
+                    pos=xml_vector(leg.motor_com * z_axis),
+                    material="motor",
+                )
+            home_length = home_lengths[j, i]
+            shaft = ET.SubElement(motor, "body", name=n_("shaft"), pos=xml_vector(home_length * z_axis))
+            ET.SubElement(
+                shaft,
+                "joint",
+                name=n_("actuator"),
+                type="slide",
+                axis="0 0 1",
+                ref=xml_number(home_length),
+                armature=xml_number(ACTUATOR_ARMATURE),
+                range=xml_vector(np.array([leg.min_length, leg.max_length])),
+            )
+            shaft_len = 2.0 * leg.shaft_com
+            _inertial(
+                shaft,
+                leg.shaft_mass,
+                -leg.shaft_com * z_axis,
+                _cylinder_inertia(leg.shaft_mass, dim.shaft_radius, shaft_len),
+            )
+            if shaft_len > 0:
+                ET.SubElement(
+                    shaft,
+                    "geom",
+                    type="cylinder",
+                    size=xml_vector(np.array([dim.shaft_radius, 0.5 * shaft_len])),
+                    pos=xml_vector(-leg.shaft_com * z_axis),
+                    material="shaft",
+                )
+        parent = add_plate(parent, j + 1)
+    payload = ET.SubElement(parent, "body", name=names.payload, pos=xml_vector(cfg.payload.offset * z_axis))
+    m = cfg.payload.mass
+    _inertial(payload, m, zero, np.full(3, m * dim.payload_size**2 / 6.0))
+    ET.SubElement(payload, "geom", type="box", size=xml_vector(np.full(3, 0.5 * dim.payload_size)), material="payload")
+
+    equality = ET.SubElement(root, "equality")
+    for j in range(cfg.platforms):
+        for i in range(LEGS_PER_PLATFORM):
+            ET.SubElement(
+                equality,
+                "connect",
+                name=f"sp{j}_leg{i}_ball",
+                body1=names.leg(j, i, "shaft"),
+                body2=names.plate(j + 1),
+                anchor="0 0 0",
+            )
+    actuator = ET.SubElement(root, "actuator")
+    for j in range(cfg.platforms):
+        for i in range(LEGS_PER_PLATFORM):
+            ET.SubElement(
+                actuator,
+                "position",
+                name=f"sp{j}_leg{i}",
+                joint=names.leg(j, i, "actuator"),
+                kp=xml_number(ACTUATOR_KP),
+                kv=xml_number(ACTUATOR_KV),
+                ctrlrange=xml_vector(np.array([leg.min_length, leg.max_length])),
+                forcerange=xml_vector(np.array([-leg.max_tension, leg.max_compression])),
+            )
+    ET.indent(root, space="  ")
+    header = (
+        '<?xml version="1.0"?>\n'
+        f"<!-- Assembler: {cfg.platforms} stacked Stewart platforms, generated by assembler_pin.\n"
+        "     Ball joints are equality constraints; each slide's position is the leg length [m]. -->\n"
+    )
+    return header + ET.tostring(root, encoding="unicode") + "\n"
