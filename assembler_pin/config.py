@@ -18,6 +18,8 @@ The YAML format (every key optional; a missing key takes the default shown)::
       max_deflection_deg: 45  # [deg] largest joint deflection from the home direction, (0, 90)
       max_tension: 200      # [N] > 0
       max_compression: 200  # [N] > 0
+      max_speed: 0.05       # [m/s] > 0, largest leg-length rate along a planned motion
+      max_acceleration: 0.2 # [m/s^2] > 0, largest leg-length acceleration along a motion
     payload:
       mass: 5.0             # [kg] >= 0
       offset: 0.2           # [m] along the end-effector plate's local +z
@@ -76,6 +78,8 @@ class LegConfig:
         max_deflection_deg: largest deflection of the leg from its home direction at
             either joint, measured in the frame of the plate the joint sits on [deg].
         max_tension, max_compression: force limits, both positive magnitudes [N].
+        max_speed, max_acceleration: limits of a leg's length rate [m/s] and its
+            acceleration [m/s²] along a planned motion (:mod:`assembler_pin.motion`).
     """
 
     min_length: float = 0.20
@@ -87,6 +91,8 @@ class LegConfig:
     max_deflection_deg: float = 45.0
     max_tension: float = 200.0
     max_compression: float = 200.0
+    max_speed: float = 0.05
+    max_acceleration: float = 0.2
 
     @property
     def mid_length(self) -> float:
@@ -237,6 +243,8 @@ def _validate(cfg: AssemblerConfig) -> None:
     )
     for key in ("max_tension", "max_compression"):
         _check(getattr(leg, key) > 0, f"leg.{key}", getattr(leg, key), "must be > 0 [N]")
+    _check(leg.max_speed > 0, "leg.max_speed", leg.max_speed, "must be > 0 [m/s]")
+    _check(leg.max_acceleration > 0, "leg.max_acceleration", leg.max_acceleration, "must be > 0 [m/s^2]")
     chord = cfg.leg_chord
     if leg.mid_length <= chord * (1.0 + 1e-9):
         raise ConfigError(

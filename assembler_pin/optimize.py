@@ -24,6 +24,10 @@ compression limits (for ``slsqp`` also capped by the start's max|F|, so max|F| n
 continuous translation (every top joint at least ``rise_margin``
 above its bottom joint in the bottom plate's frame), end effector within tolerance.
 
+Along a motion (:mod:`assembler_pin.motion`) a :class:`MotionTerm` adds the paper's
+"minimum required movement": ``w3·Σ (L_i - L_i^prev)²`` in the objective and, as
+constraints, ``|L_i - L_i^prev| <= max_step`` for every leg (slsqp only).
+
 The result never calls a constraint-violating state a success: the returned state is the
 best *feasible* one met (checked again with the Pinocchio statics), the initial one when
 nothing better was found, with the reason.
@@ -49,7 +53,14 @@ from .state import StackState, evaluate_state
 from .statics import solve_statics
 from .validation import is_number
 
-__all__ = ["METHODS", "OptimizeOptions", "OptimizeResult", "objective_value", "optimize_internal_poses"]
+__all__ = [
+    "METHODS",
+    "MotionTerm",
+    "OptimizeOptions",
+    "OptimizeResult",
+    "objective_value",
+    "optimize_internal_poses",
+]
 
 logger = logging.getLogger(__name__)
 
@@ -77,6 +88,9 @@ class OptimizeOptions:
         max_iterations: solver iteration limit.
         ftol: solver's convergence tolerance on the objective.
         rise_margin: smallest rise of a top joint above its bottom joint [m].
+        limit_margin: how far inside the stroke [m] and the deflection limit [rad] the
+            optimizer keeps the legs (default :data:`GEOMETRIC_MARGIN`; a motion plan keeps
+            more, so that the legs stay inside between its samples).
         goal_tolerance: tolerance the final state is checked against when the EE is fixed.
     """
 
@@ -87,12 +101,19 @@ class OptimizeOptions:
     max_iterations: int = 200
     ftol: float = 1e-7
     rise_margin: float = 1e-3
+    limit_margin: float = GEOMETRIC_MARGIN
     goal_tolerance: GoalTolerance = field(default_factory=lambda: GoalTolerance(1e-9, 1e-9))
 
     def __post_init__(self) -> None:
         if self.method not in METHODS:
             raise OptionsError(f"method must be one of {', '.join(METHODS)}, got {self.method!r}")
-        for name, positive in (("w1", False), ("w2", False), ("ftol", True), ("rise_margin", False)):
+        for name, positive in (
+            ("w1", False),
+            ("w2", False),
+            ("ftol", True),
+            ("rise_margin", False),
+            ("limit_margin", True),
+        ):
             value = getattr(self, name)
             if not (is_number(value) and math.isfinite(value) and (value > 0 if positive else value >= 0)):
                 raise OptionsError(f"{name} must be a finite number {'>' if positive else '>='} 0, got {value!r}")
@@ -108,6 +129,36 @@ class OptimizeOptions:
                 is_number(v) and 0 < v < math.inf for v in (tol.position, tol.rotation)
             ):
                 raise OptionsError(f"{name} must be a GoalTolerance of two finite numbers > 0 (m, rad), got {tol!r}")
+
+
+@dataclass(frozen=True)
+class MotionTerm:
+    """Continuity with the previous sample of a motion.
+
+    Attributes:
+        previous_lengths: (n, 6) leg lengths of the previous sample [m].
+        max_step: largest change of any leg length from it [m] (> 0).
+        w3: weight of Σ ΔL² in the objective [1/m²] (>= 0).
+    """
+
+    previous_lengths: np.ndarray
+    max_step: float
+    w3: float = 0.0
+
+    def __post_init__(self) -> None:
+        if not (is_number(self.max_step) and 0 < self.max_step < math.inf):
+            raise OptionsError(f"max_step must be a finite number > 0 [m], got {self.max_step!r}")
+        if not (is_number(self.w3) and 0 <= self.w3 < math.inf):
+            raise OptionsError(f"w3 must be a finite number >= 0 [1/m^2], got {self.w3!r}")
+        prev = np.asarray(self.previous_lengths, dtype=float)
+        if prev.ndim != 2 or prev.shape[1] != 6 or not np.all(np.isfinite(prev)):
+            raise OptionsError(f"previous_lengths must be a finite (n, 6) array [m], got shape {prev.shape}")
+        object.__setattr__(self, "previous_lengths", prev)
+
+    def margins(self, lengths: np.ndarray) -> np.ndarray:
+        """Rows >= 0 when every leg moved at most ``max_step``: (2·6n,)."""
+        step = (lengths - self.previous_lengths).ravel()
+        return np.concatenate([self.max_step - step, self.max_step + step])
 
 
 @dataclass
@@ -171,9 +222,15 @@ class _Problem:
     """
 
     def __init__(
-        self, am: AssemblerModel, start: PlateArrays, goal: pin.SE3, opts: OptimizeOptions, start_feasible: bool
+        self,
+        am: AssemblerModel,
+        start: PlateArrays,
+        goal: pin.SE3,
+        opts: OptimizeOptions,
+        start_feasible: bool,
+        motion: MotionTerm | None = None,
     ):
-        self.am, self.opts, self.goal = am, opts, goal
+        self.am, self.opts, self.goal, self.motion = am, opts, goal, motion
         self.n = am.n
         self.free_ee = opts.ee_tolerance is not None
         self.movable = list(range(1, self.n)) + ([self.n] if self.free_ee else [])
@@ -230,10 +287,12 @@ class _Problem:
         self._values = (key, v)
         self.evaluations += 1
         omega = self.opts.w1 * np.abs(v.forces).max() + self.opts.w2 * np.sqrt(np.sum(v.plate_angles**2))
+        omega += self._motion_cost(v)
         feasible = (
             np.all(self._geometric(v) >= 0)
             and np.all(self._force_rows(v.forces) >= 0)
             and np.all(self._ee(v.plates, x_pose) >= 0)
+            and np.all(self._motion(v) >= 0)
         )
         if feasible and (self.best is None or omega < self.best[0]):
             self.best = (omega, x_pose.copy())
@@ -270,9 +329,9 @@ class _Problem:
 
     # ----------------------------------------------------------- constraint rows (>= 0)
     def _geometric(self, v: _Values) -> np.ndarray:
-        """Stroke, deflection and rise rows (:func:`leg_limit_margins`, :data:`GEOMETRIC_MARGIN` inside)."""
+        """Stroke, deflection and rise rows (:func:`leg_limit_margins`, ``limit_margin`` inside)."""
         margins = leg_limit_margins(self.am.config.leg, v.lengths, v.cos_deflection, v.rise,
-                                    GEOMETRIC_MARGIN, rise_margin=self.opts.rise_margin)  # fmt: skip
+                                    self.opts.limit_margin, rise_margin=self.opts.rise_margin)  # fmt: skip
         return margins.ravel()
 
     def _geometric_jac(self, d: PoseDerivatives, B: np.ndarray) -> np.ndarray:
@@ -286,6 +345,14 @@ class _Problem:
     def _force_rows(self, forces: np.ndarray) -> np.ndarray:
         F = forces.ravel()
         return np.concatenate([self.tension_limit - F, F + self.compression_limit])
+
+    def _motion(self, v: _Values) -> np.ndarray:
+        return np.zeros(0) if self.motion is None else self.motion.margins(v.lengths)
+
+    def _motion_cost(self, v: _Values) -> float:
+        if self.motion is None or self.motion.w3 == 0.0:
+            return 0.0
+        return float(self.motion.w3 * np.sum((v.lengths - self.motion.previous_lengths) ** 2))
 
     def _ee(self, pa: PlateArrays, x_pose: np.ndarray) -> np.ndarray:
         if not self.free_ee:
@@ -312,7 +379,7 @@ class _Problem:
     # ----------------------------------------------------------- smooth method (x = [poses, s])
     def smooth_fun(self, x: np.ndarray) -> float:
         v = self.values(x[:-1])
-        return float(self.opts.w1 * x[-1] + self.opts.w2 * np.sqrt(np.sum(v.plate_angles**2)))
+        return float(self.opts.w1 * x[-1] + self.opts.w2 * np.sqrt(np.sum(v.plate_angles**2)) + self._motion_cost(v))
 
     def smooth_grad(self, x: np.ndarray) -> np.ndarray:
         v = self.values(x[:-1])
@@ -321,6 +388,9 @@ class _Problem:
         s = np.sqrt(np.sum(v.plate_angles**2))
         if s > 1e-12:
             grad[:-1] = self.opts.w2 * (0.5 / s) * (d.d_plate_angles_sq.sum(axis=0) @ B)
+        if self.motion is not None and self.motion.w3 > 0.0:
+            step = (v.lengths - self.motion.previous_lengths).ravel()
+            grad[:-1] += 2.0 * self.motion.w3 * step @ (d.d_lengths.reshape(-1, 6 * self.n) @ B)
         grad[-1] = self.opts.w1
         return grad
 
@@ -328,7 +398,7 @@ class _Problem:
         v = self.values(x[:-1])
         F, s = v.forces.ravel(), x[-1]
         limits = np.array([self.tension_limit - s]) if self.symmetric_limits else self._force_rows(v.forces)
-        return np.concatenate([s - F, s + F, limits, self._geometric(v), self._ee(v.plates, x[:-1])])
+        return np.concatenate([s - F, s + F, limits, self._geometric(v), self._ee(v.plates, x[:-1]), self._motion(v)])
 
     def smooth_cons_jac(self, x: np.ndarray) -> np.ndarray:
         v = self.values(x[:-1])
@@ -346,6 +416,9 @@ class _Problem:
         rows = [with_s(-dF, 1.0), with_s(dF, 1.0), limits, with_s(self._geometric_jac(d, B), 0.0)]
         if self.free_ee:
             rows.append(with_s(self._ee_jac(v.plates, x[:-1], B), 0.0))
+        if self.motion is not None:
+            dL = d.d_lengths.reshape(-1, 6 * self.n) @ B
+            rows.append(with_s(np.vstack([-dL, dL]), 0.0))
         return np.vstack(rows)
 
     # ----------------------------------------------------------- paper method (x = TAA poses)
@@ -363,6 +436,7 @@ def optimize_internal_poses(
     initial: StackState | PlateArrays | list,
     goal: pin.SE3 | None = None,
     options: OptimizeOptions | None = None,
+    motion: MotionTerm | None = None,
 ) -> OptimizeResult:
     """Minimize Ω over the intermediate plate poses, from a starting pose.
 
@@ -376,14 +450,21 @@ def optimize_internal_poses(
             condition; plate n is taken as the goal unless ``goal`` is given.
         goal: the EE goal pose (default: the initial state's plate n).
         options: see :class:`OptimizeOptions`.
+        motion: continuity with a previous sample (:class:`MotionTerm`, slsqp only); the
+            chosen state then also keeps every leg within ``max_step`` of it.
     """
     opts = options or OptimizeOptions()
+    if motion is not None:
+        if opts.method != "slsqp":
+            raise OptionsError("a motion term needs method 'slsqp'")
+        if motion.previous_lengths.shape != (am.n, 6):
+            raise OptionsError(f"previous_lengths must have shape ({am.n}, 6), got {motion.previous_lengths.shape}")
     start = initial.plates if isinstance(initial, StackState) else plate_arrays(am, initial)
     goal = start.se3(am.n) if goal is None else goal
     check_tol = opts.ee_tolerance or opts.goal_tolerance
     initial_state = evaluate_state(am, start, goal=goal, tolerance=check_tol)
     omega0 = objective_value(am, initial_state, opts.w1, opts.w2)
-    problem = _Problem(am, start, goal, opts, initial_state.feasible)
+    problem = _Problem(am, start, goal, opts, initial_state.feasible, motion)
     if problem.nx_pose == 0:
         return _nothing_to_optimize(initial_state, omega0, opts.method)
     t0 = time.perf_counter()
@@ -396,21 +477,33 @@ def optimize_internal_poses(
 
     final_state = state_at(x_final)
     converged = bool(res.success) and not singular
-    if converged and not final_state.feasible:
+
+    def acceptable(state: StackState) -> bool:
+        return state.feasible and (motion is None or bool(np.all(motion.margins(state.leg_lengths) >= 0)))
+
+    def score(state: StackState) -> float:
+        omega = objective_value(am, state, opts.w1, opts.w2)
+        if motion is not None:
+            omega += motion.w3 * float(np.sum((state.leg_lengths - motion.previous_lengths) ** 2))
+        return omega
+
+    if converged and not acceptable(final_state):
         # SLSQP honours its rows to ~1e-8: step back towards the best feasible point met
         x_inside = problem.best[1] if problem.best is not None else np.zeros_like(x_final)
         for t in (1e-4, 1e-3, 1e-2, 1e-1):
             trial = state_at(x_final + t * (x_inside - x_final))
-            if trial.feasible:
+            if acceptable(trial):
                 final_state = trial
                 break
     candidates = [final_state] + ([state_at(problem.best[1])] if problem.best is not None else [])
-    chosen, omega_chosen = initial_state, omega0
+    chosen, omega_chosen = initial_state, score(initial_state)
     for state in candidates:
-        omega = objective_value(am, state, opts.w1, opts.w2)
+        omega = score(state)
         no_worse = not initial_state.feasible or state.max_abs_force <= initial_state.max_abs_force + 1e-9
-        if state.feasible and (not chosen.feasible or (omega < omega_chosen and no_worse)):
+        if acceptable(state) and (not acceptable(chosen) or (omega < omega_chosen and no_worse)):
             chosen, omega_chosen = state, omega
+    if motion is not None and converged and final_state.feasible and not acceptable(final_state):
+        converged, singular = False, "the converged point moves a leg more than the motion step allows"
     success, message = _verdict(res, singular, converged, final_state, chosen, initial_state)
     logger.info("optimize[%s]: %s, Ω %.4g -> %.4g in %.3f s, %d iterations",
                 opts.method, message, omega0, omega_chosen, elapsed, res.nit)  # fmt: skip

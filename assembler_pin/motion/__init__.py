@@ -1,0 +1,21 @@
+"""Motion of the stack: EE paths, force-optimal plans along them, and their time law.
+
+* :mod:`.paths` — EE paths through waypoints (screw or linear interpolation).
+* :mod:`.planner` — :func:`plan_path`: valid, force-optimized, continuous samples.
+* :mod:`.timing` — :func:`time_parametrize`: leg-length trajectories within the legs'
+  speed and acceleration limits, written to and read from CSV/JSON.
+"""
+
+from .paths import PATH_KINDS, EEPath, PathError, interpolate_pose, read_waypoints
+from .planner import PlanOptions, PlanResult, plan_path
+
+__all__ = [
+    "PATH_KINDS",
+    "EEPath",
+    "PathError",
+    "PlanOptions",
+    "PlanResult",
+    "interpolate_pose",
+    "plan_path",
+    "read_waypoints",
+]

@@ -1,0 +1,241 @@
+"""Force-optimal motion along an EE path: every sample a valid, force-optimized internal
+pose, each warm-started from the previous one and kept close to it.
+
+For each sample the optimizer (:func:`~assembler_pin.optimize.optimize_internal_poses`)
+starts from the previous optimum with its EE plate moved to the new goal, with a
+:class:`~assembler_pin.optimize.MotionTerm`: no leg moves more than ``max_leg_step`` from
+the previous sample (so the plan cannot jump to another assembly mode or local minimum),
+and, with ``w3 > 0``, the paper's minimum-movement term ``w3·Σ ΔL²`` in the objective.
+Between two samples the leg lengths are interpolated and the stack checked there
+(``checks_between`` points: stack FK of the lengths, every limit, the EE within
+``path_tolerance`` of the path). A step that fails any of this is halved, up to
+``max_refinements`` times; a sample that still cannot be made valid ends the plan with the
+reason and the valid prefix — never a gap.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import logging
+import math
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+import pinocchio as pin
+
+from ..constraints import GoalTolerance
+from ..exceptions import OptionsError
+from ..kinematics import PlateArrays, plate_arrays, stack_forward_kinematics
+from ..model import AssemblerModel
+from ..optimize import MotionTerm, OptimizeOptions, optimize_internal_poses
+from ..state import StackState, evaluate_state
+from ..validation import is_number
+from .paths import EEPath
+
+__all__ = ["PlanOptions", "PlanResult", "plan_path"]
+
+logger = logging.getLogger(__name__)
+
+
+@dataclass(frozen=True)
+class PlanOptions:
+    """Settings of :func:`plan_path`.
+
+    Attributes:
+        position_step, rotation_step: largest EE move between samples [m], [rad].
+        max_leg_step: largest change of any leg length between samples [m].
+        w3: weight of the motion term Σ ΔL² [1/m²] (0: force only).
+        max_refinements: how many times a failing step may be halved.
+        checks_between: interpolated checks between two samples.
+        path_tolerance: how far the EE may leave the path between samples.
+        limit_margin: how far inside the stroke [m] and deflection limit [rad] the samples
+            stay, so that the interpolated legs between them stay inside too.
+        optimize: the optimizer's settings (method slsqp; its ``limit_margin`` is replaced).
+    """
+
+    position_step: float = 0.01
+    rotation_step: float = math.radians(2.0)
+    max_leg_step: float = 0.01
+    w3: float = 0.0
+    max_refinements: int = 4
+    checks_between: int = 3
+    path_tolerance: GoalTolerance = field(default_factory=lambda: GoalTolerance(2e-3, math.radians(0.5)))
+    limit_margin: float = 5e-4
+    optimize: OptimizeOptions = field(default_factory=OptimizeOptions)
+
+    def __post_init__(self) -> None:
+        for name in ("position_step", "rotation_step", "max_leg_step", "limit_margin"):
+            value = getattr(self, name)
+            if not (is_number(value) and 0 < value < math.inf):
+                raise OptionsError(f"{name} must be a finite number > 0, got {value!r}")
+        if not (is_number(self.w3) and 0 <= self.w3 < math.inf):
+            raise OptionsError(f"w3 must be a finite number >= 0 [1/m^2], got {self.w3!r}")
+        for name in ("max_refinements", "checks_between"):
+            value = getattr(self, name)
+            if not (isinstance(value, int) and 0 <= value <= 20):
+                raise OptionsError(f"{name} must be an integer in [0, 20], got {value!r}")
+        if self.optimize.method != "slsqp":
+            raise OptionsError("motion planning needs the optimizer method 'slsqp'")
+        object.__setattr__(self, "optimize", dataclasses.replace(self.optimize, limit_margin=self.limit_margin))
+
+
+@dataclass
+class PlanResult:
+    """A planned motion: valid samples along the path (the whole path when successful).
+
+    Attributes:
+        success: every sample to the end of the path is valid and continuous.
+        reason: why the plan stopped, or "reached the end of the path".
+        path: the EE path.
+        parameters: (m,) path parameter of each sample (0 … path.segments).
+        states: the m valid, force-optimized states (the valid prefix when it failed).
+        solve_times_s: (m,) optimization time of each sample [s] (0 for the start).
+        refinements: number of halved steps.
+        max_between_deviation: largest EE distance from the path at the checks between
+            samples [m] and angle [rad].
+        time_s: wall time of the plan [s].
+    """
+
+    success: bool
+    reason: str
+    path: EEPath
+    parameters: np.ndarray
+    states: list[StackState]
+    solve_times_s: np.ndarray
+    refinements: int
+    max_between_deviation: tuple[float, float]
+    time_s: float
+
+    @property
+    def lengths(self) -> np.ndarray:
+        """(m, n, 6) leg lengths of the samples [m]."""
+        return np.array([s.leg_lengths for s in self.states])
+
+    @property
+    def max_abs_forces(self) -> np.ndarray:
+        """(m,) max|F| of each sample [N]."""
+        return np.array([s.max_abs_force for s in self.states])
+
+    def __repr__(self) -> str:
+        peak = f"{self.max_abs_forces.max():.2f} N" if self.states else "-"
+        return (
+            f"PlanResult(success={self.success}, {len(self.states)} samples to u = "
+            f"{self.parameters[-1] if len(self.parameters) else 0:.3f}/{self.path.segments}, peak max|F| {peak}, "
+            f"{self.refinements} refinements, {self.time_s:.2f} s, reason={self.reason!r})"
+        )
+
+
+def _with_ee(plates: PlateArrays, goal: pin.SE3) -> PlateArrays:
+    R, p = plates.R.copy(), plates.p.copy()
+    R[-1], p[-1] = goal.rotation, goal.translation
+    return PlateArrays(R, p)
+
+
+def _between_problems(
+    am: AssemblerModel, path: EEPath, u0: float, u1: float, a: StackState, b: StackState, opts: PlanOptions
+) -> tuple[str, float, float]:
+    """Checks at the interpolated leg lengths strictly between two samples: the first
+    problem found ("" when none), and the largest EE deviation from the path [m], [rad]."""
+    dev_p = dev_r = 0.0
+    guess = a.plates
+    for t in np.arange(1, opts.checks_between + 1) / (opts.checks_between + 1):
+        lengths = (1 - t) * a.leg_lengths + t * b.leg_lengths
+        fk = stack_forward_kinematics(am, lengths, base=a.plates.se3(0), guess=guess)
+        if not fk.success:
+            return f"stack FK between samples failed ({fk.message})", dev_p, dev_r
+        guess = fk.plates
+        target = path.at((1 - t) * u0 + t * u1)
+        state = evaluate_state(am, fk.plates, goal=target, tolerance=opts.path_tolerance)
+        ee = fk.plates.se3(am.n)
+        dev_p = max(dev_p, float(np.linalg.norm(ee.translation - target.translation)))
+        dev_r = max(dev_r, float(np.linalg.norm(pin.log3(target.rotation.T @ ee.rotation))))
+        if not state.feasible:
+            return f"between samples: {state.violations[0]}", dev_p, dev_r
+    return "", dev_p, dev_r
+
+
+def _step(
+    am: AssemblerModel, path: EEPath, u0: float, u1: float, prev: StackState, opts: PlanOptions
+) -> tuple[StackState | None, str, float, tuple[float, float]]:
+    """One sample at ``u1`` from the valid sample ``prev`` at ``u0``: (state or None, why
+    not, solve time [s], EE deviation between them)."""
+    goal = path.at(u1)
+    motion = MotionTerm(prev.leg_lengths, opts.max_leg_step, opts.w3)
+    result = optimize_internal_poses(am, _with_ee(prev.plates, goal), goal, opts.optimize, motion=motion)
+    if not result.success:
+        return None, result.message, result.time_s, (0.0, 0.0)
+    state = result.optimized
+    jump = float(np.abs(state.leg_lengths - prev.leg_lengths).max())
+    if jump > opts.max_leg_step * (1 + 1e-9):  # held by the optimizer; checked again here
+        return None, f"a leg would move {1e3 * jump:.2f} mm in one step", result.time_s, (0.0, 0.0)
+    problem, dev_p, dev_r = _between_problems(am, path, u0, u1, prev, state, opts)
+    if problem:
+        return None, problem, result.time_s, (dev_p, dev_r)
+    return state, "", result.time_s, (dev_p, dev_r)
+
+
+def plan_path(
+    am: AssemblerModel,
+    path: EEPath,
+    start: StackState | PlateArrays | list | None = None,
+    options: PlanOptions | None = None,
+) -> PlanResult:
+    """Force-optimized internal poses along an EE path (see module docstring).
+
+    Args:
+        path: the EE path (:class:`~assembler_pin.motion.paths.EEPath`).
+        start: the stack's state at the path's start (e.g. its current pose, or
+            ``am.home`` for a motion from the home pose). Default: the force-optimized
+            solution of the path's first pose (:func:`~assembler_pin.solve.solve`).
+        options: see :class:`PlanOptions`.
+    """
+    opts = options or PlanOptions()
+    t_start = time.perf_counter()
+    first = path.at(0.0)
+    tol = opts.optimize.goal_tolerance
+    if start is None:
+        from ..solve import solve
+
+        solved = solve(am, first, options=opts.optimize)
+        start_state = solved.optimized if solved.success else None
+        why = "" if solved.success else f"no valid pose at the path's start: {solved.message}"
+    else:
+        pa = start.plates if isinstance(start, StackState) else plate_arrays(am, start)
+        start_state = evaluate_state(am, pa, goal=first, tolerance=GoalTolerance(1e-6, 1e-6))
+        why = (
+            ""
+            if start_state.feasible
+            else "the start state is not valid at the path's start: "
+            + "; ".join(str(v) for v in start_state.violations[:2])
+        )
+        start_state = start_state if start_state.feasible else None
+    if start_state is None:
+        return PlanResult(False, why, path, np.zeros(0), [], np.zeros(0), 0, (0.0, 0.0), time.perf_counter() - t_start)
+    del tol
+    targets = list(path.parameters(opts.position_step, opts.rotation_step)[1:])
+    params, states, times = [0.0], [start_state], [0.0]
+    refinements, dev = 0, (0.0, 0.0)
+    base_step = 1.0 / max(1, len(targets))
+    reason = "reached the end of the path"
+    success = True
+    while targets:
+        u0, u1 = params[-1], targets[0]
+        state, why, dt, d = _step(am, path, u0, u1, states[-1], opts)
+        if state is None:
+            if (u1 - u0) <= base_step * path.segments / 2**opts.max_refinements + 1e-12 or opts.max_refinements == 0:
+                success = False
+                reason = f"no valid sample after u = {u0:.4f} (step refined {opts.max_refinements} times): {why}"
+                break
+            targets.insert(0, 0.5 * (u0 + u1))
+            refinements += 1
+            continue
+        targets.pop(0)
+        params.append(u1)
+        states.append(state)
+        times.append(dt)
+        dev = (max(dev[0], d[0]), max(dev[1], d[1]))
+    result = PlanResult(success, reason, path, np.array(params), states, np.array(times), refinements, dev,
+                        time.perf_counter() - t_start)  # fmt: skip
+    logger.info("plan: %s", result)
+    return result
