@@ -82,7 +82,7 @@ class EEPath:
     def at(self, u: float) -> pin.SE3:
         """The pose at path parameter ``u`` ∈ [0, segments] (segment ``floor(u)``)."""
         u = float(np.clip(u, 0.0, self.segments))
-        k = min(int(math.floor(u)), self.segments - 1)
+        k = min(math.floor(u), self.segments - 1)
         return interpolate_pose(self.waypoints[k], self.waypoints[k + 1], u - k, self.kind)
 
     def parameters(self, position_step: float, rotation_step: float) -> np.ndarray:
