@@ -298,6 +298,60 @@ def cmd_bench(args: argparse.Namespace) -> int:
     return 0
 
 
+def cmd_plan(args: argparse.Namespace) -> int:
+    """A force-optimal motion along an EE path, timed within the legs' limits."""
+    from .kinematics import taa_to_se3
+    from .motion import EEPath, PlanOptions, read_waypoints
+    from .motion.timing import plan_trajectory
+
+    if args.out:
+        _writable_parent(args.out, "--out file")
+    am = AssemblerModel.from_config(_config(args))
+    start = None
+    if args.waypoints:
+        path = read_waypoints(args.waypoints, kind=args.path)
+    elif args.to is not None:
+        goal = taa_to_se3(args.to, what="--to")
+        if args.from_ is None:
+            start = am.home
+            path = EEPath((am.home[-1], goal), args.path)
+        else:
+            path = EEPath((taa_to_se3(args.from_, what="--from"), goal), args.path)
+    else:
+        raise CLIError("give --to X Y Z RX RY RZ (from the home pose, or --from ...) or --waypoints FILE")
+    try:
+        options = PlanOptions(w3=args.w3)
+    except ValueError as exc:
+        raise CLIError(str(exc)) from None
+    plan, traj, problems = plan_trajectory(am, path, start, options, rate=args.rate)
+    travel = float(np.abs(np.diff(plan.lengths, axis=0)).sum()) if len(plan.states) > 1 else 0.0
+    doc = {
+        "success": plan.success and not problems,
+        "reason": plan.reason if not problems or not plan.success else "; ".join(problems),
+        "samples": len(plan.states),
+        "peak_max_abs_force": float(plan.max_abs_forces.max()) if plan.states else None,
+        "total_leg_travel_m": travel,
+        "duration_s": traj.duration if traj is not None else None,
+        "median_sample_time_s": float(np.median(plan.solve_times_s[1:])) if len(plan.states) > 1 else None,
+        "plan_time_s": plan.time_s,
+    }
+    if args.out and traj is not None:
+        doc["out"] = str(traj.write(args.out))
+    if args.json:
+        print(_dumps(doc))
+        return 0
+    print(f"plan: {'success' if doc['success'] else 'FAILED'} — {doc['reason']}")
+    if plan.states:
+        print(f"{doc['samples']} samples, peak max|F| {doc['peak_max_abs_force']:.2f} N, total leg travel "
+              f"{doc['total_leg_travel_m']:.3f} m, planned in {plan.time_s:.2f} s")  # fmt: skip
+    if traj is not None:
+        print(f"trajectory: {traj.duration:.2f} s at {args.rate:g} Hz ({len(traj.times)} samples), every sample valid: "
+              f"{'yes' if traj.feasible.all() else 'NO'}")  # fmt: skip
+    if "out" in doc:
+        print(f"wrote {doc['out']}")
+    return 0
+
+
 def cmd_simulate(args: argparse.Namespace) -> int:
     """Hold a pose with MuJoCo's position actuators: EE drift and actuator forces over time."""
     from .simulate import hold_pose
@@ -504,6 +558,21 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--mujoco", action="store_true",
                    help="only MuJoCo against our statics: inverse statics and held poses (~15 s)")  # fmt: skip
     p.set_defaults(func=cmd_bench)
+
+    p = add("plan", "a force-optimal motion along an EE path, as leg-length commands within the legs' limits")
+    src = p.add_mutually_exclusive_group()
+    src.add_argument("--to", nargs=6, type=float, metavar=("X", "Y", "Z", "RX", "RY", "RZ"),
+                     help="EE goal (m, rotation vector in rad); from the home pose unless --from")  # fmt: skip
+    src.add_argument("--waypoints", metavar="FILE", help="JSON or CSV waypoints (TAA rows, optional times)")
+    p.add_argument("--from", dest="from_", nargs=6, type=float, metavar=("X", "Y", "Z", "RX", "RY", "RZ"),
+                   help="with --to: start at the optimized pose of this EE pose")  # fmt: skip
+    p.add_argument("--path", choices=("screw", "linear"), default="screw",
+                   help="interpolation on SE(3): screw (geodesic, default) or linear (line + slerp)")  # fmt: skip
+    p.add_argument("--rate", type=float, default=50.0, help="output samples per second (default 50)")
+    p.add_argument("--w3", type=float, default=100.0, help="weight of the motion term Σ ΔL² [1/m²] (default 100)")
+    p.add_argument("--out", metavar="FILE", help="write the trajectory (.csv, or JSON for any other suffix)")
+    p.add_argument("--json", action="store_true", help="print one JSON object")
+    p.set_defaults(func=cmd_plan)
 
     p = add("simulate", "hold a pose in MuJoCo with force-limited position actuators: EE drift, forces over time")
     src = p.add_mutually_exclusive_group(required=True)

@@ -45,7 +45,8 @@ class PlanOptions:
     Attributes:
         position_step, rotation_step: largest EE move between samples [m], [rad].
         max_leg_step: largest change of any leg length between samples [m].
-        w3: weight of the motion term Σ ΔL² [1/m²] (0: force only).
+        w3: weight of the motion term Σ ΔL² [1/m²] (0: force only); it also keeps the
+            legs that do not set max|F| from wandering between samples.
         max_refinements: how many times a failing step may be halved.
         checks_between: interpolated checks between two samples.
         path_tolerance: how far the EE may leave the path between samples.
@@ -57,11 +58,11 @@ class PlanOptions:
     position_step: float = 0.01
     rotation_step: float = math.radians(2.0)
     max_leg_step: float = 0.01
-    w3: float = 0.0
+    w3: float = 100.0
     max_refinements: int = 4
     checks_between: int = 3
     path_tolerance: GoalTolerance = field(default_factory=lambda: GoalTolerance(2e-3, math.radians(0.5)))
-    limit_margin: float = 5e-4
+    limit_margin: float = 2e-3
     optimize: OptimizeOptions = field(default_factory=OptimizeOptions)
 
     def __post_init__(self) -> None:
@@ -95,6 +96,7 @@ class PlanResult:
         max_between_deviation: largest EE distance from the path at the checks between
             samples [m] and angle [rad].
         time_s: wall time of the plan [s].
+        path_tolerance: how far the EE may leave the path between samples.
     """
 
     success: bool
@@ -106,6 +108,7 @@ class PlanResult:
     refinements: int
     max_between_deviation: tuple[float, float]
     time_s: float
+    path_tolerance: GoalTolerance = field(default_factory=lambda: GoalTolerance(2e-3, math.radians(0.5)))
 
     @property
     def lengths(self) -> np.ndarray:
@@ -193,7 +196,6 @@ def plan_path(
     opts = options or PlanOptions()
     t_start = time.perf_counter()
     first = path.at(0.0)
-    tol = opts.optimize.goal_tolerance
     if start is None:
         from ..solve import solve
 
@@ -211,8 +213,8 @@ def plan_path(
         )
         start_state = start_state if start_state.feasible else None
     if start_state is None:
-        return PlanResult(False, why, path, np.zeros(0), [], np.zeros(0), 0, (0.0, 0.0), time.perf_counter() - t_start)
-    del tol
+        return PlanResult(False, why, path, np.zeros(0), [], np.zeros(0), 0, (0.0, 0.0), time.perf_counter() - t_start,
+                          opts.path_tolerance)  # fmt: skip
     targets = list(path.parameters(opts.position_step, opts.rotation_step)[1:])
     params, states, times = [0.0], [start_state], [0.0]
     refinements, dev = 0, (0.0, 0.0)
@@ -236,6 +238,6 @@ def plan_path(
         times.append(dt)
         dev = (max(dev[0], d[0]), max(dev[1], d[1]))
     result = PlanResult(success, reason, path, np.array(params), states, np.array(times), refinements, dev,
-                        time.perf_counter() - t_start)  # fmt: skip
+                        time.perf_counter() - t_start, opts.path_tolerance)  # fmt: skip
     logger.info("plan: %s", result)
     return result
