@@ -8,6 +8,7 @@ dense re-sampling of the interpolated lengths between samples.
 
 from __future__ import annotations
 
+import itertools
 import json
 
 import numpy as np
@@ -49,8 +50,8 @@ def test_path_sampling_respects_the_steps():
     path = EEPath((pin.SE3.Identity(), pin.SE3(pin.exp3(np.array([0, 0, 0.3])), np.array([0.1, 0, 0]))), "linear")
     u = path.parameters(0.01, np.radians(2.0))
     poses = [path.at(x) for x in u]
-    steps = [np.linalg.norm(p.translation - q.translation) for p, q in zip(poses, poses[1:], strict=False)]
-    turns = [np.linalg.norm(pin.log3(p.rotation.T @ q.rotation)) for p, q in zip(poses, poses[1:], strict=False)]
+    steps = [np.linalg.norm(p.translation - q.translation) for p, q in itertools.pairwise(poses)]
+    turns = [np.linalg.norm(pin.log3(p.rotation.T @ q.rotation)) for p, q in itertools.pairwise(poses)]
     assert max(steps) <= 0.01 + 1e-12 and max(turns) <= np.radians(2.0) + 1e-12
     assert u[0] == 0 and u[-1] == 1
 
@@ -73,7 +74,7 @@ def test_waypoint_files(tmp_path):
 
 
 def test_every_sample_is_valid_continuous_and_on_the_path(am, planned):
-    plan, traj, problems = planned
+    plan, _traj, problems = planned
     assert plan.success, plan.reason
     assert problems == []
     assert len(plan.states) >= 10
