@@ -100,6 +100,15 @@ def _plates_from_file(source: str) -> list:
     return plates
 
 
+def _plates_from_args(args: argparse.Namespace, am: AssemblerModel, missing: str) -> list:
+    """The pose of ``--home`` or ``--plates FILE``; a CLIError saying ``missing`` when neither."""
+    if args.home:
+        return am.home
+    if args.plates is not None:
+        return _plates_from_file(args.plates)
+    raise CLIError(missing)
+
+
 def format_state_table(state: StackState, title: str = "") -> str:
     """A readable table of a state: forces and lengths per actuator, then summary lines.
 
@@ -142,13 +151,7 @@ def cmd_export(args: argparse.Namespace) -> int:
 
 def cmd_statics(args: argparse.Namespace) -> int:
     am = AssemblerModel.from_config(_config(args))
-    if args.home:
-        plates = am.home
-    else:
-        if args.plates is None:
-            raise CLIError("give --plates FILE (or - for stdin) or --home")
-        plates = _plates_from_file(args.plates)
-    state = evaluate_state(am, plates)
+    state = evaluate_state(am, _plates_from_args(args, am, "give --plates FILE (or - for stdin) or --home"))
     if args.json:
         print(_dumps(state.to_dict()))
     else:
@@ -359,13 +362,7 @@ def cmd_simulate(args: argparse.Namespace) -> int:
     if args.html:
         _writable_parent(args.html, "--html file")
     am = AssemblerModel.from_config(_config(args))
-    if args.home:
-        plates = am.home
-    elif args.plates is not None:
-        plates = _plates_from_file(args.plates)
-    else:
-        raise CLIError("give --plates FILE (or - for stdin) or --home")
-    ours = evaluate_state(am, plates)
+    ours = evaluate_state(am, _plates_from_args(args, am, "give --plates FILE (or - for stdin) or --home"))
     result = hold_pose(am, ours.plates, seconds=args.seconds, samples=args.samples,
                        drift_tolerance=1e-3 * args.drift_tolerance)  # fmt: skip
     gap = np.abs(result.final_forces - ours.forces)
@@ -430,12 +427,7 @@ def cmd_view(args: argparse.Namespace) -> int:
                 viewer.animate(interpolate_states(am, result.initial, result.optimized, args.animate))
             print(f"solve: {'success' if result.success else 'FAILED'} — {result.message}", file=sys.stderr)
         else:
-            if args.home:
-                plates = am.home
-            elif args.plates is not None:
-                plates = _plates_from_file(args.plates)
-            else:
-                raise CLIError("give one of --goal, --goal-deg, --plates FILE or --home")
+            plates = _plates_from_args(args, am, "give one of --goal, --goal-deg, --plates FILE or --home")
             shown = viewer.display(plates)
             viewer.frame()
         print(

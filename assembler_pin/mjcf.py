@@ -46,7 +46,7 @@ import pinocchio as pin
 
 from .config import AssemblerConfig
 from .geometry import DIMENSIONS, LEGS_PER_PLATFORM, leg_geometry
-from .urdf import names, xml_number, xml_vector
+from .urdf import cylinder_inertia, names, node_points, xml_number, xml_vector
 
 __all__ = [
     "ACTUATOR_ARMATURE",
@@ -120,9 +120,15 @@ def _inertial(body: ET.Element, mass: float, com: np.ndarray, diag: np.ndarray) 
     ET.SubElement(body, "inertial", pos=xml_vector(com), mass=xml_number(mass), diaginertia=xml_vector(diag))
 
 
-def _cylinder_inertia(mass: float, radius: float, length: float) -> np.ndarray:
-    ixx = mass * (3.0 * radius**2 + length**2) / 12.0
-    return np.array([ixx, ixx, 0.5 * mass * radius**2])
+def _cylinder_part(body: ET.Element, mass: float, radius: float, com_z: float, material: str) -> None:
+    """Inertial and geom of a motor or shaft: a solid cylinder on the body's z axis, centred at
+    ``com_z`` [m], twice ``|com_z|`` long (as in the URDF)."""
+    length = 2.0 * abs(com_z)
+    centre = np.array([0.0, 0.0, com_z])
+    _inertial(body, mass, centre, cylinder_inertia(mass, radius, length))
+    if length > 0:
+        size = xml_vector(np.array([radius, 0.5 * length]))
+        ET.SubElement(body, "geom", type="cylinder", size=size, pos=xml_vector(centre), material=material)
 
 
 def assembler_mjcf(cfg: AssemblerConfig) -> str:
@@ -155,7 +161,7 @@ def assembler_mjcf(cfg: AssemblerConfig) -> str:
     world = ET.SubElement(root, "worldbody")
     ET.SubElement(world, "light", name="sun", pos="0 0 3", dir="0 0 -1", directional="true")
     r = cfg.plate.node_radius
-    plate_inertia = _cylinder_inertia(cfg.plate.mass, r, dim.plate_thickness)
+    plate_inertia = cylinder_inertia(cfg.plate.mass, r, dim.plate_thickness)
     zero = np.zeros(3)
     z_axis = np.array([0.0, 0.0, 1.0])
 
@@ -174,9 +180,7 @@ def assembler_mjcf(cfg: AssemblerConfig) -> str:
         ET.SubElement(
             body, "geom", type="cylinder", size=xml_vector(np.array([r, 0.5 * dim.plate_thickness])), material="plate"
         )
-        for m in range(3):
-            a = np.deg2rad(90.0 + 60.0 * k + 120.0 * m)
-            p = np.array([r * np.cos(a), r * np.sin(a), 0.0])
+        for p in node_points(cfg, k):
             ET.SubElement(
                 body, "geom", type="sphere", size=xml_number(dim.node_sphere_radius), pos=xml_vector(p), material="node"
             )
@@ -199,22 +203,7 @@ def assembler_mjcf(cfg: AssemblerConfig) -> str:
             ET.SubElement(
                 motor, "joint", name=n_("uy"), type="hinge", axis="0 1 0", range=xml_vector(np.array([-defl, defl]))
             )
-            motor_len = 2.0 * leg.motor_com
-            _inertial(
-                motor,
-                leg.motor_mass,
-                leg.motor_com * z_axis,
-                _cylinder_inertia(leg.motor_mass, dim.motor_radius, motor_len),
-            )
-            if motor_len > 0:
-                ET.SubElement(
-                    motor,
-                    "geom",
-                    type="cylinder",
-                    size=xml_vector(np.array([dim.motor_radius, 0.5 * motor_len])),
-                    pos=xml_vector(leg.motor_com * z_axis),
-                    material="motor",
-                )
+            _cylinder_part(motor, leg.motor_mass, dim.motor_radius, leg.motor_com, "motor")
             home_length = home_lengths[j, i]
             shaft = ET.SubElement(motor, "body", name=n_("shaft"), pos=xml_vector(home_length * z_axis))
             ET.SubElement(
@@ -227,22 +216,7 @@ def assembler_mjcf(cfg: AssemblerConfig) -> str:
                 armature=xml_number(ACTUATOR_ARMATURE),
                 range=xml_vector(np.array([leg.min_length, leg.max_length])),
             )
-            shaft_len = 2.0 * leg.shaft_com
-            _inertial(
-                shaft,
-                leg.shaft_mass,
-                -leg.shaft_com * z_axis,
-                _cylinder_inertia(leg.shaft_mass, dim.shaft_radius, shaft_len),
-            )
-            if shaft_len > 0:
-                ET.SubElement(
-                    shaft,
-                    "geom",
-                    type="cylinder",
-                    size=xml_vector(np.array([dim.shaft_radius, 0.5 * shaft_len])),
-                    pos=xml_vector(-leg.shaft_com * z_axis),
-                    material="shaft",
-                )
+            _cylinder_part(shaft, leg.shaft_mass, dim.shaft_radius, -leg.shaft_com, "shaft")
         parent = add_plate(parent, j + 1)
     payload = ET.SubElement(parent, "body", name=names.payload, pos=xml_vector(cfg.payload.offset * z_axis))
     m = cfg.payload.mass

@@ -29,7 +29,6 @@ the limits that are not part of URDF.
 from __future__ import annotations
 
 import functools
-import math
 import xml.etree.ElementTree as ET
 
 import numpy as np
@@ -44,7 +43,9 @@ __all__ = [
     "URDF_FILENAME",
     "assembler_urdf",
     "closure_sidecar",
+    "cylinder_inertia",
     "names",
+    "node_points",
     "xml_number",
     "xml_vector",
 ]
@@ -108,8 +109,8 @@ def _inertial(link: ET.Element, mass: float, com: np.ndarray, diag: np.ndarray) 
     )
 
 
-def _cylinder_inertia(mass: float, radius: float, length: float) -> np.ndarray:
-    """Diagonal inertia of a solid cylinder about its centre, axis z [kg m^2]."""
+def cylinder_inertia(mass: float, radius: float, length: float) -> np.ndarray:
+    """Diagonal inertia of a solid cylinder about its centre, axis z [kg m^2] (every model writer's)."""
     ixx = mass * (3.0 * radius**2 + length**2) / 12.0
     return np.array([ixx, ixx, 0.5 * mass * radius**2])
 
@@ -155,6 +156,13 @@ def _joint(
         )
 
 
+def node_points(cfg: AssemblerConfig, k: int) -> np.ndarray:
+    """(3, 3) centres of plate k's three joint nodes in its frame [m] (drawn as spheres)."""
+    a = np.radians(90.0 + 60.0 * k + 120.0 * np.arange(3))
+    r = cfg.plate.node_radius
+    return np.stack([r * np.cos(a), r * np.sin(a), np.zeros(3)], axis=1)
+
+
 def assembler_urdf(cfg: AssemblerConfig) -> str:
     """The URDF text of the stack described by ``cfg`` (see module docstring)."""
     # Long by design: it writes the URDF in document order, plate by plate and leg by leg.
@@ -173,18 +181,16 @@ def assembler_urdf(cfg: AssemblerConfig) -> str:
         ET.SubElement(ET.SubElement(robot, "material", name=name), "color", rgba=rgba)
     zero = np.zeros(3)
     r = cfg.plate.node_radius
-    plate_inertia = _cylinder_inertia(cfg.plate.mass, r, dim.plate_thickness)
+    plate_inertia = cylinder_inertia(cfg.plate.mass, r, dim.plate_thickness)
     z_axis = np.array([0.0, 0.0, 1.0])
     defl = leg.max_deflection
     force_limit = max(leg.max_tension, leg.max_compression)
-    node_angles_deg = [[90.0 + 60.0 * k + 120.0 * m for m in range(3)] for k in range(cfg.platforms + 1)]
 
     def add_plate(k: int) -> None:
         link = ET.SubElement(robot, "link", name=names.plate(k))
         _inertial(link, cfg.plate.mass, zero, plate_inertia)
         _shape(link, zero, ("cylinder", {"radius": xml_number(r), "length": xml_number(dim.plate_thickness)}), "plate")
-        for a in node_angles_deg[k]:
-            p = np.array([r * math.cos(math.radians(a)), r * math.sin(math.radians(a)), 0.0])
+        for p in node_points(cfg, k):
             _shape(link, p, ("sphere", {"radius": xml_number(dim.node_sphere_radius)}), "node", collision=False)
 
     add_plate(0)
@@ -210,7 +216,7 @@ def assembler_urdf(cfg: AssemblerConfig) -> str:
                 motor,
                 leg.motor_mass,
                 leg.motor_com * z_axis,
-                _cylinder_inertia(leg.motor_mass, dim.motor_radius, motor_len),
+                cylinder_inertia(leg.motor_mass, dim.motor_radius, motor_len),
             )
             if motor_len > 0:
                 _shape(
@@ -226,7 +232,7 @@ def assembler_urdf(cfg: AssemblerConfig) -> str:
                 shaft,
                 leg.shaft_mass,
                 -leg.shaft_com * z_axis,
-                _cylinder_inertia(leg.shaft_mass, dim.shaft_radius, shaft_len),
+                cylinder_inertia(leg.shaft_mass, dim.shaft_radius, shaft_len),
             )
             if shaft_len > 0:
                 _shape(

@@ -25,7 +25,7 @@ from pathlib import Path
 import numpy as np
 import pinocchio as pin
 
-from ..constraints import GoalTolerance
+from ..constraints import GoalTolerance, leg_limit_margins
 from ..exceptions import AssemblerError
 from ..kinematics import se3_to_taa, stack_forward_kinematics
 from ..model import AssemblerModel
@@ -256,9 +256,10 @@ def _evaluate(am: AssemblerModel, plan: PlanResult, times: np.ndarray, lengths: 
         pose = fk.plates.se3(am.n)
         ee[k] = se3_to_taa(pose)
         force[k] = state.max_abs_force
-        margins["stroke"][k] = min(lengths[k].min() - leg.min_length, leg.max_length - lengths[k].max())
-        margins["deflection"][k] = leg.max_deflection - state.legs.deflection.max()
-        margins["rise"][k] = state.legs.rise.min()
+        rows = leg_limit_margins(leg, state.legs.lengths, np.cos(state.legs.deflection), state.legs.rise, 0.0)
+        margins["stroke"][k] = rows[:2].min()
+        margins["deflection"][k] = leg.max_deflection - state.legs.deflection.max()  # [rad], not the cosine rows
+        margins["rise"][k] = rows[4].min()
         margins["force"][k] = min(leg.max_tension - state.forces.max(), leg.max_compression + state.forces.min())
         margins["path_position"][k] = tol.position - np.linalg.norm(pose.translation - target.translation)
         margins["path_rotation"][k] = tol.rotation - np.linalg.norm(pin.log3(target.rotation.T @ pose.rotation))
