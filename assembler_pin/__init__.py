@@ -51,6 +51,8 @@ from .kinematics import (
     to_se3,
 )
 from .model import AssemblerModel
+from .motion import EEPath
+from .motion.timing import MotionResult, Trajectory, plan_trajectory, read_trajectory
 from .optimize import OptimizeOptions, OptimizeResult, optimize_internal_poses
 from .scenarios import SCENARIOS, Scenario, scenario
 from .solve import SolveResult, solve
@@ -66,6 +68,7 @@ __all__ = [
     "CLIError",
     "ConfigError",
     "ConvergenceError",
+    "EEPath",
     "FKResult",
     "GoalTolerance",
     "HelperArm",
@@ -74,6 +77,7 @@ __all__ = [
     "LegConfig",
     "LegState",
     "ModelFileError",
+    "MotionResult",
     "OptimizeOptions",
     "OptimizeResult",
     "OptionsError",
@@ -87,6 +91,7 @@ __all__ = [
     "StackFKResult",
     "StackState",
     "StaticsResult",
+    "Trajectory",
     "UnknownScenarioError",
     "ViewerError",
     "Violation",
@@ -103,9 +108,11 @@ __all__ = [
     "leg_state",
     "load_config",
     "optimize_internal_poses",
+    "plan_trajectory",
     "plate_arrays",
     "plates_from_q",
     "q_from_plates",
+    "read_trajectory",
     "scenario",
     "se3_to_taa",
     "solve",

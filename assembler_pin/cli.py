@@ -301,57 +301,96 @@ def cmd_bench(args: argparse.Namespace) -> int:
     return 0
 
 
+#: The paths ``plan --compare`` runs by default: from the home pose to these scenarios' goals.
+COMPARE_SCENARIOS = ("translation", "vertical_lift", "orientation_transition")
+
+
+def _plan_path(args: argparse.Namespace, am: AssemblerModel):
+    """The EE path and start state of ``plan``: (path, start or None)."""
+    from .kinematics import taa_to_se3
+    from .motion import EEPath, read_waypoints
+
+    if args.waypoints:
+        return read_waypoints(args.waypoints, kind=args.path), None
+    goal = taa_to_se3(args.to, what="--to")
+    if args.from_ is None:
+        return EEPath((am.home[-1], goal), args.path), am.home
+    return EEPath((taa_to_se3(args.from_, what="--from"), goal), args.path), None
+
+
 def cmd_plan(args: argparse.Namespace) -> int:
     """A force-optimal motion along an EE path, timed within the legs' limits."""
-    from .kinematics import taa_to_se3
-    from .motion import EEPath, PlanOptions, read_waypoints
+    from .motion import PlanOptions
     from .motion.timing import plan_trajectory
 
-    if args.out:
-        _writable_parent(args.out, "--out file")
-    am = AssemblerModel.from_config(_config(args))
-    start = None
-    if args.waypoints:
-        path = read_waypoints(args.waypoints, kind=args.path)
-    elif args.to is not None:
-        goal = taa_to_se3(args.to, what="--to")
-        if args.from_ is None:
-            start = am.home
-            path = EEPath((am.home[-1], goal), args.path)
-        else:
-            path = EEPath((taa_to_se3(args.from_, what="--from"), goal), args.path)
-    else:
+    for option, value in (("--out file", args.out), ("--plot file", args.plot)):
+        if value:
+            _writable_parent(value, option)
+    if args.to is None and not args.waypoints and not args.compare:
         raise CLIError("give --to X Y Z RX RY RZ (from the home pose, or --from ...) or --waypoints FILE")
     try:
         options = PlanOptions(w3=args.w3)
     except ValueError as exc:
         raise CLIError(str(exc)) from None
-    plan, traj, problems = plan_trajectory(am, path, start, options, rate=args.rate)
-    travel = float(np.abs(np.diff(plan.lengths, axis=0)).sum()) if len(plan.states) > 1 else 0.0
-    doc = {
-        "success": plan.success and not problems,
-        "reason": plan.reason if not problems or not plan.success else "; ".join(problems),
-        "samples": len(plan.states),
-        "peak_max_abs_force": float(plan.max_abs_forces.max()) if plan.states else None,
-        "total_leg_travel_m": travel,
-        "duration_s": traj.duration if traj is not None else None,
-        "median_sample_time_s": float(np.median(plan.solve_times_s[1:])) if len(plan.states) > 1 else None,
-        "plan_time_s": plan.time_s,
-    }
+    am = AssemblerModel.from_config(_config(args))
+    if args.compare:
+        return _plan_compare(args, am, options)
+    path, start = _plan_path(args, am)
+    motion = plan_trajectory(am, path, start, options, rate=args.rate)
+    doc = motion.to_dict()
+    traj = motion.trajectory
     if args.out and traj is not None:
         doc["out"] = str(traj.write(args.out))
+    if args.plot and traj is not None:
+        from .motion.timing import trajectory_states
+        from .plots import save, trajectory_plot
+
+        times, states = trajectory_states(am, traj, 200)
+        title = "planned motion" if args.to is None else "home → goal" if args.from_ is None else "--from → --to"
+        doc["plot"] = str(save(trajectory_plot(am, traj, states, times, title), args.plot))
     if args.json:
         print(_dumps(doc))
         return 0
     print(f"plan: {'success' if doc['success'] else 'FAILED'} — {doc['reason']}")
-    if plan.states:
+    if motion.plan.states:
         print(f"{doc['samples']} samples, peak max|F| {doc['peak_max_abs_force']:.2f} N, total leg travel "
-              f"{doc['total_leg_travel_m']:.3f} m, planned in {plan.time_s:.2f} s")  # fmt: skip
+              f"{doc['total_leg_travel_m']:.3f} m, planned in {motion.plan.time_s:.2f} s")  # fmt: skip
     if traj is not None:
         print(f"trajectory: {traj.duration:.2f} s at {args.rate:g} Hz ({len(traj.times)} samples), every sample valid: "
               f"{'yes' if traj.feasible.all() else 'NO'}")  # fmt: skip
-    if "out" in doc:
-        print(f"wrote {doc['out']}")
+    for key in ("out", "plot"):
+        if key in doc:
+            print(f"wrote {doc[key]}")
+    return 0
+
+
+def _plan_compare(args: argparse.Namespace, am: AssemblerModel, options) -> int:
+    """``plan --compare``: our plan against the helper arm per sample and linear leg lengths."""
+    from .motion import EEPath
+    from .motion.compare import compare_motion
+    from .scenarios import scenario
+
+    if args.to is not None or args.waypoints:
+        path, start = _plan_path(args, am)
+        runs = [("path", path, start)]
+    else:
+        runs = [(name, EEPath((am.home[-1], scenario(name).goal), args.path), am.home) for name in COMPARE_SCENARIOS]
+    results = [compare_motion(am, path, start, options, rate=args.rate, name=name) for name, path, start in runs]
+    if args.json:
+        print(_dumps([{"path": c.name, "success": c.motion.success, "reason": c.motion.reason,
+                       "methods": {m: f.to_dict() for m, f in c.figures.items()}} for c in results]))  # fmt: skip
+        return 0
+    print(f"{'path':<24}{'plan':<16}{'peak max|F| N':>14}{'leg travel m':>13}{'duration s':>11}"
+          f"{'valid %':>9}{'limits %':>9}{'off path mm':>12}")  # fmt: skip
+    for c in results:
+        if not c.figures:
+            print(f"{c.name:<24}no plan: {c.motion.reason}")
+        for m, f in c.figures.items():
+            print(f"{c.name:<24}{m:<16}{f.peak_max_abs_force:14.2f}{f.total_leg_travel:13.3f}{f.duration:11.2f}"
+                  f"{100 * f.valid_fraction:9.1f}{100 * f.limits_fraction:9.1f}"
+                  f"{1e3 * f.max_path_deviation:12.2f}")  # fmt: skip
+    print("valid: every limit and the EE within the path tolerance at every output sample; "
+          "limits: legs, joints and forces only")  # fmt: skip
     return 0
 
 
@@ -394,6 +433,19 @@ def cmd_simulate(args: argparse.Namespace) -> int:
     return 0
 
 
+def _animate_trajectory(viewer, am: AssemblerModel, path: str, frames: int) -> StackState:
+    """Store a trajectory file's motion in the viewer, in real time; returns its peak state."""
+    from .motion.timing import read_trajectory, trajectory_states
+
+    if not 2 <= frames <= 2000:
+        raise CLIError(f"--frames must be an integer in [2, 2000], got {frames}")
+    traj = read_trajectory(path)
+    _, states = trajectory_states(am, traj, frames)
+    viewer.animate(states, fps=max(1.0, (len(states) - 1) / max(traj.duration, 1e-9)), color_forces=True)
+    print(f"trajectory: {traj.duration:.2f} s, {len(states)} frames", file=sys.stderr)
+    return max(states, key=lambda st: st.max_abs_force)
+
+
 def cmd_view(args: argparse.Namespace) -> int:
     """Show a pose in Meshcat: write a standalone page (--html) or serve until Ctrl-C."""
     # Long by design: the live server's start, signal handling and serving loop read as one flow.
@@ -426,6 +478,8 @@ def cmd_view(args: argparse.Namespace) -> int:
 
                 viewer.animate(interpolate_states(am, result.initial, result.optimized, args.animate))
             print(f"solve: {'success' if result.success else 'FAILED'} — {result.message}", file=sys.stderr)
+        elif args.trajectory:
+            shown = _animate_trajectory(viewer, am, args.trajectory, args.frames)
         else:
             plates = _plates_from_args(args, am, "give one of --goal, --goal-deg, --plates FILE or --home")
             shown = viewer.display(plates)
@@ -563,6 +617,10 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--rate", type=float, default=50.0, help="output samples per second (default 50)")
     p.add_argument("--w3", type=float, default=100.0, help="weight of the motion term Σ ΔL² [1/m²] (default 100)")
     p.add_argument("--out", metavar="FILE", help="write the trajectory (.csv, or JSON for any other suffix)")
+    p.add_argument("--plot", metavar="PNG", help="write the lengths, speeds and forces over time with their limits")
+    p.add_argument("--compare", action="store_true",
+                   help="compare with the helper arm per sample and linear leg lengths (default paths: home to "
+                        f"{', '.join(COMPARE_SCENARIOS)})")  # fmt: skip
     p.add_argument("--json", action="store_true", help="print one JSON object")
     p.set_defaults(func=cmd_plan)
 
@@ -583,6 +641,9 @@ def build_parser() -> argparse.ArgumentParser:
     _add_goal_arguments(src, " (shows the initial and optimized poses)")
     src.add_argument("--plates", metavar="FILE", help='JSON {"plates": [n+1 4x4]} file, or - for stdin')
     src.add_argument("--home", action="store_true", help="show the home pose")
+    src.add_argument("--trajectory", metavar="FILE",
+                     help="animate a trajectory written by 'plan --out' (legs colored by force)")  # fmt: skip
+    p.add_argument("--frames", type=int, default=150, help="with --trajectory: frames of the animation (default 150)")
     p.add_argument("--html", metavar="FILE", help="write a standalone HTML page instead of serving")
     p.add_argument("--open", action="store_true", help="open the page / viewer URL in a web browser")
     p.add_argument(

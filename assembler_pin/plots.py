@@ -41,6 +41,7 @@ __all__ = [
     "plot_workspace_slice",
     "pose_views",
     "save",
+    "trajectory_plot",
     "workspace_slice",
 ]
 
@@ -357,6 +358,60 @@ def workspace_slice(am: AssemblerModel, state_function=None, **kwargs) -> tuple[
     """:func:`compute_workspace_slice` then :func:`plot_workspace_slice`; returns both."""
     ws = compute_workspace_slice(am, state_function, **kwargs)
     return plot_workspace_slice(ws), ws
+
+
+def trajectory_plot(
+    am: AssemblerModel,
+    traj,
+    states: Sequence[StackState] | None = None,
+    state_times: npt.ArrayLike | None = None,
+    title: str = "Planned motion",
+) -> Figure:
+    """Leg lengths, leg speeds and actuator forces of a trajectory over time, limits dashed.
+
+    Args:
+        traj: a :class:`~assembler_pin.motion.timing.Trajectory`.
+        states: the stack at some of its samples (e.g. from
+            :func:`~assembler_pin.motion.timing.trajectory_states`) for the per-leg forces;
+            without them the force panel shows the trajectory's max|F| only.
+        state_times: (len(states),) times of ``states`` [s].
+        title: figure title (the path, e.g. "home → vertical_lift").
+    """
+    leg = am.config.leg
+    fig = Figure(figsize=(9, 8.5), layout="constrained")
+    ax_len, ax_speed, ax_force = fig.subplots(3, 1, sharex=True)
+    t = traj.times
+    n_legs = traj.lengths.shape[1] * 6
+    ax_len.plot(t, traj.lengths.reshape(len(t), -1), lw=0.8, alpha=0.7)
+    for value, label in ((leg.min_length, "stroke limits"), (leg.max_length, None)):
+        ax_len.axhline(value, color="k", ls="--", lw=1.2, label=label)
+    ax_len.set_ylabel("leg length [m]")
+    ax_len.set_title(f"{n_legs} leg lengths (one line per leg)", fontsize=9, loc="left")
+    ax_len.legend(loc="upper right", fontsize=8)
+    mid = 0.5 * (t[1:] + t[:-1])
+    ax_speed.plot(mid, traj.speeds().reshape(len(mid), -1), lw=0.8, alpha=0.7)
+    for value, label in ((leg.max_speed, "speed limit"), (-leg.max_speed, None)):
+        ax_speed.axhline(value, color="k", ls="--", lw=1.2, label=label)
+    ax_speed.set_ylabel("leg speed [m/s]")
+    ax_speed.legend(loc="upper right", fontsize=8)
+    if states:
+        ts = np.asarray(state_times, dtype=float)
+        forces = np.array([st.forces.ravel() for st in states])
+        ax_force.plot(ts, forces, lw=0.8, alpha=0.7)
+    ax_force.plot(t, traj.max_abs_force, color="k", lw=2.0, label="max|F|")
+    ax_force.axhline(leg.max_tension, color="#d62728", ls="--", lw=1.2, label="tension limit")
+    ax_force.axhline(-leg.max_compression, color="#1f77b4", ls="--", lw=1.2, label="compression limit")
+    ax_force.set_ylabel("actuator force [N]\n(tension +)")
+    ax_force.set_xlabel("time [s]")
+    ax_force.legend(loc="upper right", fontsize=8, ncol=3)
+    infeasible = ~np.asarray(traj.feasible, dtype=bool)
+    if infeasible.any():
+        for ax in (ax_len, ax_speed, ax_force):
+            ax.fill_between(t, 0, 1, where=infeasible, transform=ax.get_xaxis_transform(), color="#ffd700",
+                            alpha=0.3, label=None)  # fmt: skip
+    verdict = "every sample valid" if not infeasible.any() else f"{int(infeasible.sum())} samples INVALID (yellow)"
+    fig.suptitle(f"{title}: {traj.duration:.1f} s, peak max|F| {np.nanmax(traj.max_abs_force):.1f} N, {verdict}")
+    return fig
 
 
 def save(fig: Figure, path: str | Path, dpi: int = 150) -> Path:

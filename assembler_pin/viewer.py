@@ -80,6 +80,10 @@ GHOST_RGBA = np.array([0.15, 0.75, 0.25, 0.3])
 ARM_LINK_RGBA = np.array([0.55, 0.55, 0.55, 1.0])
 ARM_CLUSTER_RGBA = np.array([0.10, 0.25, 0.95, 1.0])
 VIOLATION_RGBA = np.array([1.0, 0.85, 0.0, 0.9])
+FORCE_BAND_LEVELS = np.linspace(-1.0, 1.0, 11)
+"""Force levels (fraction of the compression / tension limit) of an animation's leg sleeves."""
+FORCE_BAND_LENGTH = 0.08
+"""Length of an animated leg's force sleeve [m]."""
 CAMERA_FOV_DEG = 75.0
 """Vertical field of view of meshcat's default perspective camera [deg]."""
 
@@ -515,16 +519,27 @@ class StackViewer:
         fps: float = 15.0,
         repetitions: int = 1,
         play: bool = True,
+        color_forces: bool = False,
     ) -> None:
         """Store the sequence as a meshcat animation (plays in the live and static viewer).
 
         The stack is displayed at the first state (leg colors of that state); each frame
         moves every body of the main stack, and the page ends on the last state. A later
         :meth:`display` (or :meth:`show_comparison`) removes the animation. Build
-        ``states`` with :func:`interpolate_states`.
+        ``states`` with :func:`interpolate_states` (or, for a planned trajectory,
+        :func:`~assembler_pin.motion.timing.trajectory_states`).
+
+        Args:
+            fps: frames per second of playback.
+            color_forces: also animate each leg's color with its force in every frame
+                (``states`` must then be :class:`StackState` objects).
         """
         if len(states) < 2:
             raise AssemblerError("an animation needs at least two states")
+        if color_forces and not all(isinstance(st, StackState) for st in states):
+            raise AssemblerError("color_forces needs StackState frames (their forces)")
+        if color_forces:
+            self._make_force_bands()
         first = states[0]
         self.display(first if isinstance(first, StackState) else evaluate_state(self.am, first))
         anim = meshcat.animation.Animation(default_framerate=fps)
@@ -539,10 +554,49 @@ class StackViewer:
                     frame[self.viz.getViewerNodeName(g, pin.GeometryType.VISUAL)].set_transform(
                         vdata.oMg[gid].homogeneous
                     )
+                if color_forces:
+                    self._force_band_frame(frame, st)
             self._extra_points[f"anim{k}"] = self._stack_points(plates)
+        if color_forces and f"{self.prefix}_force_bands" not in self._roots:
+            self._roots.append(f"{self.prefix}_force_bands")
         self.meshcat.set_animation(anim, play=play, repetitions=repetitions)
         self._animated = True
         self.viz.display(q_from_plates(self.am, _as_plates(self.am, first)))
+
+    def _make_force_bands(self) -> None:
+        """One sleeve per leg and force level, hidden; :meth:`_force_band_frame` shows one.
+
+        meshcat animates transforms and visibility but not material colors, so a leg's
+        force color in an animation is a sleeve of the level's color around its middle.
+        """
+        root = self.meshcat[f"{self.prefix}_force_bands"]
+        root.delete()
+        leg = self.am.config.leg
+        levels = FORCE_BAND_LEVELS
+        forces = np.where(levels >= 0, levels * leg.max_tension, levels * leg.max_compression)
+        colors = force_color(forces, leg.max_tension, leg.max_compression)
+        shape = mg.Cylinder(FORCE_BAND_LENGTH, 1.3 * DIMENSIONS.motor_radius)
+        for j in range(self.am.n):
+            for i in range(6):
+                for k, rgb in enumerate(colors):
+                    node = root[f"sp{j}_leg{i}"][f"level{k}"]
+                    node.set_object(shape, _material([*rgb, 1.0]))
+                    node.set_property("visible", False)
+
+    def _force_band_frame(self, frame, state: StackState) -> None:
+        """Place and show, in one animation frame, the sleeve of each leg's force level."""
+        leg = self.am.config.leg
+        fraction = np.where(state.forces >= 0, state.forces / leg.max_tension, state.forces / leg.max_compression)
+        level = np.abs(FORCE_BAND_LEVELS[None, None, :] - np.clip(fraction, -1, 1)[..., None]).argmin(axis=-1)
+        root = frame[f"{self.prefix}_force_bands"]
+        for j in range(self.am.n):
+            for i in range(6):
+                T = _cylinder_between(state.legs.bottom_points[j, i], state.legs.top_points[j, i])
+                for k in range(len(FORCE_BAND_LEVELS)):
+                    node = root[f"sp{j}_leg{i}"][f"level{k}"]
+                    node.set_property("visible", "boolean", bool(k == level[j, i]))
+                    if k == level[j, i]:
+                        node.set_transform(T)
 
     def _clear_animation(self) -> None:
         """Replace a stored animation by an empty one (meshcat has no command to delete it).
@@ -553,6 +607,7 @@ class StackViewer:
         if not self._animated:
             return
         self.meshcat.set_animation(meshcat.animation.Animation(), play=False)
+        self.meshcat[f"{self.prefix}_force_bands"].delete()
         self._animated = False
         for key in [k for k in self._extra_points if k.startswith("anim")]:
             del self._extra_points[key]

@@ -15,12 +15,23 @@ import numpy as np
 import pinocchio as pin
 import pytest
 from checks import kinematic_problems
+from test_viewer import page_commands
 
 from assembler_pin import evaluate_state, scenario, stack_forward_kinematics
 from assembler_pin.cli import main
 from assembler_pin.exceptions import OptionsError
 from assembler_pin.motion import EEPath, PathError, PlanOptions, interpolate_pose, plan_path, read_waypoints
-from assembler_pin.motion.timing import plan_trajectory, read_trajectory, time_parametrize, verify_trajectory
+from assembler_pin.motion.compare import compare_motion
+from assembler_pin.motion.timing import (
+    TrajectoryError,
+    plan_trajectory,
+    read_trajectory,
+    time_parametrize,
+    trajectory_states,
+    verify_trajectory,
+)
+from assembler_pin.plots import trajectory_plot
+from assembler_pin.viewer import FORCE_BAND_LEVELS
 
 
 @pytest.fixture(scope="module")
@@ -74,8 +85,8 @@ def test_waypoint_files(tmp_path):
 
 
 def test_every_sample_is_valid_continuous_and_on_the_path(am, planned):
-    plan, _traj, problems = planned
-    assert plan.success, plan.reason
+    assert planned.success, planned.reason
+    plan, problems = planned.plan, planned.problems
     assert problems == []
     assert len(plan.states) >= 10
     leg = am.config.leg
@@ -95,7 +106,7 @@ def test_every_sample_is_valid_continuous_and_on_the_path(am, planned):
 
 
 def test_trajectory_between_samples_and_its_time_law(am, planned):
-    plan, traj, _ = planned
+    plan, traj = planned.plan, planned.trajectory
     leg = am.config.leg
     # starts and ends at the planned lengths, at rest
     np.testing.assert_allclose(traj.lengths[0], plan.lengths[0], atol=1e-12)
@@ -115,7 +126,7 @@ def test_trajectory_between_samples_and_its_time_law(am, planned):
 
 
 def test_trajectory_files_round_trip(tmp_path, planned):
-    _, traj, _ = planned
+    traj = planned.trajectory
     for name in ("t.csv", "t.json"):
         back = read_trajectory(traj.write(tmp_path / name))
         np.testing.assert_allclose(back.lengths, traj.lengths, rtol=0, atol=1e-15)
@@ -124,7 +135,7 @@ def test_trajectory_files_round_trip(tmp_path, planned):
 
 
 def test_time_law_scales_with_the_limits(am, planned):
-    plan, traj, _ = planned
+    plan, traj = planned.plan, planned.trajectory
     slow = time_parametrize(am, plan, rate=20.0, max_speed=am.config.leg.max_speed / 2,
                             max_acceleration=am.config.leg.max_acceleration / 4)  # fmt: skip
     assert slow.duration == pytest.approx(2 * traj.duration, rel=1e-6)
@@ -153,3 +164,95 @@ def test_cli_plan(tmp_path, capsys):
     assert doc["success"] is True and doc["samples"] >= 2
     assert read_trajectory(out).feasible.all()
     assert main(["plan", "--to", "0", "0", "0.9", "0", "0", "0", "--rate", "0"]) == 2
+
+
+def test_motion_result_reads_and_agrees_with_its_plan(planned):
+    text = repr(planned)
+    assert text.startswith("MotionResult(success=True") and "array(" not in text
+    doc = planned.to_dict()
+    # travel recomputed from the planned lengths, bounded below by the net change (triangle inequality)
+    lengths = np.array([s.leg_lengths for s in planned.plan.states])
+    assert doc["total_leg_travel_m"] == pytest.approx(np.abs(np.diff(lengths, axis=0)).sum(), rel=1e-12)
+    assert doc["total_leg_travel_m"] >= np.abs(lengths[-1] - lengths[0]).sum() - 1e-12
+    assert doc["duration_s"] == planned.trajectory.times[-1]
+
+
+def test_trajectory_states_rebuild_the_file_by_fk(am, tmp_path, planned):
+    back = read_trajectory(planned.trajectory.write(tmp_path / "t.json"))
+    times, states = trajectory_states(am, back, frames=12)
+    assert len(states) == 12 and times[0] == 0 and times[-1] == back.times[-1]
+    for t, st in zip(times, states, strict=True):
+        k = int(np.argmin(np.abs(back.times - t)))
+        # the rebuilt stack has the commanded lengths and the EE written in the file
+        np.testing.assert_allclose(st.leg_lengths, back.lengths[k], atol=1e-9)
+        np.testing.assert_allclose(st.plates.p[-1], back.ee[k, :3], atol=1e-9)
+        assert kinematic_problems(am.config, st.plates, tol=1e-9) == []
+        assert st.max_abs_force == pytest.approx(back.max_abs_force[k], rel=1e-6)  # FK converged to ~1e-10 m
+    # a file whose EE column disagrees with its lengths is refused
+    back.ee[5, 0] += 1e-3
+    with pytest.raises(TrajectoryError, match="EE"):
+        trajectory_states(am, back)
+    fig = trajectory_plot(am, back, states, times, "test")
+    lines = {round(float(line.get_ydata()[0]), 6) for ax in fig.axes for line in ax.lines if len(line.get_ydata()) == 2}
+    leg = am.config.leg
+    assert {leg.min_length, leg.max_length, leg.max_speed, -leg.max_speed, leg.max_tension,
+            -leg.max_compression} <= lines  # fmt: skip
+    assert len(fig.axes) == 3 and fig.get_suptitle().startswith("test")
+
+
+def test_compare_against_simple_plans(am):
+    path = EEPath.between(am.home[-1], scenario("orientation_transition").goal)
+    c = compare_motion(am, path, start=am.home, rate=10.0, name="ot")
+    assert c.motion.success and list(c.figures) == ["optimized", "helper_arm", "linear_lengths"]
+    ours, arm, linear = c.figures.values()
+    assert ours.valid_fraction == 1.0
+    assert ours.peak_max_abs_force <= min(arm.peak_max_abs_force, linear.peak_max_abs_force) + 1e-9
+    # linear leg lengths travel exactly their net change between the two end poses ...
+    first, last = c.motion.plan.states[0], c.motion.plan.states[-1]
+    assert linear.total_leg_travel == pytest.approx(np.abs(last.leg_lengths - first.leg_lengths).sum(), rel=1e-9)
+    # ... and the EE is not steered: independent FK of the mid lengths puts it off the path
+    fk = stack_forward_kinematics(am, 0.5 * (first.leg_lengths + last.leg_lengths), base=am.home[0],
+                                  guess=first.plates)  # fmt: skip
+    mid_off = min(np.linalg.norm(fk.plates.p[-1] - path.at(u).translation) for u in np.linspace(0, 1, 201))
+    assert linear.max_path_deviation >= mid_off - 1e-6 > 2e-3 and linear.valid_fraction < 1.0
+    for f in c.figures.values():
+        assert 0 <= f.valid_fraction <= f.limits_fraction <= 1 and f.duration > 0
+        assert f.total_leg_travel >= np.abs(last.leg_lengths - first.leg_lengths).sum() * (f is not arm) - 1e-9
+    assert "array(" not in repr(c)
+
+
+def test_cli_plan_compare_prints_the_table(capsys):
+    assert main(["plan", "--compare", "--to", "0.03", "0", "0.97", "0", "0", "0", "--rate", "5"]) == 0
+    out = capsys.readouterr().out
+    assert "peak max|F| N" in out and all(m in out for m in ("optimized", "helper_arm", "linear_lengths"))
+
+
+def test_cli_view_trajectory_page_shows_each_legs_force_level(am, tmp_path, planned):
+    traj_file = planned.trajectory.write(tmp_path / "t.csv")
+    page = tmp_path / "t.html"
+    assert main(["view", "--trajectory", str(traj_file), "--frames", "6", "--html", str(page)]) == 0
+    (anim,) = [c for c in page_commands(page.read_text()) if c["type"] == "set_animation"]
+    visible = {}  # (platform, leg, level) -> visibility per frame
+    for clip in anim["animations"]:
+        parts = clip["path"].split("/")
+        if "assembler_force_bands" in parts:
+            j, i = (int(x) for x in parts[-2].removeprefix("sp").split("_leg"))
+            for track in clip["clip"]["tracks"]:
+                if track["name"] == ".visible":
+                    visible[j, i, int(parts[-1].removeprefix("level"))] = [k["value"] for k in track["keys"]]
+    # the frames' forces, independently: FK of the file's lengths at the animation's samples
+    traj = read_trajectory(traj_file)
+    picks = np.unique(np.round(np.linspace(0, len(traj.times) - 1, 6)).astype(int))
+    leg = am.config.leg
+    guess = evaluate_state(am, am.home).plates
+    for frame, k in enumerate(picks):
+        fk = stack_forward_kinematics(am, traj.lengths[k], base=am.home[0], guess=guess)
+        guess = fk.plates
+        forces = evaluate_state(am, fk.plates).forces
+        fraction = np.where(forces >= 0, forces / leg.max_tension, forces / leg.max_compression)
+        for j in range(am.n):
+            for i in range(6):
+                shown = [lvl for (jj, ii, lvl), keys in visible.items() if (jj, ii) == (j, i) and keys[frame]]
+                assert len(shown) == 1  # exactly one sleeve per leg and frame
+                assert abs(FORCE_BAND_LEVELS[shown[0]] - fraction[j, i]) <= 0.5 * np.diff(FORCE_BAND_LEVELS)[0] + 1e-9
+    assert main(["view", "--trajectory", str(tmp_path / "missing.csv"), "--html", str(page)]) == 2

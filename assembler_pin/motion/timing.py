@@ -19,6 +19,8 @@ from __future__ import annotations
 
 import csv
 import json
+import math
+import time
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -27,17 +29,19 @@ import pinocchio as pin
 
 from ..constraints import GoalTolerance, leg_limit_margins
 from ..exceptions import AssemblerError
-from ..kinematics import se3_to_taa, stack_forward_kinematics
+from ..kinematics import PlateArrays, se3_to_taa, stack_forward_kinematics
 from ..model import AssemblerModel
-from ..state import evaluate_state
+from ..state import StackState, evaluate_state
 from .planner import PlanResult
 
 __all__ = [
+    "MotionResult",
     "Trajectory",
     "TrajectoryError",
     "plan_trajectory",
     "read_trajectory",
     "time_parametrize",
+    "trajectory_states",
     "verify_trajectory",
 ]
 
@@ -191,6 +195,7 @@ def time_parametrize(
     max_acceleration: float | None = None,
     safety: float = 0.95,
     grid_per_sample: int = 16,
+    strict: bool = True,
 ) -> Trajectory:
     """The trajectory of a plan: time law within the leg limits, resampled at ``rate``.
 
@@ -200,9 +205,11 @@ def time_parametrize(
         max_speed, max_acceleration: leg limits [m/s], [m/s²] (default: the config's).
         safety: fraction of the limits the time law uses (0 < safety <= 1).
         grid_per_sample: grid points of the duration check per planned step.
+        strict: raise when stack FK fails at an output sample; otherwise mark that sample
+            infeasible (its pose and margins NaN) — for comparing plans that may be invalid.
 
     Raises:
-        TrajectoryError: fewer than 2 samples, or invalid settings.
+        TrajectoryError: fewer than 2 samples, invalid settings, or (strict) a failed FK.
     """
     from scipy.interpolate import PchipInterpolator
 
@@ -226,12 +233,13 @@ def time_parametrize(
     s_of_t = span * _quintic(times / duration)[0]
     lengths = spline(s_of_t).reshape(count, am.n, 6)
     u_of_s = np.interp(s_of_t, s_knots, plan.parameters)
-    meta = {"rate_hz": rate, "max_speed": v_max, "max_acceleration": a_max, "path_kind": plan.path.kind}
-    return _evaluate(am, plan, times, lengths, u_of_s, meta)
+    meta = {"rate_hz": rate, "max_speed": v_max, "max_acceleration": a_max, "path_kind": plan.path.kind,
+            "base": plan.states[0].plates.se3(0).homogeneous.tolist()}  # fmt: skip
+    return _evaluate(am, plan, times, lengths, u_of_s, meta, strict)
 
 
 def _evaluate(am: AssemblerModel, plan: PlanResult, times: np.ndarray, lengths: np.ndarray, u: np.ndarray,
-              meta: dict) -> Trajectory:  # fmt: skip
+              meta: dict, strict: bool = True) -> Trajectory:  # fmt: skip
     """Stack FK, statics and every constraint margin at each resampled time."""
     leg = am.config.leg
     tol: GoalTolerance = (
@@ -248,8 +256,15 @@ def _evaluate(am: AssemblerModel, plan: PlanResult, times: np.ndarray, lengths: 
     for k in range(T):
         near = int(np.clip(np.searchsorted(knots, u[k]), 0, len(knots) - 1))
         fk = stack_forward_kinematics(am, lengths[k], base=base, guess=plan.states[near].plates if k == 0 else guess)
+        if not fk.success and k > 0:  # after a fast stretch, the nearest planned sample is the better guess
+            fk = stack_forward_kinematics(am, lengths[k], base=base, guess=plan.states[near].plates)
         if not fk.success:
-            raise TrajectoryError(f"stack FK failed at t = {times[k]:.3f} s: {fk.message}")
+            if strict:
+                raise TrajectoryError(f"stack FK failed at t = {times[k]:.3f} s: {fk.message}")
+            ee[k], force[k], feasible[k] = np.nan, np.nan, False
+            for values in margins.values():
+                values[k] = np.nan
+            continue
         guess = fk.plates
         target = plan.path.at(u[k])
         state = evaluate_state(am, fk.plates, goal=target, tolerance=tol)
@@ -265,6 +280,48 @@ def _evaluate(am: AssemblerModel, plan: PlanResult, times: np.ndarray, lengths: 
         margins["path_rotation"][k] = tol.rotation - np.linalg.norm(pin.log3(target.rotation.T @ pose.rotation))
         feasible[k] = state.feasible
     return Trajectory(times, lengths, ee, force, margins, feasible, am.n, meta)
+
+
+def trajectory_states(
+    am: AssemblerModel, traj: Trajectory, frames: int | None = None, tolerance: float = 1e-6
+) -> tuple[np.ndarray, list[StackState]]:
+    """The stack at the trajectory's samples, rebuilt from its leg lengths by stack FK.
+
+    Each FK starts from the previous pose (the first from the home pose), and the EE it
+    gives must match the EE pose written in the trajectory; the base is the trajectory's
+    ``meta["base"]`` (the home base plate when absent).
+
+    Args:
+        frames: how many evenly spaced samples (default: all).
+        tolerance: largest EE mismatch with the file [m, rad].
+
+    Returns:
+        (times [s], states) of the chosen samples.
+
+    Raises:
+        TrajectoryError: a different stack size, a failed FK, or an EE that does not match.
+    """
+    if traj.platforms != am.n:
+        raise TrajectoryError(f"the trajectory is for {traj.platforms} platforms, the model has {am.n}")
+    count = len(traj.times) if frames is None else max(2, min(int(frames), len(traj.times)))
+    picks = np.unique(np.round(np.linspace(0, len(traj.times) - 1, count)).astype(int))
+    base = pin.SE3(np.asarray(traj.meta["base"], dtype=float)) if "base" in traj.meta else am.home[0]
+    home = evaluate_state(am, am.home).plates
+    guess = PlateArrays(home.R.copy(), home.p.copy())
+    guess.R[0], guess.p[0] = base.rotation, base.translation
+    states = []
+    for k in picks:
+        fk = stack_forward_kinematics(am, traj.lengths[k], base=base, guess=guess)
+        if not fk.success:
+            raise TrajectoryError(f"stack FK failed at t = {traj.times[k]:.3f} s: {fk.message}")
+        ee = fk.plates.se3(am.n)
+        mismatch = np.abs(se3_to_taa(ee) - traj.ee[k]).max()
+        if not mismatch <= tolerance:
+            raise TrajectoryError(f"at t = {traj.times[k]:.3f} s the lengths put the EE {mismatch:.2e} from the "
+                                  "pose written in the file")  # fmt: skip
+        guess = fk.plates
+        states.append(evaluate_state(am, fk.plates))
+    return traj.times[picks], states
 
 
 def verify_trajectory(am: AssemblerModel, traj: Trajectory, rtol: float = 1e-6) -> list[str]:
@@ -284,6 +341,72 @@ def verify_trajectory(am: AssemblerModel, traj: Trajectory, rtol: float = 1e-6) 
     return problems
 
 
+@dataclass
+class MotionResult:
+    """A planned, timed and checked motion (:func:`plan_trajectory`).
+
+    Attributes:
+        success: the plan reached the end of the path and every output sample of the
+            trajectory is valid and within the legs' speed and acceleration limits.
+        reason: why not, or what happened.
+        plan: the force-optimized samples (:class:`~assembler_pin.motion.planner.PlanResult`).
+        trajectory: the timed leg-length commands (None when the plan has < 2 samples).
+        problems: what the trajectory check found (empty when nothing).
+        time_s: wall time of planning, timing and checking [s].
+    """
+
+    success: bool
+    reason: str
+    plan: PlanResult
+    trajectory: Trajectory | None
+    problems: list[str]
+    time_s: float
+
+    @property
+    def samples(self) -> int:
+        """Number of planned (force-optimized) samples."""
+        return len(self.plan.states)
+
+    @property
+    def peak_max_abs_force(self) -> float:
+        """Largest max|F| over the trajectory (over the samples without one) [N]."""
+        if self.trajectory is not None:
+            return float(self.trajectory.max_abs_force.max())
+        return float(self.plan.max_abs_forces.max()) if self.plan.states else math.nan
+
+    @property
+    def total_leg_travel(self) -> float:
+        """Σ over legs of the distance each travels along the planned samples [m]."""
+        return float(np.abs(np.diff(self.plan.lengths, axis=0)).sum()) if self.samples > 1 else 0.0
+
+    @property
+    def duration(self) -> float:
+        """Duration of the trajectory [s] (nan without one)."""
+        return self.trajectory.duration if self.trajectory is not None else math.nan
+
+    def to_dict(self) -> dict:
+        """The JSON of ``assembler-pin plan --json``."""
+        solve_times = self.plan.solve_times_s[1:]
+        return {
+            "success": self.success,
+            "reason": self.reason,
+            "samples": self.samples,
+            "peak_max_abs_force": self.peak_max_abs_force if self.plan.states else None,
+            "total_leg_travel_m": self.total_leg_travel,
+            "duration_s": self.duration if self.trajectory is not None else None,
+            "median_sample_time_s": float(np.median(solve_times)) if len(solve_times) else None,
+            "plan_time_s": self.plan.time_s,
+            "time_s": self.time_s,
+        }
+
+    def __repr__(self) -> str:
+        return (
+            f"MotionResult(success={self.success}, {self.samples} samples, peak max|F| "
+            f"{self.peak_max_abs_force:.2f} N, travel {self.total_leg_travel:.3f} m, duration "
+            f"{self.duration:.2f} s, reason={self.reason!r})"
+        )
+
+
 def plan_trajectory(
     am: AssemblerModel,
     path,
@@ -291,27 +414,42 @@ def plan_trajectory(
     options=None,
     rate: float = 50.0,
     refinements: int = 2,
-) -> tuple[PlanResult, Trajectory | None, list[str]]:
+) -> MotionResult:
     """Plan a path, time it, and check every output sample; when a check fails between
     samples, plan again with steps half as long (up to ``refinements`` times).
 
+    Args:
+        path: the EE path (:class:`~assembler_pin.motion.paths.EEPath`).
+        start: the stack's state at the path's start (e.g. ``am.home``); default the
+            force-optimized pose of the path's first pose.
+        options: :class:`~assembler_pin.motion.planner.PlanOptions`.
+        rate: output samples per second [Hz].
+        refinements: how many times the whole path may be planned again with half steps.
+
     Returns:
-        (plan, trajectory or None when the plan has < 2 samples, problems of the trajectory
-        — empty when every sample is valid and within the leg limits).
+        A :class:`MotionResult`: the plan, the trajectory (None when the plan has fewer
+        than 2 samples) and the problems the check found.
     """
     import dataclasses
 
     from .planner import PlanOptions, plan_path
 
+    t0 = time.perf_counter()
     opts = options or PlanOptions()
     for attempt in range(refinements + 1):
         plan = plan_path(am, path, start, opts)
         if len(plan.states) < 2:
-            return plan, None, [plan.reason]
+            return MotionResult(False, plan.reason, plan, None, [plan.reason], time.perf_counter() - t0)
         traj = time_parametrize(am, plan, rate=rate)
         problems = verify_trajectory(am, traj)
         if not problems or attempt == refinements:
-            return plan, traj, problems
+            success = plan.success and not problems
+            reason = (
+                plan.reason
+                if plan.success and not problems
+                else "; ".join(([] if plan.success else [plan.reason]) + problems)
+            )
+            return MotionResult(success, reason, plan, traj, problems, time.perf_counter() - t0)
         opts = dataclasses.replace(opts, position_step=opts.position_step / 2, rotation_step=opts.rotation_step / 2,
                                    max_leg_step=opts.max_leg_step / 2)  # fmt: skip
     raise AssertionError("unreachable")
