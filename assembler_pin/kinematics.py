@@ -66,6 +66,9 @@ class PlateArrays:
     def __len__(self) -> int:
         return self.R.shape[0]
 
+    def __repr__(self) -> str:
+        return f"PlateArrays({len(self)} plates, EE at {np.round(self.p[-1], 4).tolist()} m)"
+
     @classmethod
     def from_se3(cls, poses: Sequence[pin.SE3]) -> PlateArrays:
         """From a list of world poses (trusted: no validation, see :func:`plate_arrays`)."""
@@ -386,6 +389,10 @@ class FKResult:
     residual: float
     message: str
 
+    def __repr__(self) -> str:
+        return (f"FKResult(success={self.success}, {self.iterations} iterations, residual {self.residual:.2e} m, "
+                f"top at {np.round(self.pose.translation, 4).tolist()} m, message={self.message!r})")  # fmt: skip
+
     def raise_if_failed(self) -> pin.SE3:
         """Return ``pose``, or raise :class:`ConvergenceError` when not successful."""
         if not self.success:
@@ -510,6 +517,11 @@ class StackFKResult:
     @property
     def iterations(self) -> int:
         return sum(r.iterations for r in self.platforms)
+
+    def __repr__(self) -> str:
+        res = f"{self.residual:.2e} m" if self.platforms else "-"
+        return (f"StackFKResult(success={self.success}, {len(self.plates) - 1} platforms, EE at "
+                f"{np.round(self.plates.p[-1], 4).tolist()} m, residual {res}, message={self.message!r})")  # fmt: skip
 
     @property
     def residual(self) -> float:

@@ -86,6 +86,12 @@ class AssemblerModel:
     """The helper arms built for this configuration (an
     :class:`~assembler_pin.helper_arm.ArmCache`, made by the first initial condition)."""
 
+    def __repr__(self) -> str:
+        return (
+            f"AssemblerModel({self.n} platforms, {6 * self.n} legs, nq={self.model.nq}, nv={self.model.nv}, "
+            f"{len(self.closures)} closures, payload {self.config.payload.mass} kg)"
+        )
+
     def __post_init__(self) -> None:
         cfg, model = self.config, self.model
         n = cfg.platforms

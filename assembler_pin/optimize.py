@@ -191,6 +191,13 @@ class OptimizeResult:
     objective_optimized: float
     method: str
 
+    def __repr__(self) -> str:
+        return (f"OptimizeResult(success={self.success}, method={self.method!r}, max|F| "
+                f"{self.initial.max_abs_force:.3f} → {self.optimized.max_abs_force:.3f} N, "
+                f"Ω {self.objective_initial:.3f} → {self.objective_optimized:.3f}, {self.iterations} iterations, "
+                f"{1e3 * self.time_s:.1f} ms, "
+                f"message={self.message!r})")  # fmt: skip
+
 
 def objective_value(am: AssemblerModel, state: StackState, w1: float = 1.0, w2: float = 1.0) -> float:
     """Ω = w1·max|F| + w2·sqrt(Σ λ_k²) of a state (paper eq. 10)."""

@@ -79,6 +79,14 @@ class SolveResult:
         """The optimized state when there is one, else the initial one."""
         return self.optimized or self.initial
 
+    def __repr__(self) -> str:
+        init = f"{self.initial.max_abs_force:.3f} N" if self.initial is not None else "-"
+        opt = f"{self.optimized.max_abs_force:.3f} N" if self.optimized is not None else "-"
+        times = ", ".join(f"{k} {1e3 * v:.0f} ms" for k, v in self.timing_s.items())
+        return (f"SolveResult(success={self.success}, goal {np.round(self.goal.translation, 4).tolist()} m, max|F| "
+                f"initial {init} → optimized {opt} (start {self.start}), {times}, "
+                f"message={self.message!r})")  # fmt: skip
+
     def to_dict(self) -> dict[str, Any]:
         """JSON of ``assembler-pin solve --json``."""
         out: dict[str, Any] = {

@@ -87,6 +87,12 @@ class StaticsResult:
     def mean_abs_force(self) -> float:
         return float(np.abs(self.forces).mean())
 
+    def __repr__(self) -> str:
+        n = self.forces.shape[0]
+        return (f"StaticsResult({n} platforms, max|F| {self.max_abs_force:.3f} N, mean|F| {self.mean_abs_force:.3f} N, "
+                f"base force {np.round(self.base_wrench[:3], 3).tolist()} N, worst condition "
+                f"{float(np.max(self.condition)):.3g}{', SINGULAR' if self.singular else ''})")  # fmt: skip
+
 
 def _leg_jacobians_t(columns: np.ndarray, top_points: np.ndarray) -> np.ndarray:
     """Transposed closure Jacobian blocks of the legs' own joints.

@@ -81,6 +81,12 @@ class InitialConditionResult:
     arm_points: np.ndarray | None = None
     repaired: bool = False
 
+    def __repr__(self) -> str:
+        d = f"{self.link_length:.4f} m" if self.link_length is not None else "-"
+        return (f"InitialConditionResult(success={self.success}, max|F| {self.state.max_abs_force:.3f} N, d {d}, "
+                f"{self.attempts} attempts, {1e3 * self.time_s:.1f} ms{', repaired' if self.repaired else ''}, "
+                f"message={self.message!r})")  # fmt: skip
+
     def plates_if_valid(self) -> PlateArrays | None:
         """The valid state's plate poses, None when no valid initial condition was found."""
         return self.state.plates if self.success else None
