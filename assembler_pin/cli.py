@@ -433,6 +433,23 @@ def cmd_simulate(args: argparse.Namespace) -> int:
     return 0
 
 
+def _view_title(args: argparse.Namespace, result) -> str:
+    """Title of ``view --goal/--scenario``: what was asked and max|F| initial → optimized."""
+    from .scenarios import scenario
+
+    if args.scenario:
+        what = f"Scenario {args.scenario}: {scenario(args.scenario).title}"
+    else:
+        taa = args.goal if args.goal is not None else args.goal_deg
+        unit = "rad" if args.goal is not None else "deg"
+        what = (
+            f"Goal ({', '.join(f'{x:g}' for x in taa[:3])}) m, rotation ({', '.join(f'{x:g}' for x in taa[3:])}) {unit}"
+        )
+    init = f"{result.initial.max_abs_force:.1f} N" if result.initial is not None else "none"
+    opt = f"{result.optimized.max_abs_force:.1f} N" if result.optimized is not None else "none"
+    return f"{what} — max|F| initial {init} → optimized {opt}"
+
+
 def _animate_trajectory(viewer, am: AssemblerModel, path: str, frames: int) -> StackState:
     """Store a trajectory file's motion in the viewer, in real time; returns its peak state."""
     from .motion.timing import read_trajectory, trajectory_states
@@ -442,6 +459,9 @@ def _animate_trajectory(viewer, am: AssemblerModel, path: str, frames: int) -> S
     traj = read_trajectory(path)
     _, states = trajectory_states(am, traj, frames)
     viewer.animate(states, fps=max(1.0, (len(states) - 1) / max(traj.duration, 1e-9)), color_forces=True)
+    peak = max(st.max_abs_force for st in states)
+    viewer.set_title(f"Trajectory {Path(path).name}: {traj.duration:.1f} s, peak max|F| {peak:.1f} N "
+                     "(legs: sleeve colored by force, frame by frame)")  # fmt: skip
     print(f"trajectory: {traj.duration:.2f} s, {len(states)} frames", file=sys.stderr)
     return max(states, key=lambda st: st.max_abs_force)
 
@@ -460,7 +480,12 @@ def cmd_view(args: argparse.Namespace) -> int:
     restore_signals = interrupt_on_signals()  # kill / a closed terminal stop it as Ctrl-C does
     viewer = None
     try:
-        viewer = StackViewer(am, host=args.host)
+        viewer = StackViewer(am, host=args.host, force_scale=args.force_scale)
+        if args.scenario:
+            from .kinematics import se3_to_taa
+            from .scenarios import scenario
+
+            args.goal = list(se3_to_taa(scenario(args.scenario).goal))
         if args.goal is not None or args.goal_deg is not None:
             try:
                 from .solve import solve  # lazy: the solver is only needed for --goal
@@ -472,6 +497,7 @@ def cmd_view(args: argparse.Namespace) -> int:
                 raise CLIError(f"no pose to show: {result.message}")
             arm = getattr(getattr(result, "initial_result", None), "arm_points", None)
             viewer.show_comparison(result.initial, result.optimized, None if args.no_arm else arm)
+            viewer.set_title(_view_title(args, result))
             shown = result.optimized if result.optimized is not None else result.initial
             if args.animate and result.initial is not None and result.optimized is not None:
                 from .viewer import interpolate_states
@@ -483,6 +509,9 @@ def cmd_view(args: argparse.Namespace) -> int:
         else:
             plates = _plates_from_args(args, am, "give one of --goal, --goal-deg, --plates FILE or --home")
             shown = viewer.display(plates)
+            verdict = "" if shown.feasible else " (VIOLATES limits)"
+            name = "Home pose" if args.home else Path(args.plates).name
+            viewer.set_title(f"{name} — max|F| {shown.max_abs_force:.1f} N{verdict}")
             viewer.frame()
         print(
             f"max |F| = {shown.max_abs_force:.3f} N, feasible: {'yes' if shown.feasible else 'NO'}",
@@ -641,8 +670,16 @@ def build_parser() -> argparse.ArgumentParser:
     _add_goal_arguments(src, " (shows the initial and optimized poses)")
     src.add_argument("--plates", metavar="FILE", help='JSON {"plates": [n+1 4x4]} file, or - for stdin')
     src.add_argument("--home", action="store_true", help="show the home pose")
+    from .scenarios import SCENARIOS
+    from .viewer import FORCE_SCALES
+
+    src.add_argument("--scenario", choices=list(SCENARIOS),
+                     help="solve a scenario's goal and show its initial and optimized poses")  # fmt: skip
     src.add_argument("--trajectory", metavar="FILE",
                      help="animate a trajectory written by 'plan --out' (legs colored by force)")  # fmt: skip
+    p.add_argument("--force-scale", choices=FORCE_SCALES, default="auto",
+                   help="where leg colors saturate: auto (default: max|F|, at least 10%% of the limit), "
+                        "limit, max")  # fmt: skip
     p.add_argument("--frames", type=int, default=150, help="with --trajectory: frames of the animation (default 150)")
     p.add_argument("--html", metavar="FILE", help="write a standalone HTML page instead of serving")
     p.add_argument("--open", action="store_true", help="open the page / viewer URL in a web browser")

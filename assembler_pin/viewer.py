@@ -77,8 +77,18 @@ TENSION_RGB = np.array([0.95, 0.12, 0.10])
 """Leg color at (or beyond) the tension limit."""
 GHOST_RGBA = np.array([0.15, 0.75, 0.25, 0.3])
 """Color of the translucent ghost pose (the paper draws the initial condition green)."""
-ARM_LINK_RGBA = np.array([0.55, 0.55, 0.55, 1.0])
-ARM_CLUSTER_RGBA = np.array([0.10, 0.25, 0.95, 1.0])
+ARM_LINK_RGBA = np.array([0.60, 0.25, 0.80, 1.0])
+"""Violet: the helper arm's links — a color no leg can take (legs run blue ↔ gray ↔ red)."""
+ARM_CLUSTER_RGBA = np.array([0.40, 0.10, 0.55, 1.0])
+"""Dark violet: the helper arm's joint clusters."""
+PAYLOAD_ROD_RGBA = np.array([0.85, 0.55, 0.10, 1.0])
+"""The rod joining the payload to the EE plate (the payload's orange)."""
+BACKGROUND_RGB = (np.array([0.97, 0.97, 0.96]), np.array([0.86, 0.87, 0.88]))
+"""Neutral background, top and bottom."""
+FORCE_SCALES = ("auto", "limit", "max")
+"""Leg color scales: ``limit`` saturates at the force limits, ``max`` at the state's max|F|,
+``auto`` (default) at the larger of max|F| and :data:`FORCE_SCALE_FLOOR` × the smaller limit."""
+FORCE_SCALE_FLOOR = 0.1
 VIOLATION_RGBA = np.array([1.0, 0.85, 0.0, 0.9])
 FORCE_BAND_LEVELS = np.linspace(-1.0, 1.0, 11)
 """Force levels (fraction of the compression / tension limit) of an animation's leg sleeves."""
@@ -285,6 +295,7 @@ class StackViewer:
             machine only, the default) or e.g. ``0.0.0.0`` (every interface: anyone who
             can reach this machine sees the page).
         port: web port of the started server (default: the first free one from 7000).
+        force_scale: default color scale of the legs (:data:`FORCE_SCALES`).
 
     Attributes:
         viz: the :class:`pinocchio.visualize.MeshcatVisualizer` of the main stack.
@@ -302,7 +313,11 @@ class StackViewer:
         open: bool = False,
         host: str = DEFAULT_HOST,
         port: int | None = None,
+        force_scale: str = "auto",
     ) -> None:
+        if force_scale not in FORCE_SCALES:
+            raise ViewerError(f"force_scale must be one of {', '.join(FORCE_SCALES)}, got {force_scale!r}")
+        self.force_scale = force_scale
         if am.n > WHOLE_DATA_MAX_PLATFORMS:
             raise ViewerError(
                 f"the viewer draws stacks of up to {WHOLE_DATA_MAX_PLATFORMS} platforms (it runs on the "
@@ -326,6 +341,8 @@ class StackViewer:
         self._extra_points: dict[str, np.ndarray] = {}
         self._roots: list[str] = [prefix, f"{prefix}_violations"]
         self.state: StackState | None = None
+        self.title = ""
+        self.force_range = (am.config.leg.max_tension, am.config.leg.max_compression)
         self._animated = False
         self.viz = self._make_visualizer(prefix)
         self._leg_geoms = self._index_leg_geometries()
@@ -382,6 +399,7 @@ class StackViewer:
         pose: StackState | PlateArrays | Sequence | np.ndarray,
         color_forces: bool = True,
         mark_violations: bool = True,
+        force_scale: str | None = None,
     ) -> StackState:
         """Show a pose; color each leg by its force and mark violating legs.
 
@@ -391,6 +409,9 @@ class StackViewer:
         Args:
             pose: a :class:`StackState`, or world plate poses (their state is computed).
             color_forces: color motor and shaft by the actuator force (else URDF colors).
+            force_scale: where the colors saturate (:data:`FORCE_SCALES`; default the
+                viewer's :attr:`force_scale`); the numbers are in :attr:`force_range` and on
+                the page's color bar.
             mark_violations: put a yellow marker at the middle of every leg that
                 violates a constraint (length, deflection, force, rise), at the meshcat
                 path ``{prefix}_violations/sp{j}_leg{i}`` (0-based, as the URDF's names
@@ -403,8 +424,8 @@ class StackViewer:
         self.state = state
         self._clear_animation()
         self.viz.display(q_from_plates(self.am, state.plates))
-        leg_cfg = self.am.config.leg
-        colors = force_color(state.forces, leg_cfg.max_tension, leg_cfg.max_compression)
+        self.force_range = self.color_scale(state, force_scale or self.force_scale)
+        colors = force_color(state.forces, *self.force_range)
         for (j, i), gids in self._leg_geoms.items():
             for gid in gids:
                 g = self.visual_model.geometryObjects[gid]
@@ -419,8 +440,76 @@ class StackViewer:
                 node = marks[f"sp{j}_leg{i}"]
                 node.set_object(mg.Sphere(2.2 * DIMENSIONS.motor_radius), _material(VIOLATION_RGBA))
                 node.set_transform(_translation(mid))
+        self._show_payload_rod(state.plates)
         self._extra_points["stack"] = self._stack_points(state)
         return state
+
+    def color_scale(self, state: StackState, force_scale: str = "auto") -> tuple[float, float]:
+        """(tension, compression) [N] at which the leg colors saturate (see :data:`FORCE_SCALES`)."""
+        if force_scale not in FORCE_SCALES:
+            raise ViewerError(f"force_scale must be one of {', '.join(FORCE_SCALES)}, got {force_scale!r}")
+        leg = self.am.config.leg
+        if force_scale == "limit":
+            return leg.max_tension, leg.max_compression
+        peak = max(state.max_abs_force, 1e-9)
+        if force_scale == "auto":
+            peak = max(peak, FORCE_SCALE_FLOOR * min(leg.max_tension, leg.max_compression))
+        return peak, peak
+
+    def _show_payload_rod(self, plates: PlateArrays) -> None:
+        """A thin rod from the EE plate's centre to the payload, so it does not float."""
+        offset = self.am.config.payload.offset
+        node = self.meshcat[f"{self.prefix}_payload_rod"]
+        if offset <= 0 or self.am.config.payload.mass <= 0:
+            node.delete()
+            return
+        a = plates.p[-1]
+        b = plates.R[-1] @ np.array([0.0, 0.0, offset]) + a
+        node.set_object(mg.Cylinder(offset, 0.4 * DIMENSIONS.motor_radius), _material(PAYLOAD_ROD_RGBA))
+        node.set_transform(_cylinder_between(a, b))
+        if f"{self.prefix}_payload_rod" not in self._roots:
+            self._roots.append(f"{self.prefix}_payload_rod")
+
+    def set_title(self, title: str) -> None:
+        """The title of the page's overlay (e.g. the scenario or goal and max|F|)."""
+        self.title = str(title)
+
+    def overlay_html(self) -> str:
+        """The page's overlay: title, legend of every color and marker drawn, and the
+        color bar of the leg forces with its numbers [N]."""
+        import html as html_lib
+
+        tension, compression = self.force_range
+        items = [(_hex(TENSION_RGB), "leg in tension (+)"),
+                 (_hex(COMPRESSION_RGB), "leg in compression (−)"),
+                 (_hex(NEUTRAL_RGB), "leg at 0 N")]  # fmt: skip
+        if self._ghosts:
+            items.append((_hex(GHOST_RGBA[:3]), "initial pose (ghost)"))
+        if any(r == "helper_arm" for r in self._roots):
+            items.append((_hex(ARM_LINK_RGBA[:3]), "helper arm"))
+        if self.state is not None and self.violating_legs(self.state):
+            items.append((_hex(VIOLATION_RGBA[:3]),
+                          "yellow ball: leg violating a limit"))  # fmt: skip
+        if self.am.config.payload.mass > 0:
+            items.append((_hex(PAYLOAD_ROD_RGBA[:3]),
+                          f"payload {self.am.config.payload.mass:g} kg"))  # fmt: skip
+        legend = "".join(
+            f'<div><span style="display:inline-block;width:12px;height:12px;background:{c};margin-right:6px;'
+            f'border:1px solid #555"></span>{html_lib.escape(t)}</div>'
+            for c, t in items
+        )
+        blue, gray, red = (_hex(rgb) for rgb in (COMPRESSION_RGB, NEUTRAL_RGB, TENSION_RGB))
+        bar = (f'<div id="assembler-colorbar" style="margin-top:8px">leg force [N]'
+               f'<div style="height:12px;width:220px;background:linear-gradient(to right,{blue},{gray},{red});'
+               f'border:1px solid #555"></div><div style="display:flex;justify-content:space-between;width:222px">'
+               f"<span>−{compression:.0f}</span><span>0</span><span>+{tension:.0f}</span></div></div>")  # fmt: skip
+        title = html_lib.escape(self.title or "Assembler")
+        return (
+            '<div id="assembler-overlay" style="position:absolute;top:8px;left:8px;z-index:10;'
+            "max-width:330px;background:rgba(255,255,255,0.8);padding:6px 8px;border-radius:4px;font:12px sans-serif;"
+            f'color:#222;pointer-events:none"><div id="assembler-title" style="font-weight:bold;'
+            f'margin-bottom:6px">{title}</div><div id="assembler-legend">{legend}</div>{bar}</div>'
+        )
 
     @staticmethod
     def violating_legs(state: StackState) -> list[tuple[int, int]]:
@@ -554,6 +643,9 @@ class StackViewer:
                     frame[self.viz.getViewerNodeName(g, pin.GeometryType.VISUAL)].set_transform(
                         vdata.oMg[gid].homogeneous
                     )
+                if self.am.config.payload.offset > 0 and self.am.config.payload.mass > 0:
+                    rod_end = plates.R[-1] @ np.array([0.0, 0.0, self.am.config.payload.offset]) + plates.p[-1]
+                    frame[f"{self.prefix}_payload_rod"].set_transform(_cylinder_between(plates.p[-1], rod_end))
                 if color_forces:
                     self._force_band_frame(frame, st)
             self._extra_points[f"anim{k}"] = self._stack_points(plates)
@@ -648,6 +740,8 @@ class StackViewer:
         # three.js is y-up: world (x, y, z) -> (x, z, -y)
         self.meshcat["/Cameras/default/rotated/<object>"].set_property("position", [rel[0], rel[2], -rel[1]])
         self.meshcat["/Grid"].set_property("visible", show_grid)
+        self.meshcat["/Background"].set_property("top_color", BACKGROUND_RGB[0].tolist())
+        self.meshcat["/Background"].set_property("bottom_color", BACKGROUND_RGB[1].tolist())
         return cam
 
     def static_html(self, path: str | Path | None = None, frame: bool = True) -> str:
@@ -660,6 +754,7 @@ class StackViewer:
         if frame:
             self.frame()
         html = self.meshcat.static_html()
+        html = html.replace("</body>", self.overlay_html() + "\n</body>", 1)
         if path is not None:
             Path(path).write_text(html)
             logger.info("wrote %s (%d bytes)", path, len(html))
@@ -670,6 +765,13 @@ class StackViewer:
         to the server: the scene is embedded)."""
         self.frame()
         return self.meshcat.render_static(height=height)
+
+
+def _hex(rgb: npt.ArrayLike) -> str:
+    """CSS color of an RGB(A) triple in [0, 1]."""
+    from matplotlib.colors import to_hex
+
+    return to_hex(np.asarray(rgb, dtype=float)[:3])
 
 
 def _translation(p: npt.ArrayLike) -> np.ndarray:

@@ -25,9 +25,10 @@ import pinocchio as pin
 import pytest
 
 from assembler_pin import evaluate_state, stack_forward_kinematics
-from assembler_pin.exceptions import AssemblerError, ConvergenceError
+from assembler_pin.exceptions import AssemblerError, ConvergenceError, ViewerError
 from assembler_pin.kinematics import StackFKResult
 from assembler_pin.viewer import (
+    ARM_LINK_RGBA,
     CAMERA_FOV_DEG,
     COMPRESSION_RGB,
     NEUTRAL_RGB,
@@ -156,7 +157,7 @@ def test_animation_in_static_html(am, viewer, bent, tmp_path):
     anims = [c for c in cmds if c["type"] == "set_animation"]
     assert len(anims) == 1
     tracks = anims[0]["animations"]
-    assert len(tracks) == viewer.visual_model.ngeoms  # one clip per drawn body
+    assert len(tracks) == viewer.visual_model.ngeoms + 1  # one clip per drawn body, and the payload rod
     times = [k["time"] for k in tracks[0]["clip"]["tracks"][0]["keys"]]
     assert times == list(range(5))
     assert (tmp_path / "anim.html").stat().st_size > 100_000
@@ -518,6 +519,17 @@ def test_html_page_draws_the_stack_in_a_real_browser(am, bent, tmp_path):
     differ = np.abs(home - bent_img).max(axis=2) > 0.12
     assert differ.mean() > 0.01
 
+    # the overlay (title, legend, color bar) is drawn at the top left, and nowhere else
+    html = pages["home"].read_text()
+    start, end = html.index('<div id="assembler-overlay"'), html.index("</body>")
+    bare = tmp_path / "bare.html"
+    bare.write_text(html[:start] + html[end:])
+    overlay = np.abs(home - screenshot(bare, tmp_path)).max(axis=2) > 0.12
+    corner = np.zeros_like(overlay)
+    corner[: HEIGHT // 2, : WIDTH // 2] = True
+    assert overlay[:60, :200].mean() > 0.05, "no overlay text at the top left"
+    assert overlay[~corner].mean() < 0.01
+
 
 @pytest.mark.skipif(CHROMIUM is None, reason="chromium not installed (.ci/run installs it)")
 def test_pose_shown_after_an_animation_in_a_real_browser(am, bent, tmp_path):
@@ -547,3 +559,39 @@ def test_pose_shown_after_an_animation_in_a_real_browser(am, bent, tmp_path):
 
     assert changed("still", "played") > 0.01  # the animation does run in the browser before the picture
     assert changed("after", "plain") < 1e-3  # and a pose shown afterwards is not replayed over
+
+
+def test_page_overlay_names_what_is_drawn_and_the_color_scale_follows_the_option(am, bent, tmp_path):
+    state = evaluate_state(am, bent)
+    peak = float(np.abs(state.forces).max())
+    leg = am.config.leg
+    with StackViewer(am, force_scale="limit") as v:
+        v.display(state)
+        assert v.force_range == (leg.max_tension, leg.max_compression)
+        v.display(state, force_scale="max")
+        assert v.force_range == pytest.approx((peak, peak))
+        # the drawn leg colors saturate at the chosen scale: the strongest leg is at a pure end color
+        j, i = np.unravel_index(np.abs(state.forces).argmax(), state.forces.shape)
+        end = TENSION_RGB if state.forces[j, i] > 0 else COMPRESSION_RGB
+        assert np.allclose(force_color(state.forces[j, i], *v.force_range), end)
+        v.display(am.home, force_scale="auto")  # max|F| but at least 10 % of the smaller limit
+        assert v.force_range[0] == pytest.approx(max(evaluate_state(am, am.home).max_abs_force,
+                                                     0.1 * min(leg.max_tension, leg.max_compression)))  # fmt: skip
+        v.show_ghost(bent)
+        v.show_helper_arm(np.array([[0, 0, 0], [0.1, 0, 0.3], [0.2, 0, 0.6]]))
+        v.set_title("Scenario test — max|F| initial 1 → optimized 2 N")
+        html = v.static_html(tmp_path / "page.html")
+        with pytest.raises(ViewerError, match="force_scale"):
+            v.display(am.home, force_scale="huge")
+    for element in ('id="assembler-overlay"', 'id="assembler-title"', 'id="assembler-legend"',
+                    'id="assembler-colorbar"', "Scenario test", "initial pose (ghost)", "helper arm",
+                    "leg in tension", "leg in compression", "payload 5 kg"):  # fmt: skip
+        assert element in html, element
+    low, high = v.force_range
+    assert f"−{low:.0f}" in html and f"+{high:.0f}" in html
+    # the helper arm's color is none a leg can take (legs run blue ↔ gray ↔ red)
+    legs = force_color(np.linspace(-1, 1, 2001), 1.0, 1.0)
+    assert np.abs(legs - ARM_LINK_RGBA[:3]).max(axis=1).min() > 0.15
+    # the payload is joined to the EE plate by a rod
+    paths = page_paths(html)
+    assert "/meshcat/assembler_payload_rod" in paths
