@@ -23,7 +23,9 @@ import numpy.typing as npt
 import pinocchio as pin
 from matplotlib.colors import Normalize, TwoSlopeNorm
 from matplotlib.figure import Figure
+from matplotlib.patches import Patch, Rectangle
 
+from .config import LegConfig
 from .exceptions import AssemblerError
 from .labels import leg_label, platform_label
 from .model import AssemblerModel
@@ -38,6 +40,7 @@ __all__ = [
     "default_state_function",
     "force_bars",
     "force_heatmaps",
+    "leg_flags",
     "plot_workspace_slice",
     "pose_views",
     "save",
@@ -53,6 +56,10 @@ OPTIMIZED_PLATE_COLOR = "#1f3fbf"
 """Blue: plates of the optimized pose."""
 OPTIMIZED_LEG_COLOR = "#d62728"
 """Red: legs of the optimized pose."""
+ARM_COLOR = "#9940cc"
+"""Violet: the helper arm's links (as in the viewer, a color no leg takes)."""
+ARM_JOINT_COLOR = "#66198c"
+"""Dark violet: the helper arm's joint clusters."""
 FORCE_CMAP = "RdBu_r"
 """Diverging colormap: blue = compression (negative), red = tension (positive)."""
 
@@ -67,12 +74,30 @@ def _named_states(
 
 
 # ---------------------------------------------------------------------- force tables
+STROKE_END_TOLERANCE = 1e-3
+"""A leg within this distance of its stroke end is marked "at a stroke end" in the figures [m]."""
+FORCE_BOUND_FRACTION = 0.99
+"""A leg at this fraction of its force limit or more is marked "at the force bound"."""
+
+
+def leg_flags(state: StackState, leg: LegConfig) -> tuple[np.ndarray, np.ndarray]:
+    """(n, 6) masks of the legs at a stroke end (within :data:`STROKE_END_TOLERANCE`) and at
+    the force bound (at least :data:`FORCE_BOUND_FRACTION` of the tension or compression limit)."""
+    L = state.leg_lengths
+    stroke = (L <= leg.min_length + STROKE_END_TOLERANCE) | (L >= leg.max_length - STROKE_END_TOLERANCE)
+    F = state.forces
+    bound = (F >= FORCE_BOUND_FRACTION * leg.max_tension) | (F <= -FORCE_BOUND_FRACTION * leg.max_compression)
+    return stroke, bound
+
+
 def force_heatmaps(
     initial: StackState | None,
     optimized: StackState | None = None,
     titles: Sequence[str] = ("initial", "optimized"),
     limit: float | None = None,
     fmt: str = "{:.1f}",
+    leg: LegConfig | None = None,
+    title: str | None = None,
 ) -> Figure:
     """Annotated heatmaps of the actuator forces, leg × platform, side by side.
 
@@ -80,7 +105,8 @@ def force_heatmaps(
     :mod:`~assembler_pin.labels`); each cell is annotated with its force [N]. The
     colormap is diverging and centred at 0 (red tension, blue compression) with one
     symmetric scale for both panels: ±``limit`` if given, else ±max |F| over the states
-    shown.
+    shown. With ``leg`` (the leg limits), a leg at a stroke end gets a black frame and
+    a leg at the force bound a yellow one (see :func:`leg_flags`); ``title`` heads the figure.
     """
     states = _named_states(initial, optimized, titles)
     vmax = limit if limit is not None else max(float(np.abs(s.forces).max()) for _, s in states)
@@ -90,7 +116,7 @@ def force_heatmaps(
     fig = Figure(figsize=(1.2 + 1.25 * n * len(states), 4.2), layout="constrained")
     axes = fig.subplots(1, len(states), squeeze=False)[0]
     image = None
-    for ax, (title, state) in zip(axes, states, strict=True):
+    for ax, (name, state) in zip(axes, states, strict=True):
         table = state.forces.T  # (6, n): leg × platform
         image = ax.imshow(table, cmap=FORCE_CMAP, norm=norm, aspect="auto")
         for i in range(table.shape[0]):
@@ -104,8 +130,18 @@ def force_heatmaps(
         ax.set_yticks(range(6), [f"leg {i}" for i in range(6)])
         ax.set_xlabel("platform")
         ax.set_ylabel("leg")
-        ax.set_title(f"{title}: max |F| {state.max_abs_force:.1f} N, mean {state.mean_abs_force:.1f} N", fontsize=9)
+        ax.set_title(f"{name}: max |F| {state.max_abs_force:.1f} N, mean {state.mean_abs_force:.1f} N", fontsize=9)
+        if leg is not None:
+            for mask, color in zip(leg_flags(state, leg), ("black", "gold"), strict=True):
+                for j, i in zip(*np.nonzero(mask), strict=True):
+                    ax.add_patch(Rectangle((j - 0.46, i - 0.46), 0.92, 0.92, fill=False, ec=color, lw=2.2))
+    if leg is not None:
+        axes[-1].legend(handles=[Patch(fill=False, ec="black", lw=2, label="at a stroke end"),
+                                 Patch(fill=False, ec="gold", lw=2, label="at the force bound")],
+                        loc="upper left", bbox_to_anchor=(1.25, 1.0), fontsize=7)  # fmt: skip
     fig.colorbar(image, ax=list(axes), label="force [N] (tension +, compression −)", shrink=0.9)
+    if title:
+        fig.suptitle(title)
     return fig
 
 
@@ -114,11 +150,16 @@ def force_bars(
     optimized: StackState | None = None,
     titles: Sequence[str] = ("initial", "optimized"),
     limits: tuple[float, float] | None = None,
+    leg: LegConfig | None = None,
+    title: str | None = None,
 ) -> Figure:
     """Per-actuator force bars [N], initial (green) next to optimized (red), labelled ``SPj leg i``.
 
     Args:
         limits: optional ``(max_tension, max_compression)`` [N] drawn as dashed lines.
+        leg: the leg limits: legs at a stroke end are marked ▲ above (below) their bar,
+            legs at the force bound ◆ (see :func:`leg_flags`).
+        title: figure title.
     """
     states = _named_states(initial, optimized, titles)
     n = states[0][1].forces.shape[0]
@@ -127,9 +168,18 @@ def force_bars(
     colors = {titles[0]: INITIAL_COLOR, titles[1]: OPTIMIZED_LEG_COLOR}
     fig = Figure(figsize=(max(6.0, 0.38 * 6 * n), 3.6), layout="constrained")
     ax = fig.subplots()
-    for k, (title, state) in enumerate(states):
+    for k, (name, state) in enumerate(states):
         offset = (k - (len(states) - 1) / 2) * width
-        ax.bar(x + offset, state.forces.ravel(), width, label=title, color=colors.get(title))
+        ax.bar(x + offset, state.forces.ravel(), width, label=name, color=colors.get(name))
+        if leg is not None:
+            f = state.forces.ravel()
+            pad = 0.04 * max(float(np.abs(s.forces).max()) for _, s in states)
+            for mask, marker, what in zip(leg_flags(state, leg), ("^", "D"), ("stroke end", "force bound"),
+                                          strict=True):  # fmt: skip
+                hit = mask.ravel()
+                if hit.any():
+                    ax.plot(x[hit] + offset, f[hit] + np.sign(f[hit]) * pad, marker, color=colors.get(name, "k"),
+                            mec="k", ms=5, ls="none", label=f"{name}: at a {what}")  # fmt: skip
     ax.axhline(0.0, color="black", lw=0.8)
     if limits is not None:
         ax.axhline(limits[0], color="gray", ls="--", lw=0.8, label="limits")
@@ -139,7 +189,9 @@ def force_bars(
     ax.set_xticks(x, [leg_label(j, i) for j in range(n) for i in range(6)], fontsize=7, rotation=90)
     ax.set_xlabel("leg")
     ax.set_ylabel("force [N] (tension +)")
-    ax.legend(fontsize=8)
+    ax.legend(fontsize=7, ncol=2)
+    if title:
+        ax.set_title(title)
     return fig
 
 
@@ -187,34 +239,55 @@ def pose_views(
     optimized: StackState | None = None,
     arm_points: npt.ArrayLike | None = None,
     titles: Sequence[str] = ("initial", "optimized"),
+    title: str | None = None,
+    goal: pin.SE3 | None = None,
+    floor_z: float | None = None,
 ) -> Figure:
-    """Side (x–z) and top (x–y) views of one or two states, as in the paper's figures.
+    """Side (x–z), front (y–z) and top (x–y) views of one or two states, as in the paper's figures.
 
     The initial state is drawn green, the optimized one with blue plates and red legs;
-    legs join their two joint centres, plates are outlined through their leg joints.
-    ``arm_points`` ((n+2, 3) world points [m]) adds the helper arm: gray links, blue
-    joint clusters.
+    legs join their two joint centres, plates are outlined through their leg joints (filled
+    translucent, so plates stacked in the top view stay readable; the front view separates
+    them in height). ``arm_points`` ((n+2, 3) world points [m]) adds the helper arm: violet
+    links, dark violet joint clusters.
+
+    Args:
+        title: figure title (e.g. the scenario and its goal); max|F| of each state is added.
+        goal: the EE goal, marked by a star and its z axis (the payload direction).
+        floor_z: height of the floor [m], drawn as a line in the side and front views.
     """
-    _named_states(initial, optimized, titles)
-    fig = Figure(figsize=(10.0, 5.0), layout="constrained")
-    side, top = fig.subplots(1, 2)
-    for ax, idx, name in ((side, (0, 2), "side view (x–z)"), (top, (0, 1), "top view (x–y)")):
+    named = _named_states(initial, optimized, titles)
+    fig = Figure(figsize=(13.5, 5.0), layout="constrained")
+    side, front, top = fig.subplots(1, 3)
+    views = ((side, (0, 2), "side view (x–z)"), (front, (1, 2), "front view (y–z)"), (top, (0, 1), "top view (x–y)"))
+    for ax, idx, name in views:
         if initial is not None:
             _draw_state(
                 ax, initial, idx, INITIAL_COLOR, INITIAL_COLOR, titles[0], alpha=0.8 if optimized is not None else 1.0
             )
         if optimized is not None:
-            _draw_state(ax, optimized, idx, OPTIMIZED_LEG_COLOR, OPTIMIZED_PLATE_COLOR, titles[1])
+            _draw_state(ax, optimized, idx, OPTIMIZED_LEG_COLOR, OPTIMIZED_PLATE_COLOR, f"{titles[1]} legs")
+            ax.plot([], [], color=OPTIMIZED_PLATE_COLOR, lw=2.0, label=f"{titles[1]} plates")
+        ax.plot([], [], "o", color="0.3", ms=3, label="plate centres")
         if arm_points is not None:
             arm = np.asarray(arm_points, dtype=float)
-            ax.plot(arm[:, idx[0]], arm[:, idx[1]], "-", color="0.5", lw=2.5, label="helper arm")
-            ax.plot(arm[1:-1, idx[0]], arm[1:-1, idx[1]], "o", color="#1030f0", ms=7)
+            ax.plot(arm[:, idx[0]], arm[:, idx[1]], "-", color=ARM_COLOR, lw=2.5, label="helper arm")
+            ax.plot(arm[1:-1, idx[0]], arm[1:-1, idx[1]], "o", color=ARM_JOINT_COLOR, ms=7, label="helper arm joints")
+        if goal is not None:
+            p, z = goal.translation, goal.rotation[:, 2]
+            ax.plot(p[idx[0]], p[idx[1]], "*", color="k", ms=14, mfc="gold", label="EE goal", zorder=5)
+            tip = (p[idx[0]] + 0.12 * z[idx[0]], p[idx[1]] + 0.12 * z[idx[1]])
+            ax.annotate("", xy=tip, xytext=(p[idx[0]], p[idx[1]]), arrowprops={"arrowstyle": "->", "color": "k"})
+        if floor_z is not None and idx[1] == 2:
+            ax.axhline(floor_z, color="saddlebrown", lw=2.0, label="floor")
         ax.set_aspect("equal", adjustable="datalim")
-        ax.set_xlabel("x [m]")
-        ax.set_ylabel("z [m]" if idx[1] == 2 else "y [m]")
+        ax.set_xlabel("xyz"[idx[0]] + " [m]")
+        ax.set_ylabel("xyz"[idx[1]] + " [m]")
         ax.set_title(name)
         ax.grid(True, lw=0.4, alpha=0.5)
-    side.legend(fontsize=8, loc="best")
+    side.legend(fontsize=7, loc="best")
+    forces = ", ".join(f"max|F| {t} {st.max_abs_force:.1f} N" for t, st in named)
+    fig.suptitle(f"{title}: {forces}" if title else forces)
     return fig
 
 

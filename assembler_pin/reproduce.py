@@ -152,6 +152,13 @@ def _paper_reduction(scn: Scenario) -> float:
     return 1.0 - scn.paper_optimized_max_force / scn.paper_initial_max_force
 
 
+def figure_title(s: Scenario) -> str:
+    """A scenario's figure title: its name and goal (position [m], rotation vector [deg])."""
+    taa = s.goal_taa
+    return (f"{s.name}: goal ({', '.join(f'{x:.2f}' for x in taa[:3])}) m, "
+            f"rotation ({', '.join(f'{np.rad2deg(x):.0f}' for x in taa[3:])})°")  # fmt: skip
+
+
 def summary_table(outcomes: Sequence[ScenarioOutcome], markdown: bool = False) -> str:
     """Initial vs optimized max |F| (which leg: ``SPj leg i``, 0-based), reduction, mean |F|
     and time, beside the paper's figures."""
@@ -265,13 +272,21 @@ def write_report(am: AssemblerModel, outcomes: Sequence[ScenarioOutcome], out_di
             parts += [f"Not solved: {o.result.message}", ""]
             continue
         arm = o.result.initial_result.arm_points
+        heading = figure_title(s)
         files = {
-            "views": plots.save(plots.pose_views(o.initial, o.optimized, arm_points=arm), out / f"{s.name}_views.png"),
+            "views": plots.save(
+                plots.pose_views(o.initial, o.optimized, arm_points=arm, title=heading, goal=s.goal, floor_z=s.floor_z),
+                out / f"{s.name}_views.png",
+            ),
             "bars": plots.save(
-                plots.force_bars(o.initial, o.optimized, limits=(leg.max_tension, leg.max_compression)),
+                plots.force_bars(
+                    o.initial, o.optimized, limits=(leg.max_tension, leg.max_compression), leg=leg, title=heading
+                ),
                 out / f"{s.name}_forces.png",
             ),
-            "heatmap": plots.save(plots.force_heatmaps(o.initial, o.optimized), out / f"{s.name}_heatmap.png"),
+            "heatmap": plots.save(
+                plots.force_heatmaps(o.initial, o.optimized, leg=leg, title=heading), out / f"{s.name}_heatmap.png"
+            ),
         }
         parts += [
             f"![{s.name} views]({files['views'].name})",

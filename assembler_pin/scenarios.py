@@ -39,6 +39,8 @@ class Scenario:
         paper_initial_max_force, paper_optimized_max_force: the paper's max |F| of its
             initial (helper-arm) and force-optimized poses [N].
         paper_initial_mean_force, paper_optimized_mean_force: the same for mean |F| [N].
+        floor_z: height of the floor the scenario works on [m] (the base plate stands on
+            it at z = 0), None when the floor plays no part.
     """
 
     name: str
@@ -49,6 +51,7 @@ class Scenario:
     paper_optimized_max_force: float
     paper_initial_mean_force: float
     paper_optimized_mean_force: float
+    floor_z: float | None = None
 
     @property
     def goal_matrix(self) -> np.ndarray:
@@ -118,6 +121,7 @@ _LIST = [
         paper_optimized_max_force=52.7,
         paper_initial_mean_force=25.9,
         paper_optimized_mean_force=28.3,
+        floor_z=0.0,
     ),
     Scenario(
         name="vertical_lift",
@@ -132,6 +136,7 @@ _LIST = [
         paper_optimized_max_force=47.9,
         paper_initial_mean_force=26.5,
         paper_optimized_mean_force=31.0,
+        floor_z=0.0,
     ),
     Scenario(
         name="orientation_transition",

@@ -43,8 +43,8 @@ def test_pose_views_draw_the_legs_at_their_joint_centres(two_states):
     initial, optimized = two_states
     arm = np.vstack([np.zeros(3), optimized.plates.p[1:-1], optimized.plates.p[-1]])
     fig = plots.pose_views(initial, optimized, arm_points=arm)
-    side, top = fig.axes[:2]
-    for ax, (a, b) in ((side, (0, 2)), (top, (0, 1))):
+    side, front, top = fig.axes[:3]
+    for ax, (a, b) in ((side, (0, 2)), (front, (1, 2)), (top, (0, 1))):
         for state, color in ((initial, plots.INITIAL_COLOR), (optimized, plots.OPTIMIZED_LEG_COLOR)):
             segments = [
                 np.column_stack(line.get_data())
@@ -103,3 +103,43 @@ def test_workspace_slice_with_a_user_callable(am):
 def test_workspace_slice_default_solver(am):
     ws = plots.compute_workspace_slice(am, plane="xz", u_range=(0.2, 0.2), v_range=(0.9, 0.9), resolution=(1, 1))
     assert ws.reachable.all() and ws.max_abs_force[0, 0] > 0
+
+
+def test_figures_say_what_they_show(am):
+    """Titles, legend entries for every mark, the goal, the floor, and the legs at a limit."""
+    import dataclasses
+
+    from matplotlib.patches import Rectangle
+
+    from assembler_pin import stack_forward_kinematics
+
+    leg = am.config.leg
+    lengths = np.full((am.n, 6), 0.275)
+    lengths[0, 1] = leg.min_length  # at a stroke end
+    lengths[2, 4] = leg.max_length
+    state = evaluate_state(am, stack_forward_kinematics(am, lengths).raise_if_failed())
+    # the flags, held to the lengths set above and to a force limit placed at one leg's force
+    stroke, bound = plots.leg_flags(state, leg)
+    assert {tuple(x) for x in np.argwhere(stroke)} == {(0, 1), (2, 4)}
+    assert not bound.any()
+    j, i = np.unravel_index(np.abs(state.forces).argmax(), state.forces.shape)
+    tight = dataclasses.replace(leg, max_tension=abs(state.forces[j, i]), max_compression=abs(state.forces[j, i]))
+    assert plots.leg_flags(state, tight)[1][j, i]
+
+    fig = plots.force_heatmaps(state, leg=leg, title="my scenario")
+    frames = [p for ax in fig.axes for p in ax.patches if isinstance(p, Rectangle) and not p.get_fill()]
+    assert len(frames) == 2 and fig.get_suptitle() == "my scenario"
+    bars = plots.force_bars(state, limits=(leg.max_tension, leg.max_compression), leg=leg, title="my scenario")
+    labels = [t.get_text() for t in bars.axes[0].get_legend().get_texts()]
+    assert "initial: at a stroke end" in labels and "limits" in labels
+
+    goal = pin.SE3(state.plates.R[-1], state.plates.p[-1])
+    arm = np.linspace([0, 0, 0], state.plates.p[-1], am.n + 2)
+    views = plots.pose_views(state, state, arm_points=arm, title="my scenario", goal=goal, floor_z=0.0)
+    assert views.get_suptitle().startswith("my scenario") and f"{state.max_abs_force:.1f} N" in views.get_suptitle()
+    assert [ax.get_title() for ax in views.axes] == ["side view (x–z)", "front view (y–z)", "top view (x–y)"]
+    labels = {t.get_text() for t in views.axes[0].get_legend().get_texts()}
+    assert {"initial", "optimized legs", "optimized plates", "plate centres", "helper arm", "helper arm joints",
+            "EE goal", "floor"} <= labels  # fmt: skip
+    star = next(ln for ln in views.axes[0].lines if ln.get_label() == "EE goal")
+    assert np.allclose([star.get_xdata()[0], star.get_ydata()[0]], goal.translation[[0, 2]])
