@@ -36,12 +36,29 @@ import threading
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 
-__all__ = ["DEFAULT_HOST", "ServerProcess", "main", "start_server"]
+__all__ = ["DEFAULT_HOST", "SET_OVERLAY", "ServerProcess", "main", "start_server"]
 
 DEFAULT_HOST = "127.0.0.1"
 """Interface the web server listens on unless asked otherwise: this machine only."""
 ZMQ_HOST = "127.0.0.1"
 """The ZMQ command socket is only for the local Python process: always loopback."""
+SET_OVERLAY = b"set_overlay"
+"""ZMQ command of this server (not meshcat's): frames ``[SET_OVERLAY, html]`` set the
+HTML the live page shows over the scene (title, legend, color bar)."""
+OVERLAY_SCRIPT = """<div id="assembler-live-overlay"></div>
+<script>
+(function () {
+  var box = document.getElementById("assembler-live-overlay"), last = null;
+  function refresh() {
+    fetch("/overlay", {cache: "no-store"}).then(function (r) { return r.text(); }).then(function (t) {
+      if (t !== last) { box.innerHTML = t; last = t; }
+    }).catch(function () {});
+  }
+  refresh();
+  setInterval(refresh, 1000);
+})();
+</script>
+"""
 
 
 @dataclass
@@ -186,18 +203,52 @@ def _read_urls(proc: subprocess.Popen, urls: dict[str, str]) -> None:
 
 # ---------------------------------------------------------------------- the server side
 def _make_bridge(host: str, port: int | None):
-    from meshcat.servers.zmqserver import ZMQWebSocketBridge
+    import tornado.routing
+    import tornado.web
+    from meshcat.servers.zmqserver import VIEWER_HTML, VIEWER_ROOT, ZMQWebSocketBridge
+
+    class OverlayHandler(tornado.web.RequestHandler):
+        """The overlay's current HTML (title, legend, color bar), as last set by the viewer."""
+
+        def initialize(self, bridge) -> None:
+            self.bridge = bridge
+
+        def get(self) -> None:
+            self.set_header("Cache-Control", "no-store")
+            self.set_header("Content-Type", "text/html; charset=utf-8")
+            self.write(self.bridge.overlay)
+
+    class IndexHandler(tornado.web.RequestHandler):
+        """meshcat's page with a box that shows the overlay, refreshed every second."""
+
+        def get(self, _name: str | None = None) -> None:
+            with open(os.path.join(VIEWER_ROOT, VIEWER_HTML), encoding="utf-8") as fh:
+                page = fh.read()
+            self.set_header("Cache-Control", "no-store")
+            self.write(page.replace("</body>", OVERLAY_SCRIPT + "</body>", 1))
 
     class Bridge(ZMQWebSocketBridge):
-        """meshcat's bridge with the web server on ``web_host`` and ZMQ on loopback."""
+        """meshcat's bridge with the web server on ``web_host`` and ZMQ on loopback, and
+        the page's overlay (set with the ZMQ command ``set_overlay``)."""
 
         def __init__(self) -> None:
             self.web_host = host
+            self.overlay = ""
             super().__init__(host=ZMQ_HOST, port=port)
             self.web_url = f"http://{_url_host(host)}:{self.fileserver_port}/static/"
 
+        def handle_zmq(self, frames):
+            if frames[0] == SET_OVERLAY:
+                self.overlay = frames[1].decode("utf-8") if len(frames) > 1 else ""
+                self.zmq_socket.send(b"ok")
+                return
+            super().handle_zmq(frames)
+
         def make_app(self):
             app = super().make_app()
+            app.wildcard_router.rules[:0] = tornado.routing.RuleRouter(
+                [(r"/static/(index\.html)?", IndexHandler), (r"/overlay", OverlayHandler, {"bridge": self})]
+            ).rules
             listen = app.listen
 
             def listen_on_host(port: int, **kwargs):

@@ -459,7 +459,7 @@ class StackViewer:
     def _show_payload_rod(self, plates: PlateArrays) -> None:
         """A thin rod from the EE plate's centre to the payload, so it does not float."""
         offset = self.am.config.payload.offset
-        node = self.meshcat[f"{self.prefix}_payload_rod"]
+        node = self.meshcat[f"{self.prefix}_payload_rod"]["rod"]  # the root carries the framing shift
         if offset <= 0 or self.am.config.payload.mass <= 0:
             node.delete()
             return
@@ -473,6 +473,18 @@ class StackViewer:
     def set_title(self, title: str) -> None:
         """The title of the page's overlay (e.g. the scenario or goal and max|F|)."""
         self.title = str(title)
+        self.push_overlay()
+
+    def push_overlay(self) -> None:
+        """Send the overlay to the live page (its server is ours: a borrowed meshcat server
+        has no overlay; the standalone page always embeds it, see :meth:`static_html`)."""
+        if self.server is None:
+            return
+        from .meshcat_server import SET_OVERLAY
+
+        socket = self.meshcat.window.zmq_socket
+        socket.send_multipart([SET_OVERLAY, self.overlay_html().encode("utf-8")])
+        socket.recv()
 
     def overlay_html(self) -> str:
         """The page's overlay: title, legend of every color and marker drawn, and the
@@ -645,7 +657,7 @@ class StackViewer:
                     )
                 if self.am.config.payload.offset > 0 and self.am.config.payload.mass > 0:
                     rod_end = plates.R[-1] @ np.array([0.0, 0.0, self.am.config.payload.offset]) + plates.p[-1]
-                    frame[f"{self.prefix}_payload_rod"].set_transform(_cylinder_between(plates.p[-1], rod_end))
+                    frame[f"{self.prefix}_payload_rod"]["rod"].set_transform(_cylinder_between(plates.p[-1], rod_end))
                 if color_forces:
                     self._force_band_frame(frame, st)
             self._extra_points[f"anim{k}"] = self._stack_points(plates)
@@ -742,6 +754,7 @@ class StackViewer:
         self.meshcat["/Grid"].set_property("visible", show_grid)
         self.meshcat["/Background"].set_property("top_color", BACKGROUND_RGB[0].tolist())
         self.meshcat["/Background"].set_property("bottom_color", BACKGROUND_RGB[1].tolist())
+        self.push_overlay()
         return cam
 
     def static_html(self, path: str | Path | None = None, frame: bool = True) -> str:

@@ -28,3 +28,12 @@ def test_readme_opens_with_the_two_setup_commands():
     first_blocks = re.findall(r"```bash\n(.*?)```", text, flags=re.S)[:2]
     assert first_blocks[0].strip().startswith("pip install -e .")
     assert first_blocks[1].strip() == 'pip install -e ".[test]" && python -m pytest'
+
+
+def test_readme_picture_is_the_reproduce_figure():
+    text = README.read_text()
+    pictures = re.findall(r"!\[[^\]]*\]\(([^)]+)\)", text)
+    assert pictures and pictures[0] == "docs/vertical_lift_views.png"
+    assert (README.parent / pictures[0]).stat().st_size > 50_000
+    assert "reproduce/vertical_lift_views.png" in text  # the command that makes it
+    assert text.index("![") < text.index("```bash")  # the picture comes first

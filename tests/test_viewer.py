@@ -463,8 +463,9 @@ def screenshot(html: Path, tmp_path: Path, virtual_time_ms: int | None = None) -
     ]
     if virtual_time_ms is not None:
         cmd.insert(1, f"--virtual-time-budget={virtual_time_ms}")
-    for _ in range(2):  # a profile still held by the previous run can make one attempt fail
-        subprocess.run(cmd, capture_output=True, timeout=120, check=False)
+    for _ in range(2):  # a profile still held by the previous run (or a stalled start) can make one attempt fail
+        with contextlib.suppress(subprocess.TimeoutExpired):
+            subprocess.run(cmd, capture_output=True, timeout=120, check=False)
         if png.exists():
             break
     assert png.exists(), "chromium wrote no screenshot"
@@ -593,5 +594,26 @@ def test_page_overlay_names_what_is_drawn_and_the_color_scale_follows_the_option
     legs = force_color(np.linspace(-1, 1, 2001), 1.0, 1.0)
     assert np.abs(legs - ARM_LINK_RGBA[:3]).max(axis=1).min() > 0.15
     # the payload is joined to the EE plate by a rod
-    paths = page_paths(html)
-    assert "/meshcat/assembler_payload_rod" in paths
+    rod = [c for c in page_commands(html) if c.get("path") == "/meshcat/assembler_payload_rod/rod"]
+    assert rod and rod[-1]["type"] == "set_transform"
+    # the rod runs from the EE plate's centre to the payload: its middle is half the offset up the EE's z
+    T = np.array(rod[-1]["matrix"]).reshape(4, 4).T
+    ee = evaluate_state(am, am.home).plates
+    expected_mid = ee.p[-1] + 0.5 * am.config.payload.offset * ee.R[-1][:, 2]
+    np.testing.assert_allclose(T[:3, 3], expected_mid, atol=1e-9)
+
+
+def test_live_page_shows_the_overlay(am):
+    import urllib.request
+
+    with StackViewer(am) as v:
+        v.display(am.home)
+        v.set_title("Live page title")
+        page = urllib.request.urlopen(v.url, timeout=10).read().decode()
+        overlay = urllib.request.urlopen(v.url.replace("/static/", "/overlay"), timeout=10).read().decode()
+        script = urllib.request.urlopen(v.url + "main.min.js", timeout=10)
+        assert script.status == 200  # meshcat's own files are still served
+    assert 'id="assembler-live-overlay"' in page and 'fetch("/overlay"' in page
+    assert overlay == v.overlay_html()
+    for element in ("Live page title", 'id="assembler-legend"', 'id="assembler-colorbar"'):
+        assert element in overlay
