@@ -11,6 +11,7 @@ Quick start::
     state.forces                                  # (4, 6) [N], tension positive
 """
 
+from .carrier import Carrier, carrier_statics, solve_on_carrier
 from .config import AssemblerConfig, LegConfig, PayloadConfig, PlateConfig, load_config
 from .constraints import GoalTolerance, Violation, evaluate_constraints
 from .exceptions import (
@@ -66,6 +67,7 @@ __all__ = [
     "AssemblerError",
     "AssemblerModel",
     "CLIError",
+    "Carrier",
     "ConfigError",
     "ConvergenceError",
     "EEPath",
@@ -96,6 +98,7 @@ __all__ = [
     "ViewerError",
     "Violation",
     "assembler_urdf",
+    "carrier_statics",
     "closure_sidecar",
     "ee_jacobian_wrt_lengths",
     "evaluate_constraints",
@@ -116,6 +119,7 @@ __all__ = [
     "scenario",
     "se3_to_taa",
     "solve",
+    "solve_on_carrier",
     "solve_statics",
     "solve_statics_batch",
     "sp_forward_kinematics",

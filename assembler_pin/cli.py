@@ -151,7 +151,19 @@ def cmd_export(args: argparse.Namespace) -> int:
 
 def cmd_statics(args: argparse.Namespace) -> int:
     am = AssemblerModel.from_config(_config(args))
-    state = evaluate_state(am, _plates_from_args(args, am, "give --plates FILE (or - for stdin) or --home"))
+    carrier, q = _carrier_from_args(args)
+    plates = _plates_from_args(args, am, "give --plates FILE (or - for stdin) or --home")
+    if carrier is not None:
+        from .carrier import carrier_statics
+
+        statics = carrier_statics(am, carrier, q, plates)
+        if args.json:
+            print(_dumps(statics.state.to_dict() | statics.to_dict()))
+            return 0
+        print(format_state_table(statics.state, f"Statics of {am.n} platforms on {carrier.name} (world gravity)"))
+        print(_format_carrier(carrier, statics))
+        return 0
+    state = evaluate_state(am, plates)
     if args.json:
         print(_dumps(state.to_dict()))
     else:
@@ -206,6 +218,9 @@ def cmd_solve(args: argparse.Namespace) -> int:
         raise CLIError(str(exc)) from None
     options = None if args.no_optimize else _optimize_options(args)
     am = AssemblerModel.from_config(_config(args))
+    carrier, q = _carrier_from_args(args)
+    if carrier is not None:
+        return _solve_on_carrier(args, am, carrier, q, goal)
     result = solve(am, goal, optimize=not args.no_optimize, options=options, helper_options=helper)
     if args.json:
         print(_dumps(result.to_dict()))
@@ -233,6 +248,25 @@ def cmd_solve(args: argparse.Namespace) -> int:
         print(format_state_table(opt.optimized, "Optimized"))
     elif not args.no_optimize:
         print(f"\nno optimization: {result.message}")
+    return 0
+
+
+def _solve_on_carrier(args: argparse.Namespace, am: AssemblerModel, carrier, q, goal) -> int:
+    """``solve --carrier``: a world goal, the carrier moving unless ``--fixed-carrier``."""
+    from .carrier import solve_on_carrier
+
+    result = solve_on_carrier(am, carrier, goal, q, move_carrier=not args.fixed_carrier)
+    if args.json:
+        print(_dumps(result.to_dict()))
+        return 0
+    print(f"solve on {carrier.name} ({'carrier held' if args.fixed_carrier else 'carrier moving'}): "
+          f"{'success' if result.success else 'FAILED'} — {result.message} [{result.time_s:.2f} s]")  # fmt: skip
+    for t, cq, _score, note in result.candidates:
+        print(f"  placement t = {t:.2f}: q = {np.round(cq, 3).tolist()}: {note}")
+    if result.statics is not None:
+        print(f"carrier q = {np.round(result.statics.q, 4).tolist()} rad")
+        print(format_state_table(result.statics.state, "Optimized (world gravity)"))
+        print(_format_carrier(carrier, result.statics))
     return 0
 
 
@@ -433,6 +467,31 @@ def cmd_simulate(args: argparse.Namespace) -> int:
     return 0
 
 
+def _view_on_carrier(args: argparse.Namespace, am: AssemblerModel, viewer, carrier, q) -> StackState:
+    """``view --carrier``: the stack on its carrier (a world goal is solved with the carrier moving)."""
+    from .carrier import carrier_statics, solve_on_carrier
+
+    if args.trajectory:
+        raise CLIError("--trajectory cannot be shown on a carrier")
+    if args.scenario or args.goal is not None or args.goal_deg is not None:
+        if args.scenario:
+            raise CLIError("--scenario goals are in the base frame; give a world --goal with --carrier")
+        result = solve_on_carrier(am, carrier, _goal_from_args(args), q)
+        if result.statics is None:
+            raise CLIError(f"no pose to show: {result.message}")
+        statics = result.statics
+        print(f"solve on {carrier.name}: {'success' if result.success else 'FAILED'} — {result.message}",
+              file=sys.stderr)  # fmt: skip
+    else:
+        statics = carrier_statics(am, carrier, q, _plates_from_args(args, am, "give --goal, --plates FILE or --home"))
+    shown = viewer.display(statics.state)
+    viewer.show_carrier(carrier, statics.q)
+    viewer.set_title(f"On {carrier.name}: max|F| {shown.max_abs_force:.1f} N, carrier torque up to "
+                     f"{100 * statics.carrier_ratio:.0f} % of its effort limit ({statics.binding} binds)")  # fmt: skip
+    viewer.frame()
+    return shown
+
+
 def _view_title(args: argparse.Namespace, result) -> str:
     """Title of ``view --goal/--scenario``: what was asked and max|F| initial → optimized."""
     from .scenarios import scenario
@@ -481,12 +540,17 @@ def cmd_view(args: argparse.Namespace) -> int:
     viewer = None
     try:
         viewer = StackViewer(am, host=args.host, force_scale=args.force_scale)
-        if args.scenario:
+        carrier, carrier_q = _carrier_from_args(args)
+        if carrier is not None:
+            shown = _view_on_carrier(args, am, viewer, carrier, carrier_q)
+        elif args.scenario:
             from .kinematics import se3_to_taa
             from .scenarios import scenario
 
             args.goal = list(se3_to_taa(scenario(args.scenario).goal))
-        if args.goal is not None or args.goal_deg is not None:
+        if carrier is not None:
+            pass
+        elif args.goal is not None or args.goal_deg is not None:
             try:
                 from .solve import solve  # lazy: the solver is only needed for --goal
             except ImportError as exc:
@@ -540,6 +604,45 @@ def cmd_view(args: argparse.Namespace) -> int:
         if viewer is not None:
             viewer.close()
         restore_signals()
+
+
+def _add_carrier_arguments(p: argparse.ArgumentParser, note: str = "") -> None:
+    """``--carrier NAME``, ``--carrier-q`` and ``--mount``, read by :func:`_carrier_from_args`."""
+    from .carrier import CARRIERS
+
+    p.add_argument("--carrier", metavar="NAME",
+                   help="mount the stack on a carrier arm from example-robot-data: "
+                        f"{', '.join(CARRIERS)}{note}")  # fmt: skip
+    p.add_argument("--carrier-q", nargs="+", type=float, metavar="Q",
+                   help="the carrier's joint angles [rad] (default: its upright configuration)")  # fmt: skip
+    p.add_argument("--mount", nargs=6, type=float, metavar=("X", "Y", "Z", "RX", "RY", "RZ"),
+                   help="base plate pose in the carrier's tool frame [m, rad] (default identity)")  # fmt: skip
+
+
+def _carrier_from_args(args: argparse.Namespace):
+    """(carrier, q) of ``--carrier``, or (None, None) without one."""
+    if not getattr(args, "carrier", None):
+        if getattr(args, "carrier_q", None) or getattr(args, "mount", None):
+            raise CLIError("--carrier-q and --mount need --carrier NAME")
+        return None, None
+    from .carrier import Carrier
+    from .kinematics import taa_to_se3
+
+    carrier = Carrier(args.carrier, None if args.mount is None else taa_to_se3(args.mount, what="--mount"))
+    q = carrier.upright_q if args.carrier_q is None else carrier.check_q(args.carrier_q, "--carrier-q")
+    return carrier, q
+
+
+def _format_carrier(carrier, statics) -> str:
+    """The carrier's joint torques against their effort limits, and what binds."""
+    lines = [f"carrier {carrier.name}: joint torques [N·m] (effort limit, use)"]
+    for k, (tau, limit, ratio) in enumerate(zip(statics.torques, carrier.effort_limit, statics.torque_ratio,
+                                                strict=True)):  # fmt: skip
+        lines.append(f"  joint {k}: {tau:9.3f}  ({limit:g}, {100 * ratio:5.1f} %)")
+    lines.append(f"stack at {100 * statics.stack_ratio:.1f} % of its force limit, carrier at "
+                 f"{100 * statics.carrier_ratio:.1f} % of its effort limit: {statics.binding} binds; "
+                 f"within every limit: {'yes' if statics.within_limits else 'NO'}")  # fmt: skip
+    return "\n".join(lines)
 
 
 def _add_goal_arguments(group: argparse._MutuallyExclusiveGroup, note: str = "") -> None:
@@ -604,6 +707,7 @@ def build_parser() -> argparse.ArgumentParser:
     src = p.add_mutually_exclusive_group()
     src.add_argument("--plates", metavar="FILE", help='JSON {"plates": [n+1 4x4]} file, or - for stdin')
     src.add_argument("--home", action="store_true", help="use the home pose")
+    _add_carrier_arguments(p, " (the plates are then relative to the base plate)")
     p.add_argument("--json", action="store_true", help="print one JSON object")
     p.set_defaults(func=cmd_statics)
 
@@ -612,6 +716,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--no-optimize", action="store_true", help="only the helper-arm initial condition")
     _add_helper_arm_arguments(p)
     _add_optimize_arguments(p)
+    _add_carrier_arguments(p, " (the goal is then in the world; the carrier's joints join the search)")
+    p.add_argument("--fixed-carrier", action="store_true", help="with --carrier: hold it at --carrier-q")
     p.add_argument("--json", action="store_true", help="print one JSON object")
     p.set_defaults(func=cmd_solve)
 
@@ -677,6 +783,7 @@ def build_parser() -> argparse.ArgumentParser:
                      help="solve a scenario's goal and show its initial and optimized poses")  # fmt: skip
     src.add_argument("--trajectory", metavar="FILE",
                      help="animate a trajectory written by 'plan --out' (legs colored by force)")  # fmt: skip
+    _add_carrier_arguments(p, " (--home/--plates relative to its base plate, --goal in the world)")
     p.add_argument("--force-scale", choices=FORCE_SCALES, default="auto",
                    help="where leg colors saturate: auto (default: max|F|, at least 10%% of the limit), "
                         "limit, max")  # fmt: skip

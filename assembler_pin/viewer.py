@@ -502,6 +502,8 @@ class StackViewer:
         if self.state is not None and self.violating_legs(self.state):
             items.append((_hex(VIOLATION_RGBA[:3]),
                           "yellow ball: leg violating a limit"))  # fmt: skip
+        if getattr(self, "_carrier_name", None):
+            items.append(("#b0b0b0", f"carrier arm: {self._carrier_name}"))
         if self.am.config.payload.mass > 0:
             items.append((_hex(PAYLOAD_ROD_RGBA[:3]),
                           f"payload {self.am.config.payload.mass:g} kg"))  # fmt: skip
@@ -591,6 +593,20 @@ class StackViewer:
         self._extra_points[name] = pts
         if name not in self._roots:
             self._roots.append(name)
+
+    def show_carrier(self, carrier, q: npt.ArrayLike, name: str = "carrier") -> None:
+        """Draw a carrier arm (:class:`~assembler_pin.carrier.Carrier`) with its meshes at
+        joint angles ``q``, under the meshcat path ``name``."""
+        q = carrier.check_q(q)
+        viz = MeshcatVisualizer(carrier.model, None, carrier.visual_model)
+        viz.initViewer(viewer=self.meshcat)
+        viz.loadViewerModel(rootNodeName=name)
+        viz.display(q)
+        self._carrier_viz = viz
+        if name not in self._roots:
+            self._roots.append(name)
+        self._extra_points[name] = carrier.joint_points(q)
+        self._carrier_name = carrier.name
 
     def show_comparison(
         self,
