@@ -11,6 +11,7 @@ Quick start::
     state.forces                                  # (4, 6) [N], tension positive
 """
 
+from .capacity import CapacityResult, payload_capacity
 from .carrier import Carrier, carrier_statics, solve_on_carrier
 from .config import AssemblerConfig, LegConfig, PayloadConfig, PlateConfig, load_config
 from .constraints import GoalTolerance, Violation, evaluate_constraints
@@ -67,6 +68,7 @@ __all__ = [
     "AssemblerError",
     "AssemblerModel",
     "CLIError",
+    "CapacityResult",
     "Carrier",
     "ConfigError",
     "ConvergenceError",
@@ -111,6 +113,7 @@ __all__ = [
     "leg_state",
     "load_config",
     "optimize_internal_poses",
+    "payload_capacity",
     "plan_trajectory",
     "plate_arrays",
     "plates_from_q",

@@ -222,8 +222,17 @@ def cmd_solve(args: argparse.Namespace) -> int:
     if carrier is not None:
         return _solve_on_carrier(args, am, carrier, q, goal)
     result = solve(am, goal, optimize=not args.no_optimize, options=options, helper_options=helper)
+    capacity = None
+    if args.capacity:
+        from .capacity import payload_capacity
+
+        start = result.optimized.plates if result.success and result.optimized is not None else None
+        capacity = payload_capacity(am, goal, start=start)
     if args.json:
-        print(_dumps(result.to_dict()))
+        doc = result.to_dict()
+        if capacity is not None:
+            doc["capacity"] = capacity.to_dict()
+        print(_dumps(doc))
         return 0
     taa = se3_to_taa(result.goal)
     print(
@@ -248,6 +257,12 @@ def cmd_solve(args: argparse.Namespace) -> int:
         print(format_state_table(opt.optimized, "Optimized"))
     elif not args.no_optimize:
         print(f"\nno optimization: {result.message}")
+    if capacity is not None:
+        if capacity.success:
+            print(f"\npayload capacity: {capacity.capacity_kg:.3f} kg ({capacity.binding} at its limit; "
+                  f"{capacity.iterations} optimizations, {capacity.time_s:.2f} s)")  # fmt: skip
+        else:
+            print(f"\npayload capacity: none — {capacity.message}")
     return 0
 
 
@@ -718,6 +733,8 @@ def build_parser() -> argparse.ArgumentParser:
     _add_optimize_arguments(p)
     _add_carrier_arguments(p, " (the goal is then in the world; the carrier's joints join the search)")
     p.add_argument("--fixed-carrier", action="store_true", help="with --carrier: hold it at --carrier-q")
+    p.add_argument("--capacity", action="store_true",
+                   help="also the largest payload [kg] some valid internal pose holds at the goal")  # fmt: skip
     p.add_argument("--json", action="store_true", help="print one JSON object")
     p.set_defaults(func=cmd_solve)
 

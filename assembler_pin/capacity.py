@@ -1,0 +1,207 @@
+"""Payload capacity: the heaviest payload the stack can hold at a goal within every limit.
+
+For a fixed pose the actuator forces are affine in the payload mass ``m`` (the payload is a
+point mass at a fixed place on the EE plate, and the statics are linear in the loads):
+``F(m) = F0 + m·F1``, with ``F0`` the forces without payload and ``F1`` the forces per kg.
+Only the force limits depend on ``m`` (the kinematic ones do not), so the capacity of a
+pose is the largest ``m`` keeping every ``F0_i + m·F1_i`` within ``[-max_compression,
+max_tension]`` — a ratio per leg (:func:`pose_capacity`).
+
+The capacity of a goal is the largest ``m`` for which *some* valid internal pose exists
+(:func:`payload_capacity`). It is found by alternating the two: the internal poses are
+force-optimized for a mass ``m_k`` (the package's optimizer, on the model with that payload),
+and ``m_{k+1}`` is the capacity of that pose; a pose optimized for ``m`` holds at least ``m``,
+so the sequence rises until the optimum pose is exactly at its force limit. A mass the
+optimizer cannot hold bounds the search from above, and bisection takes over inside the
+bracket.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import logging
+import math
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+import pinocchio as pin
+
+from .exceptions import OptionsError
+from .kinematics import PlateArrays, to_se3
+from .labels import leg_label
+from .model import AssemblerModel
+from .statics import solve_statics
+
+__all__ = ["GLOBAL_PROBE", "CapacityResult", "PayloadModels", "payload_capacity", "pose_capacity"]
+
+GLOBAL_PROBE = 0.01
+"""At a fixed point of the iteration, the full solve (every start) is tried at this much more
+payload (relative); only when it fails is the capacity final, so it is within this of what a
+bisection on the payload with the ordinary solve finds."""
+
+logger = logging.getLogger(__name__)
+
+
+class PayloadModels:
+    """The stack's model with other payload masses (same geometry), each built once.
+
+    Attributes:
+        base: the model as configured.
+    """
+
+    def __init__(self, am: AssemblerModel) -> None:
+        self.base = am
+        self._models: dict[float, AssemblerModel] = {round(float(am.config.payload.mass), 9): am}
+
+    def at(self, mass: float) -> AssemblerModel:
+        """The model with a payload of ``mass`` [kg] (cached)."""
+        key = round(float(mass), 9)
+        if key not in self._models:
+            cfg = self.base.config
+            self._models[key] = AssemblerModel.from_config(
+                dataclasses.replace(cfg, payload=dataclasses.replace(cfg.payload, mass=key))
+            )
+        return self._models[key]
+
+
+def force_per_kg(models: PayloadModels, plates: PlateArrays) -> tuple[np.ndarray, np.ndarray]:
+    """(F0, F1): actuator forces without payload and per kg of payload at these plates [N, N/kg]."""
+    f0 = solve_statics(models.at(0.0), plates).forces
+    f1 = solve_statics(models.at(1.0), plates).forces - f0
+    return f0, f1
+
+
+def pose_capacity(models: PayloadModels, plates: PlateArrays) -> tuple[float, tuple[int, int] | None, str]:
+    """Largest payload [kg] these plates hold within the force limits, the leg that binds
+    (None when nothing does) and its limit (``tension``/``compression``); -1 when even no
+    payload is within the limits.
+
+    Args:
+        plates: world poses of plates 0..n (kinematic limits are not checked here).
+    """
+    leg = models.base.config.leg
+    f0, f1 = force_per_kg(models, plates)
+    if np.any(f0 > leg.max_tension) or np.any(f0 < -leg.max_compression):
+        return -1.0, None, "over the limit without payload"
+    with np.errstate(divide="ignore", invalid="ignore"):
+        room = np.where(f1 > 0, (leg.max_tension - f0) / f1, np.where(f1 < 0, (leg.max_compression + f0) / -f1, np.inf))
+    k = int(np.argmin(room))
+    j, i = divmod(k, 6)
+    if not np.isfinite(room.flat[k]):
+        return math.inf, None, ""
+    return float(room.flat[k]), (j, i), "tension" if f1.flat[k] > 0 else "compression"
+
+
+@dataclass
+class CapacityResult:
+    """The payload capacity of a goal (:func:`payload_capacity`).
+
+    Attributes:
+        success: a capacity was found (some valid pose holds the goal).
+        capacity_kg: the largest payload held [kg], certified by ``plates`` (nan when no
+            valid pose holds the goal even without payload).
+        binding: the leg at its force limit at capacity, as ``"SPj leg i tension"``.
+        plates: the internal poses that hold it (world), None without.
+        message: what happened.
+        iterations: optimizations run.
+        history: (mass optimized for [kg], capacity of the pose found [kg]) per optimization.
+        time_s: wall time [s].
+    """
+
+    success: bool
+    capacity_kg: float
+    binding: str
+    plates: PlateArrays | None
+    message: str
+    iterations: int
+    history: list[tuple[float, float]] = field(default_factory=list)
+    time_s: float = 0.0
+
+    def to_dict(self) -> dict:
+        return {"success": self.success, "capacity_kg": self.capacity_kg, "binding": self.binding,
+                "message": self.message, "iterations": self.iterations, "history": self.history,
+                "time_s": self.time_s}  # fmt: skip
+
+    def __repr__(self) -> str:
+        return (f"CapacityResult(success={self.success}, capacity {self.capacity_kg:.3f} kg, binding "
+                f"{self.binding or '-'}, {self.iterations} optimizations, {self.time_s:.2f} s, "
+                f"message={self.message!r})")  # fmt: skip
+
+
+def payload_capacity(
+    am: AssemblerModel,
+    goal: pin.SE3 | np.ndarray,
+    models: PayloadModels | None = None,
+    rtol: float = 1e-3,
+    max_iterations: int = 12,
+    start: PlateArrays | None = None,
+    configured_failed: bool = False,
+) -> CapacityResult:
+    """The heaviest payload [kg] some valid internal pose holds at ``goal``.
+
+    A valid pose for the goal is found at the configured payload (or without payload when
+    that fails); its capacity ``c`` is certified by the pose itself. The internal poses are
+    then optimized again for a payload of ``c`` from that pose (which holds ``c``, so the
+    start is feasible): the new optimum holds ``c' >= c``. This repeats until ``c'`` gains
+    less than ``rtol`` — the pose optimized for ``c`` is at its force limit. The optimizer
+    may stop in a local optimum there, so the full solve (every start) then tries
+    :data:`GLOBAL_PROBE` more payload; the iteration goes on from its pose when it holds it.
+
+    Args:
+        goal: EE goal pose in the world.
+        models: the payload models to reuse (maps keep one per worker).
+        rtol: relative gain at which the iteration stops.
+        start: a valid pose for the goal at the configured payload, if the caller has one.
+        configured_failed: the caller's solve at the configured payload failed (start from
+            the solve without payload).
+    """
+    from .optimize import optimize_internal_poses
+    from .solve import solve
+
+    if not (0 < rtol < 0.5 and isinstance(max_iterations, int) and max_iterations >= 1):
+        raise OptionsError("rtol must be in (0, 0.5) and max_iterations an integer >= 1")
+    t0 = time.perf_counter()
+    goal = to_se3(goal, "goal")
+    models = models or PayloadModels(am)
+
+    def solved(mass: float) -> PlateArrays | None:
+        result = solve(models.at(mass), goal)
+        return result.optimized.plates if result.success else None
+
+    plates = start if start is not None or configured_failed else solved(float(am.config.payload.mass))
+    if plates is None and am.config.payload.mass > 0:
+        plates = solved(0.0)
+    if plates is None:
+        return CapacityResult(False, math.nan, "", None, "no valid pose for the goal even without payload", 1,
+                              [], time.perf_counter() - t0)  # fmt: skip
+    cap, binding, kind = pose_capacity(models, plates)
+    history = [(float(am.config.payload.mass), cap)]
+    iterations, message = 1, "converged"
+    while iterations < max_iterations and np.isfinite(cap) and cap >= 0:
+        result = optimize_internal_poses(models.at(cap), plates, goal)
+        iterations += 1
+        new_cap = pose_capacity(models, result.optimized.plates)[0] if result.success else -1.0
+        history.append((cap, new_cap))
+        if new_cap > cap * (1 + rtol):
+            plates, (cap, binding, kind) = result.optimized.plates, pose_capacity(models, result.optimized.plates)
+            continue
+        if result.success and new_cap > cap:
+            plates, (cap, binding, kind) = result.optimized.plates, pose_capacity(models, result.optimized.plates)
+        # a local fixed point: does the whole portfolio of starts hold 1 % more?
+        probe = cap * (1 + GLOBAL_PROBE)
+        again = solve(models.at(probe), goal)
+        iterations += 1
+        history.append((probe, pose_capacity(models, again.optimized.plates)[0] if again.success else -1.0))
+        if not again.success:
+            message = f"converged; the full solve cannot hold {probe:.3f} kg"
+            break
+        plates, (cap, binding, kind) = again.optimized.plates, pose_capacity(models, again.optimized.plates)
+    else:
+        if iterations >= max_iterations:
+            message = f"stopped after {max_iterations} optimizations (still gaining)"
+    label = f"{leg_label(*binding)} {kind}" if binding is not None else ""
+    result = CapacityResult(True, max(cap, 0.0), label, plates, message, iterations, history,
+                            time.perf_counter() - t0)  # fmt: skip
+    logger.info("capacity: %s", result)
+    return result

@@ -1,0 +1,14 @@
+"""Capability maps: over a grid of EE goals (× orientations × configurations), where the
+stack reaches, its optimized max|F|, its payload capacity and what binds — computed in
+batches on Dask (a local cluster by default, or an existing one) and written to Parquet.
+
+* :mod:`.grid` — grid and orientation SPECs, cells with stable ids.
+* :mod:`.cells` — one cell's numbers (solve, capacity, binding constraint).
+* :mod:`.engine` — :func:`run_map`: serial, local or remote Dask; resumable output.
+* :mod:`.pictures` — heatmap slices and the Meshcat point cloud.
+"""
+
+from .engine import MapRun, read_map, run_map
+from .grid import Cell, Grid, GridError, parse_grid, parse_orientations
+
+__all__ = ["Cell", "Grid", "GridError", "MapRun", "parse_grid", "parse_orientations", "read_map", "run_map"]
