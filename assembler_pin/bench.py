@@ -350,3 +350,49 @@ def format_mujoco(rows: list[dict]) -> str:
         )
     lines.append("tolerance = max(1% of max|F|, 0.5 N); held/tol ≤ 1 meets it")
     return "\n".join(lines)
+
+
+#: The grid of ``bench --maps``: 12 cells in front of the base, mostly reachable.
+MAP_BENCH_GRID = "x=0.1:0.55:4,y=0.05,z=0.7:0.95:3"
+
+
+def benchmark_maps(grid_spec: str = MAP_BENCH_GRID, workers: tuple[int, ...] = (1, 2)) -> dict[str, Any]:
+    """Cells per second of a map on 1 and 2 local Dask workers, the scaling efficiency and
+    an estimate for a 64-core cluster (64 × the one-worker rate × the measured efficiency).
+
+    Each run starts from an empty output directory and includes starting the local cluster.
+    """
+    import tempfile
+
+    from .config import load_config
+    from .maps import parse_grid, run_map
+
+    grid = parse_grid(grid_spec)
+    rates = {}
+    per_cell = {}
+    with tempfile.TemporaryDirectory() as tmp:
+        for w in workers:
+            run = run_map(grid, [("default", load_config())], f"{tmp}/w{w}", workers=w)
+            rates[w] = run.cells_per_second
+            per_cell[w] = run.time_s * w / max(run.computed, 1)
+    one, most = min(workers), max(workers)
+    efficiency = rates[most] / (rates[one] * most / one)
+    return {
+        "grid": grid_spec,
+        "cells": len(grid),
+        "cells_per_s": {str(w): rates[w] for w in workers},
+        "core_seconds_per_cell": per_cell[one],
+        "efficiency": efficiency,
+        "estimate_64_cores_cells_per_s": 64 * rates[one] / one * efficiency,
+    }
+
+
+def format_maps(result: dict[str, Any]) -> str:
+    """The ``bench --maps`` table."""
+    lines = [f"map of {result['cells']} cells ({result['grid']}), local Dask cluster, one thread per worker"]
+    for w, rate in result["cells_per_s"].items():
+        lines.append(f"  {w} worker(s): {rate:6.2f} cells/s")
+    lines.append(f"  scaling efficiency {max(result['cells_per_s'])} workers: {100 * result['efficiency']:.0f} %")
+    lines.append(f"  {result['core_seconds_per_cell']:.2f} core-seconds per cell; a 64-core cluster at this "
+                 f"efficiency: ~{result['estimate_64_cores_cells_per_s']:.0f} cells/s")  # fmt: skip
+    return "\n".join(lines)

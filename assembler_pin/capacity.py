@@ -36,9 +36,9 @@ from .statics import solve_statics
 __all__ = ["GLOBAL_PROBE", "CapacityResult", "PayloadModels", "payload_capacity", "pose_capacity"]
 
 GLOBAL_PROBE = 0.01
-"""At a fixed point of the iteration, the full solve (every start) is tried at this much more
-payload (relative); only when it fails is the capacity final, so it is within this of what a
-bisection on the payload with the ordinary solve finds."""
+"""At a fixed point of the iteration, the solver's starts are optimized for this much more
+payload (relative); only when none holds it is the capacity final, so it is within this of
+what a bisection on the payload with the ordinary solve finds."""
 
 logger = logging.getLogger(__name__)
 
@@ -129,6 +129,18 @@ class CapacityResult:
                 f"message={self.message!r})")  # fmt: skip
 
 
+def _probe(model: AssemblerModel, goal: pin.SE3, arm: PlateArrays | None) -> PlateArrays | None:
+    """A valid pose holding ``model``'s payload from the solver's starts (or None)."""
+    from .optimize import optimize_internal_poses
+    from .solve import optimizer_starts
+
+    for start in optimizer_starts(model, goal, arm).values():
+        result = optimize_internal_poses(model, start, goal)
+        if result.success:
+            return result.optimized.plates
+    return None
+
+
 def payload_capacity(
     am: AssemblerModel,
     goal: pin.SE3 | np.ndarray,
@@ -137,6 +149,7 @@ def payload_capacity(
     max_iterations: int = 12,
     start: PlateArrays | None = None,
     configured_failed: bool = False,
+    arm_start: PlateArrays | None = None,
 ) -> CapacityResult:
     """The heaviest payload [kg] some valid internal pose holds at ``goal``.
 
@@ -145,8 +158,9 @@ def payload_capacity(
     then optimized again for a payload of ``c`` from that pose (which holds ``c``, so the
     start is feasible): the new optimum holds ``c' >= c``. This repeats until ``c'`` gains
     less than ``rtol`` — the pose optimized for ``c`` is at its force limit. The optimizer
-    may stop in a local optimum there, so the full solve (every start) then tries
-    :data:`GLOBAL_PROBE` more payload; the iteration goes on from its pose when it holds it.
+    may stop in a local optimum there, so the solver's starts (the helper arm's pose, the home
+    pose, the even screw pose) are then optimized for :data:`GLOBAL_PROBE` more payload; the
+    iteration goes on from the first that holds it.
 
     Args:
         goal: EE goal pose in the world.
@@ -155,6 +169,7 @@ def payload_capacity(
         start: a valid pose for the goal at the configured payload, if the caller has one.
         configured_failed: the caller's solve at the configured payload failed (start from
             the solve without payload).
+        arm_start: the helper arm's valid pose for the goal, if the caller has it.
     """
     from .optimize import optimize_internal_poses
     from .solve import solve
@@ -164,6 +179,16 @@ def payload_capacity(
     t0 = time.perf_counter()
     goal = to_se3(goal, "goal")
     models = models or PayloadModels(am)
+
+    arm_plates: list[PlateArrays | None] = [] if arm_start is None else [arm_start]
+
+    def helper_plates() -> PlateArrays | None:
+        """The helper arm's valid pose for the goal (kinematic: the same for every payload)."""
+        if not arm_plates:
+            from .helper_arm import initial_condition
+
+            arm_plates.append(initial_condition(am, goal).plates_if_valid())
+        return arm_plates[0]
 
     def solved(mass: float) -> PlateArrays | None:
         result = solve(models.at(mass), goal)
@@ -188,15 +213,15 @@ def payload_capacity(
             continue
         if result.success and new_cap > cap:
             plates, (cap, binding, kind) = result.optimized.plates, pose_capacity(models, result.optimized.plates)
-        # a local fixed point: does the whole portfolio of starts hold 1 % more?
+        # a local fixed point: do the solver's starts (helper arm, home, screw) hold 1 % more?
         probe = cap * (1 + GLOBAL_PROBE)
-        again = solve(models.at(probe), goal)
+        found = _probe(models.at(probe), goal, helper_plates())
         iterations += 1
-        history.append((probe, pose_capacity(models, again.optimized.plates)[0] if again.success else -1.0))
-        if not again.success:
-            message = f"converged; the full solve cannot hold {probe:.3f} kg"
+        history.append((probe, pose_capacity(models, found)[0] if found is not None else -1.0))
+        if found is None:
+            message = f"converged; no start holds {probe:.3f} kg"
             break
-        plates, (cap, binding, kind) = again.optimized.plates, pose_capacity(models, again.optimized.plates)
+        plates, (cap, binding, kind) = found, pose_capacity(models, found)
     else:
         if iterations >= max_iterations:
             message = f"stopped after {max_iterations} optimizations (still gaining)"

@@ -321,6 +321,12 @@ def cmd_bench(args: argparse.Namespace) -> int:
         rows = benchmark_platforms_sweep()
         print(_dumps(rows) if args.json else format_sweep(rows))
         return 0
+    if args.maps:
+        from .bench import benchmark_maps, format_maps
+
+        result = benchmark_maps()
+        print(_dumps(result) if args.json else format_maps(result))
+        return 0
     am = AssemblerModel.from_config(_config(args))
     if args.mujoco:
         from .bench import benchmark_mujoco, format_mujoco
@@ -347,6 +353,78 @@ def cmd_bench(args: argparse.Namespace) -> int:
         for name, v in scenarios.items():
             print(f"{name:<24}{v['slsqp_s']:9.3f}{v['paper_s']:9.3f}{v['speedup']:9.1f}"
                   f"{v['initial_objective']:11.2f}{v['slsqp_objective']:9.2f}{v['paper_objective']:9.2f}")  # fmt: skip
+    return 0
+
+
+def _finite_range(values: np.ndarray) -> list[float] | None:
+    """[min, max] of the finite values, None without any."""
+    ok = np.isfinite(values)
+    return [float(values[ok].min()), float(values[ok].max())] if ok.any() else None
+
+
+def cmd_map(args: argparse.Namespace) -> int:
+    """A capability map: per cell reachability, optimized max|F|, payload capacity, binding."""
+    from .config import load_config
+    from .maps import parse_grid, read_map, run_map
+
+    for option, value in (("--png file", args.png), ("--html file", args.html)):
+        if value:
+            _writable_parent(value, option)
+    grid = parse_grid(args.grid, args.orientations)
+    if args.workers is not None and args.workers < 0:
+        raise CLIError(f"--workers must be >= 0, got {args.workers}")
+    if args.batch_size is not None and args.batch_size < 1:
+        raise CLIError(f"--batch-size must be >= 1, got {args.batch_size}")
+    if args.sweep:
+        names = [Path(c).stem for c in args.sweep]
+        if len(set(names)) != len(names):
+            raise CLIError("--sweep files must have different names (the map's config column)")
+        configs = [(name, load_config(c)) for name, c in zip(names, args.sweep, strict=True)]
+    else:
+        configs = [(Path(args.config).stem if args.config else "default", _config(args))]
+    run = run_map(grid, configs, args.out, workers=args.workers, scheduler=args.scheduler,
+                  batch_size=args.batch_size, progress=not args.no_progress)  # fmt: skip
+    table = read_map(args.out)
+    reach = np.asarray(table.column("reachable").to_pylist(), dtype=bool)
+    cap = np.asarray(table.column("capacity_kg").to_pylist(), dtype=float)
+    force = np.asarray(table.column("max_abs_force").to_pylist(), dtype=float)
+    doc = {"out": str(Path(args.out)), "cells": len(grid) * len(configs), "computed": run.computed,
+           "already_done": run.skipped, "workers": run.workers, "time_s": run.time_s,
+           "cells_per_s": run.cells_per_second, "reachable": int(reach.sum()),
+           "max_abs_force_range": _finite_range(force), "capacity_kg_range": _finite_range(cap)}  # fmt: skip
+    if args.png or args.html:
+        am = AssemblerModel.from_config(configs[0][1])
+        if args.png:
+            from .maps.pictures import map_heatmaps
+            from .plots import save
+
+            doc["png"] = str(save(map_heatmaps(table, am, configs[0][0]), args.png))
+        if args.html:
+            from .maps.pictures import show_map_points
+            from .viewer import StackViewer
+
+            with StackViewer(am) as viewer:
+                viewer.display(am.home)
+                lo, hi = show_map_points(viewer, table, config=configs[0][0])
+                viewer.set_title(f"Capability map: payload capacity {lo:.1f} (light) – {hi:.1f} kg (dark); "
+                                 "gray: not reachable")  # fmt: skip
+                doc["html"] = str(Path(args.html).resolve())
+                viewer.static_html(doc["html"])
+    if args.json:
+        print(_dumps(doc))
+        return 0
+    print(f"map: {doc['computed']} cells computed, {doc['already_done']} already in {doc['out']}; "
+          f"{run.workers or 'no'} workers, {run.time_s:.1f} s ({run.cells_per_second:.2f} cells/s)")  # fmt: skip
+    print(f"reachable: {doc['reachable']} of {len(reach)} cells")
+    if doc["max_abs_force_range"]:
+        lo, hi = doc["max_abs_force_range"]
+        print(f"optimized max|F|: {lo:.1f} – {hi:.1f} N")
+    if doc["capacity_kg_range"]:
+        lo, hi = doc["capacity_kg_range"]
+        print(f"payload capacity: {lo:.2f} – {hi:.2f} kg")
+    for key in ("png", "html"):
+        if key in doc:
+            print(f"wrote {doc[key]}")
     return 0
 
 
@@ -753,6 +831,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--platforms-sweep", action="store_true",
                    help="only the cost of each stack size n = 1..64: build, memory, statics, FK, "
                         "initial condition, optimization (~5 min)")  # fmt: skip
+    p.add_argument("--maps", action="store_true",
+                   help="only the capability map's cells/s on 1 and 2 local Dask workers (~1 min)")  # fmt: skip
     p.add_argument("--mujoco", action="store_true",
                    help="only MuJoCo against our statics: inverse statics and held poses (~15 s)")  # fmt: skip
     p.set_defaults(func=cmd_bench)
@@ -775,6 +855,24 @@ def build_parser() -> argparse.ArgumentParser:
                         f"{', '.join(COMPARE_SCENARIOS)})")  # fmt: skip
     p.add_argument("--json", action="store_true", help="print one JSON object")
     p.set_defaults(func=cmd_plan)
+
+    p = add("map", "capability map: reachability, optimized max|F|, payload capacity per cell (Dask, resumable)")
+    p.add_argument("--grid", required=True, metavar="SPEC",
+                   help="EE positions [m]: AXIS=VALUE or START:STOP:COUNT, e.g. x=0:0.6:10,y=0,z=0.5:1:10")  # fmt: skip
+    p.add_argument("--orientations", metavar="SPEC",
+                   help='EE rotation vectors in degrees, e.g. "0 0 0; 0 30 0" (default level)')  # fmt: skip
+    p.add_argument("--sweep", nargs="+", metavar="FILE",
+                   help="design sweep: the map of each configuration file (config column: its name)")  # fmt: skip
+    p.add_argument("--out", required=True, metavar="DIR", help="map directory (Parquet parts; a rerun extends it)")
+    p.add_argument("--workers", type=int, default=None,
+                   help="local worker processes (default: the machine's cores; 0: here, no Dask)")  # fmt: skip
+    p.add_argument("--scheduler", metavar="ADDRESS", help="an existing Dask scheduler, e.g. tcp://10.0.0.5:8786")
+    p.add_argument("--batch-size", type=int, default=None, metavar="N", help="cells per task (default automatic)")
+    p.add_argument("--png", metavar="FILE", help="heatmap slices: reachability, max|F|, capacity")
+    p.add_argument("--html", metavar="FILE", help="the cells as a point cloud colored by capacity, in the viewer")
+    p.add_argument("--no-progress", action="store_true", help="no progress bar")
+    p.add_argument("--json", action="store_true", help="print one JSON object")
+    p.set_defaults(func=cmd_map)
 
     p = add("simulate", "hold a pose in MuJoCo with force-limited position actuators: EE drift, forces over time")
     src = p.add_mutually_exclusive_group(required=True)

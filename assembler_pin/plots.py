@@ -38,6 +38,7 @@ __all__ = [
     "WorkspaceSlice",
     "compute_workspace_slice",
     "default_state_function",
+    "draw_state",
     "force_bars",
     "force_heatmaps",
     "leg_flags",
@@ -212,9 +213,11 @@ def _plate_outline(state: StackState, k: int) -> np.ndarray:
     return np.vstack([p, p[:1]])
 
 
-def _draw_state(
+def draw_state(
     ax, state: StackState, axes_idx: tuple[int, int], leg_color: str, plate_color: str, label: str, alpha: float = 1.0
 ) -> None:
+    """Draw a state projected on two world axes (``axes_idx``, e.g. (0, 2) for x–z): legs
+    between their joint centres, plates outlined through their joints and filled."""
     a, b = axes_idx
     bottom, top = state.legs.bottom_points, state.legs.top_points
     for j in range(bottom.shape[0]):
@@ -262,11 +265,11 @@ def pose_views(
     views = ((side, (0, 2), "side view (x–z)"), (front, (1, 2), "front view (y–z)"), (top, (0, 1), "top view (x–y)"))
     for ax, idx, name in views:
         if initial is not None:
-            _draw_state(
+            draw_state(
                 ax, initial, idx, INITIAL_COLOR, INITIAL_COLOR, titles[0], alpha=0.8 if optimized is not None else 1.0
             )
         if optimized is not None:
-            _draw_state(ax, optimized, idx, OPTIMIZED_LEG_COLOR, OPTIMIZED_PLATE_COLOR, f"{titles[1]} legs")
+            draw_state(ax, optimized, idx, OPTIMIZED_LEG_COLOR, OPTIMIZED_PLATE_COLOR, f"{titles[1]} legs")
             ax.plot([], [], color=OPTIMIZED_PLATE_COLOR, lw=2.0, label=f"{titles[1]} plates")
         ax.plot([], [], "o", color="0.3", ms=3, label="plate centres")
         if arm_points is not None:

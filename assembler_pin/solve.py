@@ -24,7 +24,7 @@ from .state import StackState
 if TYPE_CHECKING:
     from .helper_arm import HelperArmOptions, InitialConditionResult
 
-__all__ = ["STARTS", "SolveResult", "solve"]
+__all__ = ["STARTS", "SolveResult", "optimizer_starts", "solve"]
 
 #: The starts the optimizer runs from, in order: the helper arm's valid initial condition,
 #: the home pose's internal plates, and the even screw pose (every platform the same
@@ -160,7 +160,7 @@ def solve(
         return SolveResult(goal, False, f"no valid initial condition: {init.message}", init, None, timing)
     opts = options or OptimizeOptions()
     t1 = time.perf_counter()
-    starts = _starts(am, goal, init.plates_if_valid())
+    starts = optimizer_starts(am, goal, init.plates_if_valid())
     runs = {name: optimize_internal_poses(am, start, goal, opts) for name, start in starts.items()}
     if not any(r.success for r in runs.values()):
         around = init.state.plates if init.success else starts["screw"]
@@ -181,7 +181,7 @@ def solve(
     return SolveResult(goal, best.success, message, init, best, timing, name, runs)
 
 
-def _starts(am: AssemblerModel, goal: pin.SE3, helper_plates: PlateArrays | None) -> dict[str, PlateArrays]:
+def optimizer_starts(am: AssemblerModel, goal: pin.SE3, helper_plates: PlateArrays | None) -> dict[str, PlateArrays]:
     """The optimizer's starts (:data:`STARTS`): plate 0 at home, plate n at the goal."""
     n, base = am.n, am.home[0]
     home = list(am.home)

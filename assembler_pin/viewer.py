@@ -594,6 +594,19 @@ class StackViewer:
         if name not in self._roots:
             self._roots.append(name)
 
+    def show_points(self, name: str, points: npt.ArrayLike, colors: npt.ArrayLike, size: float = 0.03) -> None:
+        """A point cloud under the meshcat path ``name``: (N, 3) world points [m] and (N, 3)
+        RGB colors in [0, 1]; the camera frames it with the rest."""
+        pts = np.asarray(points, dtype=float)
+        rgb = np.asarray(colors, dtype=float)
+        if pts.ndim != 2 or pts.shape[1] != 3 or rgb.shape != pts.shape or not np.all(np.isfinite(pts)):
+            raise ViewerError(f"points and colors must be finite (N, 3) arrays, got {pts.shape} and {rgb.shape}")
+        node = self.meshcat[name]
+        node.set_object(mg.PointCloud(position=pts.T.astype(np.float32), color=rgb.T.astype(np.float32), size=size))
+        if name not in self._roots:
+            self._roots.append(name)
+        self._extra_points[name] = pts
+
     def show_carrier(self, carrier, q: npt.ArrayLike, name: str = "carrier") -> None:
         """Draw a carrier arm (:class:`~assembler_pin.carrier.Carrier`) with its meshes at
         joint angles ``q``, under the meshcat path ``name``."""

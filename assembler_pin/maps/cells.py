@@ -16,6 +16,7 @@ import numpy as np
 from ..capacity import PayloadModels, payload_capacity
 from ..config import AssemblerConfig, config_from_dict
 from ..constraints import leg_limit_margins
+from ..exceptions import AssemblerError
 from ..labels import leg_label
 from ..model import AssemblerModel
 from ..solve import solve
@@ -82,8 +83,9 @@ def compute_cell(models: PayloadModels, cell: Cell, config_name: str = "") -> di
         row["reason"] = result.message
     if state is None and not result.initial_result.success:
         return row  # no pose at all: kinematically out of reach, whatever the payload
-    cap = payload_capacity(am, goal, models, start=None if state is None else state.plates,
-                           configured_failed=state is None)  # fmt: skip
+    arm = result.initial_result.plates_if_valid()
+    start = None if state is None else state.plates
+    cap = payload_capacity(am, goal, models, start=start, configured_failed=state is None, arm_start=arm)
     row["capacity_time_s"] = cap.time_s
     if cap.success:
         row["reachable"] = True  # some payload (possibly lighter than configured) is held there
@@ -100,8 +102,10 @@ def compute_batch(key: str, cells: Sequence[Cell], config_name: str = "") -> lis
     numbers in this process, a local cluster or a remote one (multithreaded BLAS sums in
     another order, and the optimizer can amplify that into another local optimum).
     """
-    from threadpoolctl import threadpool_limits
-
+    try:
+        from threadpoolctl import threadpool_limits
+    except ImportError:
+        raise AssemblerError("maps need threadpoolctl: pip install 'assembler_pin[maps]'") from None
     models = models_for(key)
     with threadpool_limits(limits=1):
         return [compute_cell(models, cell, config_name) for cell in cells]

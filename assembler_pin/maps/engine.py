@@ -109,7 +109,8 @@ def _client(scheduler: str | None, workers: int):
             return Client(scheduler, timeout="20s"), None
         except OSError as exc:
             raise AssemblerError(f"cannot reach the Dask scheduler at {scheduler}: {exc}") from None
-    cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True, dashboard_address=None)
+    cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True, dashboard_address=None,
+                           silence_logs=logging.ERROR)  # fmt: skip
     return Client(cluster), cluster
 
 
@@ -161,6 +162,8 @@ def run_map(
         elif batches:
             from distributed import as_completed
 
+            for name in ("distributed", "distributed.batched", "distributed.comm"):
+                logging.getLogger(name).setLevel(logging.ERROR)  # a closing cluster logs benign errors
             client, cluster = _client(scheduler, n_workers)
             try:
                 if scheduler:
