@@ -42,7 +42,9 @@ __all__ = [
     "CarrierSpec",
     "CarrierStatics",
     "UnknownCarrierError",
+    "carrier_objective",
     "carrier_statics",
+    "carrier_torques",
     "robots_directory",
     "solve_on_carrier",
 ]
@@ -87,6 +89,10 @@ CARRIERS: dict[str, CarrierSpec] = {
                          "Franka Emika Panda, 7 joints, fingers locked (rated payload 3 kg)"),
 }  # fmt: skip
 """The supported carriers by name (see :class:`CarrierSpec`)."""
+
+W_CARRIER = 200.0
+"""Weight of the carrier term of Ω_c [N]: a joint at its effort limit costs as much as a leg
+at the default force limit."""
 
 
 @cache
@@ -305,18 +311,24 @@ def carrier_statics(
     base = carrier.base_pose(q)
     world = PlateArrays(np.einsum("ab,kbc->kac", base.rotation, rel.R), rel.p @ base.rotation.T + base.translation)
     state = evaluate_state(am, world, goal=goal) if goal is not None else evaluate_state(am, world)
-    f, m = state.statics.base_wrench[:3], state.statics.base_wrench[3:]
-    on_carrier_world = pin.SE3(np.eye(3), world.p[0]).act(pin.Force(-f, -m))  # about the world origin
+    torques = carrier_torques(carrier, q, world.p[0], state.statics.base_wrench)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        ratio = np.where(carrier.effort_limit > 0, np.abs(torques) / carrier.effort_limit, 0.0)
+    return CarrierStatics(state, q, torques, ratio, _stack_ratio(am, state))
+
+
+def carrier_torques(carrier: Carrier, q: np.ndarray, base_origin: np.ndarray, base_wrench: np.ndarray) -> np.ndarray:
+    """Joint torques [N·m] holding the carrier and the stack still: ``computeStaticTorque``
+    with the stack's reaction on the tool joint (minus ``base_wrench``, the wrench the mount
+    applies to plate 0, world axes, about ``base_origin``, plate 0's origin)."""
+    on_carrier_world = pin.SE3(np.eye(3), base_origin).act(pin.Force(-base_wrench[:3], -base_wrench[3:]))
     model, data = carrier.model, carrier.data
     pin.framesForwardKinematics(model, data, q)
     joint = model.frames[carrier.base_frame].parentJoint
     fext = pin.StdVec_Force()
     for k in range(model.njoints):
         fext.append(data.oMi[k].actInv(on_carrier_world) if k == joint else pin.Force.Zero())
-    torques = np.array(pin.computeStaticTorque(model, data, q, fext), dtype=float)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        ratio = np.where(carrier.effort_limit > 0, np.abs(torques) / carrier.effort_limit, 0.0)
-    return CarrierStatics(state, q, torques, ratio, _stack_ratio(am, state))
+    return np.array(pin.computeStaticTorque(model, data, q, fext), dtype=float)
 
 
 @dataclass
@@ -330,8 +342,9 @@ class CarrierSolveResult:
         goal: the EE goal in the world.
         statics: the chosen pose's :class:`CarrierStatics` (None when no pose was found).
         moved_carrier: whether the carrier's joints were searched.
-        candidates: every carrier placement tried: ``(t, q, score or nan, note)`` with ``t``
-            the blend from the goal seen from the start placement (0) to the home EE pose (1).
+        candidates: every carrier placement tried: ``(t, q, Ω_c or nan, note)`` with ``t``
+            the blend from the goal seen from the start placement (0) to the home EE pose (1);
+            the joint optimization's answer last, with ``t`` nan.
         time_s: wall time [s].
     """
 
@@ -390,6 +403,9 @@ def solve_on_carrier(
     q0: npt.ArrayLike | None = None,
     move_carrier: bool = True,
     blends: int = 5,
+    polish: bool = True,
+    w_carrier: float = W_CARRIER,
+    max_iterations: int = 100,
 ) -> CarrierSolveResult:
     """Reach a world EE goal with the stack on its carrier.
 
@@ -400,13 +416,19 @@ def solve_on_carrier(
     With ``move_carrier=True`` the carrier's joints join the search: the goal seen from the
     base is blended from where ``q0`` puts it (t = 0) to the stack's home EE pose (t = 1) in
     ``blends`` steps; for each, the carrier's joint-limited IK places the base so, and the
-    stack is solved there. Each candidate is scored by the larger of the stack's max|F| over
-    its force limit and the carrier's largest torque over its effort limit — the utilization
-    of whichever binds — and the lowest score wins. This is a search over a one-parameter
-    family of placements, not a joint optimization of all the carrier's joints.
+    stack is solved there; the candidate within every limit with the lowest Ω_c wins. From
+    it (``polish``), one SLSQP over the
+    carrier's joints (within their limits) and the internal plates together minimizes
+    Ω_c = w1·max|F| + w2·sqrt(Σλ²) + ``w_carrier``·max|τ|/τ_max (:func:`carrier_objective`),
+    every leg limit and force limit holding and no joint over its effort limit, with
+    forward-difference gradients; its answer is kept when its Ω_c is lower.
 
     Args:
         q0: the carrier's configuration (default: the spec's upright one) [rad].
+        blends: placements tried between the start and the home EE pose.
+        polish: run the joint optimization after the placement search.
+        w_carrier: weight of the carrier's torque term in Ω_c [N].
+        max_iterations: iteration limit of the joint optimization.
     """
     t0 = time.perf_counter()
     goal = to_se3(goal, "goal")
@@ -415,7 +437,7 @@ def solve_on_carrier(
         statics, why = _stack_on(am, carrier, q0, goal)
         ok = statics is not None and statics.within_limits
         msg = why if statics is None else _verdict(statics)
-        return CarrierSolveResult(ok, msg, goal, statics, False, [(0.0, q0, _score(statics), msg)],
+        return CarrierSolveResult(ok, msg, goal, statics, False, [(0.0, q0, _score(am, statics, w_carrier), msg)],
                                   time.perf_counter() - t0)  # fmt: skip
     start_rel = carrier.base_pose(q0).actInv(goal)
     home_ee = am.home[-1]
@@ -428,28 +450,149 @@ def solve_on_carrier(
             candidates.append((float(t), ik.q, math.nan, f"carrier IK failed (error {ik.error:.2e})"))
             continue
         statics, why = _stack_on(am, carrier, ik.q, goal)
-        candidates.append((float(t), ik.q, _score(statics), why if statics is None else _verdict(statics)))
-        if statics is not None and (best is None or _rank(statics) < _rank(best)):
+        candidates.append(
+            (float(t), ik.q, _score(am, statics, w_carrier), why if statics is None else _verdict(statics))
+        )
+        if statics is not None and (best is None or _rank(am, statics, w_carrier) < _rank(am, best, w_carrier)):
             best = statics
     if best is None:
         return CarrierSolveResult(False, "no carrier placement gave a valid stack pose", goal, None, True, candidates,
                                   time.perf_counter() - t0)  # fmt: skip
+    if polish and best.within_limits:
+        polished, why = _joint_polish(am, carrier, goal, best, w_carrier, max_iterations)
+        better = polished is not None and carrier_objective(am, polished, w_carrier) < carrier_objective(
+            am, best, w_carrier)  # fmt: skip
+        note = f"joint optimization: {why}{'' if better else ' (kept the placement)'}"
+        candidates.append(
+            (math.nan, polished.q if polished is not None else best.q, _score(am, polished, w_carrier), note)
+        )
+        if better:
+            best = polished
     return CarrierSolveResult(best.within_limits, _verdict(best), goal, best, True, candidates,
                               time.perf_counter() - t0)  # fmt: skip
 
 
-def _score(statics: CarrierStatics | None) -> float:
-    return math.nan if statics is None else max(statics.stack_ratio, statics.carrier_ratio)
+def carrier_objective(am: AssemblerModel, statics: CarrierStatics, w_carrier: float = W_CARRIER) -> float:
+    """Ω_c = w1·max|F| + w2·sqrt(Σλ²) + w_carrier·max|τ|/τ_max of a mounted state (the paper's
+    eq. 10 with the optimizer's default weights, plus the carrier's torque term)."""
+    from .kinematics import plate_deviation
+    from .optimize import OptimizeOptions
+
+    o = OptimizeOptions()
+    lam = plate_deviation(am, statics.state.plates).angles
+    return float(
+        o.w1 * statics.state.max_abs_force + o.w2 * np.sqrt(np.sum(lam**2)) + w_carrier * statics.carrier_ratio
+    )
 
 
-def _rank(statics: CarrierStatics) -> tuple[bool, float]:
-    """Within limits first, then the lower utilization."""
-    return (not statics.within_limits, _score(statics))
+class _JointProblem:
+    """The carrier's joints and the internal plates together: x = [q, ξ_1..ξ_{n-1}, s, t],
+    the plates as twists in the base plate's frame (``T_k = T_k⁰·exp6(ξ_k)``), plate n at the
+    goal (``T_n = base(q)⁻¹·goal``), ``s >= |F_i|`` within the force limits and
+    ``t >= |τ_k|/τ_max,k``, ``t <= 1``; every leg limit. Ω_c = w1·s + w2·sqrt(Σλ²) + w_c·t.
+    Gradients by forward differences (one statics evaluation per variable)."""
+
+    def __init__(self, am: AssemblerModel, carrier: Carrier, goal: pin.SE3, start: CarrierStatics, w_carrier: float):
+        from .optimize import OptimizeOptions
+
+        self.am, self.carrier, self.goal, self.w_carrier = am, carrier, goal, w_carrier
+        self.opts = OptimizeOptions()
+        base = carrier.base_pose(start.q)
+        self.ref = [base.actInv(start.state.plates.se3(k)) for k in range(am.n + 1)]
+        self.nq = carrier.model.nq
+        self.nx = self.nq + 6 * (am.n - 1) + 2
+        self._cache: dict[bytes, np.ndarray] = {}
+
+    def world(self, x: np.ndarray) -> tuple[np.ndarray, PlateArrays]:
+        q = x[: self.nq]
+        base = self.carrier.base_pose(q)
+        rel = [self.ref[0]] + [self.ref[k] * pin.exp6(x[self.nq + 6 * (k - 1) : self.nq + 6 * k])
+                               for k in range(1, self.am.n)] + [base.actInv(self.goal)]  # fmt: skip
+        return q, PlateArrays.from_se3([base * T for T in rel])
+
+    def vector(self, x: np.ndarray) -> np.ndarray:
+        """[Ω_c, constraint rows (>= 0)...] at x (cached)."""
+        from .constraints import leg_limit_margins
+        from .kinematics import leg_state, plate_deviation
+        from .optimize import SINGULAR_FORCE
+        from .statics import solve_statics
+
+        key = x.tobytes()
+        if key in self._cache:
+            return self._cache[key]
+        q, world = self.world(x)
+        leg = self.am.config.leg
+        legs = leg_state(self.am, world)
+        statics = solve_statics(self.am, world, legs=legs)
+        forces = np.where(np.isfinite(statics.forces), statics.forces, SINGULAR_FORCE).ravel()
+        margins = leg_limit_margins(leg, legs.lengths, np.cos(legs.deflection), legs.rise, self.opts.limit_margin,
+                                    rise_margin=self.opts.rise_margin).ravel()  # fmt: skip
+        angles = plate_deviation(self.am, world).angles
+        ratio = carrier_torques(self.carrier, q, world.p[0], statics.base_wrench) / self.carrier.effort_limit
+        s, t = x[-2], x[-1]
+        omega = self.opts.w1 * s + self.opts.w2 * np.sqrt(np.sum(angles**2)) + self.w_carrier * t
+        rows = np.concatenate([[omega], s - forces, s + forces, leg.max_tension - 1e-6 - forces,
+                               forces + leg.max_compression - 1e-6, t - ratio, t + ratio, margins])  # fmt: skip
+        if len(self._cache) > 512:
+            self._cache.clear()
+        self._cache[key] = rows
+        return rows
+
+    def jacobian(self, x: np.ndarray, step: float = 1e-7) -> np.ndarray:
+        f0 = self.vector(x)
+        out = np.empty((f0.size, x.size))
+        for i in range(x.size):
+            xp = x.copy()
+            xp[i] += step
+            out[:, i] = (self.vector(xp) - f0) / step
+        return out
+
+
+def _joint_polish(
+    am: AssemblerModel, carrier: Carrier, goal: pin.SE3, start: CarrierStatics, w_carrier: float, max_iterations: int
+) -> tuple[CarrierStatics | None, str]:
+    """SLSQP over the carrier's joints and the internal plates from a valid mounted state."""
+    from scipy.optimize import minimize
+
+    problem = _JointProblem(am, carrier, goal, start, w_carrier)
+    nq, margin = problem.nq, 1e-3
+    x0 = np.zeros(problem.nx)
+    x0[:nq] = np.clip(start.q, carrier.lower + margin, carrier.upper - margin)
+    x0[-2], x0[-1] = start.state.max_abs_force, min(start.carrier_ratio, 1.0 - 1e-6)
+    bounds = [(lo + margin, hi - margin) for lo, hi in zip(carrier.lower, carrier.upper, strict=True)]
+    bounds += [(None, None)] * (6 * (am.n - 1)) + [(0.0, None), (0.0, 1.0 - 1e-6)]
+    jac_cache: dict[bytes, np.ndarray] = {}
+
+    def jac(x: np.ndarray) -> np.ndarray:
+        key = x.tobytes()
+        if key not in jac_cache:
+            jac_cache.clear()
+            jac_cache[key] = problem.jacobian(x)
+        return jac_cache[key]
+
+    res = minimize(lambda x: problem.vector(x)[0], x0, jac=lambda x: jac(x)[0], method="SLSQP", bounds=bounds,
+                   constraints=[{"type": "ineq", "fun": lambda x: problem.vector(x)[1:], "jac": lambda x: jac(x)[1:]}],
+                   options={"maxiter": max_iterations, "ftol": 1e-6})  # fmt: skip
+    q, world = problem.world(res.x)
+    base = carrier.base_pose(q)
+    rel = [pin.SE3.Identity()] + [base.actInv(world.se3(k)) for k in range(1, am.n + 1)]
+    statics = carrier_statics(am, carrier, q, rel, goal=goal)
+    return (statics if statics.within_limits else None), f"{res.message} ({res.nit} iterations)"
+
+
+def _score(am: AssemblerModel, statics: CarrierStatics | None, w_carrier: float) -> float:
+    return math.nan if statics is None else carrier_objective(am, statics, w_carrier)
+
+
+def _rank(am: AssemblerModel, statics: CarrierStatics, w_carrier: float) -> tuple[bool, float]:
+    """Within limits first, then the lower Ω_c."""
+    return (not statics.within_limits, carrier_objective(am, statics, w_carrier))
 
 
 def _verdict(statics: CarrierStatics) -> str:
     if statics.within_limits:
-        return f"reached; {statics.binding} binds at {100 * _score(statics):.0f} % of its limit"
+        share = max(statics.stack_ratio, statics.carrier_ratio)
+        return f"reached; {statics.binding} binds at {100 * share:.0f} % of its limit"
     if not statics.state.feasible:
         return f"the stack violates its limits: {statics.state.violations[0]}"
     k = int(np.argmax(statics.torque_ratio))

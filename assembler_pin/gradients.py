@@ -30,10 +30,10 @@ from dataclasses import dataclass
 import numpy as np
 
 from .kinematics import PlateArrays, plate_deviation
-from .linalg import cross, skew
+from .linalg import cross, inverse_or_nan, skew
 from .model import AssemblerModel
 
-__all__ = ["PoseDerivatives", "pose_derivatives"]
+__all__ = ["Equilibrium", "PoseDerivatives", "equilibrium", "pose_derivatives"]
 
 _I3 = np.eye(3)
 
@@ -85,6 +85,98 @@ def _point_jacobian(points: np.ndarray, first_plate: int, n: int) -> np.ndarray:
     return out.reshape(*out.shape[:-2], 6 * n)
 
 
+@dataclass(frozen=True)
+class Equilibrium:
+    """The closed-form equilibrium of stacks (module docstring), leading batch axes ``...``.
+
+    Attributes:
+        b, t: (..., n, 6, 3) bottom and top joint centres, world [m].
+        d, L, u: leg vectors [m], lengths [m] and unit directions.
+        gu: (..., n, 6) gravity along each leg [m/s²].
+        g_perp, s, f_perp: gravity across the leg, the leg's mass factor [kg] and the
+            transverse ball force [N].
+        up_force, up_moment: (..., n, 3) weight above each top plate [N] and its moment
+            about the world origin [N·m].
+        K: (..., n, 6, 6) the lines of the legs (rows [u; t × u], a column per leg).
+        a: (..., n, 6) axial ball-force components [N]; forces: actuator forces [N, tension +].
+    """
+
+    b: np.ndarray
+    t: np.ndarray
+    d: np.ndarray
+    L: np.ndarray
+    u: np.ndarray
+    gu: np.ndarray
+    g_perp: np.ndarray
+    s: np.ndarray
+    f_perp: np.ndarray
+    motor_c: np.ndarray
+    shaft_c: np.ndarray
+    payload_point: np.ndarray
+    up_force: np.ndarray
+    up_moment: np.ndarray
+    K: np.ndarray
+    a: np.ndarray
+    forces: np.ndarray
+
+
+def equilibrium(
+    am: AssemblerModel, R: np.ndarray, p: np.ndarray, inverse: bool = False
+) -> tuple[Equilibrium, np.ndarray | None]:
+    """The closed-form statics of one stack (R (n+1, 3, 3), p (n+1, 3)) or of a batch
+    (R (B, n+1, 3, 3), p (B, n+1, 3)), vectorized over the batch and the platforms.
+
+    Returns:
+        The :class:`Equilibrium`, and with ``inverse`` the inverses of ``K`` (for condition
+        numbers); a singular ``K`` gives NaN forces (and NaN inverses).
+    """
+    cfg, geo = am.config, am.geometry
+    n, leg = am.n, cfg.leg
+    g = np.array([0.0, 0.0, -cfg.gravity])
+    b = np.matmul(geo.bottom_in_plate, np.swapaxes(R[..., :-1, :, :], -1, -2)) + p[..., :-1, None, :]
+    t = np.matmul(geo.top_in_plate, np.swapaxes(R[..., 1:, :, :], -1, -2)) + p[..., 1:, None, :]
+    d = t - b
+    L = np.sqrt(np.einsum("...k,...k->...", d, d))
+    u = d / L[..., None]
+    gu = u @ g
+    g_perp = g - gu[..., None] * u
+    lever = leg.motor_com * leg.motor_mass - leg.shaft_com * leg.shaft_mass
+    s = leg.shaft_mass + lever / L
+    f_perp = -s[..., None] * g_perp
+    mg_plate = cfg.plate.mass * g
+    payload_point = np.einsum("...ab,b->...a", R[..., n, :, :], np.array([0.0, 0.0, cfg.payload.offset])) + p[..., n, :]
+    motor_c = b + leg.motor_com * u
+    shaft_c = t - leg.shaft_com * u
+    batch = R.shape[:-3]
+    level_moment = np.zeros((*batch, n + 1, 3))  # level k: plate k, legs of SP k, payload (k = n)
+    level_force = np.zeros((*batch, n + 1, 3))
+    level_moment[..., 1:, :] = cross(p[..., 1:, :], mg_plate)
+    level_force[..., 1:, :] = mg_plate
+    level_moment[..., :n, :] += cross((leg.motor_mass * motor_c + leg.shaft_mass * shaft_c).sum(axis=-2), g)
+    level_force[..., :n, :] += 6 * (leg.motor_mass + leg.shaft_mass) * g
+    level_moment[..., n, :] += cfg.payload.mass * cross(payload_point, g)
+    level_force[..., n, :] += cfg.payload.mass * g
+    # everything above plate j+1 = levels j+1 .. n  (reverse cumulative sums)
+    up_force = np.flip(np.cumsum(np.flip(level_force, -2), axis=-2), -2)[..., 1:, :]
+    up_moment = np.flip(np.cumsum(np.flip(level_moment, -2), axis=-2), -2)[..., 1:, :]
+    K = np.swapaxes(np.concatenate([u, cross(t, u)], axis=-1), -1, -2)  # (..., n, 6 rows, 6 legs)
+    rhs = np.concatenate([up_force - f_perp.sum(axis=-2), up_moment - cross(t, f_perp).sum(axis=-2)], axis=-1)
+    K_inv = None
+    if inverse:
+        K_inv = inverse_or_nan(K)
+        a = np.einsum("...ab,...b->...a", K_inv, rhs)
+    else:
+        try:
+            a = np.linalg.solve(K, rhs[..., None])[..., 0]
+        except np.linalg.LinAlgError:
+            K_inv = inverse_or_nan(K)
+            a = np.einsum("...ab,...b->...a", K_inv, rhs)
+    forces = a + leg.shaft_mass * gu
+    eq = Equilibrium(b, t, d, L, u, gu, g_perp, s, f_perp, motor_c, shaft_c, payload_point, up_force, up_moment, K, a,
+                     forces)  # fmt: skip
+    return eq, K_inv
+
+
 def pose_derivatives(am: AssemblerModel, pa: PlateArrays) -> PoseDerivatives:
     """Forces, lengths, deflections, rise and plate angles with their derivatives.
 
@@ -100,69 +192,41 @@ def pose_derivatives(am: AssemblerModel, pa: PlateArrays) -> PoseDerivatives:
     leg = cfg.leg
     g = np.array([0.0, 0.0, -cfg.gravity])
     R, p = pa.R, pa.p
-    # --- leg geometry and its derivatives -------------------------------------------
-    b = np.matmul(geo.bottom_in_plate, R[:-1].transpose(0, 2, 1)) + p[:-1, None, :]
-    t = np.matmul(geo.top_in_plate, R[1:].transpose(0, 2, 1)) + p[1:, None, :]
-    d = t - b
-    L = np.sqrt(np.einsum("jik,jik->ji", d, d))
-    u = d / L[..., None]
+    eq, _ = equilibrium(am, R, p)
+    b, t, d, L, u, gu, g_perp, s = eq.b, eq.t, eq.d, eq.L, eq.u, eq.gu, eq.g_perp, eq.s
+    f_perp, K, a = eq.f_perp, eq.K, eq.a
+    # --- leg geometry derivatives ------------------------------------------------------
     db = _point_jacobian(b, 0, n)  # bottom joints of SP j lie on plate j
     dt = _point_jacobian(t, 1, n)  # top joints on plate j+1
     dd = dt - db
     dL = np.einsum("jik,jikc->jic", u, dd)
     du = (dd - u[..., None] * dL[:, :, None, :]) / L[..., None, None]
     # --- per-leg transverse ball force from the leg's own weight ----------------------
-    gu = u @ g
     dgu = np.einsum("k,jikc->jic", g, du)
-    g_perp = g - gu[..., None] * u
     dg_perp = -(dgu[:, :, None, :] * u[..., None] + gu[..., None, None] * du)
     lever = leg.motor_com * leg.motor_mass - leg.shaft_com * leg.shaft_mass
-    s = leg.shaft_mass + lever / L
     ds = (-lever / L**2)[..., None] * dL
-    f_perp = -s[..., None] * g_perp
     df_perp = -(ds[:, :, None, :] * g_perp[..., None] + s[..., None, None] * dg_perp)
-    # --- weight above each platform's top plate and its moment ------------------------
-    mg_plate = cfg.plate.mass * g
-    payload_point = R[n] @ np.array([0.0, 0.0, cfg.payload.offset]) + p[n]
-    motor_c = b + leg.motor_com * u
-    shaft_c = t - leg.shaft_com * u
+    # --- moment of the weight above each platform's top plate ---------------------------
     d_motor_c = db + leg.motor_com * du
     d_shaft_c = dt - leg.shaft_com * du
-    level_moment = np.zeros((n + 1, 3))  # level k: plate k, legs of SP k, payload (k = n)
     level_dmoment = np.zeros((n + 1, 3, C))
-    level_force = np.zeros((n + 1, 3))
     skew_g = skew(g)
-    level_moment[1:] = cross(p[1:], mg_plate)
     dp_plates = _point_jacobian(p[1:], 1, n)
     level_dmoment[1:] = -cfg.plate.mass * np.matmul(skew_g, dp_plates)
-    level_force[1:] = mg_plate
-    leg_moment = leg.motor_mass * cross(motor_c, g) + leg.shaft_mass * cross(shaft_c, g)
-    leg_dmoment = -np.matmul(skew_g, leg.motor_mass * d_motor_c + leg.shaft_mass * d_shaft_c)
-    level_moment[:n] += leg_moment.sum(axis=1)
-    level_dmoment[:n] += leg_dmoment.sum(axis=1)
-    level_force[:n] += 6 * (leg.motor_mass + leg.shaft_mass) * g
-    level_moment[n] += cfg.payload.mass * cross(payload_point, g)
-    d_payload = _point_jacobian(payload_point[None], n, n)[0]
+    level_dmoment[:n] += (-np.matmul(skew_g, leg.motor_mass * d_motor_c + leg.shaft_mass * d_shaft_c)).sum(axis=1)
+    d_payload = _point_jacobian(eq.payload_point[None], n, n)[0]
     level_dmoment[n] += -cfg.payload.mass * skew_g @ d_payload
-    level_force[n] += cfg.payload.mass * g
-    # everything above plate j+1 = levels j+1 .. n  (reverse cumulative sums)
-    up_force = np.cumsum(level_force[::-1], axis=0)[::-1][1:]
-    up_moment = np.cumsum(level_moment[::-1], axis=0)[::-1][1:]
     up_dmoment = np.cumsum(level_dmoment[::-1], axis=0)[::-1][1:]
-    # --- the 6x6 system of each platform -----------------------------------------------
-    t_cross_u = cross(t, u)
-    K = np.concatenate([u, t_cross_u], axis=2).transpose(0, 2, 1)  # (n, 6 rows, 6 legs)
+    # --- derivative of the 6x6 system of each platform ---------------------------------
     skew_t = skew(t)
-    t_cross_f = cross(t, f_perp)
-    rhs = np.concatenate([up_force - f_perp.sum(axis=1), up_moment - t_cross_f.sum(axis=1)], axis=1)
-    a = np.linalg.solve(K, rhs[..., None])[..., 0]  # (n, 6)
     # d(t × f) = -[f]× dt + [t]× df ;  d(t × u) = -[u]× dt + [t]× du
     d_t_cross_f = -np.matmul(skew(f_perp), dt) + np.matmul(skew_t, df_perp)
     d_t_cross_u = -np.matmul(skew(u), dt) + np.matmul(skew_t, du)
     d_rhs = np.concatenate([-df_perp.sum(axis=1), up_dmoment - d_t_cross_f.sum(axis=1)], axis=1)
     dK_a = np.concatenate([np.einsum("ji,jikc->jkc", a, du), np.einsum("ji,jikc->jkc", a, d_t_cross_u)], axis=1)
     da = np.linalg.solve(K, d_rhs - dK_a)  # (n, 6, C)
-    forces = a + leg.shaft_mass * gu
+    forces = eq.forces
     d_forces = da + leg.shaft_mass * dgu
     # --- deflection cosines and rise -----------------------------------------------------
     home = geo.home_direction

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["cross", "skew"]
+__all__ = ["cross", "inverse_or_nan", "skew"]
 
 
 def skew(v: np.ndarray) -> np.ndarray:
@@ -22,3 +22,19 @@ def cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     a0, a1, a2 = a[..., 0], a[..., 1], a[..., 2]
     b0, b1, b2 = b[..., 0], b[..., 1], b[..., 2]
     return np.stack([a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0], axis=-1)
+
+
+def inverse_or_nan(blocks: np.ndarray) -> np.ndarray:
+    """Inverses of a stack of square blocks (..., m, m); an exactly singular block's inverse
+    is NaN (its condition number then reads as infinite)."""
+    try:
+        return np.linalg.inv(blocks)
+    except np.linalg.LinAlgError:
+        out = np.full(blocks.shape, np.nan)
+        flat, res = blocks.reshape(-1, *blocks.shape[-2:]), out.reshape(-1, *blocks.shape[-2:])
+        for k, block in enumerate(flat):
+            try:
+                res[k] = np.linalg.inv(block)
+            except np.linalg.LinAlgError:
+                pass
+        return out

@@ -281,6 +281,14 @@ def interrupt_on_signals(names: Sequence[str] = ("SIGTERM", "SIGHUP")) -> Callab
     return restore
 
 
+class _CallerPlacedVisualizer(MeshcatVisualizer):
+    """A ``MeshcatVisualizer`` whose bodies the caller places (:meth:`StackViewer.placements`):
+    it never runs kinematics on its ``Data``, which is left empty for large stacks."""
+
+    def updatePlacements(self, geometry_type) -> None:  # noqa: N802 - Pinocchio's name
+        return None
+
+
 class StackViewer:
     """Meshcat view of an Assembler.
 
@@ -318,12 +326,11 @@ class StackViewer:
         if force_scale not in FORCE_SCALES:
             raise ViewerError(f"force_scale must be one of {', '.join(FORCE_SCALES)}, got {force_scale!r}")
         self.force_scale = force_scale
-        if am.n > WHOLE_DATA_MAX_PLATFORMS:
-            raise ViewerError(
-                f"the viewer draws stacks of up to {WHOLE_DATA_MAX_PLATFORMS} platforms (it runs on the "
-                f"whole-stack Pinocchio data); this one has {am.n}"
-            )
         self.am = am
+        # Up to WHOLE_DATA_MAX_PLATFORMS the bodies are placed by Pinocchio's kinematics of the
+        # whole stack; above, its Data (cubic in n) is never made and every visual is placed in
+        # closed form from the plate poses and leg joint centres (:meth:`placements`).
+        self.whole_stack_kinematics = am.n <= WHOLE_DATA_MAX_PLATFORMS
         self.server: ServerProcess | None = None
         if viewer is None:
             self.server = start_server(host, port)
@@ -335,6 +342,7 @@ class StackViewer:
                 raise
         self.meshcat: meshcat.Visualizer = viewer
         self.visual_model = pin.buildGeomFromUrdfString(am.model, am.urdf_text, pin.GeometryType.VISUAL)
+        self._geometry_frames = self._index_geometry_frames()
         self.prefix = prefix
         self.scene_offset = np.zeros(3)
         self._ghosts: dict[str, MeshcatVisualizer] = {}
@@ -352,7 +360,10 @@ class StackViewer:
 
     # ------------------------------------------------------------------ plumbing
     def _make_visualizer(self, root: str, rgba: npt.ArrayLike | None = None) -> MeshcatVisualizer:
-        viz = MeshcatVisualizer(self.am.model, None, self.visual_model, copy_models=False)
+        if self.whole_stack_kinematics:
+            viz = MeshcatVisualizer(self.am.model, None, self.visual_model, copy_models=False)
+        else:  # an empty Data stands in: nothing runs kinematics on it
+            viz = _CallerPlacedVisualizer(self.am.model, None, self.visual_model, copy_models=False, data=pin.Data())
         viz.initViewer(viewer=self.meshcat)
         viz.loadViewerModel(rootNodeName=root, visual_color=None if rgba is None else list(rgba))
         return viz
@@ -369,6 +380,63 @@ class StackViewer:
             if key is not None:
                 out.setdefault(key, []).append(gid)
         return out
+
+    def _index_geometry_frames(self) -> list[tuple[str, tuple[int, ...], np.ndarray]]:
+        """For each visual: its body (``plate`` k, ``motor``/``shaft`` (j, i) or ``payload``)
+        and its placement in the frame of the joint that moves it (4×4), as Pinocchio
+        stores it: the plate's, the universal joint's (motor) or the actuator's (shaft)."""
+        frames = self.am.model.frames
+        out = []
+        for g in self.visual_model.geometryObjects:
+            name = frames[g.parentFrame].name
+            local = g.placement.homogeneous
+            if name.startswith("plate_"):
+                out.append(("plate", (int(name.split("_")[1]),), local))
+            elif name == "payload":
+                out.append(("payload", (), local))
+            else:
+                j, rest = name.removeprefix("sp").split("_leg")
+                i, part = rest.split("_")
+                out.append((part, (int(j), int(i)), local))
+        return out
+
+    def placements(self, pose: StackState | PlateArrays) -> list[np.ndarray]:
+        """World placement (4×4) of every visual for a pose, in ``visual_model`` order.
+
+        With the whole-stack kinematics, Pinocchio's; otherwise in closed form: plates and
+        payload from the plate poses, each leg's motor frame at its universal-joint centre and
+        its shaft frame at its ball-joint centre, both with z along the leg (motor and shaft
+        are cylinders about that axis, so the turn about it does not show).
+        """
+        plates = _as_plates(self.am, pose)
+        if self.whole_stack_kinematics:
+            model, data = self.viz.model, self.viz.data
+            vdata = self.viz.visual_data
+            pin.forwardKinematics(model, data, q_from_plates(self.am, plates))
+            pin.updateGeometryPlacements(model, data, self.visual_model, vdata)
+            return [vdata.oMg[k].homogeneous for k in range(len(self._geometry_frames))]
+        legs = pose.legs if isinstance(pose, StackState) else leg_state(self.am, plates)
+        bottom, top = legs.bottom_points, legs.top_points
+        axis = (top - bottom) / np.linalg.norm(top - bottom, axis=-1, keepdims=True)
+        T_plates = plates.as_matrices()
+        out = []
+        for body, idx, local in self._geometry_frames:
+            if body == "plate":
+                frame = T_plates[idx[0]]
+            elif body == "payload":  # fixed to the EE plate: its placement is in the plate's joint frame
+                frame = T_plates[-1]
+            else:
+                frame = _frame_along(axis[idx], bottom[idx] if body == "motor" else top[idx])
+            out.append(frame @ local)
+        return out
+
+    def _place(self, viz: MeshcatVisualizer, pose: StackState | PlateArrays) -> None:
+        """Put every body of ``viz`` at ``pose``."""
+        if self.whole_stack_kinematics:
+            viz.display(q_from_plates(self.am, _as_plates(self.am, pose)))
+            return
+        for g, T in zip(self.visual_model.geometryObjects, self.placements(pose), strict=True):
+            self.meshcat[viz.getViewerNodeName(g, pin.GeometryType.VISUAL)].set_transform(T)
 
     @property
     def url(self) -> str:
@@ -423,7 +491,7 @@ class StackViewer:
         state = pose if isinstance(pose, StackState) else evaluate_state(self.am, pose)
         self.state = state
         self._clear_animation()
-        self.viz.display(q_from_plates(self.am, state.plates))
+        self._place(self.viz, state)
         self.force_range = self.color_scale(state, force_scale or self.force_scale)
         colors = force_color(state.forces, *self.force_range)
         for (j, i), gids in self._leg_geoms.items():
@@ -431,7 +499,7 @@ class StackViewer:
                 g = self.visual_model.geometryObjects[gid]
                 rgba = [*colors[j, i], 1.0] if color_forces else list(g.meshColor)
                 self.viz.loadViewerGeometryObject(g, pin.GeometryType.VISUAL, rgba)
-        self.viz.display()  # reloaded objects keep their transforms; refresh anyway
+        self._place(self.viz, state)  # reloaded objects keep their transforms; refresh anyway
         marks = self.meshcat[f"{self.prefix}_violations"]
         marks.delete()
         if mark_violations:
@@ -534,8 +602,13 @@ class StackViewer:
         """World joint centres of the legs as drawn: (n, 6, 3) bottom and top [m].
 
         Read back from the visualizer's own kinematics (motor frame origin = universal
-        joint centre, shaft frame origin = ball joint centre).
+        joint centre, shaft frame origin = ball joint centre); above
+        ``WHOLE_DATA_MAX_PLATFORMS``, the joint centres the closed-form placements use.
         """
+        if not self.whole_stack_kinematics:
+            if self.state is None:
+                raise AssemblerError("nothing drawn yet: call display() first")
+            return self.state.legs.bottom_points.copy(), self.state.legs.top_points.copy()
         model, data = self.viz.model, self.viz.data
         pin.updateFramePlacements(model, data)
         bottom = np.zeros((self.am.n, 6, 3))
@@ -560,7 +633,7 @@ class StackViewer:
         if name not in self._ghosts:
             self._ghosts[name] = self._make_visualizer(f"{self.prefix}_{name}", rgba)
             self._roots.append(f"{self.prefix}_{name}")
-        self._ghosts[name].display(q_from_plates(self.am, plates))
+        self._place(self._ghosts[name], plates)
         self._extra_points[f"ghost_{name}"] = self._stack_points(plates)
 
     def show_helper_arm(self, points: npt.ArrayLike, name: str = "helper_arm") -> None:
@@ -673,17 +746,13 @@ class StackViewer:
         first = states[0]
         self.display(first if isinstance(first, StackState) else evaluate_state(self.am, first))
         anim = meshcat.animation.Animation(default_framerate=fps)
-        model, data = self.viz.model, self.viz.data
-        vmodel, vdata = self.visual_model, self.viz.visual_data
+        vmodel = self.visual_model
         for k, st in enumerate(states):
             plates = _as_plates(self.am, st)
-            pin.forwardKinematics(model, data, q_from_plates(self.am, plates))
-            pin.updateGeometryPlacements(model, data, vmodel, vdata)
+            placed = self.placements(st)
             with anim.at_frame(self.meshcat, k) as frame:
-                for gid, g in enumerate(vmodel.geometryObjects):
-                    frame[self.viz.getViewerNodeName(g, pin.GeometryType.VISUAL)].set_transform(
-                        vdata.oMg[gid].homogeneous
-                    )
+                for g, T in zip(vmodel.geometryObjects, placed, strict=True):
+                    frame[self.viz.getViewerNodeName(g, pin.GeometryType.VISUAL)].set_transform(T)
                 if self.am.config.payload.offset > 0 and self.am.config.payload.mass > 0:
                     rod_end = plates.R[-1] @ np.array([0.0, 0.0, self.am.config.payload.offset]) + plates.p[-1]
                     frame[f"{self.prefix}_payload_rod"]["rod"].set_transform(_cylinder_between(plates.p[-1], rod_end))
@@ -694,7 +763,7 @@ class StackViewer:
             self._roots.append(f"{self.prefix}_force_bands")
         self.meshcat.set_animation(anim, play=play, repetitions=repetitions)
         self._animated = True
-        self.viz.display(q_from_plates(self.am, _as_plates(self.am, first)))
+        self._place(self.viz, first)
 
     def _make_force_bands(self) -> None:
         """One sleeve per leg and force level, hidden; :meth:`_force_band_frame` shows one.
@@ -807,6 +876,17 @@ class StackViewer:
         to the server: the scene is embedded)."""
         self.frame()
         return self.meshcat.render_static(height=height)
+
+
+def _frame_along(z: np.ndarray, origin: np.ndarray) -> np.ndarray:
+    """A 4×4 frame at ``origin`` whose z axis is the unit vector ``z``."""
+    helper = np.array([1.0, 0.0, 0.0]) if abs(z[0]) < 0.9 else np.array([0.0, 1.0, 0.0])
+    x = np.cross(helper, z)
+    x /= np.linalg.norm(x)
+    T = np.eye(4)
+    T[:3, :3] = np.column_stack([x, np.cross(z, x), z])
+    T[:3, 3] = origin
+    return T
 
 
 def _hex(rgb: npt.ArrayLike) -> str:

@@ -24,9 +24,11 @@ import numpy as np
 import pinocchio as pin
 import pytest
 
+import assembler_pin as ap
 from assembler_pin import evaluate_state, stack_forward_kinematics
 from assembler_pin.exceptions import AssemblerError, ConvergenceError, ViewerError
 from assembler_pin.kinematics import StackFKResult
+from assembler_pin.model import WHOLE_DATA_MAX_PLATFORMS
 from assembler_pin.viewer import (
     ARM_LINK_RGBA,
     CAMERA_FOV_DEG,
@@ -617,3 +619,30 @@ def test_live_page_shows_the_overlay(am):
     assert overlay == v.overlay_html()
     for element in ("Live page title", 'id="assembler-legend"', 'id="assembler-colorbar"'):
         assert element in overlay
+
+
+def test_closed_form_placements_match_pinocchio_and_draw_any_number_of_platforms(am, bent, tmp_path):
+    with StackViewer(am) as v:
+        exact = v.placements(evaluate_state(am, bent))  # Pinocchio's kinematics of the whole stack
+        v.whole_stack_kinematics = False
+        closed = v.placements(evaluate_state(am, bent))
+        frames = v._geometry_frames
+    for (body, _, _), A, B in zip(frames, exact, closed, strict=True):
+        np.testing.assert_allclose(B[:3, 3], A[:3, 3], atol=1e-12)  # every visual at the same place
+        if body in ("plate", "payload"):
+            np.testing.assert_allclose(B, A, atol=1e-12)
+        else:  # cylinders about the leg axis: the same axis (the turn about it does not show)
+            np.testing.assert_allclose(B[:3, 2], A[:3, 2], atol=1e-12)
+    big = ap.AssemblerModel.from_config({"platforms": 12})
+    assert big.n > WHOLE_DATA_MAX_PLATFORMS
+    lengths = np.full((12, 6), 0.275)
+    lengths[5, ::2] = 0.31
+    state = evaluate_state(big, stack_forward_kinematics(big, lengths).raise_if_failed())
+    with StackViewer(big) as v:
+        v.display(state)
+        bottom, _ = v.drawn_leg_endpoints()
+        np.testing.assert_allclose(bottom, state.legs.bottom_points)
+        v.animate(interpolate_states(big, big.home, state.plates, steps=3), fps=5)
+        html = v.static_html(tmp_path / "twelve.html")
+    paths = page_paths(html)
+    assert any(p.startswith("/meshcat/assembler/visuals/sp11_leg5_shaft") for p in paths)
