@@ -60,6 +60,10 @@ def random_reachable_plates(
             return lengths, fk.plates
 
 
+#: Stacks per call of the batched statics figure.
+BATCH_STACKS = 10_000
+
+
 def run_benchmarks(
     am: AssemblerModel, repeat: int = 300, seed: int = 0, optimize: bool = True, quick: bool = False
 ) -> dict[str, Any]:
@@ -85,7 +89,8 @@ def run_benchmarks(
         "q_from_plates_us": median_time_us(lambda: q_from_plates(am, pick()[1]), repeat),
         "statics_from_matrices_us": median_time_us(lambda: solve_statics(am, pick()[1].as_matrices()), repeat),
     }
-    batch = np.array([s[1].as_matrices() for s in samples] * 10)
+    batch = np.array([s[1].as_matrices() for s in samples])
+    batch = np.tile(batch, (max(1, BATCH_STACKS // len(batch)), 1, 1, 1))
     results["statics_batch_stacks_per_s"] = len(batch) / (
         1e-6 * median_time_us(lambda: solve_statics_batch(am, batch), 5)
     )
