@@ -528,6 +528,10 @@ def cmd_simulate(args: argparse.Namespace) -> int:
     if args.html:
         _writable_parent(args.html, "--html file")
     am = AssemblerModel.from_config(_config(args))
+    if args.trajectory:
+        if args.html:
+            raise CLIError("--html shows a held pose; with --trajectory use 'view --trajectory FILE --html'")
+        return _simulate_trajectory(args, am)
     ours = evaluate_state(am, _plates_from_args(args, am, "give --plates FILE (or - for stdin) or --home"))
     result = hold_pose(am, ours.plates, seconds=args.seconds, samples=args.samples,
                        drift_tolerance=1e-3 * args.drift_tolerance)  # fmt: skip
@@ -557,6 +561,25 @@ def cmd_simulate(args: argparse.Namespace) -> int:
             path = Path(args.html).resolve()
             viewer.static_html(path)
         print(f"wrote {path}")
+    return 0
+
+
+def _simulate_trajectory(args: argparse.Namespace, am: AssemblerModel) -> int:
+    """``simulate --trajectory``: MuJoCo's servos run a planned trajectory."""
+    from .motion.timing import read_trajectory
+    from .simulate import follow_trajectory
+
+    traj = read_trajectory(args.trajectory)
+    result = follow_trajectory(am, traj, tolerance=1e-3 * args.drift_tolerance)
+    if args.json:
+        print(_dumps(result.to_dict()))
+        return 0
+    print(f"MuJoCo running {Path(args.trajectory).name}: {traj.duration:.2f} s, then 0.5 s settling")
+    print(f"{'t [s]':>7} {'EE off plan [mm]':>17} {'max|F| MuJoCo':>14} {'max|F| plan':>12} {'at limit':>9}")
+    for k in np.unique(np.linspace(0, len(result.times) - 1, 11).round().astype(int)):
+        print(f"{result.times[k]:7.2f} {1e3 * result.ee_error[k]:17.3f} {result.max_abs_force[k]:14.2f} "
+              f"{result.planned_max_abs_force[k]:12.2f} {int(result.saturated[k]):9d}")  # fmt: skip
+    print(f"followed: {'yes' if result.followed else 'NO'} — {result.message}")
     return 0
 
 
@@ -878,6 +901,7 @@ def build_parser() -> argparse.ArgumentParser:
     src = p.add_mutually_exclusive_group(required=True)
     src.add_argument("--plates", metavar="FILE", help='JSON {"plates": [n+1 4x4]} file, or - for stdin')
     src.add_argument("--home", action="store_true", help="hold the home pose")
+    src.add_argument("--trajectory", metavar="FILE", help="run a trajectory written by 'plan --out' on the servos")
     p.add_argument("--seconds", type=float, default=2.0, help="simulated time [s] (default 2)")
     p.add_argument("--samples", type=int, default=50, help="stored samples (default 50)")
     p.add_argument("--drift-tolerance", type=float, default=5.0, metavar="MM",

@@ -33,10 +33,12 @@ from .urdf import names
 
 __all__ = [
     "HOLD_DRIFT_TOLERANCE",
+    "FollowResult",
     "HoldResult",
     "MujocoStack",
     "MujocoStatics",
     "SimulationError",
+    "follow_trajectory",
     "hold_pose",
     "mujoco_statics",
 ]
@@ -336,4 +338,105 @@ def hold_pose(
         samples=poses,
     )
     logger.info("hold: %s", result)
+    return result
+
+
+@dataclass
+class FollowResult:
+    """A planned trajectory run by MuJoCo's position actuators (:func:`follow_trajectory`).
+
+    Attributes:
+        times: (T,) the trajectory's sample times [s] (then the settling samples).
+        ee_error: (T,) distance of MuJoCo's EE from the trajectory's EE pose at that time [m].
+        ee_rotation_error: (T,) angle between them [rad].
+        max_abs_force: (T,) MuJoCo's largest actuator force [N].
+        planned_max_abs_force: (T,) the trajectory's max|F| (our statics) [N].
+        saturated: (T,) actuators at their force limit.
+        final_forces: (n, 6) MuJoCo's actuator forces after settling [N, tension positive].
+        followed: no sample off by more than ``tolerance`` and no actuator saturated.
+        message: why not, or "followed".
+    """
+
+    times: np.ndarray
+    ee_error: np.ndarray
+    ee_rotation_error: np.ndarray
+    max_abs_force: np.ndarray
+    planned_max_abs_force: np.ndarray
+    saturated: np.ndarray
+    final_forces: np.ndarray
+    followed: bool
+    message: str
+
+    def to_dict(self) -> dict:
+        """JSON of ``assembler-pin simulate --trajectory --json``."""
+        return {"followed": self.followed, "message": self.message, "seconds": float(self.times[-1]),
+                "max_ee_error_m": float(self.ee_error.max()),
+                "max_ee_rotation_error_rad": float(self.ee_rotation_error.max()),
+                "times": self.times.tolist(), "ee_error_m": self.ee_error.tolist(),
+                "max_abs_force": self.max_abs_force.tolist(),
+                "planned_max_abs_force": self.planned_max_abs_force.tolist(),
+                "saturated_actuators": self.saturated.tolist(), "final_forces": self.final_forces.tolist()}  # fmt: skip
+
+    def __repr__(self) -> str:
+        return (f"FollowResult(followed={self.followed}, {self.times[-1]:.2f} s, EE off the plan by at most "
+                f"{1e3 * self.ee_error.max():.2f} mm, message={self.message!r})")  # fmt: skip
+
+
+def follow_trajectory(
+    am: AssemblerModel,
+    traj,
+    settle: float = 0.5,
+    tolerance: float = HOLD_DRIFT_TOLERANCE,
+    stack: MujocoStack | None = None,
+) -> FollowResult:
+    """Run a trajectory (:class:`~assembler_pin.motion.timing.Trajectory`) on MuJoCo's
+    position actuators: the stack starts at rest at the first sample (rebuilt by stack FK),
+    the commands are the leg lengths interpolated linearly in time at every 1 ms step, and
+    the EE is compared with the trajectory's at each of its samples; then it settles for
+    ``settle`` seconds at the last command.
+
+    Args:
+        settle: time held at the last command after the motion [s] (>= 0).
+        tolerance: largest EE distance from the planned pose at any sample [m].
+    """
+    from .motion.timing import trajectory_states
+
+    if not (np.isfinite(settle) and 0.0 <= settle <= 60.0):
+        raise SimulationError(f"settle must be in [0, 60] s, got {settle}")
+    if not (np.isfinite(tolerance) and tolerance > 0):
+        raise SimulationError(f"tolerance must be > 0 m, got {tolerance}")
+    _, first = trajectory_states(am, traj, frames=2)
+    stack = stack or MujocoStack(am)
+    stack.set_plates(first[0].plates)
+    m, d = stack.model, stack.data
+    dt = m.opt.timestep
+    lengths = traj.lengths.reshape(len(traj.times), -1)
+    sample_times = np.concatenate([traj.times, traj.times[-1] + np.linspace(0.0, settle, 6)[1:]])
+    planned = np.concatenate([traj.max_abs_force, np.full(5, traj.max_abs_force[-1])])
+    poses = [pin.SE3(pin.exp3(traj.ee[k, 3:]), traj.ee[k, :3]) for k in range(len(traj.times))]
+    poses += [poses[-1]] * 5
+    lo, hi = m.actuator_forcerange[:, 0], m.actuator_forcerange[:, 1]
+    err, rot, peak, sat = [], [], [], []
+    for t_sample, target in zip(sample_times, poses, strict=True):
+        while d.time < t_sample - 0.5 * dt:
+            t = d.time + dt
+            d.ctrl[:] = [np.interp(t, traj.times, lengths[:, a]) for a in range(lengths.shape[1])]
+            stack.mujoco.mj_step(m, d)
+        now = stack.plates().se3(am.n)
+        err.append(float(np.linalg.norm(now.translation - target.translation)))
+        rot.append(float(np.linalg.norm(pin.log3(target.rotation.T @ now.rotation))))
+        f = d.actuator_force
+        peak.append(float(np.abs(f).max()))
+        sat.append(int(((f <= lo + 1e-9) | (f >= hi - 1e-9)).sum()))
+    err_a, sat_a = np.array(err), np.array(sat)
+    reasons = []
+    if err_a.max() > tolerance:
+        k = int(err_a.argmax())
+        reasons.append(f"EE {1e3 * err_a[k]:.2f} mm off the plan at t = {sample_times[k]:.2f} s "
+                       f"(> {1e3 * tolerance:g} mm)")  # fmt: skip
+    if sat_a.any():
+        reasons.append(f"actuators at their force limit at {int((sat_a > 0).sum())} samples")
+    result = FollowResult(sample_times, err_a, np.array(rot), np.array(peak), planned, sat_a,
+                          stack.actuator_forces(), not reasons, "; ".join(reasons) or "followed")  # fmt: skip
+    logger.info("follow: %s", result)
     return result

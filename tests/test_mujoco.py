@@ -193,3 +193,25 @@ def test_cli_export_mjcf_and_simulate(tmp_path, am):
     np.testing.assert_allclose(doc["final_forces"], solve_statics(am, am.home).forces, atol=0.5)
     bad = _cli("simulate", "--home", "--seconds", "-1")
     assert bad.returncode == 2 and len(bad.stderr.strip().splitlines()) == 1 and "seconds" in bad.stderr
+
+
+def test_servos_follow_a_planned_trajectory(am, tmp_path):
+    import assembler_pin as ap
+    from assembler_pin.cli import main
+    from assembler_pin.motion import EEPath
+    from assembler_pin.simulate import follow_trajectory
+
+    goal = pin.SE3(np.eye(3), am.home[-1].translation + np.array([0.03, 0.0, -0.01]))
+    motion = ap.plan_trajectory(am, EEPath((am.home[-1], goal)), am.home, rate=10.0)
+    assert motion.success, motion.reason
+    result = follow_trajectory(am, motion.trajectory)
+    assert result.followed, result.message
+    assert result.ee_error.max() < 5e-3 and not result.saturated.any()
+    # after settling, MuJoCo's servos carry what our statics say the final pose needs
+    final = ap.evaluate_state(am, ap.stack_forward_kinematics(am, motion.trajectory.lengths[-1], base=am.home[0],
+                                                              guess=motion.plan.states[-1].plates).plates)  # fmt: skip
+    gap = np.abs(result.final_forces - final.forces).max()
+    assert gap <= max(0.01 * final.max_abs_force, 0.5), gap
+    path = motion.trajectory.write(tmp_path / "t.csv")
+    assert main(["simulate", "--trajectory", str(path), "--json"]) == 0
+    assert main(["simulate", "--trajectory", str(path), "--html", str(tmp_path / "x.html")]) == 2
