@@ -11,124 +11,146 @@ Quick start::
     state.forces                                  # (4, 6) [N], tension positive
 """
 
-from .capacity import CapacityResult, payload_capacity
-from .carrier import Carrier, carrier_statics, solve_on_carrier
-from .config import AssemblerConfig, LegConfig, PayloadConfig, PlateConfig, load_config
-from .constraints import GoalTolerance, Violation, evaluate_constraints
-from .exceptions import (
-    AssemblerError,
-    CLIError,
-    ConfigError,
-    ConvergenceError,
-    ModelFileError,
-    OptionsError,
-    PoseError,
-    SingularConfigurationError,
-    UnknownScenarioError,
-    ViewerError,
-)
-from .export import export_model_files
-from .geometry import home_plates, leg_geometry
-from .helper_arm import (
-    HelperArm,
-    HelperArmOptions,
-    InitialConditionResult,
-    helper_arm_urdf,
-    initial_condition,
-)
-from .kinematics import (
-    FKResult,
-    LegState,
-    PlateArrays,
-    StackFKResult,
-    ee_jacobian_wrt_lengths,
-    leg_state,
-    plate_arrays,
-    plates_from_q,
-    q_from_plates,
-    se3_to_taa,
-    sp_forward_kinematics,
-    stack_forward_kinematics,
-    taa_to_se3,
-    to_se3,
-)
-from .model import AssemblerModel
-from .motion import EEPath
-from .motion.timing import MotionResult, Trajectory, plan_trajectory, read_trajectory
-from .optimize import OptimizeOptions, OptimizeResult, optimize_internal_poses
-from .scenarios import SCENARIOS, Scenario, scenario
-from .solve import SolveResult, solve
-from .state import StackState, evaluate_state
-from .statics import StaticsResult, solve_statics, solve_statics_batch
-from .urdf import assembler_urdf, closure_sidecar
+from __future__ import annotations
 
-__all__ = [
-    "SCENARIOS",
-    "AssemblerConfig",
-    "AssemblerError",
-    "AssemblerModel",
-    "CLIError",
-    "CapacityResult",
-    "Carrier",
-    "ConfigError",
-    "ConvergenceError",
-    "EEPath",
-    "FKResult",
-    "GoalTolerance",
-    "HelperArm",
-    "HelperArmOptions",
-    "InitialConditionResult",
-    "LegConfig",
-    "LegState",
-    "ModelFileError",
-    "MotionResult",
-    "OptimizeOptions",
-    "OptimizeResult",
-    "OptionsError",
-    "PayloadConfig",
-    "PlateArrays",
-    "PlateConfig",
-    "PoseError",
-    "Scenario",
-    "SingularConfigurationError",
-    "SolveResult",
-    "StackFKResult",
-    "StackState",
-    "StaticsResult",
-    "Trajectory",
-    "UnknownScenarioError",
-    "ViewerError",
-    "Violation",
-    "assembler_urdf",
-    "carrier_statics",
-    "closure_sidecar",
-    "ee_jacobian_wrt_lengths",
-    "evaluate_constraints",
-    "evaluate_state",
-    "export_model_files",
-    "helper_arm_urdf",
-    "home_plates",
-    "initial_condition",
-    "leg_geometry",
-    "leg_state",
-    "load_config",
-    "optimize_internal_poses",
-    "payload_capacity",
-    "plan_trajectory",
-    "plate_arrays",
-    "plates_from_q",
-    "q_from_plates",
-    "read_trajectory",
-    "scenario",
-    "se3_to_taa",
-    "solve",
-    "solve_on_carrier",
-    "solve_statics",
-    "solve_statics_batch",
-    "sp_forward_kinematics",
-    "stack_forward_kinematics",
-    "taa_to_se3",
-    "to_se3",
-]
+import importlib
+from typing import TYPE_CHECKING, Any
 
-__version__ = "0.1.0"
+#: public name -> the module that defines it; imported on first use, so that
+#: ``import assembler_pin`` (and ``assembler-pin --help``) stays light.
+_LAZY: dict[str, str] = {
+    "assembler_urdf": ".urdf",
+    "AssemblerConfig": ".config",
+    "AssemblerError": ".exceptions",
+    "AssemblerModel": ".model",
+    "CapacityResult": ".capacity",
+    "Carrier": ".carrier",
+    "carrier_statics": ".carrier",
+    "CLIError": ".exceptions",
+    "closure_sidecar": ".urdf",
+    "ConfigError": ".exceptions",
+    "ConvergenceError": ".exceptions",
+    "ee_jacobian_wrt_lengths": ".kinematics",
+    "EEPath": ".motion",
+    "evaluate_constraints": ".constraints",
+    "evaluate_state": ".state",
+    "export_model_files": ".export",
+    "FKResult": ".kinematics",
+    "GoalTolerance": ".constraints",
+    "helper_arm_urdf": ".helper_arm",
+    "HelperArm": ".helper_arm",
+    "HelperArmOptions": ".helper_arm",
+    "home_plates": ".geometry",
+    "initial_condition": ".helper_arm",
+    "InitialConditionResult": ".helper_arm",
+    "leg_geometry": ".geometry",
+    "leg_state": ".kinematics",
+    "LegConfig": ".config",
+    "LegState": ".kinematics",
+    "load_config": ".config",
+    "ModelFileError": ".exceptions",
+    "MotionResult": ".motion.timing",
+    "optimize_internal_poses": ".optimize",
+    "OptimizeOptions": ".optimize",
+    "OptimizeResult": ".optimize",
+    "OptionsError": ".exceptions",
+    "payload_capacity": ".capacity",
+    "PayloadConfig": ".config",
+    "plan_trajectory": ".motion.timing",
+    "plate_arrays": ".kinematics",
+    "PlateArrays": ".kinematics",
+    "PlateConfig": ".config",
+    "plates_from_q": ".kinematics",
+    "PoseError": ".exceptions",
+    "q_from_plates": ".kinematics",
+    "read_trajectory": ".motion.timing",
+    "Scenario": ".scenarios",
+    "scenario": ".scenarios",
+    "SCENARIOS": ".scenarios",
+    "se3_to_taa": ".kinematics",
+    "SingularConfigurationError": ".exceptions",
+    "solve": ".solve",
+    "solve_on_carrier": ".carrier",
+    "solve_statics": ".statics",
+    "solve_statics_batch": ".statics",
+    "SolveResult": ".solve",
+    "sp_forward_kinematics": ".kinematics",
+    "stack_forward_kinematics": ".kinematics",
+    "StackFKResult": ".kinematics",
+    "StackState": ".state",
+    "StaticsResult": ".statics",
+    "taa_to_se3": ".kinematics",
+    "to_se3": ".kinematics",
+    "Trajectory": ".motion.timing",
+    "UnknownScenarioError": ".exceptions",
+    "ViewerError": ".exceptions",
+    "Violation": ".constraints",
+}
+
+__all__ = sorted(_LAZY)
+
+
+def __getattr__(name: str) -> Any:
+    module = _LAZY.get(name)
+    if module is None:
+        raise AttributeError(f"module 'assembler_pin' has no attribute {name!r}")
+    value = getattr(importlib.import_module(module, __name__), name)
+    globals()[name] = value
+    return value
+
+
+def __dir__() -> list[str]:
+    return sorted(set(globals()) | set(_LAZY))
+
+
+if TYPE_CHECKING:  # for type checkers and IDEs: the same names, imported eagerly
+    from .capacity import CapacityResult, payload_capacity
+    from .carrier import Carrier, carrier_statics, solve_on_carrier
+    from .config import AssemblerConfig, LegConfig, PayloadConfig, PlateConfig, load_config
+    from .constraints import GoalTolerance, Violation, evaluate_constraints
+    from .exceptions import (
+        AssemblerError,
+        CLIError,
+        ConfigError,
+        ConvergenceError,
+        ModelFileError,
+        OptionsError,
+        PoseError,
+        SingularConfigurationError,
+        UnknownScenarioError,
+        ViewerError,
+    )
+    from .export import export_model_files
+    from .geometry import home_plates, leg_geometry
+    from .helper_arm import (
+        HelperArm,
+        HelperArmOptions,
+        InitialConditionResult,
+        helper_arm_urdf,
+        initial_condition,
+    )
+    from .kinematics import (
+        FKResult,
+        LegState,
+        PlateArrays,
+        StackFKResult,
+        ee_jacobian_wrt_lengths,
+        leg_state,
+        plate_arrays,
+        plates_from_q,
+        q_from_plates,
+        se3_to_taa,
+        sp_forward_kinematics,
+        stack_forward_kinematics,
+        taa_to_se3,
+        to_se3,
+    )
+    from .model import AssemblerModel
+    from .motion import EEPath
+    from .motion.timing import MotionResult, Trajectory, plan_trajectory, read_trajectory
+    from .optimize import OptimizeOptions, OptimizeResult, optimize_internal_poses
+    from .scenarios import SCENARIOS, Scenario, scenario
+    from .solve import SolveResult, solve
+    from .state import StackState, evaluate_state
+    from .statics import StaticsResult, solve_statics, solve_statics_batch
+    from .urdf import assembler_urdf, closure_sidecar

@@ -30,7 +30,7 @@ import numpy as np
 import numpy.typing as npt
 import pinocchio as pin
 
-from .exceptions import AssemblerError, PoseError
+from .exceptions import AssemblerError, PoseError, UnknownCarrierError
 from .kinematics import PlateArrays, plate_arrays, to_se3
 from .model import AssemblerModel
 from .state import StackState, evaluate_state
@@ -50,10 +50,6 @@ __all__ = [
 ]
 
 logger = logging.getLogger(__name__)
-
-
-class UnknownCarrierError(AssemblerError, ValueError):
-    """A carrier name that is not supported."""
 
 
 @dataclass(frozen=True)

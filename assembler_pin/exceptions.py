@@ -68,3 +68,23 @@ class UnknownScenarioError(AssemblerError, KeyError):
 
 class CLIError(AssemblerError):
     """A command-line input problem (reported as one line, exit status 2)."""
+
+
+class UnknownCarrierError(AssemblerError, ValueError):
+    """A carrier name that is not supported."""
+
+
+class SimulationError(AssemblerError):
+    """MuJoCo is missing, or a simulation request is invalid."""
+
+
+class PathError(AssemblerError, ValueError):
+    """An EE path that cannot be built (bad waypoints, file or settings)."""
+
+
+class TrajectoryError(AssemblerError, ValueError):
+    """A trajectory that cannot be built, written or read."""
+
+
+class GridError(AssemblerError, ValueError):
+    """A grid or orientation SPEC that cannot be read."""

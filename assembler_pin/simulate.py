@@ -26,7 +26,7 @@ from dataclasses import dataclass, field
 import numpy as np
 import pinocchio as pin
 
-from .exceptions import AssemblerError, SingularConfigurationError
+from .exceptions import SimulationError, SingularConfigurationError
 from .kinematics import PlateArrays, leg_vectors, plate_arrays, q_from_arrays
 from .model import AssemblerModel
 from .urdf import names
@@ -51,10 +51,6 @@ logger = logging.getLogger(__name__)
 HOLD_DRIFT_TOLERANCE = 5.0e-3
 #: Largest EE rotation [rad] of a held pose (1°).
 HOLD_ROTATION_TOLERANCE = float(np.deg2rad(1.0))
-
-
-class SimulationError(AssemblerError):
-    """MuJoCo is missing, or a simulation request is invalid."""
 
 
 def _mujoco():

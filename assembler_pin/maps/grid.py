@@ -14,17 +14,13 @@ from dataclasses import dataclass
 import numpy as np
 import pinocchio as pin
 
-from ..exceptions import AssemblerError
+from ..exceptions import GridError
 
 __all__ = ["Cell", "Grid", "GridError", "parse_grid", "parse_orientations"]
 
 _AXES = ("x", "y", "z")
 MAX_CELLS = 10_000_000
 """Largest grid accepted (cells)."""
-
-
-class GridError(AssemblerError, ValueError):
-    """A grid or orientation SPEC that cannot be read."""
 
 
 @dataclass(frozen=True)

@@ -23,16 +23,12 @@ from pathlib import Path
 import numpy as np
 import pinocchio as pin
 
-from ..exceptions import AssemblerError
+from ..exceptions import PathError
 from ..kinematics import taa_to_se3, to_se3
 
 __all__ = ["PATH_KINDS", "EEPath", "PathError", "interpolate_pose", "read_waypoints"]
 
 PATH_KINDS = ("screw", "linear")
-
-
-class PathError(AssemblerError):
-    """An EE path that cannot be built (bad waypoints, file or settings)."""
 
 
 def interpolate_pose(a: pin.SE3, b: pin.SE3, t: float, kind: str = "screw") -> pin.SE3:

@@ -28,7 +28,7 @@ import numpy as np
 import pinocchio as pin
 
 from ..constraints import GoalTolerance, leg_limit_margins
-from ..exceptions import AssemblerError
+from ..exceptions import TrajectoryError
 from ..kinematics import PlateArrays, se3_to_taa, stack_forward_kinematics
 from ..model import AssemblerModel
 from ..state import StackState, evaluate_state
@@ -44,10 +44,6 @@ __all__ = [
     "trajectory_states",
     "verify_trajectory",
 ]
-
-
-class TrajectoryError(AssemblerError):
-    """A trajectory that cannot be built, written or read."""
 
 
 @dataclass

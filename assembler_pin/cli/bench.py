@@ -1,0 +1,80 @@
+"""``assembler-pin bench``: timings."""
+
+from __future__ import annotations
+
+import argparse
+from typing import TYPE_CHECKING
+
+from ..exceptions import CLIError
+
+if TYPE_CHECKING:
+    pass
+from .common import (
+    config_from_args,
+    dumps,
+)
+
+
+def add_parser(add) -> None:
+    """Register the ``bench`` subcommand (``add`` makes a subparser with ``--config``)."""
+    p = add("bench", "median time per call of the hot computations")
+    p.add_argument("--json", action="store_true", help="print one JSON object")
+    p.add_argument("--repeat", type=int, default=300, help="calls per figure (default 300)")
+    p.add_argument("--no-optimize", action="store_true", help="skip the optimization comparison (slow: ~10 s)")
+    p.add_argument("--quick", action="store_true", help="minimal goal sets: a smoke test, not figures")
+    p.add_argument("--grid", action="store_true", help="also solve the 120-goal level-EE grid (~2 min)")
+    p.add_argument("--platforms-sweep", action="store_true",
+                   help="only the cost of each stack size n = 1..64: build, memory, statics, FK, "
+                        "initial condition, optimization (~5 min)")  # fmt: skip
+    p.add_argument("--maps", action="store_true",
+                   help="only the capability map's cells/s on 1 and 2 local Dask workers (~1 min)")  # fmt: skip
+    p.add_argument("--mujoco", action="store_true",
+                   help="only MuJoCo against our statics: inverse statics and held poses (~15 s)")  # fmt: skip
+    p.set_defaults(func=run)
+
+
+def run(args: argparse.Namespace) -> int:
+    from ..bench import run_benchmarks
+    from ..model import AssemblerModel
+
+    if args.repeat < 1:
+        raise CLIError(f"--repeat must be an integer >= 1, got {args.repeat}")
+    if args.platforms_sweep:
+        from ..bench import benchmark_platforms_sweep, format_sweep
+
+        rows = benchmark_platforms_sweep()
+        print(dumps(rows) if args.json else format_sweep(rows))
+        return 0
+    if args.maps:
+        from ..bench import benchmark_maps, format_maps
+
+        result = benchmark_maps()
+        print(dumps(result) if args.json else format_maps(result))
+        return 0
+    am = AssemblerModel.from_config(config_from_args(args))
+    if args.mujoco:
+        from ..bench import benchmark_mujoco, format_mujoco
+
+        rows = benchmark_mujoco(am)
+        print(dumps(rows) if args.json else format_mujoco(rows))
+        return 0
+    results = run_benchmarks(am, repeat=args.repeat, optimize=not args.no_optimize, quick=args.quick)
+    if args.grid:
+        from ..bench import benchmark_solve_grid
+
+        results.update(benchmark_solve_grid(am))
+    if args.json:
+        print(dumps(results))
+        return 0
+    scenarios = results.pop("optimize_scenarios", None)
+    for key, value in results.items():
+        print(f"{key:>30}: {value:10.3f}" if isinstance(value, float | int) else f"{key:>30}: {value}")
+    if scenarios:
+        print("\noptimization per scenario (same run): time [s] and objective Ω")
+        print(
+            f"{'scenario':<24}{'slsqp s':>9}{'paper s':>9}{'speedup':>9}{'Ω initial':>11}{'Ω slsqp':>9}{'Ω paper':>9}"
+        )
+        for name, v in scenarios.items():
+            print(f"{name:<24}{v['slsqp_s']:9.3f}{v['paper_s']:9.3f}{v['speedup']:9.1f}"
+                  f"{v['initial_objective']:11.2f}{v['slsqp_objective']:9.2f}{v['paper_objective']:9.2f}")  # fmt: skip
+    return 0

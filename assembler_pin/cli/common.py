@@ -1,0 +1,239 @@
+"""Shared argument groups, readers and text tables of the ``assembler-pin`` subcommands.
+
+Nothing heavy is imported at module level: ``assembler-pin --help`` starts at once.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import os
+import sys
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+from ..exceptions import CLIError
+
+if TYPE_CHECKING:
+    import numpy as np
+
+    from ..config import AssemblerConfig
+    from ..model import AssemblerModel
+    from ..state import StackState
+
+
+def dumps(doc: object) -> str:
+    """Strict JSON: a NaN or infinite number (a singular pose's forces) is written as null."""
+
+    def clean(x: object) -> object:
+        if isinstance(x, float):
+            return x if math.isfinite(x) else None
+        if isinstance(x, dict):
+            return {k: clean(v) for k, v in x.items()}
+        if isinstance(x, (list, tuple)):
+            return [clean(v) for v in x]
+        return x
+
+    return json.dumps(clean(doc), allow_nan=False)
+
+
+def writable_parent(path: str, what: str) -> Path:
+    """``path`` whose directory exists and is writable, else a CLIError naming it."""
+    target = Path(path)
+    parent = target.parent if target.parent != Path("") else Path(".")
+    if not parent.is_dir():
+        raise CLIError(f"{what} '{path}': directory '{parent}' does not exist")
+    if not os.access(parent, os.W_OK):
+        raise CLIError(f"{what} '{path}': directory '{parent}' is not writable")
+    if target.is_dir() and what.endswith("file"):
+        raise CLIError(f"{what} '{path}' is a directory")
+    return target
+
+
+def config_from_args(args: argparse.Namespace) -> AssemblerConfig:
+    from ..config import load_config
+
+    return load_config(args.config) if args.config else load_config()
+
+
+def read_json(source: str) -> object:
+    try:
+        text = sys.stdin.read() if source == "-" else Path(source).read_text(encoding="utf-8")
+    except OSError as exc:
+        raise CLIError(f"cannot read '{source}': {exc.strerror or exc}") from None
+    except UnicodeDecodeError:
+        raise CLIError(f"'{source}' is not UTF-8 text") from None
+    try:
+        return json.loads(text)
+    except json.JSONDecodeError as exc:
+        raise CLIError(f"'{source}' is not valid JSON: {exc}") from None
+    except RecursionError:
+        raise CLIError(f"'{source}' is nested too deeply to be a plate file") from None
+
+
+def plates_from_file(source: str) -> list:
+    """The ``plates`` list of a JSON plate file (``{"plates": [n+1 4x4 world transforms]}``)."""
+    doc = read_json(source)
+    if not isinstance(doc, dict) or "plates" not in doc:
+        raise CLIError('the input must be a JSON object {"plates": [n+1 4x4 world transforms]}')
+    plates = doc["plates"]
+    if not isinstance(plates, list):
+        raise CLIError('"plates" must be a list of n+1 4x4 matrices, plate 0 first')
+    return plates
+
+
+def plates_from_args(args: argparse.Namespace, am: AssemblerModel, missing: str) -> list:
+    """The pose of ``--home`` or ``--plates FILE``; a CLIError saying ``missing`` when neither."""
+    if args.home:
+        return am.home
+    if args.plates is not None:
+        return plates_from_file(args.plates)
+    raise CLIError(missing)
+
+
+def format_state_table(state: StackState, title: str = "") -> str:
+    """A readable table of a state: forces and lengths per actuator, then summary lines.
+
+    Row ``i``, column ``SPj`` is leg ``i`` of platform ``j``, both 0-based
+    (:mod:`~assembler_pin.labels`), the indices of ``forces[j, i]`` and of the JSON.
+    """
+    import numpy as np
+
+    from ..labels import leg_label, platform_label
+
+    n = state.forces.shape[0]
+    lines = [title] if title else []
+    header = "leg | " + " | ".join(f"{platform_label(j)} F [N]  L [mm]" for j in range(n))
+    lines += [header, "-" * len(header)]
+    for i in range(6):
+        cells = [f"{state.forces[j, i]:9.3f} {1e3 * state.leg_lengths[j, i]:7.2f}" for j in range(n)]
+        lines.append(f"{i:>3} | " + " | ".join(cells))
+    j, i = np.unravel_index(np.abs(state.forces).argmax(), state.forces.shape)
+    lines.append(
+        f"max |F| = {state.max_abs_force:.3f} N ({leg_label(j, i)}), "
+        f"mean |F| = {state.mean_abs_force:.3f} N   (tension positive)"
+    )
+    w = state.statics.base_wrench
+    lines.append(
+        f"base wrench [N, N·m]: f = ({w[0]:.3f}, {w[1]:.3f}, {w[2]:.3f}), m = ({w[3]:.3f}, {w[4]:.3f}, {w[5]:.3f})"
+    )
+    if state.feasible:
+        lines.append("feasible: yes (every constraint holds)")
+    else:
+        lines.append(f"feasible: NO — {len(state.violations)} violation(s):")
+        lines += [f"  - {v}" for v in state.violations]
+    return "\n".join(lines)
+
+
+def goal_from_args(args: argparse.Namespace):
+    """The EE goal of ``solve``: ``--goal`` (rotation vector in rad) or ``--goal-deg`` (in deg)."""
+    from ..kinematics import taa_to_se3
+
+    if args.goal is not None:
+        return taa_to_se3(args.goal, what="--goal")
+    if args.goal_deg is not None:
+        return taa_to_se3(args.goal_deg, degrees=True, what="--goal-deg")
+    raise CLIError("give the EE goal: --goal X Y Z RX RY RZ (m, rad) or --goal-deg X Y Z RX RY RZ (m, deg)")
+
+
+def optimize_options(args: argparse.Namespace):
+    from ..constraints import GoalTolerance
+    from ..optimize import OptimizeOptions
+
+    ee = None
+    if args.ee_tolerance is not None:
+        pos, rot = args.ee_tolerance
+        if not (pos > 0 and rot > 0):
+            raise CLIError("--ee-tolerance POSITION ROTATION must both be > 0 (m, rad)")
+        ee = GoalTolerance(position=pos, rotation=rot)
+    try:
+        return OptimizeOptions(method=args.method, w1=args.w1, w2=args.w2, ee_tolerance=ee,
+                               max_iterations=args.max_iterations, ftol=args.ftol)  # fmt: skip
+    except ValueError as exc:
+        raise CLIError(str(exc)) from None
+
+
+def add_carrier_arguments(p: argparse.ArgumentParser, note: str = "") -> None:
+    """``--carrier NAME``, ``--carrier-q`` and ``--mount``, read by :func:`carrier_from_args`."""
+    from ..carrier import CARRIERS
+
+    p.add_argument("--carrier", metavar="NAME",
+                   help="mount the stack on a carrier arm from example-robot-data: "
+                        f"{', '.join(CARRIERS)}{note}")  # fmt: skip
+    p.add_argument("--carrier-q", nargs="+", type=float, metavar="Q",
+                   help="the carrier's joint angles [rad] (default: its upright configuration)")  # fmt: skip
+    p.add_argument("--mount", nargs=6, type=float, metavar=("X", "Y", "Z", "RX", "RY", "RZ"),
+                   help="base plate pose in the carrier's tool frame [m, rad] (default identity)")  # fmt: skip
+
+
+def carrier_from_args(args: argparse.Namespace):
+    """(carrier, q) of ``--carrier``, or (None, None) without one."""
+    if not getattr(args, "carrier", None):
+        if getattr(args, "carrier_q", None) or getattr(args, "mount", None):
+            raise CLIError("--carrier-q and --mount need --carrier NAME")
+        return None, None
+    from ..carrier import Carrier
+    from ..kinematics import taa_to_se3
+
+    carrier = Carrier(args.carrier, None if args.mount is None else taa_to_se3(args.mount, what="--mount"))
+    q = carrier.upright_q if args.carrier_q is None else carrier.check_q(args.carrier_q, "--carrier-q")
+    return carrier, q
+
+
+def format_carrier(carrier, statics) -> str:
+    """The carrier's joint torques against their effort limits, and what binds."""
+    lines = [f"carrier {carrier.name}: joint torques [N·m] (effort limit, use)"]
+    for k, (tau, limit, ratio) in enumerate(zip(statics.torques, carrier.effort_limit, statics.torque_ratio,
+                                                strict=True)):  # fmt: skip
+        lines.append(f"  joint {k}: {tau:9.3f}  ({limit:g}, {100 * ratio:5.1f} %)")
+    lines.append(f"stack at {100 * statics.stack_ratio:.1f} % of its force limit, carrier at "
+                 f"{100 * statics.carrier_ratio:.1f} % of its effort limit: {statics.binding} binds; "
+                 f"within every limit: {'yes' if statics.within_limits else 'NO'}")  # fmt: skip
+    return "\n".join(lines)
+
+
+def add_goal_arguments(group: argparse._MutuallyExclusiveGroup, note: str = "") -> None:
+    """``--goal`` (rotation vector in rad) and ``--goal-deg``, read by :func:`goal_from_args`."""
+    taa = ("X", "Y", "Z", "RX", "RY", "RZ")
+    group.add_argument("--goal", nargs=6, type=float, metavar=taa,
+                       help="EE goal: position [m] and rotation vector [rad], world frame" + note)  # fmt: skip
+    group.add_argument("--goal-deg", nargs=6, type=float, metavar=taa,
+                       help="as --goal with the rotation vector in degrees")  # fmt: skip
+
+
+def add_optimize_arguments(p: argparse.ArgumentParser) -> None:
+    """The optimizer's options; defaults and choices come from :class:`OptimizeOptions`."""
+    from ..optimize import METHODS, OptimizeOptions
+
+    d = OptimizeOptions()
+    p.add_argument("--method", choices=METHODS, default=d.method,
+                   help=f"slsqp: smooth epigraph form, analytic gradients; paper: the paper's non-smooth objective "
+                        f"with finite differences (default {d.method})")  # fmt: skip
+    p.add_argument("--w1", type=float, default=d.w1, help=f"weight of max|F| [1/N] (default {d.w1:g})")
+    p.add_argument("--w2", type=float, default=d.w2,
+                   help=f"weight of the plate deviation term [1/rad] (default {d.w2:g})")  # fmt: skip
+    p.add_argument("--ee-tolerance", type=float, nargs=2, metavar=("POSITION", "ROTATION"),
+                   help="let the EE move this far from the goal [m, rad] (default: fixed at the goal)")  # fmt: skip
+    p.add_argument("--max-iterations", type=int, default=d.max_iterations,
+                   help=f"solver iteration limit (default {d.max_iterations})")  # fmt: skip
+    p.add_argument("--ftol", type=float, default=d.ftol, help=f"solver tolerance on the objective (default {d.ftol:g})")
+
+
+def add_helper_arm_arguments(p: argparse.ArgumentParser) -> None:
+    """The helper arm's options; defaults come from :class:`HelperArmOptions`."""
+    from ..helper_arm import HelperArmOptions
+
+    d = HelperArmOptions()
+    p.add_argument("--d-step", type=float, default=d.d_step, metavar="M",
+                   help=f"helper-arm link-length scan step [m] (default {d.d_step:g})")  # fmt: skip
+    p.add_argument("--max-attempts", type=int, default=d.max_attempts, metavar="N",
+                   help=f"helper-arm recursion limit: link lengths tried (default {d.max_attempts})")  # fmt: skip
+
+
+def finite_range(values: np.ndarray) -> list[float] | None:
+    """[min, max] of the finite values, None without any."""
+    import numpy as np
+
+    ok = np.isfinite(values)
+    return [float(values[ok].min()), float(values[ok].max())] if ok.any() else None

@@ -1,0 +1,108 @@
+"""``assembler-pin map``: capability maps."""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+from ..exceptions import CLIError
+
+if TYPE_CHECKING:
+    pass
+from .common import (
+    config_from_args,
+    dumps,
+    finite_range,
+    writable_parent,
+)
+
+
+def add_parser(add) -> None:
+    """Register the ``map`` subcommand (``add`` makes a subparser with ``--config``)."""
+    p = add("map", "capability map: reachability, optimized max|F|, payload capacity per cell (Dask, resumable)")
+    p.add_argument("--grid", required=True, metavar="SPEC",
+                   help="EE positions [m]: AXIS=VALUE or START:STOP:COUNT, e.g. x=0:0.6:10,y=0,z=0.5:1:10")  # fmt: skip
+    p.add_argument("--orientations", metavar="SPEC",
+                   help='EE rotation vectors in degrees, e.g. "0 0 0; 0 30 0" (default level)')  # fmt: skip
+    p.add_argument("--sweep", nargs="+", metavar="FILE",
+                   help="design sweep: the map of each configuration file (config column: its name)")  # fmt: skip
+    p.add_argument("--out", required=True, metavar="DIR", help="map directory (Parquet parts; a rerun extends it)")
+    p.add_argument("--workers", type=int, default=None,
+                   help="local worker processes (default: the machine's cores; 0: here, no Dask)")  # fmt: skip
+    p.add_argument("--scheduler", metavar="ADDRESS", help="an existing Dask scheduler, e.g. tcp://10.0.0.5:8786")
+    p.add_argument("--batch-size", type=int, default=None, metavar="N", help="cells per task (default automatic)")
+    p.add_argument("--png", metavar="FILE", help="heatmap slices: reachability, max|F|, capacity")
+    p.add_argument("--html", metavar="FILE", help="the cells as a point cloud colored by capacity, in the viewer")
+    p.add_argument("--no-progress", action="store_true", help="no progress bar")
+    p.add_argument("--json", action="store_true", help="print one JSON object")
+    p.set_defaults(func=run)
+
+
+def run(args: argparse.Namespace) -> int:
+    """A capability map: per cell reachability, optimized max|F|, payload capacity, binding."""
+    import numpy as np
+
+    from ..config import load_config
+    from ..maps import parse_grid, read_map, run_map
+    from ..model import AssemblerModel
+
+    for option, value in (("--png file", args.png), ("--html file", args.html)):
+        if value:
+            writable_parent(value, option)
+    grid = parse_grid(args.grid, args.orientations)
+    if args.workers is not None and args.workers < 0:
+        raise CLIError(f"--workers must be >= 0, got {args.workers}")
+    if args.batch_size is not None and args.batch_size < 1:
+        raise CLIError(f"--batch-size must be >= 1, got {args.batch_size}")
+    if args.sweep:
+        names = [Path(c).stem for c in args.sweep]
+        if len(set(names)) != len(names):
+            raise CLIError("--sweep files must have different names (the map's config column)")
+        configs = [(name, load_config(c)) for name, c in zip(names, args.sweep, strict=True)]
+    else:
+        configs = [(Path(args.config).stem if args.config else "default", config_from_args(args))]
+    run = run_map(grid, configs, args.out, workers=args.workers, scheduler=args.scheduler,
+                  batch_size=args.batch_size, progress=not args.no_progress)  # fmt: skip
+    table = read_map(args.out)
+    reach = np.asarray(table.column("reachable").to_pylist(), dtype=bool)
+    cap = np.asarray(table.column("capacity_kg").to_pylist(), dtype=float)
+    force = np.asarray(table.column("max_abs_force").to_pylist(), dtype=float)
+    doc = {"out": str(Path(args.out)), "cells": len(grid) * len(configs), "computed": run.computed,
+           "already_done": run.skipped, "workers": run.workers, "time_s": run.time_s,
+           "cells_per_s": run.cells_per_second, "reachable": int(reach.sum()),
+           "max_abs_force_range": finite_range(force), "capacity_kg_range": finite_range(cap)}  # fmt: skip
+    if args.png or args.html:
+        am = AssemblerModel.from_config(configs[0][1])
+        if args.png:
+            from ..maps.pictures import map_heatmaps
+            from ..plots import save
+
+            doc["png"] = str(save(map_heatmaps(table, am, configs[0][0]), args.png))
+        if args.html:
+            from ..maps.pictures import show_map_points
+            from ..viewer import StackViewer
+
+            with StackViewer(am) as viewer:
+                viewer.display(am.home)
+                lo, hi = show_map_points(viewer, table, config=configs[0][0])
+                viewer.set_title(f"Capability map: payload capacity {lo:.1f} (light) – {hi:.1f} kg (dark); "
+                                 "gray: not reachable")  # fmt: skip
+                doc["html"] = str(Path(args.html).resolve())
+                viewer.static_html(doc["html"])
+    if args.json:
+        print(dumps(doc))
+        return 0
+    print(f"map: {doc['computed']} cells computed, {doc['already_done']} already in {doc['out']}; "
+          f"{run.workers or 'no'} workers, {run.time_s:.1f} s ({run.cells_per_second:.2f} cells/s)")  # fmt: skip
+    print(f"reachable: {doc['reachable']} of {len(reach)} cells")
+    if doc["max_abs_force_range"]:
+        lo, hi = doc["max_abs_force_range"]
+        print(f"optimized max|F|: {lo:.1f} – {hi:.1f} N")
+    if doc["capacity_kg_range"]:
+        lo, hi = doc["capacity_kg_range"]
+        print(f"payload capacity: {lo:.2f} – {hi:.2f} kg")
+    for key in ("png", "html"):
+        if key in doc:
+            print(f"wrote {doc[key]}")
+    return 0

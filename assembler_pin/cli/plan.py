@@ -1,0 +1,132 @@
+"""``assembler-pin plan``: motions along an EE path."""
+
+from __future__ import annotations
+
+import argparse
+from typing import TYPE_CHECKING
+
+from ..exceptions import CLIError
+
+if TYPE_CHECKING:
+    from ..model import AssemblerModel
+from .common import (
+    config_from_args,
+    dumps,
+    writable_parent,
+)
+
+
+def add_parser(add) -> None:
+    """Register the ``plan`` subcommand (``add`` makes a subparser with ``--config``)."""
+    p = add("plan", "a force-optimal motion along an EE path, as leg-length commands within the legs' limits")
+    src = p.add_mutually_exclusive_group()
+    src.add_argument("--to", nargs=6, type=float, metavar=("X", "Y", "Z", "RX", "RY", "RZ"),
+                     help="EE goal (m, rotation vector in rad); from the home pose unless --from")  # fmt: skip
+    src.add_argument("--waypoints", metavar="FILE", help="JSON or CSV waypoints (TAA rows, optional times)")
+    p.add_argument("--from", dest="from_", nargs=6, type=float, metavar=("X", "Y", "Z", "RX", "RY", "RZ"),
+                   help="with --to: start at the optimized pose of this EE pose")  # fmt: skip
+    p.add_argument("--path", choices=("screw", "linear"), default="screw",
+                   help="interpolation on SE(3): screw (geodesic, default) or linear (line + slerp)")  # fmt: skip
+    p.add_argument("--rate", type=float, default=50.0, help="output samples per second (default 50)")
+    p.add_argument("--w3", type=float, default=100.0, help="weight of the motion term Σ ΔL² [1/m²] (default 100)")
+    p.add_argument("--out", metavar="FILE", help="write the trajectory (.csv, or JSON for any other suffix)")
+    p.add_argument("--plot", metavar="PNG", help="write the lengths, speeds and forces over time with their limits")
+    p.add_argument("--compare", action="store_true",
+                   help="compare with the helper arm per sample and linear leg lengths (default paths: home to "
+                        f"{', '.join(COMPARE_SCENARIOS)})")  # fmt: skip
+    p.add_argument("--json", action="store_true", help="print one JSON object")
+    p.set_defaults(func=run)
+
+
+#: The paths ``plan --compare`` runs by default: from the home pose to these scenarios' goals.
+COMPARE_SCENARIOS = ("translation", "vertical_lift", "orientation_transition")
+
+
+def _plan_path(args: argparse.Namespace, am: AssemblerModel):
+    """The EE path and start state of ``plan``: (path, start or None)."""
+    from ..kinematics import taa_to_se3
+    from ..motion import EEPath, read_waypoints
+
+    if args.waypoints:
+        return read_waypoints(args.waypoints, kind=args.path), None
+    goal = taa_to_se3(args.to, what="--to")
+    if args.from_ is None:
+        return EEPath((am.home[-1], goal), args.path), am.home
+    return EEPath((taa_to_se3(args.from_, what="--from"), goal), args.path), None
+
+
+def run(args: argparse.Namespace) -> int:
+    """A force-optimal motion along an EE path, timed within the legs' limits."""
+    from ..model import AssemblerModel
+    from ..motion import PlanOptions
+    from ..motion.timing import plan_trajectory
+
+    for option, value in (("--out file", args.out), ("--plot file", args.plot)):
+        if value:
+            writable_parent(value, option)
+    if args.to is None and not args.waypoints and not args.compare:
+        raise CLIError("give --to X Y Z RX RY RZ (from the home pose, or --from ..) or --waypoints FILE")
+    try:
+        options = PlanOptions(w3=args.w3)
+    except ValueError as exc:
+        raise CLIError(str(exc)) from None
+    am = AssemblerModel.from_config(config_from_args(args))
+    if args.compare:
+        return _plan_compare(args, am, options)
+    path, start = _plan_path(args, am)
+    motion = plan_trajectory(am, path, start, options, rate=args.rate)
+    doc = motion.to_dict()
+    traj = motion.trajectory
+    if args.out and traj is not None:
+        doc["out"] = str(traj.write(args.out))
+    if args.plot and traj is not None:
+        from ..motion.timing import trajectory_states
+        from ..plots import save, trajectory_plot
+
+        times, states = trajectory_states(am, traj, 200)
+        title = "planned motion" if args.to is None else "home → goal" if args.from_ is None else "--from → --to"
+        doc["plot"] = str(save(trajectory_plot(am, traj, states, times, title), args.plot))
+    if args.json:
+        print(dumps(doc))
+        return 0
+    print(f"plan: {'success' if doc['success'] else 'FAILED'} — {doc['reason']}")
+    if motion.plan.states:
+        print(f"{doc['samples']} samples, peak max|F| {doc['peak_max_abs_force']:.2f} N, total leg travel "
+              f"{doc['total_leg_travel_m']:.3f} m, planned in {motion.plan.time_s:.2f} s")  # fmt: skip
+    if traj is not None:
+        print(f"trajectory: {traj.duration:.2f} s at {args.rate:g} Hz ({len(traj.times)} samples), every sample valid: "
+              f"{'yes' if traj.feasible.all() else 'NO'}")  # fmt: skip
+    for key in ("out", "plot"):
+        if key in doc:
+            print(f"wrote {doc[key]}")
+    return 0
+
+
+def _plan_compare(args: argparse.Namespace, am: AssemblerModel, options) -> int:
+    """``plan --compare``: our plan against the helper arm per sample and linear leg lengths."""
+    from ..motion import EEPath
+    from ..motion.compare import compare_motion
+    from ..scenarios import scenario
+
+    if args.to is not None or args.waypoints:
+        path, start = _plan_path(args, am)
+        runs = [("path", path, start)]
+    else:
+        runs = [(name, EEPath((am.home[-1], scenario(name).goal), args.path), am.home) for name in COMPARE_SCENARIOS]
+    results = [compare_motion(am, path, start, options, rate=args.rate, name=name) for name, path, start in runs]
+    if args.json:
+        print(dumps([{"path": c.name, "success": c.motion.success, "reason": c.motion.reason,
+                       "methods": {m: f.to_dict() for m, f in c.figures.items()}} for c in results]))  # fmt: skip
+        return 0
+    print(f"{'path':<24}{'plan':<16}{'peak max|F| N':>14}{'leg travel m':>13}{'duration s':>11}"
+          f"{'valid %':>9}{'limits %':>9}{'off path mm':>12}")  # fmt: skip
+    for c in results:
+        if not c.figures:
+            print(f"{c.name:<24}no plan: {c.motion.reason}")
+        for m, f in c.figures.items():
+            print(f"{c.name:<24}{m:<16}{f.peak_max_abs_force:14.2f}{f.total_leg_travel:13.3f}{f.duration:11.2f}"
+                  f"{100 * f.valid_fraction:9.1f}{100 * f.limits_fraction:9.1f}"
+                  f"{1e3 * f.max_path_deviation:12.2f}")  # fmt: skip
+    print("valid: every limit and the EE within the path tolerance at every output sample; "
+          "limits: legs, joints and forces only")  # fmt: skip
+    return 0

@@ -1,0 +1,52 @@
+"""``assembler-pin reproduce``: the paper's scenarios."""
+
+from __future__ import annotations
+
+import argparse
+from typing import TYPE_CHECKING
+
+from ..exceptions import CLIError
+
+if TYPE_CHECKING:
+    pass
+from .common import (
+    add_optimize_arguments,
+    config_from_args,
+    optimize_options,
+    writable_parent,
+)
+
+
+def add_parser(add) -> None:
+    """Register the ``reproduce`` subcommand (``add`` makes a subparser with ``--config``)."""
+    p = add("reproduce", "the paper's scenarios: initial vs optimized forces, tables, report with figures")
+    p.add_argument("--out", metavar="DIR", help="write report.md and PNG figures into DIR")
+    p.add_argument("--scenario", action="append", metavar="NAME", help="only this scenario (repeatable)")
+    add_optimize_arguments(p)
+    p.set_defaults(func=run)
+
+
+def run(args: argparse.Namespace) -> int:
+    """The paper's scenarios, initial vs optimized, with a markdown report and figures."""
+    from ..model import AssemblerModel
+    from ..reproduce import force_tables, run_scenarios, summary_table, write_report
+    from ..scenarios import SCENARIOS
+
+    names = args.scenario or list(SCENARIOS)
+    unknown = [n for n in names if n not in SCENARIOS]
+    if unknown:
+        raise CLIError(f"unknown scenario {', '.join(unknown)}; valid: {', '.join(SCENARIOS)}")
+    if args.out:
+        writable_parent(args.out, "--out directory")
+    am = AssemblerModel.from_config(config_from_args(args))
+    outcomes = run_scenarios(am, names, optimize_options(args))
+    print(f"The paper's scenarios on {am.n} platforms, payload {am.config.payload.mass:g} kg "
+          f"at {am.config.payload.offset:g} m (forces in N, tension positive)\n")  # fmt: skip
+    print(summary_table(outcomes))
+    for outcome in outcomes:
+        print()
+        print(force_tables(outcome))
+    if args.out:
+        path = write_report(am, outcomes, args.out)
+        print(f"\nwrote report: {path}")
+    return 0

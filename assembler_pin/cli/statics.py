@@ -1,0 +1,59 @@
+"""``assembler-pin statics``: the forces of given plate poses."""
+
+from __future__ import annotations
+
+import argparse
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:
+    pass
+from .common import (
+    add_carrier_arguments,
+    carrier_from_args,
+    config_from_args,
+    dumps,
+    format_carrier,
+    format_state_table,
+    plates_from_args,
+)
+
+
+def add_parser(add) -> None:
+    """Register the ``statics`` subcommand (``add`` makes a subparser with ``--config``)."""
+    p = add("statics", "actuator forces of given plate poses (tension positive, newtons)")
+    src = p.add_mutually_exclusive_group()
+    src.add_argument("--plates", metavar="FILE", help='JSON {"plates": [n+1 4x4]} file, or - for stdin')
+    src.add_argument("--home", action="store_true", help="use the home pose")
+    add_carrier_arguments(p, " (the plates are then relative to the base plate)")
+    p.add_argument("--json", action="store_true", help="print one JSON object")
+    p.set_defaults(func=run)
+
+
+def run(args: argparse.Namespace) -> int:
+    from ..model import AssemblerModel
+    from ..state import evaluate_state
+
+    am = AssemblerModel.from_config(config_from_args(args))
+    carrier, q = carrier_from_args(args)
+    plates = plates_from_args(args, am, "give --plates FILE (or - for stdin) or --home")
+    if carrier is not None:
+        from ..carrier import carrier_statics
+
+        statics = carrier_statics(am, carrier, q, plates)
+        if args.json:
+            print(dumps(statics.state.to_dict() | statics.to_dict()))
+            return 0
+        print(format_state_table(statics.state, f"Statics of {am.n} platforms on {carrier.name} (world gravity)"))
+        print(format_carrier(carrier, statics))
+        return 0
+    state = evaluate_state(am, plates)
+    if args.json:
+        print(dumps(state.to_dict()))
+    else:
+        print(
+            format_state_table(
+                state,
+                f"Statics of {am.n} platforms, payload {am.config.payload.mass:g} kg at {am.config.payload.offset:g} m",
+            )
+        )
+    return 0

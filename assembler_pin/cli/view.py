@@ -1,0 +1,198 @@
+"""``assembler-pin view``: the Meshcat viewer."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+from ..exceptions import CLIError
+
+if TYPE_CHECKING:
+    from ..model import AssemblerModel
+    from ..state import StackState
+from .common import (
+    add_carrier_arguments,
+    add_goal_arguments,
+    carrier_from_args,
+    config_from_args,
+    goal_from_args,
+    plates_from_args,
+    writable_parent,
+)
+
+
+def add_parser(add) -> None:
+    """Register the ``view`` subcommand (``add`` makes a subparser with ``--config``)."""
+    p = add("view", "show a pose in Meshcat (live server until Ctrl-C, or a standalone HTML page)")
+    src = p.add_mutually_exclusive_group(required=True)
+    add_goal_arguments(src, " (shows the initial and optimized poses)")
+    src.add_argument("--plates", metavar="FILE", help='JSON {"plates": [n+1 4x4]} file, or - for stdin')
+    src.add_argument("--home", action="store_true", help="show the home pose")
+    from ..scenarios import SCENARIOS
+    from ..viewer import FORCE_SCALES
+
+    src.add_argument("--scenario", choices=list(SCENARIOS),
+                     help="solve a scenario's goal and show its initial and optimized poses")  # fmt: skip
+    src.add_argument("--trajectory", metavar="FILE",
+                     help="animate a trajectory written by 'plan --out' (legs colored by force)")  # fmt: skip
+    add_carrier_arguments(p, " (--home/--plates relative to its base plate, --goal in the world)")
+    p.add_argument("--force-scale", choices=FORCE_SCALES, default="auto",
+                   help="where leg colors saturate: auto (default: max|F|, at least 10%% of the limit), "
+                        "limit, max")  # fmt: skip
+    p.add_argument("--frames", type=int, default=150, help="with --trajectory: frames of the animation (default 150)")
+    p.add_argument("--html", metavar="FILE", help="write a standalone HTML page instead of serving")
+    p.add_argument("--open", action="store_true", help="open the page / viewer URL in a web browser")
+    p.add_argument(
+        "--animate",
+        type=int,
+        default=0,
+        metavar="STEPS",
+        help="with --goal: animate initial -> optimized in STEPS leg-length steps",
+    )
+    p.add_argument("--no-arm", action="store_true", help="with --goal: do not draw the helper arm")
+    p.add_argument("--host", default="127.0.0.1",
+                   help="interface the live page listens on (default 127.0.0.1: this machine only; "
+                        "0.0.0.0: every interface)")  # fmt: skip
+    p.set_defaults(func=run)
+
+
+def _view_on_carrier(args: argparse.Namespace, am: AssemblerModel, viewer, carrier, q) -> StackState:
+    """``view --carrier``: the stack on its carrier (a world goal is solved with the carrier moving)."""
+    from ..carrier import carrier_statics, solve_on_carrier
+
+    if args.trajectory:
+        raise CLIError("--trajectory cannot be shown on a carrier")
+    if args.scenario or args.goal is not None or args.goal_deg is not None:
+        if args.scenario:
+            raise CLIError("--scenario goals are in the base frame; give a world --goal with --carrier")
+        result = solve_on_carrier(am, carrier, goal_from_args(args), q)
+        if result.statics is None:
+            raise CLIError(f"no pose to show: {result.message}")
+        statics = result.statics
+        print(f"solve on {carrier.name}: {'success' if result.success else 'FAILED'} — {result.message}",
+              file=sys.stderr)  # fmt: skip
+    else:
+        statics = carrier_statics(am, carrier, q, plates_from_args(args, am, "give --goal, --plates FILE or --home"))
+    shown = viewer.display(statics.state)
+    viewer.show_carrier(carrier, statics.q)
+    viewer.set_title(f"On {carrier.name}: max|F| {shown.max_abs_force:.1f} N, carrier torque up to "
+                     f"{100 * statics.carrier_ratio:.0f} % of its effort limit ({statics.binding} binds)")  # fmt: skip
+    viewer.frame()
+    return shown
+
+
+def _view_title(args: argparse.Namespace, result) -> str:
+    """Title of ``view --goal/--scenario``: what was asked and max|F| initial → optimized."""
+    from ..scenarios import scenario
+
+    if args.scenario:
+        what = f"Scenario {args.scenario}: {scenario(args.scenario).title}"
+    else:
+        taa = args.goal if args.goal is not None else args.goal_deg
+        unit = "rad" if args.goal is not None else "deg"
+        what = (
+            f"Goal ({', '.join(f'{x:g}' for x in taa[:3])}) m, rotation ({', '.join(f'{x:g}' for x in taa[3:])}) {unit}"
+        )
+    init = f"{result.initial.max_abs_force:.1f} N" if result.initial is not None else "none"
+    opt = f"{result.optimized.max_abs_force:.1f} N" if result.optimized is not None else "none"
+    return f"{what} — max|F| initial {init} → optimized {opt}"
+
+
+def _animate_trajectory(viewer, am: AssemblerModel, path: str, frames: int) -> StackState:
+    """Store a trajectory file's motion in the viewer, in real time; returns its peak state."""
+    from ..motion.timing import read_trajectory, trajectory_states
+
+    if not 2 <= frames <= 2000:
+        raise CLIError(f"--frames must be an integer in [2, 2000], got {frames}")
+    traj = read_trajectory(path)
+    _, states = trajectory_states(am, traj, frames)
+    viewer.animate(states, fps=max(1.0, (len(states) - 1) / max(traj.duration, 1e-9)), color_forces=True)
+    peak = max(st.max_abs_force for st in states)
+    viewer.set_title(f"Trajectory {Path(path).name}: {traj.duration:.1f} s, peak max|F| {peak:.1f} N "
+                     "(legs: sleeve colored by force, frame by frame)")  # fmt: skip
+    print(f"trajectory: {traj.duration:.2f} s, {len(states)} frames", file=sys.stderr)
+    return max(states, key=lambda st: st.max_abs_force)
+
+
+def run(args: argparse.Namespace) -> int:
+    """Show a pose in Meshcat: write a standalone page (--html) or serve until Ctrl-C."""
+    # Long by design: the live server's start, signal handling and serving loop read as one flow.
+    import time
+    import webbrowser
+
+    from ..model import AssemblerModel
+    from ..viewer import StackViewer, interrupt_on_signals
+
+    if args.html:
+        writable_parent(args.html, "--html file")
+    am = AssemblerModel.from_config(config_from_args(args))
+    restore_signals = interrupt_on_signals()  # kill / a closed terminal stop it as Ctrl-C does
+    viewer = None
+    try:
+        viewer = StackViewer(am, host=args.host, force_scale=args.force_scale)
+        carrier, carrier_q = carrier_from_args(args)
+        if carrier is not None:
+            shown = _view_on_carrier(args, am, viewer, carrier, carrier_q)
+        elif args.scenario:
+            from ..kinematics import se3_to_taa
+            from ..scenarios import scenario
+
+            args.goal = list(se3_to_taa(scenario(args.scenario).goal))
+        if carrier is not None:
+            pass
+        elif args.goal is not None or args.goal_deg is not None:
+            try:
+                from ..solve import solve  # lazy: the solver is only needed for --goal
+            except ImportError as exc:
+                raise CLIError(f"--goal needs assembler_pin.solve, which cannot be imported: {exc}") from None
+
+            result = solve(am, goal_from_args(args))
+            if result.initial is None and result.optimized is None:
+                raise CLIError(f"no pose to show: {result.message}")
+            arm = getattr(getattr(result, "initial_result", None), "arm_points", None)
+            viewer.show_comparison(result.initial, result.optimized, None if args.no_arm else arm)
+            viewer.set_title(_view_title(args, result))
+            shown = result.optimized if result.optimized is not None else result.initial
+            if args.animate and result.initial is not None and result.optimized is not None:
+                from ..viewer import interpolate_states
+
+                viewer.animate(interpolate_states(am, result.initial, result.optimized, args.animate))
+            print(f"solve: {'success' if result.success else 'FAILED'} — {result.message}", file=sys.stderr)
+        elif args.trajectory:
+            shown = _animate_trajectory(viewer, am, args.trajectory, args.frames)
+        else:
+            plates = plates_from_args(args, am, "give one of --goal, --goal-deg, --plates FILE or --home")
+            shown = viewer.display(plates)
+            verdict = "" if shown.feasible else " (VIOLATES limits)"
+            name = "Home pose" if args.home else Path(args.plates).name
+            viewer.set_title(f"{name} — max|F| {shown.max_abs_force:.1f} N{verdict}")
+            viewer.frame()
+        print(
+            f"max |F| = {shown.max_abs_force:.3f} N, feasible: {'yes' if shown.feasible else 'NO'}",
+            file=sys.stderr,
+        )
+        if args.html:
+            path = Path(args.html).resolve()
+            viewer.static_html(path)
+            print(f"wrote {path}")
+            if args.open:
+                webbrowser.open(path.as_uri())
+            return 0
+        viewer.frame()
+        try:
+            print(viewer.url, flush=True)
+            if args.open:
+                webbrowser.open(viewer.url)
+            while True:
+                time.sleep(0.5)
+        except KeyboardInterrupt:
+            return 0  # serving until stopped: stopping is the normal end
+    except KeyboardInterrupt as stop:  # stopped before the view was ready
+        print(f"assembler-pin view: {stop or 'interrupted'} before the view was ready", file=sys.stderr)
+        return 128 + getattr(stop, "signum", 2)  # the shell's status for a signal (SIGINT = 2)
+    finally:
+        if viewer is not None:
+            viewer.close()
+        restore_signals()
