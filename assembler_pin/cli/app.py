@@ -41,6 +41,7 @@ def build_parser() -> argparse.ArgumentParser:
         description="Serialized Stewart platforms (the Assembler) on Pinocchio: model, statics, solve.",
     )
     parser.add_argument("-v", "--verbose", action="store_true", help="log progress to stderr")
+    parser.add_argument("-q", "--quiet", action="store_true", help="no progress line on a terminal")
     sub = parser.add_subparsers(dest="command", required=True)
 
     def add(name: str, help_: str) -> argparse.ArgumentParser:

@@ -237,3 +237,10 @@ def finite_range(values: np.ndarray) -> list[float] | None:
 
     ok = np.isfinite(values)
     return [float(values[ok].min()), float(values[ok].max())] if ok.any() else None
+
+
+def progress_for(args: argparse.Namespace, label: str):
+    """The progress display of a subcommand: on stderr when it is a terminal, unless ``--quiet``."""
+    from ..progress import TerminalProgress
+
+    return TerminalProgress(label, enabled=False if getattr(args, "quiet", False) else None)
