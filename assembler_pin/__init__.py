@@ -69,11 +69,11 @@ _LAZY: dict[str, str] = {
     "SCENARIOS": ".scenarios",
     "se3_to_taa": ".kinematics",
     "SingularConfigurationError": ".exceptions",
-    "solve": ".solve",
+    "solve": ".solver",
     "solve_on_carrier": ".carrier",
     "solve_statics": ".statics",
     "solve_statics_batch": ".statics",
-    "SolveResult": ".solve",
+    "SolveResult": ".solver",
     "sp_forward_kinematics": ".kinematics",
     "stack_forward_kinematics": ".kinematics",
     "StackFKResult": ".kinematics",
@@ -150,7 +150,7 @@ if TYPE_CHECKING:  # for type checkers and IDEs: the same names, imported eagerl
     from .motion.timing import MotionResult, Trajectory, plan_trajectory, read_trajectory
     from .optimize import OptimizeOptions, OptimizeResult, optimize_internal_poses
     from .scenarios import SCENARIOS, Scenario, scenario
-    from .solve import SolveResult, solve
+    from .solver import SolveResult, solve
     from .state import StackState, evaluate_state
     from .statics import StaticsResult, solve_statics, solve_statics_batch
     from .urdf import assembler_urdf, closure_sidecar

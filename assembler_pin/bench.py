@@ -203,7 +203,7 @@ def benchmark_solve_grid(am: AssemblerModel, goals: tuple = LEVEL_GRID) -> dict[
     """
     import pinocchio as pin
 
-    from .solve import solve
+    from .solver import solve
 
     times, solved_times, won, unsolved = [], [], {}, []
     for xyz in goals:
@@ -307,7 +307,7 @@ def benchmark_mujoco(am: AssemblerModel, n_random: int = 8, seed: int = 42, seco
     ball-joint gap [m] and the wall time of the simulation [s] (``assembler-pin bench --mujoco``)."""
     from .scenarios import SCENARIOS
     from .simulate import MujocoStack, hold_pose, mujoco_statics
-    from .solve import solve
+    from .solver import solve
 
     rng = np.random.default_rng(seed)
     poses: dict[str, PlateArrays] = {"home": PlateArrays.from_se3(am.home)}

@@ -132,7 +132,7 @@ class CapacityResult:
 def _probe(model: AssemblerModel, goal: pin.SE3, arm: PlateArrays | None) -> PlateArrays | None:
     """A valid pose holding ``model``'s payload from the solver's starts (or None)."""
     from .optimize import optimize_internal_poses
-    from .solve import optimizer_starts
+    from .solver import optimizer_starts
 
     for start in optimizer_starts(model, goal, arm).values():
         result = optimize_internal_poses(model, start, goal)
@@ -172,7 +172,7 @@ def payload_capacity(
         arm_start: the helper arm's valid pose for the goal, if the caller has it.
     """
     from .optimize import optimize_internal_poses
-    from .solve import solve
+    from .solver import solve
 
     if not (0 < rtol < 0.5 and isinstance(max_iterations, int) and max_iterations >= 1):
         raise OptionsError("rtol must be in (0, 0.5) and max_iterations an integer >= 1")

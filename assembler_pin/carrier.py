@@ -30,6 +30,7 @@ import numpy as np
 import numpy.typing as npt
 import pinocchio as pin
 
+from .choices import CARRIER_NAMES, check_names
 from .exceptions import AssemblerError, PoseError, UnknownCarrierError
 from .kinematics import PlateArrays, plate_arrays, to_se3
 from .model import AssemblerModel
@@ -85,6 +86,7 @@ CARRIERS: dict[str, CarrierSpec] = {
                          "Franka Emika Panda, 7 joints, fingers locked (rated payload 3 kg)"),
 }  # fmt: skip
 """The supported carriers by name (see :class:`CarrierSpec`)."""
+check_names(CARRIERS, CARRIER_NAMES, "carriers")
 
 W_CARRIER = 200.0
 """Weight of the carrier term of Ω_c [N]: a joint at its effort limit costs as much as a leg
@@ -375,7 +377,7 @@ class CarrierSolveResult:
 def _stack_on(am: AssemblerModel, carrier: Carrier, q: np.ndarray, goal: pin.SE3) -> tuple[CarrierStatics | None, str]:
     """The force-optimized stack for a world goal with the carrier held at ``q``."""
     from .optimize import optimize_internal_poses
-    from .solve import solve
+    from .solver import solve
 
     base = carrier.base_pose(q)
     rel_goal = base.actInv(goal)

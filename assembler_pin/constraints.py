@@ -23,6 +23,7 @@ from .config import AssemblerConfig, LegConfig
 from .exceptions import PoseError
 from .kinematics import LegState, PlateArrays
 from .labels import leg_label, platform_label
+from .options import DEFAULT_GOAL_TOLERANCE, GoalTolerance
 from .statics import CONDITION_LIMIT, StaticsResult
 
 __all__ = [
@@ -33,22 +34,6 @@ __all__ = [
     "evaluate_constraints",
     "leg_limit_margins",
 ]
-
-
-@dataclass(frozen=True)
-class GoalTolerance:
-    """How close the end effector must be to its goal.
-
-    Attributes:
-        position: largest distance between EE and goal origins [m].
-        rotation: largest angle of the rotation between EE and goal [rad].
-    """
-
-    position: float = 1e-6
-    rotation: float = 1e-6
-
-
-DEFAULT_GOAL_TOLERANCE = GoalTolerance()
 
 
 @dataclass(frozen=True)

@@ -37,18 +37,18 @@ from __future__ import annotations
 
 import logging
 import math
-import numbers
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import numpy as np
 import pinocchio as pin
 
-from .constraints import GoalTolerance, leg_limit_margins
+from .constraints import leg_limit_margins
 from .exceptions import OptionsError, SingularConfigurationError
 from .gradients import PoseDerivatives, pose_derivatives
 from .kinematics import LegState, PlateArrays, leg_state, plate_arrays, plate_deviation
 from .model import AssemblerModel
+from .options import METHODS, OptimizeOptions
 from .state import StackState, evaluate_state
 from .statics import solve_statics
 from .validation import is_number
@@ -64,72 +64,9 @@ __all__ = [
 
 logger = logging.getLogger(__name__)
 
-METHODS = ("slsqp", "paper")
-
-#: How far inside the stroke and deflection limits the optimizer's rows keep a point [m, and
-#: cosine units]. SLSQP satisfies its rows only to ~1e-8; with a smaller margin its optimum can
-#: sit just outside a limit, be rejected by the strict final check and cost the whole solve.
-GEOMETRIC_MARGIN = 1e-7
-
 #: Forces [N] standing in for the statics at a singular trial point: finite (SLSQP cannot
 #: handle NaN) and far outside every force limit, so such a step is infeasible.
 SINGULAR_FORCE = 1e6
-
-
-@dataclass(frozen=True)
-class OptimizeOptions:
-    """Settings of :func:`optimize_internal_poses`.
-
-    Attributes:
-        method: ``"slsqp"`` (smooth epigraph form, analytic gradients) or ``"paper"``.
-        w1: weight of max|F| [1/N]; w2: weight of the plate-deviation term [1/rad].
-        ee_tolerance: allow the EE plate to move this far from the goal (position [m],
-            rotation [rad]); None keeps it exactly at the goal.
-        max_iterations: solver iteration limit.
-        ftol: solver's convergence tolerance on the objective.
-        rise_margin: smallest rise of a top joint above its bottom joint [m].
-        limit_margin: how far inside the stroke [m] and the deflection limit [rad] the
-            optimizer keeps the legs (default :data:`GEOMETRIC_MARGIN`; a motion plan keeps
-            more, so that the legs stay inside between its samples).
-        goal_tolerance: tolerance the final state is checked against when the EE is fixed.
-    """
-
-    method: str = "slsqp"
-    w1: float = 1.0
-    w2: float = 1.0
-    ee_tolerance: GoalTolerance | None = None
-    max_iterations: int = 200
-    ftol: float = 1e-7
-    rise_margin: float = 1e-3
-    limit_margin: float = GEOMETRIC_MARGIN
-    goal_tolerance: GoalTolerance = field(default_factory=lambda: GoalTolerance(1e-9, 1e-9))
-
-    def __post_init__(self) -> None:
-        if self.method not in METHODS:
-            raise OptionsError(f"method must be one of {', '.join(METHODS)}, got {self.method!r}")
-        for name, positive in (
-            ("w1", False),
-            ("w2", False),
-            ("ftol", True),
-            ("rise_margin", False),
-            ("limit_margin", True),
-        ):
-            value = getattr(self, name)
-            if not (is_number(value) and math.isfinite(value) and (value > 0 if positive else value >= 0)):
-                raise OptionsError(f"{name} must be a finite number {'>' if positive else '>='} 0, got {value!r}")
-        if self.w1 + self.w2 == 0:
-            raise OptionsError("weights w1, w2 must not both be 0")
-        if not (isinstance(self.max_iterations, numbers.Integral) and self.max_iterations >= 1):
-            raise OptionsError(f"max_iterations must be an integer >= 1, got {self.max_iterations!r}")
-        for name in ("ee_tolerance", "goal_tolerance"):
-            tol = getattr(self, name)
-            if tol is None and name == "ee_tolerance":
-                continue
-            if not isinstance(tol, GoalTolerance) or not all(
-                is_number(v) and 0 < v < math.inf for v in (tol.position, tol.rotation)
-            ):
-                raise OptionsError(f"{name} must be a GoalTolerance of two finite numbers > 0 (m, rad), got {tol!r}")
-
 
 @dataclass(frozen=True)
 class MotionTerm:

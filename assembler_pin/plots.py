@@ -323,11 +323,11 @@ class WorkspaceSlice:
 
 
 def default_state_function(am: AssemblerModel) -> Callable[[pin.SE3], StackState | None]:
-    """``goal -> state``: the optimized state of :func:`assembler_pin.solve.solve` (falling
+    """``goal -> state``: the optimized state of :func:`assembler_pin.solver.solve` (falling
     back to its initial state when the optimization gives none), or, without the solve
     module, the helper-arm initial condition. None when no valid state is found."""
     try:
-        from .solve import solve
+        from .solver import solve
     except ImportError:
         solve = None
     if solve is not None:

@@ -22,7 +22,7 @@ from .labels import leg_label, platform_label
 from .model import AssemblerModel
 from .optimize import OptimizeOptions, optimize_internal_poses
 from .scenarios import SCENARIOS, Scenario
-from .solve import SolveResult, solve
+from .solver import SolveResult, solve
 from .state import StackState, evaluate_state
 
 __all__ = ["ScenarioOutcome", "force_tables", "run_scenarios", "summary_table", "write_report"]
@@ -59,7 +59,7 @@ class Reference:
 
 @dataclass
 class ScenarioOutcome:
-    """One scenario solved: the scenario, its :class:`~assembler_pin.solve.SolveResult`, the
+    """One scenario solved: the scenario, its :class:`~assembler_pin.solver.SolveResult`, the
     leg stroke it was solved with and the :class:`Reference` poses (None when not solved)."""
 
     scenario: Scenario

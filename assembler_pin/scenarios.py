@@ -22,6 +22,7 @@ from dataclasses import dataclass
 import numpy as np
 import pinocchio as pin
 
+from .choices import SCENARIO_NAMES, check_names
 from .exceptions import UnknownScenarioError
 
 __all__ = ["SCENARIOS", "Scenario", "UnknownScenarioError", "scenario"]
@@ -157,6 +158,7 @@ _LIST = [
 
 #: The scenarios by name, in the paper's order.
 SCENARIOS: dict[str, Scenario] = {s.name: s for s in _LIST}
+check_names(SCENARIOS, SCENARIO_NAMES, "scenarios")
 
 
 def scenario(name: str) -> Scenario:

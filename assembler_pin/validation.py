@@ -7,22 +7,17 @@ given and what is allowed — never passed along as NaN or raised from inside nu
 
 from __future__ import annotations
 
-import numbers
 from typing import Any
 
 import numpy as np
 
 from .exceptions import PoseError
+from .options import is_number
 
 __all__ = ["MAX_NESTING", "as_float_array", "is_number"]
 
 #: Deepest list nesting accepted in an array argument (a (B, n+1, 4, 4) batch is 4 deep).
 MAX_NESTING = 6
-
-
-def is_number(value: Any) -> bool:
-    """A real number (Python or numpy, not a boolean)."""
-    return isinstance(value, numbers.Real) and not isinstance(value, (bool, np.bool_))
 
 
 def _has_bool_or_deep(value: Any, depth: int) -> str:

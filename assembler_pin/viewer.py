@@ -46,6 +46,7 @@ import numpy.typing as npt
 import pinocchio as pin
 from pinocchio.visualize import MeshcatVisualizer
 
+from .choices import FORCE_SCALES
 from .exceptions import AssemblerError, ConvergenceError, ViewerError
 from .geometry import DIMENSIONS
 from .kinematics import PlateArrays, leg_state, plate_arrays, q_from_plates, stack_forward_kinematics
@@ -85,7 +86,6 @@ PAYLOAD_ROD_RGBA = np.array([0.85, 0.55, 0.10, 1.0])
 """The rod joining the payload to the EE plate (the payload's orange)."""
 BACKGROUND_RGB = (np.array([0.97, 0.97, 0.96]), np.array([0.86, 0.87, 0.88]))
 """Neutral background, top and bottom."""
-FORCE_SCALES = ("auto", "limit", "max")
 """Leg color scales: ``limit`` saturates at the force limits, ``max`` at the state's max|F|,
 ``auto`` (default) at the larger of max|F| and :data:`FORCE_SCALE_FLOOR` × the smaller limit."""
 FORCE_SCALE_FLOOR = 0.1

@@ -12,7 +12,7 @@ from assembler_pin import leg_state, solve_statics, stack_forward_kinematics
 from assembler_pin.cli import main
 from assembler_pin.optimize import OptimizeOptions
 from assembler_pin.scenarios import SCENARIOS
-from assembler_pin.solve import solve
+from assembler_pin.solver import solve
 
 STATE_KEYS = ["plates", "leg_lengths", "forces", "bottom_points", "top_points", "max_abs_force",
               "mean_abs_force", "feasible", "violations"]  # fmt: skip

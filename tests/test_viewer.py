@@ -397,7 +397,7 @@ def test_viewer_close_stops_its_server(am):
 
 
 @pytest.mark.skipif(
-    not __import__("importlib").util.find_spec("assembler_pin.solve"), reason="assembler_pin.solve not available"
+    not __import__("importlib").util.find_spec("assembler_pin.solver"), reason="assembler_pin.solver not available"
 )
 def test_cli_view_goal_writes_comparison(tmp_path):
     page = tmp_path / "goal.html"

@@ -156,11 +156,11 @@ def optimize_options(args: argparse.Namespace):
 
 def add_carrier_arguments(p: argparse.ArgumentParser, note: str = "") -> None:
     """``--carrier NAME``, ``--carrier-q`` and ``--mount``, read by :func:`carrier_from_args`."""
-    from ..carrier import CARRIERS
+    from ..choices import CARRIER_NAMES
 
     p.add_argument("--carrier", metavar="NAME",
                    help="mount the stack on a carrier arm from example-robot-data: "
-                        f"{', '.join(CARRIERS)}{note}")  # fmt: skip
+                        f"{', '.join(CARRIER_NAMES)}{note}")  # fmt: skip
     p.add_argument("--carrier-q", nargs="+", type=float, metavar="Q",
                    help="the carrier's joint angles [rad] (default: its upright configuration)")  # fmt: skip
     p.add_argument("--mount", nargs=6, type=float, metavar=("X", "Y", "Z", "RX", "RY", "RZ"),
@@ -204,7 +204,7 @@ def add_goal_arguments(group: argparse._MutuallyExclusiveGroup, note: str = "") 
 
 def add_optimize_arguments(p: argparse.ArgumentParser) -> None:
     """The optimizer's options; defaults and choices come from :class:`OptimizeOptions`."""
-    from ..optimize import METHODS, OptimizeOptions
+    from ..options import METHODS, OptimizeOptions
 
     d = OptimizeOptions()
     p.add_argument("--method", choices=METHODS, default=d.method,
@@ -222,7 +222,7 @@ def add_optimize_arguments(p: argparse.ArgumentParser) -> None:
 
 def add_helper_arm_arguments(p: argparse.ArgumentParser) -> None:
     """The helper arm's options; defaults come from :class:`HelperArmOptions`."""
-    from ..helper_arm import HelperArmOptions
+    from ..options import HelperArmOptions
 
     d = HelperArmOptions()
     p.add_argument("--d-step", type=float, default=d.d_step, metavar="M",

@@ -47,7 +47,7 @@ def run(args: argparse.Namespace) -> int:
     from ..helper_arm import HelperArmOptions
     from ..kinematics import se3_to_taa
     from ..model import AssemblerModel
-    from ..solve import solve
+    from ..solver import solve
 
     goal = goal_from_args(args)
     try:

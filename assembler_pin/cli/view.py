@@ -30,10 +30,9 @@ def add_parser(add) -> None:
     add_goal_arguments(src, " (shows the initial and optimized poses)")
     src.add_argument("--plates", metavar="FILE", help='JSON {"plates": [n+1 4x4]} file, or - for stdin')
     src.add_argument("--home", action="store_true", help="show the home pose")
-    from ..scenarios import SCENARIOS
-    from ..viewer import FORCE_SCALES
+    from ..choices import FORCE_SCALES, SCENARIO_NAMES
 
-    src.add_argument("--scenario", choices=list(SCENARIOS),
+    src.add_argument("--scenario", choices=SCENARIO_NAMES,
                      help="solve a scenario's goal and show its initial and optimized poses")  # fmt: skip
     src.add_argument("--trajectory", metavar="FILE",
                      help="animate a trajectory written by 'plan --out' (legs colored by force)")  # fmt: skip
@@ -144,9 +143,9 @@ def run(args: argparse.Namespace) -> int:
             pass
         elif args.goal is not None or args.goal_deg is not None:
             try:
-                from ..solve import solve  # lazy: the solver is only needed for --goal
+                from ..solver import solve  # lazy: the solver is only needed for --goal
             except ImportError as exc:
-                raise CLIError(f"--goal needs assembler_pin.solve, which cannot be imported: {exc}") from None
+                raise CLIError(f"--goal needs assembler_pin.solver, which cannot be imported: {exc}") from None
 
             result = solve(am, goal_from_args(args))
             if result.initial is None and result.optimized is None:

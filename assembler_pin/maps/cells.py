@@ -19,7 +19,7 @@ from ..constraints import leg_limit_margins
 from ..exceptions import AssemblerError
 from ..labels import leg_label
 from ..model import AssemblerModel
-from ..solve import solve
+from ..solver import solve
 from ..state import StackState
 from .grid import Cell
 

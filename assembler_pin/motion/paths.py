@@ -23,12 +23,12 @@ from pathlib import Path
 import numpy as np
 import pinocchio as pin
 
+from ..choices import PATH_KINDS
 from ..exceptions import PathError
 from ..kinematics import taa_to_se3, to_se3
 
 __all__ = ["PATH_KINDS", "EEPath", "PathError", "interpolate_pose", "read_waypoints"]
 
-PATH_KINDS = ("screw", "linear")
 
 
 def interpolate_pose(a: pin.SE3, b: pin.SE3, t: float, kind: str = "screw") -> pin.SE3:

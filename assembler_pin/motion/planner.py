@@ -190,14 +190,14 @@ def plan_path(
         path: the EE path (:class:`~assembler_pin.motion.paths.EEPath`).
         start: the stack's state at the path's start (e.g. its current pose, or
             ``am.home`` for a motion from the home pose). Default: the force-optimized
-            solution of the path's first pose (:func:`~assembler_pin.solve.solve`).
+            solution of the path's first pose (:func:`~assembler_pin.solver.solve`).
         options: see :class:`PlanOptions`.
     """
     opts = options or PlanOptions()
     t_start = time.perf_counter()
     first = path.at(0.0)
     if start is None:
-        from ..solve import solve
+        from ..solver import solve
 
         solved = solve(am, first, options=opts.optimize)
         start_state = solved.optimized if solved.success else None

@@ -1,0 +1,31 @@
+"""The names a user chooses from, in one light module (no numerical imports).
+
+The command line builds its ``choices`` and help texts from these tuples without loading
+Pinocchio; the modules that define what each name means check at import time that their
+tables carry exactly these names (:mod:`~assembler_pin.scenarios`,
+:mod:`~assembler_pin.carrier`, :mod:`~assembler_pin.viewer`).
+"""
+
+from __future__ import annotations
+
+__all__ = ["CARRIER_NAMES", "FORCE_SCALES", "PATH_KINDS", "SCENARIO_NAMES", "check_names"]
+
+#: The paper's scenarios (:data:`assembler_pin.scenarios.SCENARIOS`), in the paper's order.
+SCENARIO_NAMES = ("translation", "ninety_degrees", "inchworm", "vertical_lift", "orientation_transition")
+
+#: Carrier arms from example-robot-data (:data:`assembler_pin.carrier.CARRIERS`).
+CARRIER_NAMES = ("ur3", "ur5", "ur10", "panda")
+
+#: Where the viewer's leg colors saturate: ``auto`` (max|F|, at least 10 % of the limit),
+#: ``limit`` (the force limits), ``max`` (max|F| of the shown pose).
+FORCE_SCALES = ("auto", "limit", "max")
+
+#: Interpolations of an EE path on SE(3): ``screw`` (geodesic) or ``linear`` (line + slerp).
+PATH_KINDS = ("screw", "linear")
+
+
+def check_names(table: object, names: tuple[str, ...], what: str) -> None:
+    """Raise ``RuntimeError`` at import when a table's keys differ from its declared names."""
+    keys = tuple(table)  # type: ignore[call-overload]
+    if keys != names:
+        raise RuntimeError(f"{what} {keys} differ from assembler_pin.choices {names}")

@@ -1,0 +1,157 @@
+"""The solvers' options: one light module, the single source of their defaults.
+
+:class:`OptimizeOptions` (the internal-pose optimizer), :class:`HelperArmOptions` (the helper
+arm's initial condition) and :class:`GoalTolerance` import no numerical library, so the
+command line can show their defaults without loading Pinocchio.
+"""
+
+from __future__ import annotations
+
+import math
+import numbers
+from dataclasses import dataclass, field
+
+from .exceptions import OptionsError
+
+__all__ = [
+    "DEFAULT_GOAL_TOLERANCE",
+    "GEOMETRIC_MARGIN",
+    "METHODS",
+    "GoalTolerance",
+    "HelperArmOptions",
+    "OptimizeOptions",
+    "is_number",
+]
+
+
+def is_number(value: object) -> bool:
+    """A real number (Python or numpy, not a boolean: numpy's bool is not a ``numbers.Real``)."""
+    return isinstance(value, numbers.Real) and not isinstance(value, bool)
+
+
+@dataclass(frozen=True)
+class GoalTolerance:
+    """How close the end effector must be to its goal.
+
+    Attributes:
+        position: largest distance between EE and goal origins [m].
+        rotation: largest angle of the rotation between EE and goal [rad].
+    """
+
+    position: float = 1e-6
+    rotation: float = 1e-6
+
+
+DEFAULT_GOAL_TOLERANCE = GoalTolerance()
+
+
+METHODS = ("slsqp", "paper")
+
+#: How far inside the stroke and deflection limits the optimizer's rows keep a point [m, and
+#: cosine units]. SLSQP satisfies its rows only to ~1e-8; with a smaller margin its optimum can
+#: sit just outside a limit, be rejected by the strict final check and cost the whole solve.
+GEOMETRIC_MARGIN = 1e-7
+
+
+@dataclass(frozen=True)
+class OptimizeOptions:
+    """Settings of :func:`optimize_internal_poses`.
+
+    Attributes:
+        method: ``"slsqp"`` (smooth epigraph form, analytic gradients) or ``"paper"``.
+        w1: weight of max|F| [1/N]; w2: weight of the plate-deviation term [1/rad].
+        ee_tolerance: allow the EE plate to move this far from the goal (position [m],
+            rotation [rad]); None keeps it exactly at the goal.
+        max_iterations: solver iteration limit.
+        ftol: solver's convergence tolerance on the objective.
+        rise_margin: smallest rise of a top joint above its bottom joint [m].
+        limit_margin: how far inside the stroke [m] and the deflection limit [rad] the
+            optimizer keeps the legs (default :data:`GEOMETRIC_MARGIN`; a motion plan keeps
+            more, so that the legs stay inside between its samples).
+        goal_tolerance: tolerance the final state is checked against when the EE is fixed.
+    """
+
+    method: str = "slsqp"
+    w1: float = 1.0
+    w2: float = 1.0
+    ee_tolerance: GoalTolerance | None = None
+    max_iterations: int = 200
+    ftol: float = 1e-7
+    rise_margin: float = 1e-3
+    limit_margin: float = GEOMETRIC_MARGIN
+    goal_tolerance: GoalTolerance = field(default_factory=lambda: GoalTolerance(1e-9, 1e-9))
+
+    def __post_init__(self) -> None:
+        if self.method not in METHODS:
+            raise OptionsError(f"method must be one of {', '.join(METHODS)}, got {self.method!r}")
+        for name, positive in (
+            ("w1", False),
+            ("w2", False),
+            ("ftol", True),
+            ("rise_margin", False),
+            ("limit_margin", True),
+        ):
+            value = getattr(self, name)
+            if not (is_number(value) and math.isfinite(value) and (value > 0 if positive else value >= 0)):
+                raise OptionsError(f"{name} must be a finite number {'>' if positive else '>='} 0, got {value!r}")
+        if self.w1 + self.w2 == 0:
+            raise OptionsError("weights w1, w2 must not both be 0")
+        if not (isinstance(self.max_iterations, numbers.Integral) and self.max_iterations >= 1):
+            raise OptionsError(f"max_iterations must be an integer >= 1, got {self.max_iterations!r}")
+        for name in ("ee_tolerance", "goal_tolerance"):
+            tol = getattr(self, name)
+            if tol is None and name == "ee_tolerance":
+                continue
+            if not isinstance(tol, GoalTolerance) or not all(
+                is_number(v) and 0 < v < math.inf for v in (tol.position, tol.rotation)
+            ):
+                raise OptionsError(f"{name} must be a GoalTolerance of two finite numbers > 0 (m, rad), got {tol!r}")
+
+
+@dataclass
+class HelperArmOptions:
+    """Options of :func:`initial_condition`.
+
+    Attributes:
+        d_step: step s of the link-length scan [m] (see :func:`initial_condition`).
+        max_attempts: recursion limit: the most arm solves (scan values of d) tried.
+        tolerance: EE goal tolerance of the returned state [m, rad].
+        regularization: weight w of the pull of the joints toward 0 [m/rad].
+        constraint_weight: weight of the stack's leg constraints in the arm IK
+            (:meth:`HelperArm.ik`).
+        arm_tolerance: the arm counts as reaching the goal within this error [m, rad].
+        restarts: extra deterministic starts of the arm IK per d.
+        free_link_length: let the arm IK move d continuously over the whole
+            :func:`height_range`, starting at each scan value (False: d fixed at the scan
+            values, the paper's scan exactly).
+        repair_starts: after a scan without success, how many of the arm's closest poses
+            (fewest goal error plus leg violation) are repaired on the stack itself
+            (0: no repair).
+        perturbed_starts: how many randomly perturbed copies of the even screw pose are
+            repaired too, after the even pose itself (seeded).
+    """
+
+    d_step: float = 0.01
+    max_attempts: int = 15
+    tolerance: GoalTolerance = field(default_factory=lambda: GoalTolerance(1e-9, 1e-9))
+    regularization: float = 0.05
+    constraint_weight: float = 10.0
+    arm_tolerance: float = 1e-10
+    restarts: int = 0
+    free_link_length: bool = True
+    repair_starts: int = 2
+    perturbed_starts: int = 8
+
+    def __post_init__(self) -> None:
+        for name in ("d_step", "regularization", "constraint_weight", "arm_tolerance"):
+            value = getattr(self, name)
+            if not (is_number(value) and math.isfinite(value) and value >= 0):
+                raise OptionsError(f"{name} must be a finite number >= 0, got {value!r}")
+        if not self.d_step > 0:
+            raise OptionsError(f"d_step must be a positive number of metres, got {self.d_step!r}")
+        for name, low in (("max_attempts", 1), ("restarts", 0), ("repair_starts", 0), ("perturbed_starts", 0)):
+            value = getattr(self, name)
+            if not (isinstance(value, numbers.Integral) and not isinstance(value, bool) and value >= low):
+                raise OptionsError(f"{name} must be an integer >= {low}, got {value!r}")
+        if not isinstance(self.tolerance, GoalTolerance):
+            raise OptionsError(f"tolerance must be a GoalTolerance, got {self.tolerance!r}")
