@@ -31,7 +31,7 @@ Every subcommand follows one rule:
 | status | meaning |
 | --- | --- |
 | 0 | answered, and successful |
-| 1 | answered, not possible: `success` is false, the answer (JSON or text) is still printed, and files hold only valid content |
+| 1 | answered, not possible: `success` false; the answer is still printed; files hold only valid content |
 | 2 | refused input: exactly one line on stderr naming what was wrong and what is allowed |
 | 130 | interrupted by Ctrl-C (143 on SIGTERM): one line on stderr, no partial output file |
 
