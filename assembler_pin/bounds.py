@@ -45,6 +45,7 @@ BOUNDS: dict[str, Bound] = {
     "plan.samples": Bound(2, 1_000_000, "", True, "rows of one trajectory file (rate x duration)"),
     "trajectory.duration": Bound(0.0, 3600.0, "s", False, "the time span a trajectory file may cover"),
     "trajectory.rows": Bound(2, 1_000_000, "", True, "rows a trajectory file may hold"),
+    "trajectory.bytes": Bound(1, 2_000_000_000, "bytes", True, "size of a trajectory file read"),
     "waypoints.count": Bound(2, 10_000, "", True, "waypoints of one path file"),
     "view.animate": Bound(0, 1000, "", True, "view --animate: leg-length steps from initial to optimized"),
     "view.frames": Bound(2, 2000, "", True, "view --frames: frames of a trajectory animation"),

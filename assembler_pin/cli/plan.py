@@ -12,6 +12,7 @@ if TYPE_CHECKING:
 from .common import (
     config_from_args,
     dumps,
+    progress_for,
     writable_parent,
 )
 
@@ -27,7 +28,7 @@ def add_parser(add) -> None:
                    help="with --to: start at the optimized pose of this EE pose")  # fmt: skip
     p.add_argument("--path", choices=("screw", "linear"), default="screw",
                    help="interpolation on SE(3): screw (geodesic, default) or linear (line + slerp)")  # fmt: skip
-    p.add_argument("--rate", type=float, default=50.0, help="output samples per second (default 50)")
+    p.add_argument("--rate", type=float, default=50.0, help="output samples per second, 1..1000 (default 50)")
     p.add_argument("--w3", type=float, default=100.0, help="weight of the motion term Σ ΔL² [1/m²] (default 100)")
     p.add_argument("--out", metavar="FILE", help="write the trajectory (.csv, or JSON for any other suffix)")
     p.add_argument("--plot", metavar="PNG", help="write the lengths, speeds and forces over time with their limits")
@@ -56,7 +57,12 @@ def _plan_path(args: argparse.Namespace, am: AssemblerModel):
 
 
 def run(args: argparse.Namespace) -> int:
-    """A force-optimal motion along an EE path, timed within the legs' limits."""
+    """A force-optimal motion along an EE path, timed within the legs' limits.
+
+    Exit status 0 when the motion reaches the end of the path with every row valid, 1 when
+    it does not (the answer is printed and ``--out`` holds the valid prefix, if any).
+    """
+    from ..bounds import check_bound
     from ..model import AssemblerModel
     from ..motion import PlanOptions
     from ..motion.timing import plan_trajectory
@@ -64,6 +70,7 @@ def run(args: argparse.Namespace) -> int:
     for option, value in (("--out file", args.out), ("--plot file", args.plot)):
         if value:
             writable_parent(value, option)
+    check_bound("plan.rate", args.rate, "--rate", CLIError)
     if args.to is None and not args.waypoints and not args.compare:
         raise CLIError("give --to X Y Z RX RY RZ (from the home pose, or --from ..) or --waypoints FILE")
     try:
@@ -74,32 +81,59 @@ def run(args: argparse.Namespace) -> int:
     if args.compare:
         return _plan_compare(args, am, options)
     path, start = _plan_path(args, am)
-    motion = plan_trajectory(am, path, start, options, rate=args.rate)
+    prog = progress_for(args, "plan")
+    try:
+        motion = plan_trajectory(am, path, start, options, rate=args.rate, progress=prog)
+        doc = _write_outputs(args, am, motion, prog)
+    finally:
+        prog.close()
+    if args.json:
+        print(dumps(doc))
+    else:
+        _print_summary(args, motion, doc)
+    return 0 if motion.success else 1
+
+
+def _write_outputs(args: argparse.Namespace, am: AssemblerModel, motion, prog) -> dict:
+    """``--out`` and ``--plot`` of a planned motion (valid rows only), each written atomically."""
     doc = motion.to_dict()
     traj = motion.trajectory
     if args.out and traj is not None:
         doc["out"] = str(traj.write(args.out))
     if args.plot and traj is not None:
+        from ..files import atomic_path
         from ..motion.timing import trajectory_states
-        from ..plots import save, trajectory_plot
+        from ..plots import trajectory_plot
 
-        times, states = trajectory_states(am, traj, 200)
+        times, states = trajectory_states(am, traj, 200, progress=prog)
         title = "planned motion" if args.to is None else "home → goal" if args.from_ is None else "--from → --to"
-        doc["plot"] = str(save(trajectory_plot(am, traj, states, times, title), args.plot))
-    if args.json:
-        print(dumps(doc))
-        return 0
+        fig = trajectory_plot(am, traj, states, times, title)
+        with atomic_path(args.plot) as tmp:
+            fig.savefig(tmp, dpi=150, format="png")
+        doc["plot"] = str(args.plot)
+    return doc
+
+
+def _print_summary(args: argparse.Namespace, motion, doc: dict) -> None:
+    """The text answer of ``plan``: what was planned, the trajectory, the files written."""
+    traj = motion.trajectory
     print(f"plan: {'success' if doc['success'] else 'FAILED'} — {doc['reason']}")
     if motion.plan.states:
         print(f"{doc['samples']} samples, peak max|F| {doc['peak_max_abs_force']:.2f} N, total leg travel "
               f"{doc['total_leg_travel_m']:.3f} m, planned in {motion.plan.time_s:.2f} s")  # fmt: skip
     if traj is not None:
-        print(f"trajectory: {traj.duration:.2f} s at {args.rate:g} Hz ({len(traj.times)} samples), every sample valid: "
-              f"{'yes' if traj.feasible.all() else 'NO'}")  # fmt: skip
+        extent = (
+            "the whole path"
+            if traj.complete
+            else (f"the valid prefix only, to u = {doc['path_reached']:.4f} of {doc['path_segments']}")
+        )
+        print(f"trajectory: {traj.duration:.2f} s at {args.rate:g} Hz ({len(traj.times)} samples, every one "
+              f"valid), {extent}")  # fmt: skip
+    elif args.out:
+        print(f"no valid trajectory: {args.out} not written")
     for key in ("out", "plot"):
         if key in doc:
-            print(f"wrote {doc[key]}")
-    return 0
+            print(f"wrote {doc[key]}" + ("" if traj is None or traj.complete else " (valid prefix, complete: false)"))
 
 
 def _plan_compare(args: argparse.Namespace, am: AssemblerModel, options) -> int:

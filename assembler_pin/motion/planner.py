@@ -29,8 +29,10 @@ from ..exceptions import OptionsError
 from ..kinematics import PlateArrays, plate_arrays, stack_forward_kinematics
 from ..model import AssemblerModel
 from ..optimize import MotionTerm, OptimizeOptions, optimize_internal_poses
+from ..progress import ProgressCallback
 from ..state import StackState, evaluate_state
 from ..validation import is_number
+from .guess import on_se3
 from .paths import EEPath
 
 __all__ = ["PlanOptions", "PlanResult", "plan_path"]
@@ -144,7 +146,7 @@ def _between_problems(
     guess = a.plates
     for t in np.arange(1, opts.checks_between + 1) / (opts.checks_between + 1):
         lengths = (1 - t) * a.leg_lengths + t * b.leg_lengths
-        fk = stack_forward_kinematics(am, lengths, base=a.plates.se3(0), guess=guess)
+        fk = stack_forward_kinematics(am, lengths, base=a.plates.se3(0), guess=on_se3(guess))
         if not fk.success:
             return f"stack FK between samples failed ({fk.message})", dev_p, dev_r
         guess = fk.plates
@@ -183,6 +185,7 @@ def plan_path(
     path: EEPath,
     start: StackState | PlateArrays | list | None = None,
     options: PlanOptions | None = None,
+    progress: ProgressCallback | None = None,
 ) -> PlanResult:
     """Force-optimized internal poses along an EE path (see module docstring).
 
@@ -192,6 +195,7 @@ def plan_path(
             ``am.home`` for a motion from the home pose). Default: the force-optimized
             solution of the path's first pose (:func:`~assembler_pin.solve.solve`).
         options: see :class:`PlanOptions`.
+        progress: called as ``(permille of the path done, 1000, note)`` after each sample.
     """
     opts = options or PlanOptions()
     t_start = time.perf_counter()
@@ -237,6 +241,8 @@ def plan_path(
         states.append(state)
         times.append(dt)
         dev = (max(dev[0], d[0]), max(dev[1], d[1]))
+        if progress is not None:
+            progress(round(1000 * u1 / path.segments), 1000, f"planning: {len(states)} samples")
     result = PlanResult(success, reason, path, np.array(params), states, np.array(times), refinements, dev,
                         time.perf_counter() - t_start, opts.path_tolerance)  # fmt: skip
     logger.info("plan: %s", result)
