@@ -47,6 +47,8 @@ BOUNDS: dict[str, Bound] = {
     "trajectory.rows": Bound(2, 1_000_000, "", True, "rows a trajectory file may hold"),
     "trajectory.bytes": Bound(1, 2_000_000_000, "bytes", True, "size of a trajectory file read"),
     "waypoints.count": Bound(2, 10_000, "", True, "waypoints of one path file"),
+    "waypoints.bytes": Bound(1, 100_000_000, "bytes", True, "size of a waypoint file read"),
+    "plan.path_samples": Bound(2, 100_000, "", True, "planned samples along one path (its length / the step)"),
     "view.animate": Bound(0, 1000, "", True, "view --animate: leg-length steps from initial to optimized"),
     "view.frames": Bound(2, 2000, "", True, "view --frames: frames of a trajectory animation"),
     "bench.repeat": Bound(1, 100_000, "", True, "bench --repeat: calls per figure"),

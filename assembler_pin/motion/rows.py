@@ -73,8 +73,9 @@ def evaluate_rows(
     return Trajectory(times, lengths, ee, force, margins, feasible, am.n, meta)
 
 
-def _row_margins(am: AssemblerModel, state: StackState, target: pin.SE3, tol: GoalTolerance, margins: dict,
-                 k: int) -> None:  # fmt: skip
+def _row_margins(
+    am: AssemblerModel, state: StackState, target: pin.SE3, tol: GoalTolerance, margins: dict, k: int
+) -> None:
     """Fill row ``k`` of every margin kind from the row's state (see :class:`Trajectory`)."""
     leg = am.config.leg
     rows = leg_limit_margins(leg, state.legs.lengths, np.cos(state.legs.deflection), state.legs.rise, 0.0)
@@ -125,8 +126,10 @@ def check_trajectory(
     out = (L < leg.min_length - 1e-9) | (L > leg.max_length + 1e-9)
     if out.any():
         k = int(np.argmax(out.any(axis=(1, 2))))
-        raise TrajectoryError(f"at t = {traj.times[k]:.3f} s a leg length is outside the stroke "
-                              f"[{leg.min_length:g}, {leg.max_length:g}] m")  # fmt: skip
+        raise TrajectoryError(
+            f"at t = {traj.times[k]:.3f} s a leg length is outside the stroke "
+            f"[{leg.min_length:g}, {leg.max_length:g}] m"
+        )
     _check_rates(am, traj)
     wanted = set() if keep is None else {int(k) for k in keep}
     base = _base(am, traj)
@@ -142,11 +145,15 @@ def check_trajectory(
             raise TrajectoryError(f"stack FK failed at t = {traj.times[k]:.3f} s: {fk.message}")
         written = taa_to_se3(traj.ee[k], what=f"the EE at t = {traj.times[k]:.3f} s")
         pose = fk.plates.se3(am.n)
-        gap = max(float(np.linalg.norm(pose.translation - written.translation)),
-                  float(np.linalg.norm(pin.log3(written.rotation.T @ pose.rotation))))  # fmt: skip
+        gap = max(
+            float(np.linalg.norm(pose.translation - written.translation)),
+            float(np.linalg.norm(pin.log3(written.rotation.T @ pose.rotation))),
+        )
         if not gap <= tolerance:
-            raise TrajectoryError(f"at t = {traj.times[k]:.3f} s the lengths put the EE {gap:.2e} from the pose "
-                                  f"written in the file (> {tolerance:g})")  # fmt: skip
+            raise TrajectoryError(
+                f"at t = {traj.times[k]:.3f} s the lengths put the EE {gap:.2e} from the pose "
+                f"written in the file (> {tolerance:g})"
+            )
         guess = fk.plates
         if k in wanted:
             kept[k] = fk.plates
@@ -157,11 +164,14 @@ def _check_rates(am: AssemblerModel, traj: Trajectory, rtol: float = 1e-6) -> No
     """Leg speeds and accelerations (finite differences) within the config's limits."""
     leg = am.config.leg
     if len(traj.times) > 1 and np.abs(traj.speeds()).max() > leg.max_speed * (1 + rtol):
-        raise TrajectoryError(f"its legs move at up to {np.abs(traj.speeds()).max():.4g} m/s, over leg.max_speed "
-                              f"{leg.max_speed:g} m/s")  # fmt: skip
+        raise TrajectoryError(
+            f"its legs move at up to {np.abs(traj.speeds()).max():.4g} m/s, over leg.max_speed {leg.max_speed:g} m/s"
+        )
     if len(traj.times) > 2 and np.abs(traj.accelerations()).max() > leg.max_acceleration * (1 + rtol):
-        raise TrajectoryError(f"its legs accelerate at up to {np.abs(traj.accelerations()).max():.4g} m/s², over "
-                              f"leg.max_acceleration {leg.max_acceleration:g} m/s²")  # fmt: skip
+        raise TrajectoryError(
+            f"its legs accelerate at up to {np.abs(traj.accelerations()).max():.4g} m/s², over "
+            f"leg.max_acceleration {leg.max_acceleration:g} m/s²"
+        )
 
 
 def trajectory_states(
@@ -191,7 +201,9 @@ def trajectory_states(
     states = [evaluate_state(am, kept[int(k)]) for k in picks]
     for k, st in zip(picks, states, strict=True):
         if not abs(st.max_abs_force - traj.max_abs_force[k]) <= 1e-6 + 1e-9 * st.max_abs_force:
-            raise TrajectoryError(f"at t = {traj.times[k]:.3f} s the file's max|F| is {traj.max_abs_force[k]:.6g} N, "
-                                  f"this model's statics give {st.max_abs_force:.6g} N (planned with another "
-                                  "config?)")  # fmt: skip
+            raise TrajectoryError(
+                f"at t = {traj.times[k]:.3f} s the file's max|F| is {traj.max_abs_force[k]:.6g} N, "
+                f"this model's statics give {st.max_abs_force:.6g} N (planned with another "
+                "config?)"
+            )
     return traj.times[picks], states

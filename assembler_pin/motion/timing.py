@@ -95,8 +95,9 @@ def _pieces(plan: PlanResult) -> list[tuple[int, int, float | None]]:
     return out
 
 
-def _time_grid(spline, plan: PlanResult, rate: float, v_max: float, a_max: float, grid_per_sample: int
-               ) -> tuple[np.ndarray, np.ndarray]:  # fmt: skip
+def _time_grid(
+    spline, plan: PlanResult, rate: float, v_max: float, a_max: float, grid_per_sample: int
+) -> tuple[np.ndarray, np.ndarray]:
     """(times [s], s of each time) of the time law (see the module docstring), after checking
     its duration and row count against the bounds table, before allocating the rows."""
     pieces = []
@@ -104,19 +105,25 @@ def _time_grid(spline, plan: PlanResult, rate: float, v_max: float, a_max: float
         shortest = _shortest_duration(spline, i0, i1, v_max, a_max, grid_per_sample * (i1 - i0 + 1) + 1)
         if given is not None and shortest > given * (1 + 1e-9):
             u0, u1 = plan.parameters[i0], plan.parameters[i1]
-            raise TrajectoryError(f"waypoint times: the segment u = {u0:g} → {u1:g} needs at least {shortest:.4g} s "
-                                  f"at the legs' limits (x safety), the path gives {given:.4g} s")  # fmt: skip
+            raise TrajectoryError(
+                f"waypoint times: the segment u = {u0:g} → {u1:g} needs at least {shortest:.4g} s "
+                f"at the legs' limits (x safety), the path gives {given:.4g} s"
+            )
         pieces.append((i0, i1, shortest if given is None else given))
     total = sum(d for *_, d in pieces)
     limit = BOUNDS["plan.duration"].high
     if not total <= limit:
-        raise TrajectoryError(f"the motion would take {total:.4g} s at the legs' limits (leg.max_speed, "
-                              f"leg.max_acceleration), over the {limit:g} s a planned motion may last")  # fmt: skip
+        raise TrajectoryError(
+            f"the motion would take {total:.4g} s (leg.max_speed, leg.max_acceleration, waypoint times), "
+            f"over the {limit:g} s a planned motion may last (plan.duration)"
+        )
     counts = [max(1, math.ceil(d * rate - 1e-9)) for *_, d in pieces]
     rows = sum(counts) + 1
     if rows > BOUNDS["plan.samples"].high:
-        raise TrajectoryError(f"{rows} output samples ({rate:g} Hz x {total:.4g} s) is over the "
-                              f"{BOUNDS['plan.samples'].high:,.0f} a trajectory may hold: lower the rate")  # fmt: skip
+        raise TrajectoryError(
+            f"{rows} output samples ({rate:g} Hz x {total:.4g} s) is over the "
+            f"{BOUNDS['plan.samples'].high:,.0f} a trajectory may hold: lower the rate"
+        )
     times, s = [np.zeros(1)], [np.zeros(1)]
     start = 0.0
     for (i0, i1, d), c in zip(pieces, counts, strict=True):
@@ -158,9 +165,17 @@ def time_parametrize(
     return _timed(am, plan, rate, max_speed, max_acceleration, safety, grid_per_sample, strict, progress)[0]
 
 
-def _timed(am: AssemblerModel, plan: PlanResult, rate: float, max_speed: float | None = None,
-           max_acceleration: float | None = None, safety: float = 0.95, grid_per_sample: int = 16,
-           strict: bool = True, progress: ProgressCallback | None = None) -> tuple[Trajectory, np.ndarray]:  # fmt: skip
+def _timed(
+    am: AssemblerModel,
+    plan: PlanResult,
+    rate: float,
+    max_speed: float | None = None,
+    max_acceleration: float | None = None,
+    safety: float = 0.95,
+    grid_per_sample: int = 16,
+    strict: bool = True,
+    progress: ProgressCallback | None = None,
+) -> tuple[Trajectory, np.ndarray]:
     """:func:`time_parametrize`, and the path sample index ``s`` of each row."""
     from scipy.interpolate import PchipInterpolator
 
@@ -181,28 +196,53 @@ def _timed(am: AssemblerModel, plan: PlanResult, rate: float, max_speed: float |
     times, s = _time_grid(spline, plan, rate, safety * v_max, safety * a_max, grid_per_sample)
     lengths = spline(s).reshape(len(times), am.n, 6)
     u_of_s = np.interp(s, np.arange(len(L), dtype=float), plan.parameters)
-    meta = {"complete": plan.success, "reason": plan.reason, "rate_hz": float(rate), "max_speed": float(v_max),
-            "max_acceleration": float(a_max), "path_kind": plan.path.kind,
-            "base": plan.states[0].plates.se3(0).homogeneous.tolist(),
-            "waypoint_times": None if plan.path.times is None else [float(t) for t in plan.path.times]}  # fmt: skip
+    meta = {
+        "complete": plan.success,
+        "reason": plan.reason,
+        "rate_hz": float(rate),
+        "max_speed": float(v_max),
+        "max_acceleration": float(a_max),
+        "path_kind": plan.path.kind,
+        "base": plan.states[0].plates.se3(0).homogeneous.tolist(),
+        "waypoint_times": None if plan.path.times is None else [float(t) for t in plan.path.times],
+    }
     return evaluate_rows(am, plan, times, lengths, u_of_s, meta, strict, progress), s
 
 
 def _plan_prefix(plan: PlanResult, m: int, why: str) -> PlanResult:
     """The plan's first ``m`` samples, marked failed with ``why``."""
-    return dataclasses.replace(plan, success=False, reason=why, states=plan.states[:m],
-                               parameters=plan.parameters[:m], solve_times_s=plan.solve_times_s[:m])  # fmt: skip
+    return dataclasses.replace(
+        plan,
+        success=False,
+        reason=why,
+        states=plan.states[:m],
+        parameters=plan.parameters[:m],
+        solve_times_s=plan.solve_times_s[:m],
+    )
 
 
 def _rows_prefix(traj: Trajectory, count: int) -> Trajectory:
     """The trajectory's first ``count`` rows (a new object, meta copied)."""
-    return Trajectory(traj.times[:count], traj.lengths[:count], traj.ee[:count], traj.max_abs_force[:count],
-                      {k: v[:count] for k, v in traj.margins.items()}, traj.feasible[:count], traj.platforms,
-                      dict(traj.meta))  # fmt: skip
+    return Trajectory(
+        traj.times[:count],
+        traj.lengths[:count],
+        traj.ee[:count],
+        traj.max_abs_force[:count],
+        {k: v[:count] for k, v in traj.margins.items()},
+        traj.feasible[:count],
+        traj.platforms,
+        dict(traj.meta),
+    )
 
 
-def _valid_prefix(am: AssemblerModel, plan: PlanResult, traj: Trajectory, s: np.ndarray, rate: float,
-                  progress: ProgressCallback | None) -> tuple[Trajectory | None, str]:  # fmt: skip
+def _valid_prefix(
+    am: AssemblerModel,
+    plan: PlanResult,
+    traj: Trajectory,
+    s: np.ndarray,
+    rate: float,
+    progress: ProgressCallback | None,
+) -> tuple[Trajectory | None, str]:
     """The longest checked prefix of a trajectory with a bad row: the plan cut before the
     first bad row and timed again (rest to rest), up to 4 times; then the rows before it."""
     for _ in range(4):
@@ -268,8 +308,12 @@ def plan_trajectory(
         problems = verify_trajectory(am, traj)
         if not problems or not plan.success or attempt == refinements:
             break
-        opts = dataclasses.replace(opts, position_step=opts.position_step / 2, rotation_step=opts.rotation_step / 2,
-                                   max_leg_step=opts.max_leg_step / 2)  # fmt: skip
+        opts = dataclasses.replace(
+            opts,
+            position_step=opts.position_step / 2,
+            rotation_step=opts.rotation_step / 2,
+            max_leg_step=opts.max_leg_step / 2,
+        )
     success = plan.success and not problems
     reasons = ([] if plan.success else [plan.reason]) + problems
     final: Trajectory | None = traj

@@ -37,13 +37,24 @@ from ..bounds import check_bound
 from ..exceptions import AssemblerError, TrajectoryError
 from ..files import write_atomic
 
-__all__ = ["FORMAT", "MARGIN_KINDS", "VERSION", "Trajectory", "read_trajectory", "trajectory_columns"]
+__all__ = ["FORMAT", "MARGIN_KINDS", "VERSION", "Trajectory", "read_trajectory", "strict_json", "trajectory_columns"]
 
 FORMAT = "assembler-pin trajectory"
 VERSION = 2
 MARGIN_KINDS = ("stroke", "deflection", "rise", "force", "path_position", "path_rotation")
-_META_KEYS = {"platforms", "rows", "sha256", "complete", "reason", "rate_hz", "max_speed", "max_acceleration",
-              "path_kind", "base", "waypoint_times"}  # fmt: skip
+_META_KEYS = {
+    "platforms",
+    "rows",
+    "sha256",
+    "complete",
+    "reason",
+    "rate_hz",
+    "max_speed",
+    "max_acceleration",
+    "path_kind",
+    "base",
+    "waypoint_times",
+}
 _REPLAN = "plan it again with this version ('assembler-pin plan ... --out FILE')"
 
 
@@ -115,8 +126,16 @@ class Trajectory:
         """(T, columns) the file's rows, in :meth:`columns` order."""
         T = len(self.times)
         margins = np.stack([self.margins[k] for k in MARGIN_KINDS], axis=1)
-        return np.hstack([self.times[:, None], self.lengths.reshape(T, -1), self.ee, self.max_abs_force[:, None],
-                          margins, self.feasible[:, None].astype(float)])  # fmt: skip
+        return np.hstack(
+            [
+                self.times[:, None],
+                self.lengths.reshape(T, -1),
+                self.ee,
+                self.max_abs_force[:, None],
+                margins,
+                self.feasible[:, None].astype(float),
+            ]
+        )
 
     def write(self, path: str | os.PathLike[str]) -> Path:
         """Write atomically as CSV (``.csv``) or JSON (any other suffix); units SI, forces in N.
@@ -127,8 +146,9 @@ class Trajectory:
         rows = self.rows()
         if not np.isfinite(rows).all() or not self.feasible.all():
             bad = int(np.argmax(~(np.isfinite(rows).all(axis=1) & self.feasible)))
-            raise TrajectoryError(f"row {bad} (t = {self.times[bad]:.3f} s) is not valid: a trajectory file holds "
-                                  "valid rows only")  # fmt: skip
+            raise TrajectoryError(
+                f"row {bad} (t = {self.times[bad]:.3f} s) is not valid: a trajectory file holds valid rows only"
+            )
         meta = {"complete": True, "reason": "", "waypoint_times": None, **self.meta}
         meta.update(platforms=self.platforms, rows=len(rows), sha256=rows_digest(rows))
         path = Path(path)
@@ -161,6 +181,8 @@ def read_trajectory(path: str | os.PathLike[str]) -> Trajectory:
     path = Path(path)
     try:
         size = path.stat().st_size
+        if size == 0:
+            raise TrajectoryError(f"trajectory '{path}' is empty")
         check_bound("trajectory.bytes", size, f"the size of '{path}'", TrajectoryError)
         text = path.read_bytes().decode("utf-8")
     except OSError as exc:
@@ -174,30 +196,30 @@ def read_trajectory(path: str | os.PathLike[str]) -> Trajectory:
         raise TrajectoryError(f"trajectory '{path}': {exc}") from None
 
 
-def _strict_json(text: str) -> object:
-    """JSON without NaN/Infinity constants or duplicate keys, as a TrajectoryError when not."""
+def strict_json(text: str, error: type[AssemblerError] = TrajectoryError) -> object:
+    """JSON without NaN/Infinity constants or duplicate keys; ``error`` (one line) when not."""
 
     def pairs(items: list[tuple[str, object]]) -> dict:
         keys = [k for k, _ in items]
         if len(set(keys)) != len(keys):
-            raise TrajectoryError(f"duplicate key {next(k for k in keys if keys.count(k) > 1)!r}")
+            raise error(f"duplicate key {next(k for k in keys if keys.count(k) > 1)!r}"[:120])
         return dict(items)
 
     def constant(name: str) -> object:
-        raise TrajectoryError(f"{name} is not a number a trajectory may hold")
+        raise error(f"{name} is not a number a file may hold")
 
     try:
         return json.loads(text, object_pairs_hook=pairs, parse_constant=constant)
+    except AssemblerError:
+        raise
     except json.JSONDecodeError as exc:
-        raise TrajectoryError(
-            f"not valid JSON ({exc.msg} at line {exc.lineno}): truncated or not a trajectory"
-        ) from None
+        raise error(f"not valid JSON ({exc.msg} at line {exc.lineno} column {exc.colno}): truncated?") from None
     except (RecursionError, ValueError) as exc:  # deep nesting, an integer of thousands of digits
-        raise TrajectoryError(f"not a trajectory file ({type(exc).__name__})") from None
+        raise error(f"not a valid file ({type(exc).__name__}: nested too deeply or a number too long)") from None
 
 
 def _parse_json(text: str) -> tuple[dict, list, list]:
-    doc = _strict_json(text)
+    doc = strict_json(text)
     if isinstance(doc, dict) and "format" not in doc and {"columns", "rows"} <= set(doc):
         raise TrajectoryError(f"written by an older version (no row count or checksum): {_REPLAN}")
     if not isinstance(doc, dict) or doc.get("format") != FORMAT:
@@ -224,7 +246,7 @@ def _parse_csv(text: str) -> tuple[dict, list, list]:
         raise TrajectoryError(f"not a trajectory file (the first line must be '# {FORMAT} v{VERSION}')")
     if len(lines) < 3 or not lines[1].startswith("# meta: "):
         raise TrajectoryError("truncated: no '# meta:' line and column header")
-    meta = _check_meta(_strict_json(lines[1][len("# meta: ") :]))
+    meta = _check_meta(strict_json(lines[1][len("# meta: ") :]))
     if not lines[-1].startswith("# end: "):
         raise TrajectoryError("truncated: the last line is not '# end: N rows'")
     if lines[-1] != f"# end: {meta['rows']} rows":
@@ -260,8 +282,11 @@ def _check_meta(meta: object) -> dict:
         raise TrajectoryError(f"meta keys: missing {missing}, unknown {extra}")
     for key, bound in (("platforms", "config.platforms"), ("rows", "trajectory.rows")):
         check_bound(bound, meta[key], f"meta.{key}", TrajectoryError)
-    for key, bound in (("rate_hz", "plan.rate"), ("max_speed", "leg.max_speed"),
-                       ("max_acceleration", "leg.max_acceleration")):  # fmt: skip
+    for key, bound in (
+        ("rate_hz", "plan.rate"),
+        ("max_speed", "leg.max_speed"),
+        ("max_acceleration", "leg.max_acceleration"),
+    ):
         check_bound(bound, meta[key], f"meta.{key}", TrajectoryError)
     sha = meta["sha256"]
     if not (isinstance(sha, str) and len(sha) == 64 and all(c in "0123456789abcdef" for c in sha)):
@@ -271,8 +296,11 @@ def _check_meta(meta: object) -> dict:
     if meta["path_kind"] not in PATH_KINDS:
         raise TrajectoryError(f"meta.path_kind must be one of {', '.join(PATH_KINDS)}")
     base = meta["base"]
-    if not (isinstance(base, list) and len(base) == 4 and all(isinstance(r, list) and len(r) == 4 and
-                                                                 all(map(_is_num, r)) for r in base)):  # fmt: skip
+    if not (
+        isinstance(base, list)
+        and len(base) == 4
+        and all(isinstance(r, list) and len(r) == 4 and all(map(_is_num, r)) for r in base)
+    ):
         raise TrajectoryError("meta.base must be a 4x4 matrix of numbers (the world pose of plate 0)")
     checked_rotations(np.array([base], dtype=float), "meta.base")
     wt = meta["waypoint_times"]
@@ -310,6 +338,13 @@ def _trajectory(meta: dict, columns: object, rows: list) -> Trajectory:
     if not (legs > 0).all() or not (arr[:, 7 + 6 * n] >= 0).all():
         raise TrajectoryError("leg lengths must be > 0 and max_abs_force >= 0")
     margins = {k: arr[:, 8 + 6 * n + i] for i, k in enumerate(MARGIN_KINDS)}
-    return Trajectory(times=t.copy(), lengths=legs.reshape(-1, n, 6).copy(), ee=arr[:, 1 + 6 * n : 7 + 6 * n].copy(),
-                      max_abs_force=arr[:, 7 + 6 * n].copy(), margins=margins, feasible=np.ones(len(t), dtype=bool),
-                      platforms=n, meta=meta)  # fmt: skip
+    return Trajectory(
+        times=t.copy(),
+        lengths=legs.reshape(-1, n, 6).copy(),
+        ee=arr[:, 1 + 6 * n : 7 + 6 * n].copy(),
+        max_abs_force=arr[:, 7 + 6 * n].copy(),
+        margins=margins,
+        feasible=np.ones(len(t), dtype=bool),
+        platforms=n,
+        meta=meta,
+    )
