@@ -555,3 +555,32 @@ def test_waypoint_times_are_honoured_or_refused(am, short, tmp_path):
     too_short = dataclasses.replace(plan, path=dataclasses.replace(plan.path, times=(0.0, 0.2 * free, t2)))
     with pytest.raises(TrajectoryError, match=r"needs at least .* the path gives"):
         time_parametrize(am, too_short, rate=50.0)
+
+
+JSON_VALUES = st.recursive(
+    st.none() | st.booleans() | st.floats() | st.integers(-(10**30), 10**30) | st.text(max_size=4),
+    lambda inner: st.lists(inner, max_size=7) | st.dictionaries(st.text(max_size=4), inner, max_size=3),
+    max_leaves=40,
+)
+
+
+@HYPO
+@given(
+    doc=st.dictionaries(st.sampled_from(["waypoints", "times", "degrees", "extra"]), JSON_VALUES, max_size=4),
+    rows=st.lists(st.lists(st.floats(-2, 2) | st.integers(-2, 2), min_size=6, max_size=6), max_size=4),
+)
+def test_random_waypoint_documents_are_refused_or_read_exactly(tmp_path, doc, rows):
+    if rows and "waypoints" not in doc:
+        doc["waypoints"] = rows
+    path = tmp_path / "w.json"
+    path.write_text(json.dumps(doc))  # NaN and Infinity written as JSON's non-standard tokens
+    try:
+        read = read_waypoints(path)
+    except PathError as exc:
+        assert "\n" not in str(exc) and len(str(exc)) < 300
+        return
+    assert set(doc) <= {"waypoints", "times", "degrees"} and doc.get("degrees", False) in (True, False)
+    assert len(read.waypoints) == len(doc["waypoints"]) >= 2
+    for pose, row in zip(read.waypoints, doc["waypoints"], strict=True):
+        np.testing.assert_array_equal(pose.translation, np.array(row[:3], dtype=float))
+    assert read.times is None if doc.get("times") is None else list(read.times) == [float(t) for t in doc["times"]]

@@ -151,6 +151,10 @@ class Trajectory:
             )
         meta = {"complete": True, "reason": "", "waypoint_times": None, **self.meta}
         meta.update(platforms=self.platforms, rows=len(rows), sha256=rows_digest(rows))
+        try:  # never write what read_trajectory would refuse
+            _check_meta(meta)
+        except AssemblerError as exc:
+            raise TrajectoryError(f"cannot write this trajectory: {exc}") from None
         path = Path(path)
         if path.suffix.lower() == ".csv":
             buf = io.StringIO()
