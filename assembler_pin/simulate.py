@@ -394,6 +394,11 @@ def follow_trajectory(
     Args:
         settle: time held at the last command after the motion [s] (>= 0).
         tolerance: largest EE distance from the planned pose at any sample [m].
+
+    Raises:
+        SimulationError: a duration over the ``simulate.seconds`` bound, or bad settings.
+        TrajectoryError: a row that fails :func:`~assembler_pin.motion.timing.check_trajectory`
+            (every row is held to the model before the first step).
     """
     from .bounds import check_bound
     from .motion.timing import trajectory_states

@@ -180,6 +180,27 @@ def _step(
     return state, "", result.time_s, (dev_p, dev_r)
 
 
+def _start_state(
+    am: AssemblerModel, path: EEPath, start: StackState | PlateArrays | list | None, opts: PlanOptions
+) -> tuple[StackState | None, str]:
+    """The valid state the plan starts from, or (None, why not)."""
+    first = path.at(0.0)
+    if start is None:
+        from ..solve import solve
+
+        solved = solve(am, first, options=opts.optimize)
+        if not solved.success:
+            return None, f"no valid pose at the path's start: {solved.message}"
+        return solved.optimized, ""
+    pa = start.plates if isinstance(start, StackState) else plate_arrays(am, start)
+    state = evaluate_state(am, pa, goal=first, tolerance=GoalTolerance(1e-6, 1e-6))
+    if not state.feasible:
+        return None, "the start state is not valid at the path's start: " + "; ".join(
+            str(v) for v in state.violations[:2]
+        )
+    return state, ""
+
+
 def plan_path(
     am: AssemblerModel,
     path: EEPath,
@@ -199,27 +220,11 @@ def plan_path(
     """
     opts = options or PlanOptions()
     t_start = time.perf_counter()
-    first = path.at(0.0)
-    if start is None:
-        from ..solve import solve
-
-        solved = solve(am, first, options=opts.optimize)
-        start_state = solved.optimized if solved.success else None
-        why = "" if solved.success else f"no valid pose at the path's start: {solved.message}"
-    else:
-        pa = start.plates if isinstance(start, StackState) else plate_arrays(am, start)
-        start_state = evaluate_state(am, pa, goal=first, tolerance=GoalTolerance(1e-6, 1e-6))
-        why = (
-            ""
-            if start_state.feasible
-            else "the start state is not valid at the path's start: "
-            + "; ".join(str(v) for v in start_state.violations[:2])
-        )
-        start_state = start_state if start_state.feasible else None
+    targets = list(path.parameters(opts.position_step, opts.rotation_step)[1:])  # bounded before planning
+    start_state, why = _start_state(am, path, start, opts)
     if start_state is None:
         return PlanResult(False, why, path, np.zeros(0), [], np.zeros(0), 0, (0.0, 0.0), time.perf_counter() - t_start,
                           opts.path_tolerance)  # fmt: skip
-    targets = list(path.parameters(opts.position_step, opts.rotation_step)[1:])
     params, states, times = [0.0], [start_state], [0.0]
     refinements, dev = 0, (0.0, 0.0)
     base_step = 1.0 / max(1, len(targets))

@@ -314,6 +314,21 @@ def plan_trajectory(
             rotation_step=opts.rotation_step / 2,
             max_leg_step=opts.max_leg_step / 2,
         )
+    return _answer(am, plan, traj, s, problems, rate, progress, t0)
+
+
+def _answer(
+    am: AssemblerModel,
+    plan: PlanResult,
+    traj: Trajectory,
+    s: np.ndarray,
+    problems: list[str],
+    rate: float,
+    progress: ProgressCallback | None,
+    t0: float,
+) -> MotionResult:
+    """The MotionResult of a timed plan: its trajectory cut to the valid prefix when a row
+    fails, ``meta["complete"]`` and ``meta["reason"]`` set."""
     success = plan.success and not problems
     reasons = ([] if plan.success else [plan.reason]) + problems
     final: Trajectory | None = traj
