@@ -394,14 +394,21 @@ def follow_trajectory(
     Args:
         settle: time held at the last command after the motion [s] (>= 0).
         tolerance: largest EE distance from the planned pose at any sample [m].
+
+    Raises:
+        SimulationError: a duration over the ``simulate.seconds`` bound, or bad settings.
+        TrajectoryError: a row that fails :func:`~assembler_pin.motion.timing.check_trajectory`
+            (every row is held to the model before the first step).
     """
+    from .bounds import check_bound
     from .motion.timing import trajectory_states
 
     if not (np.isfinite(settle) and 0.0 <= settle <= 60.0):
         raise SimulationError(f"settle must be in [0, 60] s, got {settle}")
     if not (np.isfinite(tolerance) and tolerance > 0):
         raise SimulationError(f"tolerance must be > 0 m, got {tolerance}")
-    _, first = trajectory_states(am, traj, frames=2)
+    check_bound("simulate.seconds", traj.duration, "the trajectory's duration", SimulationError)
+    _, first = trajectory_states(am, traj, frames=2)  # every row held to stack FK of its lengths
     stack = stack or MujocoStack(am)
     stack.set_plates(first[0].plates)
     m, d = stack.model, stack.data

@@ -12,6 +12,7 @@ if TYPE_CHECKING:
 from .common import (
     config_from_args,
     dumps,
+    progress_for,
     writable_parent,
 )
 
@@ -20,20 +21,38 @@ def add_parser(add) -> None:
     """Register the ``plan`` subcommand (``add`` makes a subparser with ``--config``)."""
     p = add("plan", "a force-optimal motion along an EE path, as leg-length commands within the legs' limits")
     src = p.add_mutually_exclusive_group()
-    src.add_argument("--to", nargs=6, type=float, metavar=("X", "Y", "Z", "RX", "RY", "RZ"),
-                     help="EE goal (m, rotation vector in rad); from the home pose unless --from")  # fmt: skip
+    src.add_argument(
+        "--to",
+        nargs=6,
+        type=float,
+        metavar=("X", "Y", "Z", "RX", "RY", "RZ"),
+        help="EE goal (m, rotation vector in rad); from the home pose unless --from",
+    )
     src.add_argument("--waypoints", metavar="FILE", help="JSON or CSV waypoints (TAA rows, optional times)")
-    p.add_argument("--from", dest="from_", nargs=6, type=float, metavar=("X", "Y", "Z", "RX", "RY", "RZ"),
-                   help="with --to: start at the optimized pose of this EE pose")  # fmt: skip
-    p.add_argument("--path", choices=("screw", "linear"), default="screw",
-                   help="interpolation on SE(3): screw (geodesic, default) or linear (line + slerp)")  # fmt: skip
-    p.add_argument("--rate", type=float, default=50.0, help="output samples per second (default 50)")
+    p.add_argument(
+        "--from",
+        dest="from_",
+        nargs=6,
+        type=float,
+        metavar=("X", "Y", "Z", "RX", "RY", "RZ"),
+        help="with --to: start at the optimized pose of this EE pose",
+    )
+    p.add_argument(
+        "--path",
+        choices=("screw", "linear"),
+        default="screw",
+        help="interpolation on SE(3): screw (geodesic, default) or linear (line + slerp)",
+    )
+    p.add_argument("--rate", type=float, default=50.0, help="output samples per second, 1..1000 (default 50)")
     p.add_argument("--w3", type=float, default=100.0, help="weight of the motion term Σ ΔL² [1/m²] (default 100)")
     p.add_argument("--out", metavar="FILE", help="write the trajectory (.csv, or JSON for any other suffix)")
     p.add_argument("--plot", metavar="PNG", help="write the lengths, speeds and forces over time with their limits")
-    p.add_argument("--compare", action="store_true",
-                   help="compare with the helper arm per sample and linear leg lengths (default paths: home to "
-                        f"{', '.join(COMPARE_SCENARIOS)})")  # fmt: skip
+    p.add_argument(
+        "--compare",
+        action="store_true",
+        help="compare with the helper arm per sample and linear leg lengths (default paths: home to "
+        f"{', '.join(COMPARE_SCENARIOS)})",
+    )
     p.add_argument("--json", action="store_true", help="print one JSON object")
     p.set_defaults(func=run)
 
@@ -56,7 +75,12 @@ def _plan_path(args: argparse.Namespace, am: AssemblerModel):
 
 
 def run(args: argparse.Namespace) -> int:
-    """A force-optimal motion along an EE path, timed within the legs' limits."""
+    """A force-optimal motion along an EE path, timed within the legs' limits.
+
+    Exit status 0 when the motion reaches the end of the path with every row valid, 1 when
+    it does not (the answer is printed and ``--out`` holds the valid prefix, if any).
+    """
+    from ..bounds import check_bound
     from ..model import AssemblerModel
     from ..motion import PlanOptions
     from ..motion.timing import plan_trajectory
@@ -64,6 +88,7 @@ def run(args: argparse.Namespace) -> int:
     for option, value in (("--out file", args.out), ("--plot file", args.plot)):
         if value:
             writable_parent(value, option)
+    check_bound("plan.rate", args.rate, "--rate", CLIError)
     if args.to is None and not args.waypoints and not args.compare:
         raise CLIError("give --to X Y Z RX RY RZ (from the home pose, or --from ..) or --waypoints FILE")
     try:
@@ -74,32 +99,63 @@ def run(args: argparse.Namespace) -> int:
     if args.compare:
         return _plan_compare(args, am, options)
     path, start = _plan_path(args, am)
-    motion = plan_trajectory(am, path, start, options, rate=args.rate)
+    prog = progress_for(args, "plan")
+    try:
+        motion = plan_trajectory(am, path, start, options, rate=args.rate, progress=prog)
+        doc = _write_outputs(args, am, motion, prog)
+    finally:
+        prog.close()
+    if args.json:
+        print(dumps(doc))
+    else:
+        _print_summary(args, motion, doc)
+    return 0 if motion.success else 1
+
+
+def _write_outputs(args: argparse.Namespace, am: AssemblerModel, motion, prog) -> dict:
+    """``--out`` and ``--plot`` of a planned motion (valid rows only), each written atomically."""
     doc = motion.to_dict()
     traj = motion.trajectory
     if args.out and traj is not None:
         doc["out"] = str(traj.write(args.out))
     if args.plot and traj is not None:
+        from ..files import atomic_path
         from ..motion.timing import trajectory_states
-        from ..plots import save, trajectory_plot
+        from ..plots import trajectory_plot
 
-        times, states = trajectory_states(am, traj, 200)
+        times, states = trajectory_states(am, traj, 200, progress=prog)
         title = "planned motion" if args.to is None else "home → goal" if args.from_ is None else "--from → --to"
-        doc["plot"] = str(save(trajectory_plot(am, traj, states, times, title), args.plot))
-    if args.json:
-        print(dumps(doc))
-        return 0
+        fig = trajectory_plot(am, traj, states, times, title)
+        with atomic_path(args.plot) as tmp:
+            fig.savefig(tmp, dpi=150, format="png")
+        doc["plot"] = str(args.plot)
+    return doc
+
+
+def _print_summary(args: argparse.Namespace, motion, doc: dict) -> None:
+    """The text answer of ``plan``: what was planned, the trajectory, the files written."""
+    traj = motion.trajectory
     print(f"plan: {'success' if doc['success'] else 'FAILED'} — {doc['reason']}")
     if motion.plan.states:
-        print(f"{doc['samples']} samples, peak max|F| {doc['peak_max_abs_force']:.2f} N, total leg travel "
-              f"{doc['total_leg_travel_m']:.3f} m, planned in {motion.plan.time_s:.2f} s")  # fmt: skip
+        print(
+            f"{doc['samples']} samples, peak max|F| {doc['peak_max_abs_force']:.2f} N, total leg travel "
+            f"{doc['total_leg_travel_m']:.3f} m, planned in {motion.plan.time_s:.2f} s"
+        )
     if traj is not None:
-        print(f"trajectory: {traj.duration:.2f} s at {args.rate:g} Hz ({len(traj.times)} samples), every sample valid: "
-              f"{'yes' if traj.feasible.all() else 'NO'}")  # fmt: skip
+        extent = (
+            "the whole path"
+            if traj.complete
+            else (f"the valid prefix only, to u = {doc['path_reached']:.4f} of {doc['path_segments']}")
+        )
+        print(
+            f"trajectory: {traj.duration:.2f} s at {args.rate:g} Hz ({len(traj.times)} samples, every one "
+            f"valid), {extent}"
+        )
+    elif args.out:
+        print(f"no valid trajectory: {args.out} not written")
     for key in ("out", "plot"):
         if key in doc:
-            print(f"wrote {doc[key]}")
-    return 0
+            print(f"wrote {doc[key]}" + ("" if traj is None or traj.complete else " (valid prefix, complete: false)"))
 
 
 def _plan_compare(args: argparse.Namespace, am: AssemblerModel, options) -> int:
@@ -115,18 +171,35 @@ def _plan_compare(args: argparse.Namespace, am: AssemblerModel, options) -> int:
         runs = [(name, EEPath((am.home[-1], scenario(name).goal), args.path), am.home) for name in COMPARE_SCENARIOS]
     results = [compare_motion(am, path, start, options, rate=args.rate, name=name) for name, path, start in runs]
     if args.json:
-        print(dumps([{"path": c.name, "success": c.motion.success, "reason": c.motion.reason,
-                       "methods": {m: f.to_dict() for m, f in c.figures.items()}} for c in results]))  # fmt: skip
+        print(
+            dumps(
+                [
+                    {
+                        "path": c.name,
+                        "success": c.motion.success,
+                        "reason": c.motion.reason,
+                        "methods": {m: f.to_dict() for m, f in c.figures.items()},
+                    }
+                    for c in results
+                ]
+            )
+        )
         return 0
-    print(f"{'path':<24}{'plan':<16}{'peak max|F| N':>14}{'leg travel m':>13}{'duration s':>11}"
-          f"{'valid %':>9}{'limits %':>9}{'off path mm':>12}")  # fmt: skip
+    print(
+        f"{'path':<24}{'plan':<16}{'peak max|F| N':>14}{'leg travel m':>13}{'duration s':>11}"
+        f"{'valid %':>9}{'limits %':>9}{'off path mm':>12}"
+    )
     for c in results:
         if not c.figures:
             print(f"{c.name:<24}no plan: {c.motion.reason}")
         for m, f in c.figures.items():
-            print(f"{c.name:<24}{m:<16}{f.peak_max_abs_force:14.2f}{f.total_leg_travel:13.3f}{f.duration:11.2f}"
-                  f"{100 * f.valid_fraction:9.1f}{100 * f.limits_fraction:9.1f}"
-                  f"{1e3 * f.max_path_deviation:12.2f}")  # fmt: skip
-    print("valid: every limit and the EE within the path tolerance at every output sample; "
-          "limits: legs, joints and forces only")  # fmt: skip
+            print(
+                f"{c.name:<24}{m:<16}{f.peak_max_abs_force:14.2f}{f.total_leg_travel:13.3f}{f.duration:11.2f}"
+                f"{100 * f.valid_fraction:9.1f}{100 * f.limits_fraction:9.1f}"
+                f"{1e3 * f.max_path_deviation:12.2f}"
+            )
+    print(
+        "valid: every limit and the EE within the path tolerance at every output sample; "
+        "limits: legs, joints and forces only"
+    )
     return 0

@@ -89,15 +89,15 @@ def _simulate_trajectory(args: argparse.Namespace, am: AssemblerModel) -> int:
     from ..motion.timing import read_trajectory
     from ..simulate import follow_trajectory
 
-    traj = read_trajectory(args.trajectory)
+    traj = read_trajectory(args.trajectory)  # the format; follow_trajectory holds every row to the model
     result = follow_trajectory(am, traj, tolerance=1e-3 * args.drift_tolerance)
     if args.json:
         print(dumps(result.to_dict()))
-        return 0
+        return 0 if result.followed else 1
     print(f"MuJoCo running {Path(args.trajectory).name}: {traj.duration:.2f} s, then 0.5 s settling")
     print(f"{'t [s]':>7} {'EE off plan [mm]':>17} {'max|F| MuJoCo':>14} {'max|F| plan':>12} {'at limit':>9}")
     for k in np.unique(np.linspace(0, len(result.times) - 1, 11).round().astype(int)):
         print(f"{result.times[k]:7.2f} {1e3 * result.ee_error[k]:17.3f} {result.max_abs_force[k]:14.2f} "
               f"{result.planned_max_abs_force[k]:12.2f} {int(result.saturated[k]):9d}")  # fmt: skip
     print(f"followed: {'yes' if result.followed else 'NO'} — {result.message}")
-    return 0
+    return 0 if result.followed else 1

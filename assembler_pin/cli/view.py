@@ -101,12 +101,12 @@ def _view_title(args: argparse.Namespace, result) -> str:
 
 def _animate_trajectory(viewer, am: AssemblerModel, path: str, frames: int) -> StackState:
     """Store a trajectory file's motion in the viewer, in real time; returns its peak state."""
+    from ..bounds import check_bound
     from ..motion.timing import read_trajectory, trajectory_states
 
-    if not 2 <= frames <= 2000:
-        raise CLIError(f"--frames must be an integer in [2, 2000], got {frames}")
+    check_bound("view.frames", frames, "--frames", CLIError)
     traj = read_trajectory(path)
-    _, states = trajectory_states(am, traj, frames)
+    _, states = trajectory_states(am, traj, frames)  # every row held to stack FK of its lengths
     viewer.animate(states, fps=max(1.0, (len(states) - 1) / max(traj.duration, 1e-9)), color_forces=True)
     peak = max(st.max_abs_force for st in states)
     viewer.set_title(f"Trajectory {Path(path).name}: {traj.duration:.1f} s, peak max|F| {peak:.1f} N "

@@ -3,7 +3,9 @@
 * :mod:`.paths` — EE paths through waypoints (screw or linear interpolation).
 * :mod:`.planner` — :func:`plan_path`: valid, force-optimized, continuous samples.
 * :mod:`.timing` — :func:`time_parametrize`: leg-length trajectories within the legs'
-  speed and acceleration limits, written to and read from CSV/JSON.
+  speed and acceleration limits; :func:`plan_trajectory`: plan, time and check.
+* :mod:`.trajfile` — trajectory files (CSV/JSON): atomic writer, strict reader.
+* :mod:`.rows` — every row of a trajectory held to the model (stack FK of its lengths).
 """
 
 from .paths import PATH_KINDS, EEPath, PathError, interpolate_pose, read_waypoints

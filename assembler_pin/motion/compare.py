@@ -27,6 +27,7 @@ from ..helper_arm import initial_condition
 from ..kinematics import stack_forward_kinematics
 from ..model import AssemblerModel
 from ..state import evaluate_state
+from .guess import on_se3
 from .paths import EEPath
 from .planner import PlanOptions, PlanResult
 from .timing import MotionResult, Trajectory, plan_trajectory, time_parametrize
@@ -165,7 +166,7 @@ def compare_motion(
     guess, linear = first.plates, [first]
     for t in plan.parameters[1:] / plan.parameters[-1]:
         fk = stack_forward_kinematics(am, (1 - t) * first.leg_lengths + t * last.leg_lengths,
-                                      base=first.plates.se3(0), guess=guess)  # fmt: skip
+                                      base=first.plates.se3(0), guess=on_se3(guess))  # fmt: skip
         if not fk.success:
             break
         guess = fk.plates

@@ -8,13 +8,15 @@ Two interpolations between consecutive waypoints A and B (world frame):
   ``R_A · exp3(t · log3(R_Aᵀ R_B))`` — what "move in a straight line" usually means.
 
 Waypoint files: JSON ``{"waypoints": [[x, y, z, rx, ry, rz], ...], "times": [...],
-"degrees": false}`` (``times`` optional) or CSV rows ``x,y,z,rx,ry,rz[,t]`` with an optional
-header line; rotations are rotation vectors [rad] (TAA, as ``solve --goal``).
+"degrees": false}`` (``times`` and ``degrees`` optional) or CSV rows ``x,y,z,rx,ry,rz[,t]``
+with an optional header line; rotations are rotation vectors [rad] (TAA, as ``solve --goal``;
+degrees with ``"degrees": true``). Times, when given, are honoured: the EE arrives at each
+waypoint at its time, at rest (:mod:`.timing`), and times too short for the legs' limits are
+refused.
 """
 
 from __future__ import annotations
 
-import csv
 import json
 import math
 from dataclasses import dataclass
@@ -23,8 +25,9 @@ from pathlib import Path
 import numpy as np
 import pinocchio as pin
 
+from ..bounds import BOUNDS, check_bound
 from ..choices import PATH_KINDS
-from ..exceptions import PathError
+from ..exceptions import AssemblerError, PathError
 from ..kinematics import taa_to_se3, to_se3
 
 __all__ = ["PATH_KINDS", "EEPath", "PathError", "interpolate_pose", "read_waypoints"]
@@ -48,8 +51,8 @@ class EEPath:
     Attributes:
         waypoints: world poses of the EE (≥ 2).
         kind: interpolation between consecutive waypoints (:data:`PATH_KINDS`).
-        times: optional arrival time of each waypoint [s], increasing from 0 (a time
-            parametrization then stretches each segment to at least its given duration).
+        times: optional arrival time of each waypoint [s], increasing from 0: the time law
+            then arrives at each waypoint at its time, at rest (:mod:`.timing`).
     """
 
     waypoints: tuple[pin.SE3, ...]
@@ -84,57 +87,109 @@ class EEPath:
     def parameters(self, position_step: float, rotation_step: float) -> np.ndarray:
         """Path parameters of samples no farther apart than ``position_step`` [m] and
         ``rotation_step`` [rad] (each segment split evenly), from 0 to ``segments``."""
-        out = [0.0]
+        counts = []
         for k in range(self.segments):
             a, b = self.waypoints[k], self.waypoints[k + 1]
             # the screw path's origin travels at most the chord plus the arc of the turn
             mid = [interpolate_pose(a, b, t, self.kind).translation for t in np.linspace(0, 1, 9)]
             length = float(np.sum(np.linalg.norm(np.diff(mid, axis=0), axis=1)))
             angle = float(np.linalg.norm(pin.log3(a.rotation.T @ b.rotation)))
-            m = max(1, math.ceil(max(length / position_step, angle / rotation_step) - 1e-9))
-            out.extend(k + np.arange(1, m + 1) / m)
-        return np.array(out)
+            counts.append(max(1.0, math.ceil(max(length / position_step, angle / rotation_step) - 1e-9)))
+        limit = BOUNDS["plan.path_samples"].high
+        if not sum(counts) <= limit:  # checked before allocating
+            raise PathError(
+                f"the path needs {sum(counts):.4g} samples at {position_step:g} m / {rotation_step:g} rad "
+                f"steps, over the {limit:,.0f} one plan may hold (plan.path_samples): shorten the path"
+            )
+        out = [np.zeros(1)] + [k + np.arange(1, int(m) + 1) / m for k, m in enumerate(counts)]
+        return np.concatenate(out)
 
 
 def read_waypoints(path: str | Path, kind: str = "screw") -> EEPath:
-    """An :class:`EEPath` from a JSON or CSV waypoint file (see module docstring).
+    """An :class:`EEPath` from a JSON or CSV waypoint file (see module docstring), read
+    strictly: JSON keys only ``waypoints``, ``times`` and ``degrees`` (a real true/false),
+    no duplicate keys, every value a number (no strings, booleans, NaN or infinity); CSV
+    rows all of 6 numbers or all of 7 (the 7th the time), an optional header
+    ``x,y,z,rx,ry,rz[,t]`` and ``#`` comment lines. Times, when given, are honoured by the
+    time law (one per waypoint, from 0, increasing; see :mod:`.timing`).
 
     Raises:
-        PathError: the file cannot be read or does not hold valid waypoints.
+        PathError: one line naming the file and what is wrong.
     """
     path = Path(path)
     try:
-        text = path.read_text(encoding="utf-8")
-    except (OSError, UnicodeDecodeError) as exc:
-        raise PathError(f"cannot read waypoint file '{path}': {exc}") from None
-    degrees = False
-    times = None
-    if path.suffix.lower() == ".json":
-        try:
-            doc = json.loads(text)
-        except json.JSONDecodeError as exc:
-            raise PathError(f"'{path}' is not valid JSON: {exc}") from None
-        if not isinstance(doc, dict) or not isinstance(doc.get("waypoints"), list):
-            raise PathError(f"'{path}': expected {{\"waypoints\": [[x, y, z, rx, ry, rz], ...]}}")
-        rows = doc["waypoints"]
-        times = doc.get("times")
-        degrees = bool(doc.get("degrees", False))
-    else:
-        rows = [r for r in csv.reader(text.splitlines()) if r and not r[0].lstrip().startswith("#")]
-        if rows and not _is_number(rows[0][0]):
-            rows = rows[1:]  # header
-        try:
-            rows = [[float(x) for x in r] for r in rows]
-        except ValueError as exc:
-            raise PathError(f"'{path}': every CSV row must be numbers x,y,z,rx,ry,rz[,t]: {exc}") from None
-        if rows and all(len(r) == 7 for r in rows):
-            times = [r[6] for r in rows]
-            rows = [r[:6] for r in rows]
+        size = path.stat().st_size
+        if size == 0:
+            raise PathError(f"waypoint file '{path}' is empty")
+        check_bound("waypoints.bytes", size, f"the size of '{path}'", PathError)
+        text = path.read_bytes().decode("utf-8")
+    except OSError as exc:
+        raise PathError(f"cannot read waypoint file '{path}': {exc.strerror or exc}") from None
+    except UnicodeDecodeError:
+        raise PathError(f"waypoint file '{path}' is not UTF-8 text") from None
+    try:
+        rows, times, degrees = _json_waypoints(text) if path.suffix.lower() == ".json" else _csv_waypoints(text)
+        check_bound("waypoints.count", len(rows), "the number of waypoints", PathError)
+        poses = tuple(taa_to_se3(r, degrees=degrees, what=f"waypoint {i}") for i, r in enumerate(rows))
+        if times is not None:
+            check_bound("plan.duration", times[-1], "the last waypoint time", PathError)
+        return EEPath(poses, kind, times)
+    except AssemblerError as exc:
+        raise PathError(f"waypoint file '{path}': {exc}") from None
+
+
+def _numbers(row: object, width: int) -> bool:
+    return type(row) is list and len(row) == width and all(type(x) in (int, float) for x in row)
+
+
+def _json_waypoints(text: str) -> tuple[list, tuple[float, ...] | None, bool]:
+    """(rows, times or None, degrees) of a JSON waypoint file."""
+    from .trajfile import strict_json
+
+    doc = strict_json(text, PathError)
+    if not isinstance(doc, dict) or "waypoints" not in doc:
+        raise PathError('expected a JSON object {"waypoints": [[x, y, z, rx, ry, rz], ...]}')
+    unknown = sorted(set(doc) - {"waypoints", "times", "degrees"})
+    if unknown:
+        raise PathError(f"unknown keys {unknown[:5]} (allowed: waypoints, times, degrees)"[:160])
+    rows, times, degrees = doc["waypoints"], doc.get("times"), doc.get("degrees", False)
+    if type(degrees) is not bool:
+        raise PathError(f'"degrees" must be true or false, got {json.dumps(degrees)[:40]}')
+    if not isinstance(rows, list):
+        raise PathError('"waypoints" must be a list of [x, y, z, rx, ry, rz] rows')
+    check_bound("waypoints.count", len(rows), "the number of waypoints", PathError)
     for i, r in enumerate(rows):
-        if not isinstance(r, list) or len(r) != 6:
-            raise PathError(f"'{path}': waypoint {i} must have 6 numbers x, y, z, rx, ry, rz")
-    poses = tuple(taa_to_se3(r, degrees=degrees, what=f"waypoint {i}") for i, r in enumerate(rows))
-    return EEPath(poses, kind, None if times is None else tuple(float(t) for t in times))
+        if not _numbers(r, 6):
+            raise PathError(f"waypoint {i} must be a list of 6 numbers x, y, z, rx, ry, rz")
+    if times is not None and not _numbers(times, len(rows)):
+        raise PathError(f'"times" must be a list of {len(rows)} numbers [s], one per waypoint')
+    return rows, None if times is None else tuple(float(t) for t in times), degrees
+
+
+_HEADERS = ("x,y,z,rx,ry,rz", "x,y,z,rx,ry,rz,t")
+
+
+def _csv_waypoints(text: str) -> tuple[list, tuple[float, ...] | None, bool]:
+    """(rows, times or None, degrees False) of a CSV waypoint file."""
+    lines = [ln.strip() for ln in text.splitlines()]
+    lines = [ln for ln in lines if ln and not ln.startswith("#")]
+    if lines and lines[0].replace(" ", "").lower() in _HEADERS:
+        lines = lines[1:]
+    elif lines and not _is_number(lines[0].split(",")[0]):
+        raise PathError(f"the header must be one of {' or '.join(_HEADERS)}")
+    if len(lines) > BOUNDS["waypoints.count"].high:
+        check_bound("waypoints.count", len(lines), "the number of waypoints", PathError)
+    rows = [ln.split(",") for ln in lines]
+    widths = {len(r) for r in rows}
+    if not widths <= {6, 7} or len(widths) > 1:
+        raise PathError("every CSV row must hold 6 numbers x,y,z,rx,ry,rz, or every row 7 (then t [s])")
+    try:
+        values = [[float(x) for x in r] for r in rows]
+    except ValueError as exc:
+        raise PathError(f"every CSV value must be a number: {str(exc)[:80]}") from None
+    if widths == {7}:
+        return [r[:6] for r in values], tuple(r[6] for r in values), False
+    return values, None, False
 
 
 def _is_number(text: str) -> bool:

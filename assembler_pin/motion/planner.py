@@ -29,8 +29,10 @@ from ..exceptions import OptionsError
 from ..kinematics import PlateArrays, plate_arrays, stack_forward_kinematics
 from ..model import AssemblerModel
 from ..optimize import MotionTerm, OptimizeOptions, optimize_internal_poses
+from ..progress import ProgressCallback
 from ..state import StackState, evaluate_state
 from ..validation import is_number
+from .guess import on_se3
 from .paths import EEPath
 
 __all__ = ["PlanOptions", "PlanResult", "plan_path"]
@@ -144,7 +146,7 @@ def _between_problems(
     guess = a.plates
     for t in np.arange(1, opts.checks_between + 1) / (opts.checks_between + 1):
         lengths = (1 - t) * a.leg_lengths + t * b.leg_lengths
-        fk = stack_forward_kinematics(am, lengths, base=a.plates.se3(0), guess=guess)
+        fk = stack_forward_kinematics(am, lengths, base=a.plates.se3(0), guess=on_se3(guess))
         if not fk.success:
             return f"stack FK between samples failed ({fk.message})", dev_p, dev_r
         guess = fk.plates
@@ -178,11 +180,33 @@ def _step(
     return state, "", result.time_s, (dev_p, dev_r)
 
 
+def _start_state(
+    am: AssemblerModel, path: EEPath, start: StackState | PlateArrays | list | None, opts: PlanOptions
+) -> tuple[StackState | None, str]:
+    """The valid state the plan starts from, or (None, why not)."""
+    first = path.at(0.0)
+    if start is None:
+        from ..solver import solve
+
+        solved = solve(am, first, options=opts.optimize)
+        if not solved.success:
+            return None, f"no valid pose at the path's start: {solved.message}"
+        return solved.optimized, ""
+    pa = start.plates if isinstance(start, StackState) else plate_arrays(am, start)
+    state = evaluate_state(am, pa, goal=first, tolerance=GoalTolerance(1e-6, 1e-6))
+    if not state.feasible:
+        return None, "the start state is not valid at the path's start: " + "; ".join(
+            str(v) for v in state.violations[:2]
+        )
+    return state, ""
+
+
 def plan_path(
     am: AssemblerModel,
     path: EEPath,
     start: StackState | PlateArrays | list | None = None,
     options: PlanOptions | None = None,
+    progress: ProgressCallback | None = None,
 ) -> PlanResult:
     """Force-optimized internal poses along an EE path (see module docstring).
 
@@ -192,30 +216,15 @@ def plan_path(
             ``am.home`` for a motion from the home pose). Default: the force-optimized
             solution of the path's first pose (:func:`~assembler_pin.solver.solve`).
         options: see :class:`PlanOptions`.
+        progress: called as ``(permille of the path done, 1000, note)`` after each sample.
     """
     opts = options or PlanOptions()
     t_start = time.perf_counter()
-    first = path.at(0.0)
-    if start is None:
-        from ..solver import solve
-
-        solved = solve(am, first, options=opts.optimize)
-        start_state = solved.optimized if solved.success else None
-        why = "" if solved.success else f"no valid pose at the path's start: {solved.message}"
-    else:
-        pa = start.plates if isinstance(start, StackState) else plate_arrays(am, start)
-        start_state = evaluate_state(am, pa, goal=first, tolerance=GoalTolerance(1e-6, 1e-6))
-        why = (
-            ""
-            if start_state.feasible
-            else "the start state is not valid at the path's start: "
-            + "; ".join(str(v) for v in start_state.violations[:2])
-        )
-        start_state = start_state if start_state.feasible else None
+    targets = list(path.parameters(opts.position_step, opts.rotation_step)[1:])  # bounded before planning
+    start_state, why = _start_state(am, path, start, opts)
     if start_state is None:
         return PlanResult(False, why, path, np.zeros(0), [], np.zeros(0), 0, (0.0, 0.0), time.perf_counter() - t_start,
                           opts.path_tolerance)  # fmt: skip
-    targets = list(path.parameters(opts.position_step, opts.rotation_step)[1:])
     params, states, times = [0.0], [start_state], [0.0]
     refinements, dev = 0, (0.0, 0.0)
     base_step = 1.0 / max(1, len(targets))
@@ -237,6 +246,8 @@ def plan_path(
         states.append(state)
         times.append(dt)
         dev = (max(dev[0], d[0]), max(dev[1], d[1]))
+        if progress is not None:
+            progress(round(1000 * u1 / path.segments), 1000, f"planning: {len(states)} samples")
     result = PlanResult(success, reason, path, np.array(params), states, np.array(times), refinements, dev,
                         time.perf_counter() - t_start, opts.path_tolerance)  # fmt: skip
     logger.info("plan: %s", result)
