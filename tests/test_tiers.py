@@ -34,7 +34,7 @@ def test_every_slow_entry_names_a_test_that_exists():
 def test_tier_markers_are_registered_and_applied(request):
     registered = {line.split(":", 1)[0].strip() for line in request.config.getini("markers")}
     assert set(TIERS) <= registered
-    assert request.config.getoption("strict_markers")
+    assert "--strict-markers" in (ROOT / "pyproject.toml").read_text(encoding="utf-8")
     # this very item went through the hook: a fast test of tests/, no tier of its own
     assert not {m.name for m in request.node.iter_markers()} & set(TIERS)
 
