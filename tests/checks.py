@@ -94,3 +94,94 @@ def assert_feasible(am, state, goal: pin.SE3 | None = None, tol: float = 1e-9) -
         for b, t in zip(*design_anchors(cfg, j), strict=True)] for j in range(cfg.platforms)])  # fmt: skip
     fk = stack_forward_kinematics(am, lengths).raise_if_failed()
     np.testing.assert_allclose(fk.as_matrices(), state.plates.as_matrices(), atol=1e-8)
+
+
+def _leg_free_body(cfg, L: np.ndarray, u: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Weights of motor and shaft and the part of the top-joint force normal to each leg.
+
+    A leg carries only forces on its own axis (the weights at the centres of mass and the
+    joint forces), so its universal joint carries no torque and the moments about the
+    bottom joint centre fix the normal part of the top force:
+    ``L·f⊥ + motor_com·w_m⊥ + (L - shaft_com)·w_s⊥ = 0``.
+    """
+    g = np.array([0.0, 0.0, -cfg.gravity])
+    w_m = np.broadcast_to(cfg.leg.motor_mass * g, u.shape)
+    w_s = np.broadcast_to(cfg.leg.shaft_mass * g, u.shape)
+
+    def normal(w):
+        return w - np.sum(w * u, axis=1, keepdims=True) * u
+
+    lever_m = cfg.leg.motor_com / L
+    lever_s = (L - cfg.leg.shaft_com) / L
+    f_normal = -(lever_m[:, None] * normal(w_m) + lever_s[:, None] * normal(w_s))
+    return w_m, w_s, f_normal
+
+
+def design_forces(cfg, plates) -> np.ndarray:
+    """Actuator forces [N, tension positive], (n, 6), by free bodies from the top plate down.
+
+    numpy only, from the design anchors: each plate's weight (and the payload's) and the
+    forces of the legs above it are balanced by the six legs below it, whose normal force
+    parts come from :func:`_leg_free_body` and whose six axial parts solve the plate's
+    force and moment balance. The actuator force is the axial force on the shaft,
+    ``(f_top + w_shaft)·u``. A second method to Pinocchio's statics (and to virtual work).
+    """
+    n, g = cfg.platforms, cfg.gravity
+    out = np.zeros((n, 6))
+    above = None  # (points, forces) the legs of the SP above apply to the current plate
+    for j in reversed(range(n)):
+        k = j + 1
+        points = [plates.p[k]]
+        loads = [np.array([0.0, 0.0, -cfg.plate.mass * g])]
+        if k == n:
+            points.append(plates.R[n] @ [0, 0, cfg.payload.offset] + plates.p[n])
+            loads.append(np.array([0.0, 0.0, -cfg.payload.mass * g]))
+        if above is not None:
+            points += list(above[0])
+            loads += list(above[1])
+        force = np.sum(loads, axis=0)
+        moment = np.sum([np.cross(c, f) for c, f in zip(points, loads, strict=True)], axis=0)
+        bottom, top = design_anchors(cfg, j)
+        b = bottom @ plates.R[j].T + plates.p[j]
+        t = top @ plates.R[k].T + plates.p[k]
+        L = np.linalg.norm(t - b, axis=1)
+        u = (t - b) / L[:, None]
+        w_m, w_s, f_normal = _leg_free_body(cfg, L, u)
+        # plate k: loads - Σ f_top = 0, f_top = a·u + f_normal (force of the plate on the leg)
+        A = np.vstack([u.T, np.cross(t, u).T])
+        rhs = np.concatenate([force - f_normal.sum(axis=0), moment - np.cross(t, f_normal).sum(axis=0)])
+        a = np.linalg.solve(A, rhs)
+        f_top = a[:, None] * u + f_normal
+        out[j] = np.sum((f_top + w_s) * u, axis=1)
+        above = (b, f_top + w_m + w_s)  # the leg pushes its bottom plate with -f_bottom = f_top + w
+    return out
+
+
+def design_plate_deviation(plates) -> np.ndarray:
+    """λ_k [rad], k = 1..n (paper eq. 9): angle between ``p_k - p_{k-1}`` and plate k-1's
+    normal (plate k rests straight above plate k-1, plates parallel, at home)."""
+    step = plates.p[1:] - plates.p[:-1]
+    normal = plates.R[:-1][:, :, 2]
+    # atan2 of |sin| and cos: arccos loses the small angles the optimizer drives towards 0
+    return np.arctan2(np.linalg.norm(np.cross(step, normal), axis=1), np.sum(step * normal, axis=1))
+
+
+def design_objective(cfg, plates, w1: float = 1.0, w2: float = 1.0) -> float:
+    """Ω = w1·max|F| + w2·sqrt(Σ λ_k²) (paper eq. 10) from :func:`design_forces` and
+    :func:`design_plate_deviation`."""
+    forces = design_forces(cfg, plates)
+    return float(w1 * np.abs(forces).max() + w2 * np.sqrt(np.sum(design_plate_deviation(plates) ** 2)))
+
+
+def design_problems(cfg, plates, goal: pin.SE3 | None = None, tol: float = 1e-9) -> list[str]:
+    """Every broken constraint of plate poses: :func:`kinematic_problems` and the tension and
+    compression limits on :func:`design_forces` (no package statics involved)."""
+    out = kinematic_problems(cfg, plates, goal, tol)
+    forces = design_forces(cfg, plates)
+    if not np.all(np.isfinite(forces)):
+        out.append("non-finite force")
+    if forces.max() > cfg.leg.max_tension:
+        out.append(f"tension {forces.max():.3f} N")
+    if forces.min() < -cfg.leg.max_compression:
+        out.append(f"compression {forces.min():.3f} N")
+    return out

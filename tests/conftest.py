@@ -1,6 +1,13 @@
-"""Shared fixtures and independent reference computations for the tests."""
+"""Shared fixtures, independent reference computations and the test tiers.
+
+Tiers (markers registered in pyproject.toml): every test runs by default; ``-m "not slow"``
+is the fast tier. :func:`pytest_collection_modifyitems` marks by module and by the measured
+list ``tests/slow_tests.txt``, so no test file carries tier decorators of its own.
+"""
 
 from __future__ import annotations
+
+from pathlib import Path
 
 import numpy as np
 import pinocchio as pin
@@ -71,3 +78,43 @@ def bent_plates(am):
     lengths[0, :3] = 0.22
     lengths[1, 3:] = 0.33
     return stack_forward_kinematics(am, lengths).raise_if_failed()
+
+
+# ---------------------------------------------------------------------- tiers
+SLOW_LIST = Path(__file__).with_name("slow_tests.txt")
+
+
+def read_slow_list(path: Path = SLOW_LIST) -> set[str]:
+    """Node ids of the slow tier (``tests/x.py::name`` or ``tests/x.py::name[params]``)."""
+    ids = set()
+    for line in path.read_text(encoding="utf-8").splitlines():
+        entry = line.split("  #", 1)[0].strip()
+        if entry and not entry.startswith("#"):
+            ids.add(entry)
+    return ids
+
+
+def tier_markers(item: pytest.Item, slow_ids: set[str]) -> list[str]:
+    """The tier markers of one collected test: by module, by name, and by the slow list."""
+    path = Path(str(item.path))
+    nodeid = item.nodeid.replace("\\", "/")
+    marks = []
+    if path.suffix == ".ipynb":
+        marks += ["notebook", "slow"]
+    if path.name == "test_mujoco.py":
+        marks.append("mujoco")
+    if path.name == "test_maps.py" and "dask" in item.name:
+        marks.append("dask")
+    if "browser" in item.name:
+        marks.append("browser")
+    if nodeid in slow_ids or nodeid.split("[", 1)[0] in slow_ids:
+        marks.append("slow")
+    return list(dict.fromkeys(marks))
+
+
+def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item]) -> None:
+    """Mark every collected item with its tiers (before ``-m`` selects among them)."""
+    slow_ids = read_slow_list()
+    for item in items:
+        for name in tier_markers(item, slow_ids):
+            item.add_marker(getattr(pytest.mark, name))

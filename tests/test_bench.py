@@ -3,15 +3,16 @@
 from __future__ import annotations
 
 import numpy as np
+from checks import sp_legs
 
-import assembler_pin as ap
 from assembler_pin.bench import benchmark_platform_count, format_sweep, random_reachable_plates
 
 
 def test_random_reachable_plates_are_the_fk_of_their_lengths(am):
     lengths, plates = random_reachable_plates(am, np.random.default_rng(0))
-    legs = ap.leg_state(am, plates)
-    np.testing.assert_allclose(legs.lengths, lengths, atol=1e-9)
+    for j in range(am.n):  # leg lengths from the design anchors
+        legs = sp_legs(am.config, j, plates.R[j], plates.p[j], plates.R[j + 1], plates.p[j + 1])[0]
+        np.testing.assert_allclose(legs, lengths[j], atol=1e-9)
 
 
 def test_one_stack_size_row():

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pinocchio as pin
 import pytest
-from checks import design_anchors
+from checks import design_anchors, sp_legs
 from conftest import random_se3
 
 from assembler_pin import (
@@ -74,6 +74,10 @@ def test_deflections(am, random_poses):
     rng = np.random.default_rng(2)
     for _, plates in random_poses:
         legs = leg_state(am, plates)
+        for j in range(am.n):  # both joints' deflections and the rise from the design anchors
+            _, bottom, top, rise = sp_legs(am.config, j, plates.R[j], plates.p[j], plates.R[j + 1], plates.p[j + 1])
+            np.testing.assert_allclose(legs.deflection[j], np.stack([bottom, top], axis=-1), atol=1e-7)
+            np.testing.assert_allclose(legs.rise[j], rise, atol=1e-14)
         # second method for the bottom joint: the universal joint's two angles
         q = q_from_plates(am, plates)
         ux, uy = q[am.leg_idx_q[:, :, 0]], q[am.leg_idx_q[:, :, 1]]
@@ -90,8 +94,7 @@ def test_deflections(am, random_poses):
     p = plates.p.copy()
     p[2:] = (p[2:] - p[1]) @ tilt.T + p[1]
     legs = leg_state(am, PlateArrays(R, p))
-    d_top = legs.dir_in_top[0]
-    expected = np.arccos(np.clip(np.einsum("ik,ik->i", d_top, am.geometry.home_direction[0]), -1, 1))
+    expected = sp_legs(am.config, 0, R[0], p[0], R[1], p[1])[2]  # top deflections from the design anchors
     assert np.allclose(legs.deflection[0, :, 1], expected) and expected.max() > 0.05
 
 

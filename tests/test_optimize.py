@@ -5,15 +5,17 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from checks import assert_feasible
+from checks import assert_feasible, design_objective, design_problems
 
 from assembler_pin import AssemblerModel, GoalTolerance, load_config
-from assembler_pin.optimize import OptimizeOptions, objective_value, optimize_internal_poses
+from assembler_pin.optimize import OptimizeOptions, optimize_internal_poses
 
 
 def _assert_feasible_independently(am, state, goal=None, tol=1e-9):
-    """Every constraint of the paper, recomputed from the design (:mod:`checks`)."""
+    """Every constraint of the paper, recomputed from the design (:mod:`checks`), the
+    forces both by the package's statics and by free bodies."""
     assert_feasible(am, state, goal, tol)
+    assert design_problems(am.config, state.plates, goal, tol) == []
 
 
 @pytest.fixture(scope="module")
@@ -27,7 +29,9 @@ def test_optimized_state_is_feasible_and_better(am, start):
     _assert_feasible_independently(am, result.optimized, goal=start.se3(am.n))
     assert result.objective_optimized <= result.objective_initial
     assert result.optimized.max_abs_force <= result.initial.max_abs_force
-    assert result.objective_optimized == pytest.approx(objective_value(am, result.optimized))
+    # Ω (paper eq. 10) of both states, from free-body forces and plate normals (checks.py)
+    assert result.objective_initial == pytest.approx(design_objective(am.config, start), rel=1e-9)
+    assert result.objective_optimized == pytest.approx(design_objective(am.config, result.optimized.plates), rel=1e-9)
     # plate 0 and the EE did not move
     assert np.allclose(result.optimized.plates.as_matrices()[[0, -1]], start.as_matrices()[[0, -1]])
 
@@ -37,8 +41,20 @@ def test_smooth_method_beats_or_matches_the_paper_baseline(am, start):
     paper = optimize_internal_poses(am, start, options=OptimizeOptions(method="paper", max_iterations=60))
     _assert_feasible_independently(am, paper.optimized, goal=start.se3(am.n))
     assert paper.objective_optimized <= paper.objective_initial
+    assert paper.objective_optimized == pytest.approx(design_objective(am.config, paper.optimized.plates), rel=1e-9)
     assert smooth.objective_optimized <= paper.objective_optimized + 1e-6
     assert smooth.evaluations < paper.evaluations
+
+
+def test_weighted_objective_is_the_papers(am, start):
+    """With w2 ≠ w1 the two terms of Ω are told apart: each weight on its own term."""
+    result = optimize_internal_poses(am, start, options=OptimizeOptions(w1=0.5, w2=20.0))
+    assert result.success
+    assert result.objective_initial == pytest.approx(design_objective(am.config, start, 0.5, 20.0), rel=1e-9)
+    optimized = design_objective(am.config, result.optimized.plates, 0.5, 20.0)
+    assert result.objective_optimized == pytest.approx(optimized, rel=1e-9)
+    assert optimized <= result.objective_initial
+    _assert_feasible_independently(am, result.optimized, goal=start.se3(am.n))
 
 
 def test_deterministic(am, start):

@@ -4,8 +4,9 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from checks import design_problems, sp_legs
 
-from assembler_pin import leg_state, solve_statics, stack_forward_kinematics
+from assembler_pin import stack_forward_kinematics
 from assembler_pin.reproduce import random_valid_poses, run_scenarios, summary_table
 
 
@@ -18,14 +19,13 @@ def test_random_valid_poses_are_valid_independently(am, outcome):
     goal = outcome.scenario.goal
     poses = random_valid_poses(am, goal, outcome.initial, 4)
     assert poses
-    leg = am.config.leg
+    cfg = am.config
     for state in poses:
-        legs = leg_state(am, state.plates)
-        forces = solve_statics(am, state.plates).forces
-        assert leg.min_length <= legs.lengths.min() and legs.lengths.max() <= leg.max_length
-        assert legs.deflection.max() <= np.deg2rad(leg.max_deflection_deg) and legs.rise.min() > 0
-        assert np.abs(forces).max() <= leg.max_tension
-        fk = stack_forward_kinematics(am, legs.lengths).raise_if_failed()
+        pa = state.plates
+        # every constraint from the design anchors and free-body forces (checks.py)
+        assert design_problems(cfg, pa, goal=goal, tol=1e-9) == []
+        lengths = np.array([sp_legs(cfg, j, pa.R[j], pa.p[j], pa.R[j + 1], pa.p[j + 1])[0] for j in range(am.n)])
+        fk = stack_forward_kinematics(am, lengths).raise_if_failed()
         np.testing.assert_allclose(fk.as_matrices()[-1], goal.homogeneous, atol=1e-9)
     # they are different poses, not one pose repeated
     assert len({round(float(s.max_abs_force), 6) for s in poses}) == len(poses)

@@ -6,6 +6,7 @@ from __future__ import annotations
 import numpy as np
 import pinocchio as pin
 import pytest
+from checks import design_forces, design_problems, home_directions
 
 import assembler_pin as ap
 import assembler_pin.statics as statics_module
@@ -59,14 +60,15 @@ def test_a_64_platform_stack_builds_and_holds_its_weight():
     np.testing.assert_allclose(result.base_wrench[3:], 0.0, atol=1e-9)
     # at home each platform's six legs share the weight above their top plate equally
     cfg = am.config
-    geo = ap.leg_geometry(cfg)
-    axial_z = geo.home_direction[0, 0, 2]
+    axial_z = home_directions(cfg, 0)[0, 2]
     above = [cfg.payload.mass + (64 - j) * cfg.plate.mass + 6 * (63 - j) * (cfg.leg.motor_mass + cfg.leg.shaft_mass)
              for j in range(64)]  # fmt: skip
     # legs' own weight adds to the compression; bounds: without and with the whole leg weight
     low = -np.array(above) * cfg.gravity / (6 * axial_z)
     legs = (cfg.leg.motor_mass + cfg.leg.shaft_mass) * cfg.gravity / axial_z
     assert np.all(result.forces.max(axis=1) <= low + 1e-9) and np.all(result.forces.min(axis=1) >= low - legs)
+    # and exactly: free bodies of the legs and plates (checks.py)
+    np.testing.assert_allclose(result.forces, design_forces(cfg, ap.plate_arrays(am, am.home)), atol=1e-9)
     with pytest.raises(ap.ConfigError, match="gigabytes"):
         _ = am.data
 
@@ -82,9 +84,9 @@ def test_stacks_of_any_size_solve_their_own_reachable_goals(n):
     state = result.optimized
     fk = ap.stack_forward_kinematics(am, state.leg_lengths).raise_if_failed()
     np.testing.assert_allclose(fk.as_matrices()[-1], goal.homogeneous, atol=1e-9)
-    leg = am.config.leg
-    assert leg.min_length <= state.leg_lengths.min() and state.leg_lengths.max() <= leg.max_length
-    np.testing.assert_allclose(state.forces, ap.solve_statics(am, fk).forces, atol=1e-6)
+    # every constraint and the forces, from the design anchors and free bodies (checks.py)
+    assert design_problems(am.config, state.plates, goal=goal) == []
+    np.testing.assert_allclose(state.forces, design_forces(am.config, fk), atol=1e-6)
     if n <= 6:
         np.testing.assert_allclose(state.forces, whole_stack_forces(am, state.plates), atol=1e-9)
 

@@ -5,20 +5,50 @@ from __future__ import annotations
 import json
 
 import numpy as np
-from checks import kinematic_problems
+import pinocchio as pin
+import pytest
+from checks import design_forces, design_problems
 
 import assembler_pin as ap
 
+#: limits that split the random poses into feasible and infeasible ones, each by one rule
+_TIGHT = {
+    "default": {},
+    "tension": {"leg": {"max_tension": 40.0}},
+    "compression": {"leg": {"max_compression": 75.0}},
+    "deflection": {"leg": {"max_deflection_deg": 27.0}},
+    "stroke": {"leg": {"min_length": 0.222, "max_length": 0.32}},
+    "goal": {},
+}
 
-def test_feasible_exactly_when_every_constraint_holds(am, random_poses):
-    leg = am.config.leg
+
+def test_forces_equal_the_free_body_statics(am, random_poses):
+    """Pinocchio's statics against a second method: free bodies of the legs and plates."""
     for _, plates in random_poses:
-        state = ap.evaluate_state(am, plates)
-        independent_ok = kinematic_problems(am.config, plates) == [] and np.all(
-            np.abs(state.forces) <= max(leg.max_tension, leg.max_compression)
-        )
-        assert state.feasible == independent_ok
-        assert state.feasible == (state.violations == [])
+        forces = ap.evaluate_state(am, plates).forces
+        reference = design_forces(am.config, plates)
+        np.testing.assert_allclose(forces, reference, rtol=1e-9, atol=1e-9 * np.abs(reference).max())
+
+
+@pytest.mark.parametrize("limits", list(_TIGHT))
+def test_feasible_exactly_when_the_design_checks_pass(random_poses, limits):
+    """`feasible` against every constraint recomputed from the design (forces included)."""
+    am = ap.AssemblerModel.from_config(ap.load_config(_TIGHT[limits]))
+    tol = ap.GoalTolerance()
+    assert tol.position == tol.rotation
+    verdicts = []
+    for k, (_, plates) in enumerate(random_poses):
+        goal = plates.se3(am.n)
+        if limits == "goal" and k % 2:  # every other goal a little off, in position or in rotation
+            goal = goal * pin.exp6(np.roll([3 * tol.position, 0, 0, 0, 0, 0], 3 * (k % 4 == 1)))
+        state = ap.evaluate_state(am, plates, goal=goal, tolerance=tol)
+        problems = design_problems(am.config, plates, goal=goal, tol=tol.position)
+        assert state.feasible == (problems == []), problems
+        verdicts.append(state.feasible)
+    if limits == "default":
+        assert all(verdicts)
+    else:
+        assert any(verdicts) and not all(verdicts), f"the {limits} case does not split the poses"
 
 
 def test_a_stretched_leg_is_reported_with_its_place_and_amount(am, random_poses):

@@ -1,0 +1,57 @@
+"""The test tiers: the slow list names real tests, and every tier marker is registered."""
+
+from __future__ import annotations
+
+import ast
+from pathlib import Path
+from types import SimpleNamespace
+
+import pytest
+from conftest import SLOW_LIST, read_slow_list, tier_markers
+
+ROOT = Path(__file__).parents[1]
+TIERS = ("slow", "browser", "mujoco", "dask", "notebook")
+
+
+def _test_names(path: Path) -> set[str]:
+    tree = ast.parse(path.read_text(encoding="utf-8"))
+    return {n.name for n in ast.walk(tree) if isinstance(n, ast.FunctionDef) and n.name.startswith("test_")}
+
+
+def test_every_slow_entry_names_a_test_that_exists():
+    entries = read_slow_list()
+    assert entries, f"{SLOW_LIST} is empty"
+    names: dict[str, set[str]] = {}
+    for entry in sorted(entries):
+        file, _, test = entry.partition("::")
+        assert test, f"{entry}: expected tests/<file>.py::<test>"
+        path = ROOT / file
+        assert path.is_file(), f"{entry}: no file {file}"
+        names.setdefault(file, _test_names(path))
+        assert test.split("[", 1)[0] in names[file], f"{entry}: no such test in {file}"
+
+
+def test_tier_markers_are_registered_and_applied(request):
+    registered = {line.split(":", 1)[0].strip() for line in request.config.getini("markers")}
+    assert set(TIERS) <= registered
+    assert "--strict-markers" in (ROOT / "pyproject.toml").read_text(encoding="utf-8")
+    # this very item went through the hook: a fast test of tests/, no tier of its own
+    assert not {m.name for m in request.node.iter_markers()} & set(TIERS)
+
+
+@pytest.mark.parametrize(
+    ("nodeid", "expected"),
+    [
+        ("tests/test_mujoco.py::test_x", ["mujoco"]),
+        ("tests/test_maps.py::test_map_on_dask[2]", ["dask"]),
+        ("tests/test_maps.py::test_grid", []),
+        ("tests/test_viewer.py::test_page_in_a_real_browser", ["browser"]),
+        ("notebooks/quickstart.ipynb", ["notebook", "slow"]),
+    ],
+)
+def test_markers_by_module_and_name(nodeid, expected):
+    file, _, name = nodeid.partition("::")
+    item = SimpleNamespace(path=ROOT / file, nodeid=nodeid, name=name or file)
+    assert tier_markers(item, set()) == expected
+    # the slow list marks by node id, a bare name every parametrization
+    assert "slow" in tier_markers(item, {nodeid}) and "slow" in tier_markers(item, {nodeid.split("[")[0]})
