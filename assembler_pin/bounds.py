@@ -62,6 +62,7 @@ BOUNDS: dict[str, Bound] = {
     "simulate.drift_tolerance": Bound(1e-6, 1000.0, "mm", False, "simulate --drift-tolerance"),
     "leg.max_speed": Bound(1e-4, 100.0, "m/s", False, "config leg.max_speed: a leg's largest length rate"),
     "leg.max_acceleration": Bound(1e-4, 1000.0, "m/s^2", False, "config leg.max_acceleration"),
+    "leg.stiffness": Bound(1e3, 1e10, "N/m", False, "config leg.stiffness: a leg's axial stiffness"),
     "config.platforms": Bound(1, 64, "", True, "config platforms: Stewart platforms in the stack"),
     "batch.stacks": Bound(1, 10_000_000, "", True, "stacks in one batched statics call"),
 }

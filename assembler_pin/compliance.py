@@ -1,0 +1,225 @@
+"""The loaded pose of commanded leg lengths, and the lengths to command for a wanted pose.
+
+With legs of axial stiffness ``k = leg.stiffness`` (:mod:`assembler_pin.elastic`), commanding
+lengths ``L0`` does not put the plates at the rigid pose of ``L0`` (its forward kinematics):
+gravity, the payload and any wrench on the EE stretch or compress every leg by ``F / k``.
+
+* :func:`loaded_pose` — the nonlinear elastic equilibrium of commanded lengths: the plates, the
+  EE's sag from the rigid pose, the leg forces ``F = k (L - L0)`` (tension positive).
+* :func:`compensated_lengths` — the commanded lengths whose loaded equilibrium is a given pose:
+  ``L0 = L - F / k`` with ``F`` the statics forces of that pose (a leg in compression is
+  commanded longer than it ends up), confirmed by :func:`loaded_pose`.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+import numpy.typing as npt
+import pinocchio as pin
+
+from .elastic import solve_equilibrium
+from .exceptions import LoadError
+from .kinematics import PlateArrays, leg_vectors, plate_arrays, stack_forward_kinematics
+from .model import AssemblerModel
+from .statics import CONDITION_LIMIT, solve_statics
+from .stiffness import line_conditions, stiffness
+from .validation import as_float_array
+
+__all__ = [
+    "MAX_WRENCH",
+    "CompensatedLengths",
+    "LoadedPose",
+    "benchmark_stiffness",
+    "compensated_lengths",
+    "loaded_pose",
+]
+
+#: Largest force [N] or moment [N·m] component of an EE wrench accepted.
+MAX_WRENCH = 1e6
+
+
+@dataclass(frozen=True)
+class LoadedPose:
+    """The elastic equilibrium of commanded leg lengths (:func:`loaded_pose`).
+
+    Attributes:
+        plates: the loaded plate poses (the last iterate when not ``success``).
+        rigid: the rigid pose of the commanded lengths (stack forward kinematics).
+        translation, rotation: (3,) the EE's sag, loaded against rigid [m, rad], world axes
+            (rotation vector ``log3(R_loaded R_rigidᵀ)``).
+        forces: (n, 6) leg forces ``k (L - L0)`` [N], tension positive.
+        lengths: (n, 6) the loaded pin-to-pin lengths [m]; commanded: (n, 6) ``L0`` [m].
+        iterations: Newton steps; residual: the last step's size [m] (distance left).
+        success: converged to a stable equilibrium with no singular platform; message: why not.
+    """
+
+    plates: PlateArrays
+    rigid: PlateArrays
+    translation: np.ndarray
+    rotation: np.ndarray
+    forces: np.ndarray
+    lengths: np.ndarray
+    commanded: np.ndarray
+    iterations: int
+    residual: float
+    success: bool
+    message: str
+
+    def __repr__(self) -> str:
+        return (f"LoadedPose(success={self.success}, EE sag {1e3 * float(np.linalg.norm(self.translation)):.4f} mm "
+                f"{np.rad2deg(float(np.linalg.norm(self.rotation))):.4f} deg, max|F| "
+                f"{float(np.abs(self.forces).max()):.3f} N, {self.iterations} steps, message={self.message!r})")  # fmt: skip
+
+    def to_dict(self) -> dict:
+        return {"success": self.success, "message": self.message,
+                "sag": {"translation": self.translation.tolist(), "rotation": self.rotation.tolist()},
+                "leg_forces": self.forces.tolist(), "lengths": self.lengths.tolist(),
+                "commanded": self.commanded.tolist(), "plates": self.plates.as_matrices().tolist(),
+                "iterations": self.iterations, "residual_m": self.residual}  # fmt: skip
+
+
+def _checked_wrench(wrench: npt.ArrayLike | None) -> np.ndarray | None:
+    if wrench is None:
+        return None
+    w = as_float_array(wrench, "EE wrench (six numbers fx fy fz mx my mz)", (6,))
+    if not np.all(np.isfinite(w)):
+        raise LoadError(f"EE wrench contains NaN or infinite values: {w.tolist()}")
+    if np.abs(w).max() > MAX_WRENCH:
+        raise LoadError(f"EE wrench components must be at most {MAX_WRENCH:g} N or N·m in magnitude, "
+                        f"got {np.abs(w).max():.3g}")  # fmt: skip
+    return w
+
+
+def loaded_pose(
+    am: AssemblerModel,
+    lengths: npt.ArrayLike,
+    wrench: npt.ArrayLike | None = None,
+    base: pin.SE3 | npt.ArrayLike | None = None,
+    tol: float = 1e-12,
+    max_iterations: int = 30,
+) -> LoadedPose:
+    """The plates' elastic equilibrium under gravity, payload and ``wrench`` for commanded lengths.
+
+    Newton's method on the plate poses (SE(3) increments, the exact tangent stiffness of
+    :mod:`assembler_pin.elastic`) from the rigid pose of ``lengths``.
+
+    Args:
+        lengths: (n, 6) commanded (unloaded) pin-to-pin lengths [m].
+        wrench: (6,) ``[f, m]`` applied to the EE plate [N, N·m], world axes, moment about
+            the EE origin (default none).
+        base: plate 0's world pose (default identity).
+        tol: largest Newton step accepted as converged [m] (rotations times the node radius).
+
+    Raises:
+        PoseError: malformed lengths or base. LoadError: a non-finite or absurd wrench.
+    """
+    w = _checked_wrench(wrench)
+    rest = as_float_array(lengths, "leg lengths", (am.n, 6))
+    fk = stack_forward_kinematics(am, rest, base=base)
+    rigid = fk.plates
+    k = float(am.config.leg.stiffness)
+    nan = np.full((am.n, 6), np.nan)
+    if not fk.success:
+        return LoadedPose(rigid, rigid, np.full(3, np.nan), np.full(3, np.nan), nan, nan, rest, 0, math.inf, False,
+                          f"the commanded lengths have no rigid pose: {fk.message}")  # fmt: skip
+    eq = solve_equilibrium(am, rigid.R, rigid.p, rest, k, wrench=w, tol=tol, max_iterations=max_iterations)
+    message = eq.message
+    if message is None:
+        cond = line_conditions(am, eq.R, eq.terms.lines[..., :3])
+        scale = np.r_[np.ones(3), np.full(3, am.config.plate.node_radius)]
+        sym = 0.5 * (eq.schur + np.swapaxes(eq.schur, 1, 2)) * scale[:, None] * scale
+        if not cond.max() <= CONDITION_LIMIT:
+            message = f"the loaded pose puts platform {int(np.argmax(cond))} at a singular configuration"
+        elif not np.linalg.eigvalsh(sym).min() > 0:
+            message = "the loaded equilibrium is not stable (the stack buckles under this load)"
+    plates = PlateArrays(eq.R, eq.p)
+    if message is not None:
+        return LoadedPose(plates, rigid, np.full(3, np.nan), np.full(3, np.nan), nan, nan, rest, eq.iterations,
+                          eq.step, False, message)  # fmt: skip
+    now = leg_vectors(am, plates)[3]  # at the final pose (the terms are one tiny step behind it)
+    return LoadedPose(plates, rigid, eq.p[-1] - rigid.p[-1], pin.log3(eq.R[-1] @ rigid.R[-1].T), k * (now - rest),
+                      now, rest, eq.iterations, eq.step, True, "converged")  # fmt: skip
+
+
+@dataclass(frozen=True)
+class CompensatedLengths:
+    """Commanded lengths that put the loaded stack at a given pose (:func:`compensated_lengths`).
+
+    Attributes:
+        lengths: (n, 6) the lengths to command [m]; geometric: (n, 6) the pose's own lengths [m].
+        forces: (n, 6) the statics forces of the pose [N, tension positive].
+        check: the :class:`LoadedPose` of ``lengths`` (the confirmation).
+        error: largest distance of a loaded plate from the wanted pose [m] (rotations
+            times the node radius).
+        success: the check converged and ``error`` ≤ ``tolerance``; message: why not.
+    """
+
+    lengths: np.ndarray
+    geometric: np.ndarray
+    forces: np.ndarray
+    check: LoadedPose
+    error: float
+    success: bool
+    message: str
+
+    def __repr__(self) -> str:
+        return (f"CompensatedLengths(success={self.success}, largest correction "
+                f"{1e3 * float(np.abs(self.lengths - self.geometric).max()):.4f} mm, plates within "
+                f"{self.error:.2g} m, message={self.message!r})")  # fmt: skip
+
+
+def compensated_lengths(
+    am: AssemblerModel, plates: PlateArrays | Sequence | np.ndarray, tolerance: float = 1e-9
+) -> CompensatedLengths:
+    """The commanded lengths ``L - F / k`` whose loaded equilibrium is ``plates`` (to ``tolerance``
+    [m]), ``F`` the statics forces (:func:`~assembler_pin.statics.solve_statics`, tension
+    positive) and ``L`` the pose's lengths; confirmed by :func:`loaded_pose`.
+
+    Raises:
+        PoseError: malformed plates. SingularConfigurationError: the pose is singular.
+    """
+    pa = plate_arrays(am, plates)
+    statics = solve_statics(am, pa, raise_on_singular=True)
+    geometric = leg_vectors(am, pa)[3]
+    cmd = geometric - statics.forces / float(am.config.leg.stiffness)
+    check = loaded_pose(am, cmd, base=pa.se3(0), tol=min(1e-12, 1e-3 * tolerance))
+    scale = am.config.plate.node_radius
+    if check.success:
+        rot = np.einsum("kab,kab->k", check.plates.R, pa.R)  # trace(Rᵀ R') = 1 + 2 cos θ
+        angle = np.arccos(np.clip(0.5 * (rot - 1.0), -1.0, 1.0))
+        error = max(float(np.abs(check.plates.p - pa.p).max()), scale * float(angle.max()))
+    else:
+        error = math.inf
+    ok = check.success and error <= tolerance
+    message = "ok" if ok else check.message if not check.success else (
+        f"the loaded pose of the compensated lengths is {error:.3g} m from the pose (> {tolerance:g} m)")  # fmt: skip
+    return CompensatedLengths(cmd, geometric, statics.forces, check, error, ok, message)
+
+
+def benchmark_stiffness(am: AssemblerModel, repeat: int = 200) -> dict[str, float]:
+    """Median wall time [s] per call of :func:`~assembler_pin.stiffness.stiffness`,
+    :func:`loaded_pose` and :func:`compensated_lengths` at the home pose (and, for scale,
+    :func:`~assembler_pin.statics.solve_statics`)."""
+    pa = plate_arrays(am, am.home)
+    lengths = compensated_lengths(am, pa).lengths
+    calls = {
+        "stiffness": lambda: stiffness(am, pa),
+        "loaded_pose": lambda: loaded_pose(am, lengths),
+        "compensated_lengths": lambda: compensated_lengths(am, pa),
+        "solve_statics": lambda: solve_statics(am, pa),
+    }
+    out = {}
+    for name, call in calls.items():
+        call()
+        times = []
+        for _ in range(repeat):
+            t0 = time.perf_counter()
+            call()
+            times.append(time.perf_counter() - t0)
+        out[name] = float(np.median(times))
+    return out
