@@ -1,0 +1,231 @@
+"""The Assembler as a compliant truss: stiffness, loaded pose and compensated lengths, each held
+to an independent computation.
+
+The reference here is a nonlinear elastic equilibrium written from the design alone: the total
+potential (legs as springs ½k(L−L0)², the weight of plates, motors, shafts and payload placed from
+the plate poses and the design anchors of ``checks.py``, as ``conftest.potential_energy`` does),
+its exact gradient by complex-step differentiation, minimized by ``scipy.optimize.minimize``. The
+EE compliance is the finite difference of that equilibrium under small EE wrenches.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pinocchio as pin
+import pytest
+from checks import design_anchors
+from conftest import potential_energy
+from scipy.optimize import minimize
+
+import assembler_pin as ap
+from assembler_pin.compliance import compensated_lengths, loaded_pose
+from assembler_pin.stiffness import stiffness
+
+STEP = 1e-20  # complex step
+
+
+def _rotations(w: np.ndarray) -> np.ndarray:
+    """exp3 of rotation vectors (..., 3), real or complex (series near 0: analytic everywhere)."""
+    th2 = (w * w).sum(axis=-1)
+    small = np.abs(th2) < 1e-4
+    safe2 = np.where(small, 1.0, th2)
+    th = np.sqrt(safe2)
+    series_a = 1 - th2 / 6 + th2**2 / 120 - th2**3 / 5040 + th2**4 / 362880
+    series_b = 0.5 - th2 / 24 + th2**2 / 720 - th2**3 / 40320 + th2**4 / 3628800
+    a = np.where(small, series_a, np.sin(th) / th)
+    b = np.where(small, series_b, (1 - np.cos(th)) / safe2)
+    K = np.zeros((*w.shape, 3), dtype=w.dtype)
+    K[..., 0, 1], K[..., 0, 2], K[..., 1, 2] = -w[..., 2], w[..., 1], -w[..., 0]
+    K[..., 1, 0], K[..., 2, 0], K[..., 2, 1] = w[..., 2], -w[..., 1], w[..., 0]
+    return a[..., None, None] * K + b[..., None, None] * (K @ K)  # exp3(w) - I
+
+
+class ElasticStack:
+    """The total potential of the stack as a function of plate increments ``x`` (6n: per plate
+    1..n a translation and a rotation vector, world axes: ``p = p_ref + δp``, ``R = exp3(w) R_ref``),
+    measured from the reference pose so that no digits cancel near the minimum."""
+
+    def __init__(self, cfg, R, p, rest, k, wrench=None):
+        self.cfg, self.n, self.k = cfg, cfg.platforms, k
+        self.R, self.p = np.array(R, dtype=float), np.array(p, dtype=float)
+        self.wrench = np.zeros(6) if wrench is None else np.asarray(wrench, float)
+        anchors = [design_anchors(cfg, j) for j in range(self.n)]
+        self.bottom = np.array([np.asarray(b) @ self.R[j].T for j, (b, _) in enumerate(anchors)])  # (n, 6, 3) world
+        self.top = np.array([np.asarray(t) @ self.R[j + 1].T for j, (_, t) in enumerate(anchors)])
+        self.d_ref = self.top + self.p[1:, None] - self.bottom - self.p[:-1, None]
+        self.L_ref = np.sqrt((self.d_ref**2).sum(-1))
+        self.offset = self.L_ref - rest  # the springs' stretch at the reference
+
+    def energy(self, x: np.ndarray) -> np.ndarray:
+        """V(x) − V(0) [J] for a batch x (B, 6n), real or complex."""
+        cfg, n = self.cfg, self.n
+        leg, g = cfg.leg, cfg.gravity
+        x = x.reshape(x.shape[0], n, 6)
+        dp, dR = x[..., :3], _rotations(x[..., 3:])  # (B, n, 3), (B, n, 3, 3) = exp3 - I
+        zeros = np.zeros((x.shape[0], 1, 3), dtype=x.dtype)
+        # displacement of every point: plate origin's plus (exp3(w) - I) r
+        move_b = np.concatenate([zeros, dp[:, :-1]], 1)[:, :, None] + np.einsum(
+            "bjkl,jil->bjik", np.concatenate([np.zeros((x.shape[0], 1, 3, 3), x.dtype), dR[:, :-1]], 1), self.bottom)
+        move_t = dp[:, :, None] + np.einsum("bjkl,jil->bjik", dR, self.top)
+        dd = move_t - move_b
+        d = self.d_ref + dd
+        dL = (dd * (d + self.d_ref)).sum(-1) / (np.sqrt((d * d).sum(-1)) + self.L_ref)  # L − L_ref
+        springs = 0.5 * self.k * (dL * (dL + 2 * self.offset)).sum((1, 2))
+        L = self.L_ref + dL
+        du = d / L[..., None] - self.d_ref / self.L_ref[..., None]
+        motors = leg.motor_mass * g * (move_b[..., 2] + leg.motor_com * du[..., 2]).sum((1, 2))
+        shafts = leg.shaft_mass * g * (move_t[..., 2] - leg.shaft_com * du[..., 2]).sum((1, 2))
+        plates = cfg.plate.mass * g * dp[..., 2].sum(1)
+        payload_lever = self.R[n] @ np.array([0.0, 0.0, cfg.payload.offset])
+        payload = cfg.payload.mass * g * (dp[:, -1, 2] + (dR[:, -1] @ payload_lever)[:, 2])
+        work = x[:, -1] @ self.wrench
+        return springs + motors + shafts + plates + payload - work
+
+    def gradient(self, x: np.ndarray) -> np.ndarray:
+        m = x.size
+        return self.energy(x[None] + 1j * STEP * np.eye(m)).imag / STEP
+
+    def hessian(self, x: np.ndarray, h: float = 1e-7) -> np.ndarray:
+        m = x.size
+        cols = [(self.gradient(x + h * e) - self.gradient(x - h * e)) / (2 * h) for e in np.eye(m)]
+        H = np.array(cols)
+        return 0.5 * (H + H.T)
+
+    def solve(self, hess: np.ndarray, x0: np.ndarray | None = None) -> np.ndarray:
+        """The minimum of the potential: ``scipy.optimize.minimize`` (trust region), then Newton
+        steps on the exact gradient to polish the digits the energy values cannot resolve
+        (near the minimum V changes by less than its rounding)."""
+        x0 = np.zeros(6 * self.n) if x0 is None else x0
+        res = minimize(lambda x: float(self.energy(x[None])[0].real), x0, jac=self.gradient,
+                       hess=lambda x: hess, method="trust-exact", options={"gtol": 1e-10, "maxiter": 200})  # fmt: skip
+        x = res.x
+        for _ in range(20):
+            grad = self.gradient(x)
+            if np.abs(grad).max() < 1e-12:
+                break
+            x = x - np.linalg.solve(hess, grad)
+        assert np.abs(self.gradient(x)).max() < 1e-11, res.message
+        return x
+
+    def moved(self, x: np.ndarray, rest, wrench=None) -> ElasticStack:
+        """The same stack referenced at the plates moved by x."""
+        xs = x.reshape(self.n, 6)
+        R = self.R.copy()
+        p = self.p.copy()
+        R[1:] = (np.eye(3) + _rotations(xs[:, 3:])) @ R[1:]
+        p[1:] += xs[:, :3]
+        return ElasticStack(self.cfg, R, p, rest, self.k, wrench)
+
+
+def _design_lengths(cfg, pa) -> np.ndarray:
+    out = []
+    for j in range(cfg.platforms):
+        b, t = design_anchors(cfg, j)
+        out.append(np.linalg.norm(t @ pa.R[j + 1].T + pa.p[j + 1] - b @ pa.R[j].T - pa.p[j], axis=1))
+    return np.array(out)
+
+
+def _fd_compliance(stack: ElasticStack, rest, guess_compliance: np.ndarray, scale: float) -> np.ndarray:
+    """Central differences of the EE's equilibrium displacement under small EE wrenches."""
+    hess = stack.hessian(np.zeros(6 * stack.n))
+    C = np.empty((6, 6))
+    for i in range(6):
+        target = 1e-6 if i < 3 else 1e-6 / scale  # about a micrometre of motion
+        eps = target / guess_compliance[i, i]
+        e = np.zeros(6)
+        e[i] = eps
+        plus = ElasticStack(stack.cfg, stack.R, stack.p, rest, stack.k, e).solve(hess)[-6:]
+        minus = ElasticStack(stack.cfg, stack.R, stack.p, rest, stack.k, -e).solve(hess)[-6:]
+        C[:, i] = (plus - minus) / (2 * eps)
+    return C
+
+
+def _scaled_error(A: np.ndarray, B: np.ndarray, scale: float) -> float:
+    """‖A − B‖ / ‖B‖ with rotations measured as arcs of the node radius (one unit: N/m or m/N)."""
+    D = np.r_[np.ones(3), np.full(3, 1.0 / scale)]
+    if np.abs(B[:3, :3]).max() < 1.0:  # a compliance: the inverse scaling
+        D = 1.0 / D
+    return float(np.linalg.norm(D[:, None] * (A - B) * D) / np.linalg.norm(D[:, None] * B * D))
+
+
+def _pose(am, kind: str):
+    if kind == "home":
+        return ap.plate_arrays(am, am.home)
+    rng = np.random.default_rng(7 + am.n)
+    leg = am.config.leg
+    while True:
+        fk = ap.stack_forward_kinematics(am, rng.uniform(leg.min_length + 0.02, leg.max_length - 0.02, (am.n, 6)))
+        if fk.success:
+            return fk.plates
+
+
+_MODELS: dict = {}
+
+
+def _model(overrides: dict) -> ap.AssemblerModel:
+    key = repr(sorted(overrides.items()))
+    if key not in _MODELS:
+        _MODELS[key] = ap.AssemblerModel.from_config(overrides)
+    return _MODELS[key]
+
+
+def _check_against_fd(am, kind: str, tol: float = 1e-6):
+    cfg = am.config
+    pa = _pose(am, kind)
+    result = stiffness(am, pa)
+    assert result.success, result.message
+    scale = cfg.plate.node_radius
+    rest = _design_lengths(cfg, pa)
+    k = cfg.leg.stiffness
+    # the independent loaded equilibrium, then its compliance by finite differences
+    free = ElasticStack(cfg, pa.R, pa.p, rest, k)
+    x = free.solve(free.hessian(np.zeros(6 * am.n)))
+    loaded = free.moved(x, rest)
+    np.testing.assert_allclose(loaded.p, result.plates.p, rtol=0, atol=1e-12)
+    np.testing.assert_allclose(loaded.R, result.plates.R, rtol=0, atol=1e-11)
+    np.testing.assert_allclose(x[-6:-3], result.sag_translation, rtol=0, atol=1e-12)
+    C_fd = _fd_compliance(loaded, rest, result.compliance, scale)
+    assert _scaled_error(result.compliance, C_fd, scale) < tol
+    K_fd = np.linalg.inv(C_fd)
+    assert _scaled_error(result.stiffness, K_fd, scale) < tol
+    # the elastic part: the same structure without loads at the loaded pose (rest = its lengths)
+    massless = ap.load_config(cfg.to_dict() | {"gravity": 0.0})
+    rest_here = _design_lengths(cfg, result.plates)
+    bare = ElasticStack(massless, loaded.R, loaded.p, rest_here, k)
+    C_el = _fd_compliance(bare, rest_here, np.linalg.inv(result.elastic), scale)
+    K_el = np.linalg.inv(C_el)
+    assert _scaled_error(result.elastic, K_el, scale) < tol
+    return result, K_fd, K_el
+
+
+@pytest.mark.parametrize("n", [1, 2, 4, 8])
+@pytest.mark.parametrize("kind", ["home", "random"])
+def test_stiffness_equals_finite_differences_of_an_independent_equilibrium(n, kind):
+    am = _model({"platforms": n})
+    result, K_fd, K_el = _check_against_fd(am, kind)
+    # the load-dependent part (1e-4 of the whole at 1e6 N/m), to 1e-6 of itself
+    assert _scaled_error(result.geometric, K_fd - K_el, am.config.plate.node_radius) < 1e-6
+
+
+@pytest.mark.parametrize("kind", ["home", "random"])
+def test_soft_legs_make_the_load_dependent_part_large_and_it_matches(kind):
+    """At k = 2e4 N/m the loads change the lateral stiffness by a few percent."""
+    am = _model({"platforms": 2, "leg": {"stiffness": 2e4}})
+    result, K_fd, K_el = _check_against_fd(am, kind)
+    G_fd = K_fd - K_el
+    assert abs(G_fd[0, 0]) > 0.01 * K_fd[0, 0]
+    scale = am.config.plate.node_radius
+    assert _scaled_error(result.geometric, G_fd, scale) < 1e-6
+
+
+def test_independent_potential_is_the_conftest_gravity_energy(am, random_poses):
+    """The reference potential's weight terms agree with conftest.potential_energy."""
+    _, pa = random_poses[0]
+    rest = _design_lengths(am.config, pa)
+    stack = ElasticStack(am.config, pa.R, pa.p, rest, am.config.leg.stiffness)
+    x = np.random.default_rng(3).normal(size=6 * am.n) * 1e-3
+    moved = stack.moved(x, rest)
+    weight = potential_energy(am.config, ap.PlateArrays(moved.R, moved.p)) - potential_energy(am.config, pa)
+    springs = 0.5 * am.config.leg.stiffness * ((_design_lengths(am.config, ap.PlateArrays(moved.R, moved.p)) - rest)
+                                               ** 2).sum()  # fmt: skip
+    assert stack.energy(x[None])[0] == pytest.approx(weight + springs, rel=1e-9, abs=1e-12)
