@@ -86,7 +86,7 @@ class LoadedPose:
 def _checked_wrench(wrench: npt.ArrayLike | None) -> np.ndarray | None:
     if wrench is None:
         return None
-    w = as_float_array(wrench, "EE wrench (six numbers fx fy fz mx my mz)", (6,))
+    w = as_float_array(wrench, "EE wrench (six numbers fx fy fz mx my mz)", (6,), error=LoadError)
     if not np.all(np.isfinite(w)):
         raise LoadError(f"EE wrench contains NaN or infinite values: {w.tolist()}")
     if np.abs(w).max() > MAX_WRENCH:
@@ -190,8 +190,10 @@ def compensated_lengths(
     check = loaded_pose(am, cmd, base=pa.se3(0), tol=min(1e-12, 1e-3 * tolerance))
     scale = am.config.plate.node_radius
     if check.success:
-        rot = np.einsum("kab,kab->k", check.plates.R, pa.R)  # trace(Rᵀ R') = 1 + 2 cos θ
-        angle = np.arccos(np.clip(0.5 * (rot - 1.0), -1.0, 1.0))
+        M = np.matmul(check.plates.R, np.swapaxes(pa.R, 1, 2))  # rotation from wanted to loaded
+        sin = 0.5 * np.linalg.norm(np.stack([M[:, 2, 1] - M[:, 1, 2], M[:, 0, 2] - M[:, 2, 0],
+                                             M[:, 1, 0] - M[:, 0, 1]], axis=1), axis=1)  # fmt: skip
+        angle = np.arctan2(sin, 0.5 * (np.trace(M, axis1=1, axis2=2) - 1.0))  # exact for small angles
         error = max(float(np.abs(check.plates.p - pa.p).max()), scale * float(angle.max()))
     else:
         error = math.inf

@@ -24,6 +24,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
+import numpy.typing as npt
 import pinocchio as pin
 
 from .elastic import Equilibrium, solve_equilibrium
@@ -32,6 +33,7 @@ from .kinematics import PlateArrays, leg_vectors, plate_arrays
 from .linalg import cross, inverse_or_nan, skew
 from .model import AssemblerModel
 from .statics import CONDITION_LIMIT
+from .validation import as_float_array
 
 __all__ = ["StiffnessResult", "line_conditions", "stiffness"]
 
@@ -178,7 +180,7 @@ def _transport(p_from: np.ndarray, p_ee: np.ndarray) -> np.ndarray:
 def stiffness(
     am: AssemblerModel,
     plates: PlateArrays | Sequence | np.ndarray,
-    lengths: np.ndarray | None = None,
+    lengths: npt.ArrayLike | None = None,
     tol: float = 1e-12,
 ) -> StiffnessResult:
     """The EE's tangent stiffness at the loaded equilibrium of the legs commanded to ``plates``.
@@ -209,10 +211,10 @@ def stiffness(
     return stiffness_from_equilibrium(am, pa, eq, k)
 
 
-def _checked_lengths(am: AssemblerModel, lengths: np.ndarray) -> np.ndarray:
-    arr = np.asarray(lengths, dtype=float)
-    if arr.shape != (am.n, 6) or not np.all(np.isfinite(arr)) or not arr.min() > 0:
-        raise PoseError(f"commanded leg lengths must be {am.n}x6 finite numbers > 0 [m], got shape {arr.shape}")
+def _checked_lengths(am: AssemblerModel, lengths: npt.ArrayLike) -> np.ndarray:
+    arr = as_float_array(lengths, "commanded leg lengths", (am.n, 6))
+    if not np.all(np.isfinite(arr)) or not arr.min() > 0:
+        raise PoseError("commanded leg lengths must be finite and > 0 [m]")
     return arr
 
 

@@ -229,3 +229,155 @@ def test_independent_potential_is_the_conftest_gravity_energy(am, random_poses):
     springs = 0.5 * am.config.leg.stiffness * ((_design_lengths(am.config, ap.PlateArrays(moved.R, moved.p)) - rest)
                                                ** 2).sum()  # fmt: skip
     assert stack.energy(x[None])[0] == pytest.approx(weight + springs, rel=1e-9, abs=1e-12)
+
+
+# ---------------------------------------------------------------------- closed forms
+def test_one_weightless_platform_is_jt_k_j():
+    """K = Jᵀ k J with J = dL/dx the inverse of the EE Jacobian (kinematics), no load part."""
+    am = _model({"platforms": 1, "gravity": 0.0})
+    k = am.config.leg.stiffness
+    for kind in ("home", "random"):
+        pa = _pose(am, kind)
+        result = stiffness(am, pa)
+        J = np.linalg.inv(ap.ee_jacobian_wrt_lengths(am, pa))
+        K = k * J.T @ J
+        np.testing.assert_allclose(result.stiffness, K, rtol=0, atol=1e-9 * np.abs(K).max())
+        assert np.abs(result.geometric).max() < 1e-9 * np.abs(K).max()
+        assert np.abs(result.sag_translation).max() < 1e-15 and result.iterations == 0
+
+
+def test_weightless_stack_compliance_is_the_serial_sum():
+    """Legs in series: C = J_ee J_eeᵀ / k with J_ee the EE Jacobian of all 6n lengths."""
+    am = _model({"platforms": 4, "gravity": 0.0})
+    pa = _pose(am, "random")
+    result = stiffness(am, pa)
+    J = ap.ee_jacobian_wrt_lengths(am, pa)
+    C = J @ J.T / am.config.leg.stiffness
+    np.testing.assert_allclose(result.compliance, C, rtol=0, atol=1e-9 * np.abs(C).max())
+    np.testing.assert_allclose(result.platform_compliance.sum(axis=0), C, rtol=0, atol=1e-9 * np.abs(C).max())
+    assert result.platform_share.sum() == pytest.approx(1.0)
+
+
+def test_home_figures_and_the_weakest_direction(am):
+    result = stiffness(am, am.home)
+    assert result.success and result.iterations <= 3
+    t = result.translational_stiffness
+    assert t[0] == pytest.approx(t[1], rel=1e-9)  # three-fold symmetry: isotropic in the plane
+    assert 2.8e4 < t[0] < 2.9e4 and 1.1e6 < t[2] < 1.2e6
+    assert result.weakest_name.startswith("lateral")
+    assert abs(result.weakest_direction[2]) < 1e-9
+    # the sag is straight down, 0.06 mm; the lowest platform gives most of the lateral compliance
+    assert np.abs(result.sag_translation[:2]).max() < 1e-12
+    assert -6.1e-5 < result.sag_translation[2] < -5.9e-5
+    assert np.all(np.diff(result.platform_share) < 0)
+    doc = result.to_dict()
+    assert np.array(doc["stiffness"]).shape == (6, 6) and set(doc["sag"]) == {"translation", "rotation"}
+    assert repr(result).count("\n") == 0
+
+
+# ---------------------------------------------------------------------- loaded pose
+def test_loaded_leg_forces_are_pinocchios_statics_at_the_loaded_pose(am, random_poses):
+    """k (L − L0) at the loaded pose is what Pinocchio's statics say the legs carry there."""
+    for lengths, _ in random_poses[:3]:
+        loaded = loaded_pose(am, lengths)
+        assert loaded.success, loaded.message
+        statics = ap.solve_statics(am, loaded.plates).forces
+        np.testing.assert_allclose(loaded.forces, statics, rtol=0, atol=1e-6)
+        assert loaded.residual <= 1e-12
+
+
+def test_loaded_pose_under_a_wrench_is_an_independent_equilibrium(am, random_poses):
+    lengths, _ = random_poses[1]
+    wrench = np.array([20.0, -10.0, 5.0, 1.0, -2.0, 0.5])
+    loaded = loaded_pose(am, lengths, wrench=wrench)
+    assert loaded.success, loaded.message
+    stack = ElasticStack(am.config, loaded.plates.R, loaded.plates.p, lengths, am.config.leg.stiffness, wrench)
+    assert np.abs(stack.gradient(np.zeros(6 * am.n))).max() < 1e-6  # N, N·m
+    free = loaded_pose(am, lengths)
+    assert np.linalg.norm(loaded.translation - free.translation) > 1e-4  # the wrench did move the EE
+
+
+def test_sag_is_linear_in_small_loads():
+    """Doubling a small payload (or EE wrench) doubles the sag, to 1%."""
+    weightless = {"plate": {"mass": 0.0}, "leg": {"motor_mass": 0.0, "shaft_mass": 0.0}}
+    sags = []
+    for mass in (0.5, 1.0):
+        am = _model(weightless | {"payload": {"mass": mass}})
+        sags.append(stiffness(am, _pose(am, "random")).sag_translation)
+    np.testing.assert_allclose(sags[1], 2 * sags[0], rtol=0, atol=0.01 * np.linalg.norm(sags[1]))
+    am = _model({})
+    lengths = ap.leg_state(am, am.home).lengths
+    base = loaded_pose(am, lengths).translation
+    w = np.array([2.0, 1.0, -3.0, 0.1, 0.0, 0.2])
+    one, two = (loaded_pose(am, lengths, wrench=s * w).translation - base for s in (1, 2))
+    np.testing.assert_allclose(two, 2 * one, rtol=0, atol=0.01 * np.linalg.norm(two))
+    linear = (stiffness(am, am.home).compliance @ w)[:3]  # the tangent compliance predicts it
+    np.testing.assert_allclose(one, linear, rtol=0, atol=0.01 * np.linalg.norm(one))
+
+
+# ---------------------------------------------------------------------- compensation
+def test_compensated_lengths_hold_the_pose_in_an_independent_equilibrium(am, random_poses):
+    for _, plates in [(None, ap.plate_arrays(am, am.home)), *random_poses[:3]]:
+        comp = compensated_lengths(am, plates)
+        assert comp.success, comp.message
+        assert comp.error <= 1e-9
+        np.testing.assert_allclose(comp.check.plates.p, plates.p, rtol=0, atol=1e-9)
+        # compressed legs are commanded longer than they end up: L0 = L - F/k
+        F = ap.solve_statics(am, plates).forces
+        assert np.all(np.sign(comp.lengths - comp.geometric) == -np.sign(F))
+        stack = ElasticStack(am.config, plates.R, plates.p, comp.lengths, am.config.leg.stiffness)
+        assert np.abs(stack.gradient(np.zeros(6 * am.n))).max() < 1e-6  # the pose is its equilibrium
+        lengths_result = stiffness(am, plates, lengths=comp.lengths)
+        assert np.abs(lengths_result.plates.p - plates.p).max() < 1e-9
+
+
+# ---------------------------------------------------------------------- bad input
+@pytest.mark.parametrize("value", [0.0, -1e6, float("nan"), float("inf"), 1e12, 10.0, "stiff", True])
+def test_bad_leg_stiffness_is_refused_naming_the_key(value):
+    with pytest.raises(ap.ConfigError, match="leg.stiffness"):
+        ap.load_config({"leg": {"stiffness": value}})
+
+
+@pytest.mark.parametrize("wrench", [[np.nan, 0, 0, 0, 0, 0], [0, 0, 0, 0, np.inf, 0], [1e9, 0, 0, 0, 0, 0],
+                                    [1, 2, 3], "push", [True] * 6])  # fmt: skip
+def test_bad_wrenches_are_refused(am, wrench):
+    from assembler_pin.exceptions import LoadError
+
+    with pytest.raises(LoadError, match="wrench"):
+        loaded_pose(am, ap.leg_state(am, am.home).lengths, wrench=wrench)
+
+
+def test_a_singular_pose_is_reported_not_answered(am):
+    """The octahedral singularity (plates turned 90°): no stiffness, no compensated lengths."""
+    plates = [pin.SE3.Identity()]
+    turn = pin.SE3(pin.exp3(np.array([0, 0, np.pi / 2])), np.array([0, 0, am.config.home_height]))
+    for _ in range(am.n):
+        plates.append(plates[-1] * turn)
+    result = stiffness(am, plates)
+    assert not result.success and "singular" in result.message
+    assert np.all(np.isnan(result.stiffness)) and np.all(np.isnan(result.sag_translation))
+    assert "null" in __import__("assembler_pin.cli.common", fromlist=["dumps"]).dumps(result.to_dict())
+    with pytest.raises(ap.SingularConfigurationError):
+        compensated_lengths(am, plates)
+    with pytest.raises(ap.PoseError):
+        stiffness(am, am.home, lengths=np.full((am.n, 6), np.nan))
+
+
+def test_a_load_the_legs_cannot_carry_is_not_marked_converged():
+    """Soft legs under the payload buckle (an inverted pendulum: the load's part is negative);
+    huge wrenches give either no answer or a true equilibrium, however large the sag."""
+    soft = _model({"leg": {"stiffness": 1e3}})
+    for result in (stiffness(soft, soft.home), loaded_pose(soft, ap.leg_state(soft, soft.home).lengths)):
+        assert not result.success and "stable" in result.message
+    am = _model({})
+    lengths = ap.leg_state(am, am.home).lengths
+    outcomes = set()
+    for wrench in ([0, 0, -5e4, 0, 0, 0], [3e3, 0, 0, 0, 0, 0], [0, 0, 0, 0, 0, 500.0]):
+        loaded = loaded_pose(am, lengths, wrench=wrench)
+        outcomes.add(loaded.success)
+        if loaded.success:
+            stack = ElasticStack(am.config, loaded.plates.R, loaded.plates.p, lengths, 1e6, np.array(wrench, float))
+            assert np.abs(stack.gradient(np.zeros(6 * am.n))).max() < 1e-6 * np.abs(loaded.forces).max()
+        else:
+            assert loaded.message != "converged" and np.all(np.isnan(loaded.forces))
+    assert outcomes == {True, False}
