@@ -71,16 +71,24 @@ class LoadedPose:
     message: str
 
     def __repr__(self) -> str:
-        return (f"LoadedPose(success={self.success}, EE sag {1e3 * float(np.linalg.norm(self.translation)):.4f} mm "
-                f"{np.rad2deg(float(np.linalg.norm(self.rotation))):.4f} deg, max|F| "
-                f"{float(np.abs(self.forces).max()):.3f} N, {self.iterations} steps, message={self.message!r})")  # fmt: skip
+        return (
+            f"LoadedPose(success={self.success}, EE sag {1e3 * float(np.linalg.norm(self.translation)):.4f} mm "
+            f"{np.rad2deg(float(np.linalg.norm(self.rotation))):.4f} deg, max|F| "
+            f"{float(np.abs(self.forces).max()):.3f} N, {self.iterations} steps, message={self.message!r})"
+        )
 
     def to_dict(self) -> dict:
-        return {"success": self.success, "message": self.message,
-                "sag": {"translation": self.translation.tolist(), "rotation": self.rotation.tolist()},
-                "leg_forces": self.forces.tolist(), "lengths": self.lengths.tolist(),
-                "commanded": self.commanded.tolist(), "plates": self.plates.as_matrices().tolist(),
-                "iterations": self.iterations, "residual_m": self.residual}  # fmt: skip
+        return {
+            "success": self.success,
+            "message": self.message,
+            "sag": {"translation": self.translation.tolist(), "rotation": self.rotation.tolist()},
+            "leg_forces": self.forces.tolist(),
+            "lengths": self.lengths.tolist(),
+            "commanded": self.commanded.tolist(),
+            "plates": self.plates.as_matrices().tolist(),
+            "iterations": self.iterations,
+            "residual_m": self.residual,
+        }
 
 
 def _checked_wrench(wrench: npt.ArrayLike | None) -> np.ndarray | None:
@@ -90,8 +98,9 @@ def _checked_wrench(wrench: npt.ArrayLike | None) -> np.ndarray | None:
     if not np.all(np.isfinite(w)):
         raise LoadError(f"EE wrench contains NaN or infinite values: {w.tolist()}")
     if np.abs(w).max() > MAX_WRENCH:
-        raise LoadError(f"EE wrench components must be at most {MAX_WRENCH:g} N or N·m in magnitude, "
-                        f"got {np.abs(w).max():.3g}")  # fmt: skip
+        raise LoadError(
+            f"EE wrench components must be at most {MAX_WRENCH:g} N or N·m in magnitude, got {np.abs(w).max():.3g}"
+        )
     return w
 
 
@@ -125,8 +134,19 @@ def loaded_pose(
     k = float(am.config.leg.stiffness)
     nan = np.full((am.n, 6), np.nan)
     if not fk.success:
-        return LoadedPose(rigid, rigid, np.full(3, np.nan), np.full(3, np.nan), nan, nan, rest, 0, math.inf, False,
-                          f"the commanded lengths have no rigid pose: {fk.message}")  # fmt: skip
+        return LoadedPose(
+            rigid,
+            rigid,
+            np.full(3, np.nan),
+            np.full(3, np.nan),
+            nan,
+            nan,
+            rest,
+            0,
+            math.inf,
+            False,
+            f"the commanded lengths have no rigid pose: {fk.message}",
+        )
     eq = solve_equilibrium(am, rigid.R, rigid.p, rest, k, wrench=w, tol=tol, max_iterations=max_iterations)
     message = eq.message
     if message is None:
@@ -139,11 +159,33 @@ def loaded_pose(
             message = "the loaded equilibrium is not stable (the stack buckles under this load)"
     plates = PlateArrays(eq.R, eq.p)
     if message is not None:
-        return LoadedPose(plates, rigid, np.full(3, np.nan), np.full(3, np.nan), nan, nan, rest, eq.iterations,
-                          eq.step, False, message)  # fmt: skip
+        return LoadedPose(
+            plates,
+            rigid,
+            np.full(3, np.nan),
+            np.full(3, np.nan),
+            nan,
+            nan,
+            rest,
+            eq.iterations,
+            eq.step,
+            False,
+            message,
+        )
     now = leg_vectors(am, plates)[3]  # at the final pose (the terms are one tiny step behind it)
-    return LoadedPose(plates, rigid, eq.p[-1] - rigid.p[-1], pin.log3(eq.R[-1] @ rigid.R[-1].T), k * (now - rest),
-                      now, rest, eq.iterations, eq.step, True, "converged")  # fmt: skip
+    return LoadedPose(
+        plates,
+        rigid,
+        eq.p[-1] - rigid.p[-1],
+        pin.log3(eq.R[-1] @ rigid.R[-1].T),
+        k * (now - rest),
+        now,
+        rest,
+        eq.iterations,
+        eq.step,
+        True,
+        "converged",
+    )
 
 
 @dataclass(frozen=True)
@@ -168,9 +210,11 @@ class CompensatedLengths:
     message: str
 
     def __repr__(self) -> str:
-        return (f"CompensatedLengths(success={self.success}, largest correction "
-                f"{1e3 * float(np.abs(self.lengths - self.geometric).max()):.4f} mm, plates within "
-                f"{self.error:.2g} m, message={self.message!r})")  # fmt: skip
+        return (
+            f"CompensatedLengths(success={self.success}, largest correction "
+            f"{1e3 * float(np.abs(self.lengths - self.geometric).max()):.4f} mm, plates within "
+            f"{self.error:.2g} m, message={self.message!r})"
+        )
 
 
 def compensated_lengths(
@@ -191,15 +235,21 @@ def compensated_lengths(
     scale = am.config.plate.node_radius
     if check.success:
         M = np.matmul(check.plates.R, np.swapaxes(pa.R, 1, 2))  # rotation from wanted to loaded
-        sin = 0.5 * np.linalg.norm(np.stack([M[:, 2, 1] - M[:, 1, 2], M[:, 0, 2] - M[:, 2, 0],
-                                             M[:, 1, 0] - M[:, 0, 1]], axis=1), axis=1)  # fmt: skip
+        sin = 0.5 * np.linalg.norm(
+            np.stack([M[:, 2, 1] - M[:, 1, 2], M[:, 0, 2] - M[:, 2, 0], M[:, 1, 0] - M[:, 0, 1]], axis=1), axis=1
+        )
         angle = np.arctan2(sin, 0.5 * (np.trace(M, axis1=1, axis2=2) - 1.0))  # exact for small angles
         error = max(float(np.abs(check.plates.p - pa.p).max()), scale * float(angle.max()))
     else:
         error = math.inf
     ok = check.success and error <= tolerance
-    message = "ok" if ok else check.message if not check.success else (
-        f"the loaded pose of the compensated lengths is {error:.3g} m from the pose (> {tolerance:g} m)")  # fmt: skip
+    message = (
+        "ok"
+        if ok
+        else check.message
+        if not check.success
+        else (f"the loaded pose of the compensated lengths is {error:.3g} m from the pose (> {tolerance:g} m)")
+    )
     return CompensatedLengths(cmd, geometric, statics.forces, check, error, ok, message)
 
 

@@ -150,8 +150,10 @@ def elastic_terms(
     au_t = a[:, None] * u[..., None, :]  # a uᵀ
     c2 = T / L + lam * au / L**2
     c1 = stiffness - T / L - 3.0 * lam * au / L**2
-    H = c1[..., None, None] * uu + c2[..., None, None] * _I3 + (lam / L**2)[..., None, None] * (
-        au_t + np.swapaxes(au_t, -1, -2)
+    H = (
+        c1[..., None, None] * uu
+        + c2[..., None, None] * _I3
+        + (lam / L**2)[..., None, None] * (au_t + np.swapaxes(au_t, -1, -2))
     )
     St, Sb = skew(rt), skew(rb)
     diag = _sandwich(H, St, St)  # top plates (1..n)
@@ -256,8 +258,10 @@ def solve_equilibrium(
             break
         if size <= tol or it == max_iterations:
             if size > tol:
-                message = (f"the elastic equilibrium did not converge in {max_iterations} Newton steps "
-                           f"(last step {size:.3g} m > {tol:.1g} m)")  # fmt: skip
+                message = (
+                    f"the elastic equilibrium did not converge in {max_iterations} Newton steps "
+                    f"(last step {size:.3g} m > {tol:.1g} m)"
+                )
             else:
                 p[1:] += x[:, :3]
                 R[1:] = np.matmul(exp3_batch(x[:, 3:]), R[1:])

@@ -106,9 +106,11 @@ class StiffnessResult:
     def __repr__(self) -> str:
         if not self.success:
             return f"StiffnessResult(success=False, message={self.message!r})"
-        return (f"StiffnessResult({len(self.forces)} platforms, weakest {self.weakest_stiffness:.4g} N/m "
-                f"{self.weakest_name}, sag {1e3 * float(np.linalg.norm(self.sag_translation)):.4f} mm, "
-                f"{self.iterations} Newton steps)")  # fmt: skip
+        return (
+            f"StiffnessResult({len(self.forces)} platforms, weakest {self.weakest_stiffness:.4g} N/m "
+            f"{self.weakest_name}, sag {1e3 * float(np.linalg.norm(self.sag_translation)):.4f} mm, "
+            f"{self.iterations} Newton steps)"
+        )
 
     def to_dict(self) -> dict:
         """The JSON of ``assembler-pin stiffness --json`` (NaN as null through ``dumps``)."""
@@ -122,20 +124,29 @@ class StiffnessResult:
             "geometric": self.geometric.tolist(),
             "sag": {"translation": self.sag_translation.tolist(), "rotation": self.sag_rotation.tolist()},
             "principal": {
-                "translational": {"stiffness": self.translational_stiffness.tolist(),
-                                  "directions": self.translational_directions.T.tolist()},
-                "rotational": {"stiffness": self.rotational_stiffness.tolist(),
-                               "axes": self.rotational_axes.T.tolist()},
-            },  # fmt: skip
-            "weakest": {"stiffness": self.weakest_stiffness, "direction": self.weakest_direction.tolist(),
-                        "name": self.weakest_name},  # fmt: skip
+                "translational": {
+                    "stiffness": self.translational_stiffness.tolist(),
+                    "directions": self.translational_directions.T.tolist(),
+                },
+                "rotational": {
+                    "stiffness": self.rotational_stiffness.tolist(),
+                    "axes": self.rotational_axes.T.tolist(),
+                },
+            },
+            "weakest": {
+                "stiffness": self.weakest_stiffness,
+                "direction": self.weakest_direction.tolist(),
+                "name": self.weakest_name,
+            },
             "platform_share": self.platform_share.tolist(),
             "leg_forces": self.forces.tolist(),
             "loaded_plates": self.plates.as_matrices().tolist(),
             "condition": self.condition.tolist(),
             "iterations": self.iterations,
-            "units": {"stiffness": "[v, w] order, world axes at the EE origin: N/m, N/rad; N m/m, N m/rad",
-                      "sag": "translation m, rotation rad (rotation vector), world axes"},  # fmt: skip
+            "units": {
+                "stiffness": "[v, w] order, world axes at the EE origin: N/m, N/rad; N m/m, N m/rad",
+                "sag": "translation m, rotation rad (rotation vector), world axes",
+            },
         }
 
 
@@ -164,9 +175,27 @@ def _principal(block: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 def _failed(am: AssemblerModel, pa: PlateArrays, k: float, cond: np.ndarray, its: int, message: str) -> StiffnessResult:
     n = am.n
     nan6, nan3, nan33 = np.full((6, 6), np.nan), np.full(3, np.nan), np.full((3, 3), np.nan)
-    return StiffnessResult(nan6, nan6, nan6, nan6, np.full((n, 6, 6), np.nan), np.full(n, np.nan), nan3, nan33,
-                           nan3, nan33, nan3, nan3, pa, np.full((n, 6), np.nan), cond, k, its, False,
-                           message)  # fmt: skip
+    return StiffnessResult(
+        nan6,
+        nan6,
+        nan6,
+        nan6,
+        np.full((n, 6, 6), np.nan),
+        np.full(n, np.nan),
+        nan3,
+        nan33,
+        nan3,
+        nan33,
+        nan3,
+        nan3,
+        pa,
+        np.full((n, 6), np.nan),
+        cond,
+        k,
+        its,
+        False,
+        message,
+    )
 
 
 def _transport(p_from: np.ndarray, p_ee: np.ndarray) -> np.ndarray:
@@ -205,8 +234,15 @@ def stiffness(
     cond = line_conditions(am, pa.R, vec / L_geo[..., None])
     if not cond.max() <= CONDITION_LIMIT:
         j = int(np.argmax(cond))
-        return _failed(am, pa, k, cond, 0, f"platform {j} is at a singular configuration (condition number "
-                                           f"{cond[j]:.3g} > {CONDITION_LIMIT:.0g}): its stiffness is not defined")  # fmt: skip
+        return _failed(
+            am,
+            pa,
+            k,
+            cond,
+            0,
+            f"platform {j} is at a singular configuration (condition number "
+            f"{cond[j]:.3g} > {CONDITION_LIMIT:.0g}): its stiffness is not defined",
+        )
     eq = solve_equilibrium(am, pa.R, pa.p, rest, k, tol=tol)
     return stiffness_from_equilibrium(am, pa, eq, k)
 
@@ -228,13 +264,25 @@ def stiffness_from_equilibrium(am: AssemblerModel, rigid: PlateArrays, eq: Equil
         return _failed(am, loaded, k, cond, eq.iterations, eq.message)
     if not cond.max() <= CONDITION_LIMIT:
         j = int(np.argmax(cond))
-        return _failed(am, loaded, k, cond, eq.iterations, f"the loaded pose puts platform {j} at a singular "
-                                                           f"configuration (condition number {cond[j]:.3g})")  # fmt: skip
+        return _failed(
+            am,
+            loaded,
+            k,
+            cond,
+            eq.iterations,
+            f"the loaded pose puts platform {j} at a singular configuration (condition number {cond[j]:.3g})",
+        )
     scale = np.r_[np.ones(3), np.full(3, am.config.plate.node_radius)]
     low = np.linalg.eigvalsh(0.5 * (eq.schur + np.swapaxes(eq.schur, 1, 2)) * scale[:, None] * scale).min(axis=1)
     if not low.min() > 0:
-        return _failed(am, loaded, k, cond, eq.iterations, "the loaded equilibrium is not stable (its tangent "
-                                                           "stiffness is not positive definite): the stack buckles")  # fmt: skip
+        return _failed(
+            am,
+            loaded,
+            k,
+            cond,
+            eq.iterations,
+            "the loaded equilibrium is not stable (its tangent stiffness is not positive definite): the stack buckles",
+        )
     K = 0.5 * (eq.schur[-1] + eq.schur[-1].T)
     C = np.linalg.inv(K)
     # each platform's elastic compliance at its top plate, J⁻¹ J⁻ᵀ / k, moved to the EE
@@ -251,5 +299,24 @@ def stiffness_from_equilibrium(am: AssemblerModel, rigid: PlateArrays, eq: Equil
     along = np.einsum("a,jab,b->j", weak, platform_c[:, :3, :3], weak)
     sag_t = eq.p[-1] - rigid.p[-1]
     sag_r = pin.log3(eq.R[-1] @ rigid.R[-1].T)
-    return StiffnessResult(K, C, K_el, K - K_el, platform_c, along / along.sum(), t_stiff, t_dirs, r_stiff, r_axes,
-                           sag_t, sag_r, loaded, terms.tension.copy(), cond, k, eq.iterations, True, "ok")  # fmt: skip
+    return StiffnessResult(
+        K,
+        C,
+        K_el,
+        K - K_el,
+        platform_c,
+        along / along.sum(),
+        t_stiff,
+        t_dirs,
+        r_stiff,
+        r_axes,
+        sag_t,
+        sag_r,
+        loaded,
+        terms.tension.copy(),
+        cond,
+        k,
+        eq.iterations,
+        True,
+        "ok",
+    )

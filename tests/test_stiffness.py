@@ -65,7 +65,8 @@ class ElasticStack:
         zeros = np.zeros((x.shape[0], 1, 3), dtype=x.dtype)
         # displacement of every point: plate origin's plus (exp3(w) - I) r
         move_b = np.concatenate([zeros, dp[:, :-1]], 1)[:, :, None] + np.einsum(
-            "bjkl,jil->bjik", np.concatenate([np.zeros((x.shape[0], 1, 3, 3), x.dtype), dR[:, :-1]], 1), self.bottom)
+            "bjkl,jil->bjik", np.concatenate([np.zeros((x.shape[0], 1, 3, 3), x.dtype), dR[:, :-1]], 1), self.bottom
+        )
         move_t = dp[:, :, None] + np.einsum("bjkl,jil->bjik", dR, self.top)
         dd = move_t - move_b
         d = self.d_ref + dd
@@ -96,8 +97,14 @@ class ElasticStack:
         steps on the exact gradient to polish the digits the energy values cannot resolve
         (near the minimum V changes by less than its rounding)."""
         x0 = np.zeros(6 * self.n) if x0 is None else x0
-        res = minimize(lambda x: float(self.energy(x[None])[0].real), x0, jac=self.gradient,
-                       hess=lambda x: hess, method="trust-exact", options={"gtol": 1e-10, "maxiter": 200})  # fmt: skip
+        res = minimize(
+            lambda x: float(self.energy(x[None])[0].real),
+            x0,
+            jac=self.gradient,
+            hess=lambda x: hess,
+            method="trust-exact",
+            options={"gtol": 1e-10, "maxiter": 200},
+        )
         x = res.x
         for _ in range(20):
             grad = self.gradient(x)
@@ -226,8 +233,11 @@ def test_independent_potential_is_the_conftest_gravity_energy(am, random_poses):
     x = np.random.default_rng(3).normal(size=6 * am.n) * 1e-3
     moved = stack.moved(x, rest)
     weight = potential_energy(am.config, ap.PlateArrays(moved.R, moved.p)) - potential_energy(am.config, pa)
-    springs = 0.5 * am.config.leg.stiffness * ((_design_lengths(am.config, ap.PlateArrays(moved.R, moved.p)) - rest)
-                                               ** 2).sum()  # fmt: skip
+    springs = (
+        0.5
+        * am.config.leg.stiffness
+        * ((_design_lengths(am.config, ap.PlateArrays(moved.R, moved.p)) - rest) ** 2).sum()
+    )
     assert stack.energy(x[None])[0] == pytest.approx(weight + springs, rel=1e-9, abs=1e-12)
 
 
@@ -334,12 +344,13 @@ def test_compensated_lengths_hold_the_pose_in_an_independent_equilibrium(am, ran
 # ---------------------------------------------------------------------- bad input
 @pytest.mark.parametrize("value", [0.0, -1e6, float("nan"), float("inf"), 1e12, 10.0, "stiff", True])
 def test_bad_leg_stiffness_is_refused_naming_the_key(value):
-    with pytest.raises(ap.ConfigError, match="leg.stiffness"):
+    with pytest.raises(ap.ConfigError, match=r"leg\.stiffness"):
         ap.load_config({"leg": {"stiffness": value}})
 
 
-@pytest.mark.parametrize("wrench", [[np.nan, 0, 0, 0, 0, 0], [0, 0, 0, 0, np.inf, 0], [1e9, 0, 0, 0, 0, 0],
-                                    [1, 2, 3], "push", [True] * 6])  # fmt: skip
+@pytest.mark.parametrize(
+    "wrench", [[np.nan, 0, 0, 0, 0, 0], [0, 0, 0, 0, np.inf, 0], [1e9, 0, 0, 0, 0, 0], [1, 2, 3], "push", [True] * 6]
+)
 def test_bad_wrenches_are_refused(am, wrench):
     from assembler_pin.exceptions import LoadError
 
@@ -381,3 +392,83 @@ def test_a_load_the_legs_cannot_carry_is_not_marked_converged():
         else:
             assert loaded.message != "converged" and np.all(np.isnan(loaded.forces))
     assert outcomes == {True, False}
+
+
+# ---------------------------------------------------------------------- MuJoCo
+def _stiff_mujoco(am):
+    """MuJoCo's stack with its ball joints made ~100x stiffer than the exported default
+    (timestep 0.2 ms, solref time constant 0.4 ms, impedance 0.999) and the joint limits off:
+    the servos (gain ``leg.stiffness``) are the compliance left; the soft ball joints still add
+    about 0.25% to the sag (their residual gaps are ~3e-7 m)."""
+    pytest.importorskip("mujoco")
+    from assembler_pin.simulate import MujocoStack
+
+    stack = MujocoStack(am)
+    m = stack.model
+    m.opt.timestep = 2e-4
+    m.eq_solref[:] = (4e-4, 1.0)
+    m.eq_solimp[:, :3] = (0.999, 0.999, 1e-3)
+    m.opt.disableflags |= int(stack.mujoco.mjtDisableBit.mjDSBL_LIMIT)
+    return stack
+
+
+def _settle(stack, plates, ctrl, seconds: float = 0.3) -> ap.PlateArrays:
+    """Start at rest at ``plates``, command ``ctrl`` (n, 6) [m], simulate, return the plates."""
+    stack.set_plates(plates)
+    stack.data.ctrl[:] = np.asarray(ctrl).ravel()
+    for _ in range(round(seconds / stack.model.opt.timestep)):
+        stack.mujoco.mj_step(stack.model, stack.data)
+    assert np.abs(stack.data.qvel).max() < 1e-5  # still
+    return stack.plates()
+
+
+@pytest.fixture(scope="module")
+def ninety_degrees(am):
+    result = ap.solve(am, ap.scenario("ninety_degrees").goal)
+    assert result.success, result.message
+    return result.optimized.plates
+
+
+def test_mjcf_servo_gain_is_the_leg_stiffness():
+    mujoco = pytest.importorskip("mujoco")
+    from assembler_pin.mjcf import ACTUATOR_KV, actuator_gains, assembler_mjcf
+
+    for k in (2e5, 1e6, 5e6):
+        m = mujoco.MjModel.from_xml_string(assembler_mjcf(ap.load_config({"platforms": 1, "leg": {"stiffness": k}})))
+        kp, kv, armature = actuator_gains(k)
+        assert np.all(m.actuator_gainprm[:, 0] == k) and np.all(m.actuator_biasprm[:, 1] == -k)
+        assert np.all(m.actuator_biasprm[:, 2] == -kv)
+        assert kv / np.sqrt(kp * armature) == pytest.approx(ACTUATOR_KV / np.sqrt(1e6))  # the same damping ratio
+        assert np.all(m.dof_armature[m.jnt_dofadr[m.actuator_trnid[:, 0]]] == armature)
+
+
+@pytest.mark.parametrize(
+    "n, k, pose", [(1, 1e6, "home"), (4, 1e6, "home"), (4, 1e6, "ninety_degrees"), (4, 2e5, "home"), (8, 1e6, "home")]
+)
+def test_mujoco_servos_sag_as_loaded_pose_says(n, k, pose, request):
+    """MuJoCo holding the lengths of a pose sags where loaded_pose puts the EE (5% or 0.02 mm)."""
+    am = _model({"platforms": n, "leg": {"stiffness": k}})
+    plates = ap.plate_arrays(am, request.getfixturevalue(pose) if pose != "home" else am.home)
+    lengths = ap.leg_state(am, plates).lengths
+    ours = loaded_pose(am, lengths)
+    assert ours.success
+    settled = _settle(_stiff_mujoco(am), plates, lengths)
+    sag = settled.p[-1] - plates.p[-1]
+    gap = float(np.linalg.norm(sag - ours.translation))
+    assert gap <= max(0.05 * np.linalg.norm(ours.translation), 2e-5), (gap, ours.translation)
+    assert gap <= 0.01 * np.linalg.norm(ours.translation)  # measured: 0.25%
+    turn = pin.log3(settled.R[-1] @ plates.R[-1].T)
+    assert np.linalg.norm(turn - ours.rotation) <= 0.01 * np.linalg.norm(ours.rotation) + 1e-7
+
+
+@pytest.mark.parametrize("pose", ["home", "random", "ninety_degrees"])
+def test_compensated_lengths_held_by_mujoco_put_the_ee_at_the_goal(am, random_poses, pose, request):
+    plates = {"home": lambda: am.home, "random": lambda: random_poses[2][1]}.get(
+        pose, lambda: request.getfixturevalue(pose)
+    )()
+    plates = ap.plate_arrays(am, plates)
+    comp = compensated_lengths(am, plates)
+    assert comp.success, comp.message
+    off = np.linalg.norm(_settle(_stiff_mujoco(am), plates, comp.lengths).p[-1] - plates.p[-1])
+    plain = np.linalg.norm(loaded_pose(am, comp.geometric).translation)  # the sag without compensation
+    assert off <= 5e-5 and off < 0.05 * plain, (off, plain)
