@@ -22,12 +22,13 @@ import numpy as np
 import numpy.typing as npt
 import pinocchio as pin
 
+from .ee_stiffness import line_conditions, stiffness
 from .elastic import solve_equilibrium
 from .exceptions import LoadError
 from .kinematics import PlateArrays, leg_vectors, plate_arrays, stack_forward_kinematics
+from .labels import leg_label
 from .model import AssemblerModel
 from .statics import CONDITION_LIMIT, solve_statics
-from .stiffness import line_conditions, stiffness
 from .validation import as_float_array
 
 __all__ = [
@@ -198,7 +199,9 @@ class CompensatedLengths:
         check: the :class:`LoadedPose` of ``lengths`` (the confirmation).
         error: largest distance of a loaded plate from the wanted pose [m] (rotations
             times the node radius).
-        success: the check converged and ``error`` ≤ ``tolerance``; message: why not.
+        within_stroke: every commanded length is within the legs' stroke.
+        success: the check converged, ``error`` ≤ ``tolerance`` and ``within_stroke``;
+            message: "ok" or why not.
     """
 
     lengths: np.ndarray
@@ -206,6 +209,7 @@ class CompensatedLengths:
     forces: np.ndarray
     check: LoadedPose
     error: float
+    within_stroke: bool
     success: bool
     message: str
 
@@ -217,44 +221,59 @@ class CompensatedLengths:
         )
 
 
+def _plate_distance(am: AssemblerModel, a: PlateArrays, b: PlateArrays) -> float:
+    """Largest distance between the plates of two poses [m] (rotations times the node radius)."""
+    M = np.matmul(a.R, np.swapaxes(b.R, 1, 2))
+    vee = np.stack([M[:, 2, 1] - M[:, 1, 2], M[:, 0, 2] - M[:, 2, 0], M[:, 1, 0] - M[:, 0, 1]], axis=1)
+    angle = np.arctan2(0.5 * np.linalg.norm(vee, axis=1), 0.5 * (np.trace(M, axis1=1, axis2=2) - 1.0))
+    return max(float(np.abs(a.p - b.p).max()), am.config.plate.node_radius * float(angle.max()))
+
+
+def _stroke_problem(am: AssemblerModel, cmd: np.ndarray) -> str | None:
+    leg = am.config.leg
+    over = np.maximum(leg.min_length - cmd, cmd - leg.max_length)
+    if over.max() <= 0:
+        return None
+    j, i = np.unravel_index(int(np.argmax(over)), over.shape)
+    return (
+        f"{int((over > 0).sum())} compensated length(s) outside the stroke [{leg.min_length:g}, "
+        f"{leg.max_length:g}] m, the worst {leg_label(j, i)} at {cmd[j, i]:.6f} m"
+    )
+
+
 def compensated_lengths(
     am: AssemblerModel, plates: PlateArrays | Sequence | np.ndarray, tolerance: float = 1e-9
 ) -> CompensatedLengths:
     """The commanded lengths ``L - F / k`` whose loaded equilibrium is ``plates`` (to ``tolerance``
     [m]), ``F`` the statics forces (:func:`~assembler_pin.statics.solve_statics`, tension
-    positive) and ``L`` the pose's lengths; confirmed by :func:`loaded_pose`.
+    positive) and ``L`` the pose's lengths; confirmed by :func:`loaded_pose`. A leg in
+    compression is commanded longer than it ends up, one in tension shorter; ``success`` also
+    needs every commanded length within the stroke (a servo cannot be commanded beyond it).
 
     Raises:
         PoseError: malformed plates. SingularConfigurationError: the pose is singular.
+        LoadError: ``tolerance`` not in [1e-12, 1e-3] m.
     """
+    if not (isinstance(tolerance, (int, float)) and 1e-12 <= tolerance <= 1e-3):
+        raise LoadError(f"tolerance of the compensated pose must be in [1e-12, 1e-3] m, got {tolerance!r}")
     pa = plate_arrays(am, plates)
     statics = solve_statics(am, pa, raise_on_singular=True)
     geometric = leg_vectors(am, pa)[3]
     cmd = geometric - statics.forces / float(am.config.leg.stiffness)
     check = loaded_pose(am, cmd, base=pa.se3(0), tol=min(1e-12, 1e-3 * tolerance))
-    scale = am.config.plate.node_radius
-    if check.success:
-        M = np.matmul(check.plates.R, np.swapaxes(pa.R, 1, 2))  # rotation from wanted to loaded
-        sin = 0.5 * np.linalg.norm(
-            np.stack([M[:, 2, 1] - M[:, 1, 2], M[:, 0, 2] - M[:, 2, 0], M[:, 1, 0] - M[:, 0, 1]], axis=1), axis=1
-        )
-        angle = np.arctan2(sin, 0.5 * (np.trace(M, axis1=1, axis2=2) - 1.0))  # exact for small angles
-        error = max(float(np.abs(check.plates.p - pa.p).max()), scale * float(angle.max()))
+    error = _plate_distance(am, check.plates, pa) if check.success else math.inf
+    stroke = _stroke_problem(am, cmd)
+    if not check.success:
+        message = check.message
+    elif error > tolerance:
+        message = f"the loaded pose of the compensated lengths is {error:.3g} m from the pose (> {tolerance:g} m)"
     else:
-        error = math.inf
-    ok = check.success and error <= tolerance
-    message = (
-        "ok"
-        if ok
-        else check.message
-        if not check.success
-        else (f"the loaded pose of the compensated lengths is {error:.3g} m from the pose (> {tolerance:g} m)")
-    )
-    return CompensatedLengths(cmd, geometric, statics.forces, check, error, ok, message)
+        message = stroke or "ok"
+    return CompensatedLengths(cmd, geometric, statics.forces, check, error, stroke is None, message == "ok", message)
 
 
 def benchmark_stiffness(am: AssemblerModel, repeat: int = 200) -> dict[str, float]:
-    """Median wall time [s] per call of :func:`~assembler_pin.stiffness.stiffness`,
+    """Median wall time [s] per call of :func:`~assembler_pin.ee_stiffness.stiffness`,
     :func:`loaded_pose` and :func:`compensated_lengths` at the home pose (and, for scale,
     :func:`~assembler_pin.statics.solve_statics`)."""
     pa = plate_arrays(am, am.home)

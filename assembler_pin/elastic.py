@@ -1,5 +1,5 @@
 """The stack as an elastic truss: its total potential, gradient and Hessian over the plate poses,
-and the Newton solve of its loaded equilibrium (used by :mod:`assembler_pin.stiffness` and
+and the Newton solve of its loaded equilibrium (used by :mod:`assembler_pin.ee_stiffness` and
 :mod:`assembler_pin.compliance`).
 
 Model. Each leg is a linear spring along its pin-to-pin axis, stiffness ``k = leg.stiffness``

@@ -19,7 +19,8 @@ from scipy.optimize import minimize
 
 import assembler_pin as ap
 from assembler_pin.compliance import compensated_lengths, loaded_pose
-from assembler_pin.stiffness import stiffness
+from assembler_pin.ee_stiffness import stiffness
+from assembler_pin.exceptions import LoadError
 
 STEP = 1e-20  # complex step
 
@@ -472,3 +473,65 @@ def test_compensated_lengths_held_by_mujoco_put_the_ee_at_the_goal(am, random_po
     off = np.linalg.norm(_settle(_stiff_mujoco(am), plates, comp.lengths).p[-1] - plates.p[-1])
     plain = np.linalg.norm(loaded_pose(am, comp.geometric).translation)  # the sag without compensation
     assert off <= 5e-5 and off < 0.05 * plain, (off, plain)
+
+
+def test_compensation_beyond_the_stroke_is_not_a_success(am):
+    """The translation optimum has legs at their stroke ends: compressed ones would need more."""
+    result = ap.solve(am, ap.scenario("translation").goal)
+    comp = compensated_lengths(am, result.optimized.plates)
+    assert comp.error <= 1e-9  # the lengths are right ...
+    assert not comp.within_stroke and not comp.success and "stroke" in comp.message  # ... but cannot be commanded
+    with pytest.raises(LoadError):
+        compensated_lengths(am, am.home, tolerance=0.0)
+
+
+# ---------------------------------------------------------------------- API and CLI
+def test_top_level_names_stay_the_functions_whatever_was_imported():
+    import subprocess
+    import sys
+
+    code = (
+        "import assembler_pin as ap, assembler_pin.compliance, assembler_pin.cli.stiffness; "
+        "assert callable(ap.stiffness) and callable(ap.loaded_pose) and callable(ap.compensated_lengths); "
+        "assert ap.StiffnessResult.__name__ == 'StiffnessResult'"
+    )
+    assert subprocess.run([sys.executable, "-c", code], capture_output=True).returncode == 0
+
+
+def test_cli_stiffness_json_text_and_refusals(capsys, tmp_path, am):
+    import json
+
+    from assembler_pin.cli import main
+
+    assert main(["stiffness", "--home", "--json"]) == 0
+    doc = json.loads(capsys.readouterr().out)
+    for key in ("stiffness", "compliance", "elastic", "geometric"):
+        assert np.array(doc[key]).shape == (6, 6)
+    assert set(doc["sag"]) == {"translation", "rotation"} and doc["weakest"]["name"].startswith("lateral")
+    assert len(doc["principal"]["translational"]["stiffness"]) == 3
+    np.testing.assert_allclose(doc["stiffness"], stiffness(am, am.home).stiffness)
+    assert main(["stiffness", "--home"]) == 0
+    text = capsys.readouterr().out
+    assert "weakest" in text and max(map(len, text.splitlines())) <= 100
+    plates = tmp_path / "p.json"
+    plates.write_text(json.dumps({"plates": [p.homogeneous.tolist() for p in am.home]}))
+    assert main(["stiffness", "--plates", str(plates), "--compensated", "--json"]) == 0
+    assert np.abs(json.loads(capsys.readouterr().out)["sag"]["translation"]).max() < 1e-12
+    turned = [pin.SE3.Identity()]
+    for _ in range(am.n):
+        turned.append(turned[-1] * pin.SE3(pin.exp3(np.array([0, 0, np.pi / 2])), np.array([0, 0, 0.24])))
+    plates.write_text(json.dumps({"plates": [p.homogeneous.tolist() for p in turned]}))
+    assert main(["stiffness", "--plates", str(plates), "--json"]) == 1  # answered: there is none
+    doc = json.loads(capsys.readouterr().out, parse_constant=lambda c: pytest.fail(f"non-strict JSON {c}"))
+    assert doc["success"] is False and doc["stiffness"][0][0] is None
+    bad = tmp_path / "bad.yaml"
+    bad.write_text("leg:\n  stiffness: -5\n")
+    refused = (
+        ["stiffness"],
+        ["stiffness", "--home", "--config", str(bad)],
+        ["stiffness", "--goal", *"nan 0 0 0 0 0".split()],
+    )
+    for argv, word in zip(refused, ("--home", "leg.stiffness", "goal"), strict=True):
+        assert main(argv) == 2
+        err = capsys.readouterr().err.strip().splitlines()
+        assert len(err) == 1 and word in err[0], err

@@ -89,16 +89,20 @@ class StiffnessResult:
 
     @property
     def weakest_direction(self) -> np.ndarray:
-        """Its unit direction, world axes (sign: z ≥ 0, else the first nonzero component > 0)."""
+        """Its unit direction, world axes (the sign puts its largest component positive)."""
         return self.translational_directions[:, 0]
 
     @property
     def weakest_name(self) -> str:
         """``lateral`` (within 10° of the xy plane), ``vertical`` (within 10° of z) or ``oblique``,
-        with the nearest world axis: e.g. ``lateral (x)``."""
+        with the nearest world axis, e.g. ``lateral (x)``; ``lateral (any direction)`` when the
+        two weakest are equal (to 1e-6) and span the xy plane (the home pose's symmetry)."""
         d = self.weakest_direction
         if not np.all(np.isfinite(d)):
             return "undefined"
+        t, dirs = self.translational_stiffness, self.translational_directions
+        if t[1] <= t[0] * (1 + 1e-6) and abs(float(np.cross(dirs[:, 0], dirs[:, 1])[2])) > math.cos(math.radians(10)):
+            return "lateral (any direction)"
         tilt = math.degrees(math.asin(min(1.0, abs(float(d[2])))))
         kind = "lateral" if tilt < 10.0 else "vertical" if tilt > 80.0 else "oblique"
         return f"{kind} ({_AXES[int(np.argmax(np.abs(d)))]})"
