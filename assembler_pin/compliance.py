@@ -22,8 +22,8 @@ import numpy as np
 import numpy.typing as npt
 import pinocchio as pin
 
-from .ee_stiffness import line_conditions, stiffness
-from .elastic import solve_equilibrium
+from .ee_stiffness import stiffness
+from .elastic import line_conditions, solve_equilibrium
 from .exceptions import LoadError
 from .kinematics import PlateArrays, leg_vectors, plate_arrays, stack_forward_kinematics
 from .labels import leg_label
@@ -151,12 +151,10 @@ def loaded_pose(
     eq = solve_equilibrium(am, rigid.R, rigid.p, rest, k, wrench=w, tol=tol, max_iterations=max_iterations)
     message = eq.message
     if message is None:
-        cond = line_conditions(am, eq.R, eq.terms.lines[..., :3])
-        scale = np.r_[np.ones(3), np.full(3, am.config.plate.node_radius)]
-        sym = 0.5 * (eq.schur + np.swapaxes(eq.schur, 1, 2)) * scale[:, None] * scale
+        cond = line_conditions(eq.terms.lines)[1]
         if not cond.max() <= CONDITION_LIMIT:
             message = f"the loaded pose puts platform {int(np.argmax(cond))} at a singular configuration"
-        elif not np.linalg.eigvalsh(sym).min() > 0:
+        elif not eq.stable:
             message = "the loaded equilibrium is not stable (the stack buckles under this load)"
     plates = PlateArrays(eq.R, eq.p)
     if message is not None:

@@ -27,15 +27,15 @@ import numpy as np
 import numpy.typing as npt
 import pinocchio as pin
 
-from .elastic import Equilibrium, solve_equilibrium
+from .elastic import Equilibrium, line_conditions, solve_equilibrium
 from .exceptions import PoseError
-from .kinematics import PlateArrays, leg_vectors, plate_arrays
-from .linalg import cross, inverse_or_nan, skew
+from .kinematics import PlateArrays, plate_arrays
+from .linalg import skew
 from .model import AssemblerModel
 from .statics import CONDITION_LIMIT
 from .validation import as_float_array
 
-__all__ = ["StiffnessResult", "line_conditions", "stiffness"]
+__all__ = ["StiffnessResult", "stiffness", "stiffness_from_equilibrium"]
 
 _AXES = ("x", "y", "z")
 
@@ -154,26 +154,17 @@ class StiffnessResult:
         }
 
 
-def line_conditions(am: AssemblerModel, R: np.ndarray, u: np.ndarray) -> np.ndarray:
-    """(n,) 1-norm condition numbers of the platforms' leg lines in their top plates' frames
-    (those of :func:`~assembler_pin.statics.solve_statics`); NaN lines count as infinite."""
-    u_local = np.matmul(u, R[1:])
-    lines_t = np.concatenate([u_local, cross(am.geometry.top_in_plate, u_local)], axis=-1)
-    inverse_t = inverse_or_nan(lines_t)
-    cond = np.abs(lines_t).sum(axis=-1).max(axis=-1) * np.abs(inverse_t).sum(axis=-1).max(axis=-1)
-    return np.where(np.isfinite(cond), cond, np.inf)
-
-
-def _principal(block: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Principal stiffnesses (ascending) and directions of a 3×3 compliance block."""
-    sym = 0.5 * (block + block.T)
-    w, v = np.linalg.eigh(sym)  # compliance ascending → stiffness descending
-    w, v = w[::-1], v[:, ::-1]
-    for c in range(3):  # a sign that does not depend on LAPACK: largest |component| positive
-        if v[np.argmax(np.abs(v[:, c])), c] < 0:
-            v[:, c] = -v[:, c]
+def _principal(C: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Principal stiffnesses (ascending) and unit directions (columns) of the translation and
+    rotation blocks of a 6×6 compliance; each direction's largest component is positive."""
+    blocks = np.stack([C[:3, :3], C[3:, 3:]])
+    w, v = np.linalg.eigh(0.5 * (blocks + np.swapaxes(blocks, 1, 2)))  # compliance ascending
+    w, v = w[:, ::-1], v[:, :, ::-1]
+    big = np.take_along_axis(v, np.abs(v).argmax(axis=1)[:, None, :], axis=1)
+    v = v * np.where(big < 0, -1.0, 1.0)
     with np.errstate(divide="ignore"):
-        return np.where(w > 0, 1.0 / w, np.inf), v
+        k = np.where(w > 0, 1.0 / np.where(w > 0, w, 1.0), np.inf)
+    return k[0], v[0], k[1], v[1]
 
 
 def _failed(am: AssemblerModel, pa: PlateArrays, k: float, cond: np.ndarray, its: int, message: str) -> StiffnessResult:
@@ -233,21 +224,8 @@ def stiffness(
     """
     pa = plate_arrays(am, plates)
     k = float(am.config.leg.stiffness)
-    _, _, vec, L_geo = leg_vectors(am, pa)
-    rest = L_geo if lengths is None else _checked_lengths(am, lengths)
-    cond = line_conditions(am, pa.R, vec / L_geo[..., None])
-    if not cond.max() <= CONDITION_LIMIT:
-        j = int(np.argmax(cond))
-        return _failed(
-            am,
-            pa,
-            k,
-            cond,
-            0,
-            f"platform {j} is at a singular configuration (condition number "
-            f"{cond[j]:.3g} > {CONDITION_LIMIT:.0g}): its stiffness is not defined",
-        )
-    eq = solve_equilibrium(am, pa.R, pa.p, rest, k, tol=tol)
+    rest = None if lengths is None else _checked_lengths(am, lengths)
+    eq = solve_equilibrium(am, pa.R, pa.p, rest, k, tol=tol, condition_limit=CONDITION_LIMIT)
     return stiffness_from_equilibrium(am, pa, eq, k)
 
 
@@ -262,65 +240,26 @@ def stiffness_from_equilibrium(am: AssemblerModel, rigid: PlateArrays, eq: Equil
     """The :class:`StiffnessResult` of a solved equilibrium ``eq`` of the commanded pose ``rigid``."""
     loaded = PlateArrays(eq.R, eq.p)
     terms = eq.terms
-    u = terms.lines[..., :3]
-    cond = line_conditions(am, eq.R, u)
-    if eq.message is not None:
-        return _failed(am, loaded, k, cond, eq.iterations, eq.message)
-    if not cond.max() <= CONDITION_LIMIT:
+    J_inv, cond = line_conditions(terms.lines)
+    why = eq.message
+    if why is None and not cond.max() <= CONDITION_LIMIT:
         j = int(np.argmax(cond))
-        return _failed(
-            am,
-            loaded,
-            k,
-            cond,
-            eq.iterations,
-            f"the loaded pose puts platform {j} at a singular configuration (condition number {cond[j]:.3g})",
-        )
-    scale = np.r_[np.ones(3), np.full(3, am.config.plate.node_radius)]
-    low = np.linalg.eigvalsh(0.5 * (eq.schur + np.swapaxes(eq.schur, 1, 2)) * scale[:, None] * scale).min(axis=1)
-    if not low.min() > 0:
-        return _failed(
-            am,
-            loaded,
-            k,
-            cond,
-            eq.iterations,
-            "the loaded equilibrium is not stable (its tangent stiffness is not positive definite): the stack buckles",
-        )
-    K = 0.5 * (eq.schur[-1] + eq.schur[-1].T)
-    C = np.linalg.inv(K)
+        why = f"the loaded pose puts platform {j} at a singular configuration (condition number {cond[j]:.3g})"
+    if why is None and not eq.stable:
+        why = "the loaded equilibrium is not stable (its tangent stiffness is not positive definite): the stack buckles"
+    if why is not None:
+        return _failed(am, loaded, k, cond, eq.iterations, why)
+    C = 0.5 * (eq.compliance + eq.compliance.T)
+    K = np.linalg.inv(C)
+    K = 0.5 * (K + K.T)
     # each platform's elastic compliance at its top plate, J⁻¹ J⁻ᵀ / k, moved to the EE
-    J_inv = np.linalg.inv(terms.lines)
-    X = _transport(eq.p[1:], eq.p[-1])
-    XJ = np.matmul(X, J_inv)
+    XJ = np.matmul(_transport(eq.p[1:], eq.p[-1]), J_inv)
     platform_c = np.matmul(XJ, np.swapaxes(XJ, 1, 2)) / k
-    C_el = platform_c.sum(axis=0)
-    K_el = np.linalg.inv(C_el)
+    K_el = np.linalg.inv(platform_c.sum(axis=0))
     K_el = 0.5 * (K_el + K_el.T)
-    t_stiff, t_dirs = _principal(C[:3, :3])
-    r_stiff, r_axes = _principal(C[3:, 3:])
+    t_stiff, t_dirs, r_stiff, r_axes = _principal(C)
     weak = t_dirs[:, 0]
     along = np.einsum("a,jab,b->j", weak, platform_c[:, :3, :3], weak)
-    sag_t = eq.p[-1] - rigid.p[-1]
-    sag_r = pin.log3(eq.R[-1] @ rigid.R[-1].T)
-    return StiffnessResult(
-        K,
-        C,
-        K_el,
-        K - K_el,
-        platform_c,
-        along / along.sum(),
-        t_stiff,
-        t_dirs,
-        r_stiff,
-        r_axes,
-        sag_t,
-        sag_r,
-        loaded,
-        terms.tension.copy(),
-        cond,
-        k,
-        eq.iterations,
-        True,
-        "ok",
-    )
+    sag = (eq.p[-1] - rigid.p[-1], pin.log3(eq.R[-1] @ rigid.R[-1].T))
+    parts = (K, C, K_el, K - K_el, platform_c, along / along.sum(), t_stiff, t_dirs, r_stiff, r_axes, *sag)
+    return StiffnessResult(*parts, loaded, terms.tension.copy(), cond, k, eq.iterations, True, "ok")
