@@ -535,3 +535,21 @@ def test_cli_stiffness_json_text_and_refusals(capsys, tmp_path, am):
         assert main(argv) == 2
         err = capsys.readouterr().err.strip().splitlines()
         assert len(err) == 1 and word in err[0], err
+
+
+def test_the_block_sweep_of_long_stacks_equals_the_dense_solve(monkeypatch):
+    """Above DENSE_MAX_PLATFORMS the tangent is swept block by block: the same answers."""
+    import assembler_pin.elastic as elastic
+
+    am = _model({"platforms": 4})
+    pa = _pose(am, "random")
+    lengths = ap.leg_state(am, pa).lengths
+    wrench = np.array([5.0, -3.0, 2.0, 0.4, -0.2, 0.3])
+    dense = stiffness(am, pa), loaded_pose(am, lengths, wrench=wrench)
+    monkeypatch.setattr(elastic, "DENSE_MAX_PLATFORMS", 0)
+    swept = stiffness(am, pa), loaded_pose(am, lengths, wrench=wrench)
+    assert elastic.elastic_terms(am, pa.R, pa.p, None, 1e6).hessian is None
+    np.testing.assert_allclose(swept[0].stiffness, dense[0].stiffness, rtol=1e-9, atol=1e-6)
+    np.testing.assert_allclose(swept[0].sag_translation, dense[0].sag_translation, rtol=0, atol=1e-14)
+    np.testing.assert_allclose(swept[1].plates.p, dense[1].plates.p, rtol=0, atol=1e-13)
+    assert swept[1].success and swept[1].iterations == dense[1].iterations
