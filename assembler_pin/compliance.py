@@ -78,7 +78,16 @@ class LoadedPose:
             f"{float(np.abs(self.forces).max()):.3f} N, {self.iterations} steps, message={self.message!r})"
         )
 
+    @classmethod
+    def failed(
+        cls, plates: PlateArrays, rigid: PlateArrays, rest: np.ndarray, iterations: int, step: float, message: str
+    ) -> LoadedPose:
+        """No equilibrium: NaN sag and forces, ``success`` false and why."""
+        nan3, nan = np.full(3, np.nan), np.full(rest.shape, np.nan)
+        return cls(plates, rigid, nan3, nan3, nan, nan, rest, iterations, step, False, message)
+
     def to_dict(self) -> dict:
+        """The loaded pose as JSON-ready lists (NaN for a failed one: write it with ``dumps``)."""
         return {
             "success": self.success,
             "message": self.message,
@@ -133,20 +142,9 @@ def loaded_pose(
     fk = stack_forward_kinematics(am, rest, base=base)
     rigid = fk.plates
     k = float(am.config.leg.stiffness)
-    nan = np.full((am.n, 6), np.nan)
     if not fk.success:
-        return LoadedPose(
-            rigid,
-            rigid,
-            np.full(3, np.nan),
-            np.full(3, np.nan),
-            nan,
-            nan,
-            rest,
-            0,
-            math.inf,
-            False,
-            f"the commanded lengths have no rigid pose: {fk.message}",
+        return LoadedPose.failed(
+            rigid, rigid, rest, 0, math.inf, f"the commanded lengths have no rigid pose: {fk.message}"
         )
     eq = solve_equilibrium(am, rigid.R, rigid.p, rest, k, wrench=w, tol=tol, max_iterations=max_iterations)
     message = eq.message
@@ -158,19 +156,7 @@ def loaded_pose(
             message = "the loaded equilibrium is not stable (the stack buckles under this load)"
     plates = PlateArrays(eq.R, eq.p)
     if message is not None:
-        return LoadedPose(
-            plates,
-            rigid,
-            np.full(3, np.nan),
-            np.full(3, np.nan),
-            nan,
-            nan,
-            rest,
-            eq.iterations,
-            eq.step,
-            False,
-            message,
-        )
+        return LoadedPose.failed(plates, rigid, rest, eq.iterations, eq.step, message)
     now = leg_vectors(am, plates)[3]  # at the final pose (the terms are one tiny step behind it)
     return LoadedPose(
         plates,

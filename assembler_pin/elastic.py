@@ -136,6 +136,27 @@ def _platform_hessians(dirs, arms, c1, c2, c3, gravity: float) -> np.ndarray:
     return H + M + np.swapaxes(M, 1, 2)
 
 
+def _joint_gradient(am: AssemblerModel, u, arm_x, along, across) -> tuple[np.ndarray, np.ndarray]:
+    """The gradient at the joints, ``f`` (2, n, 6, 3): bottom ``-G - m_m a``, top ``G - m_s a``
+    with ``G = along u - across a`` (a = -g e_z), and the plates' gradient (n+1, 6) from them,
+    their moments ``r × f`` and the plates' weight (the payload's is the caller's)."""
+    leg, g, n = am.config.leg, am.config.gravity, am.n
+    f = np.empty((2, n, 6, 3))
+    f[1] = along[..., None] * u
+    f[1, ..., 2] += g * (across + leg.shaft_mass)
+    f[0] = -f[1]
+    f[0, ..., 2] += g * (leg.motor_mass + leg.shaft_mass)
+    m_top = along[..., None] * arm_x[1, :, :, 0] + (g * (across + leg.shaft_mass))[..., None] * arm_x[1, :, :, 3]
+    m_bottom = -along[..., None] * arm_x[0, :, :, 0] + (g * (leg.motor_mass - across))[..., None] * arm_x[0, :, :, 3]
+    grad = np.zeros((n + 1, 6))
+    grad[1:, :3] = f[1].sum(axis=1)
+    grad[1:, 2] += am.config.plate.mass * g
+    grad[1:, 3:] = m_top.sum(axis=1)
+    grad[:-1, :3] += f[0].sum(axis=1)
+    grad[:-1, 3:] += m_bottom.sum(axis=1)
+    return f, grad
+
+
 def elastic_terms(
     am: AssemblerModel,
     R: np.ndarray,
@@ -172,20 +193,7 @@ def elastic_terms(
     au = -g * u[..., 2]
     along = T + lam * au * inv_L  # G = along u - (λ/L) a: the potential's gradient in d
     across = lam * inv_L
-    # forces on the top and bottom joints: G - m_s a and -G - m_m a (a = -g e_z), moments r × f
-    f = np.empty((2, n, 6, 3))
-    f[1] = along[..., None] * u
-    f[1, ..., 2] += g * (across + leg.shaft_mass)
-    f[0] = -f[1]
-    f[0, ..., 2] += g * (leg.motor_mass + leg.shaft_mass)
-    m_top = along[..., None] * arm_x[1, :, :, 0] + (g * (across + leg.shaft_mass))[..., None] * arm_x[1, :, :, 3]
-    m_bottom = -along[..., None] * arm_x[0, :, :, 0] + (g * (leg.motor_mass - across))[..., None] * arm_x[0, :, :, 3]
-    grad = np.zeros((n + 1, 6))
-    grad[1:, :3] = f[1].sum(axis=1)
-    grad[1:, 2] += cfg.plate.mass * g
-    grad[1:, 3:] = m_top.sum(axis=1)
-    grad[:-1, :3] += f[0].sum(axis=1)
-    grad[:-1, 3:] += m_bottom.sum(axis=1)
+    f, grad = _joint_gradient(am, u, arm_x, along, across)
     r_pay = R[n, :, 2] * cfg.payload.offset
     w_pay = cfg.payload.mass * g  # the payload's weight, along -z
     grad[n, 2] += w_pay
@@ -207,16 +215,23 @@ def elastic_terms(
     ee = 0.5 * (np.outer(f_pay, r_pay) + np.outer(r_pay, f_pay)) - (w_pay * r_pay[2]) * _I3
     if not symmetric:  # a constant world moment on a rotating plate: -½ [m]× (not symmetric)
         ee = ee - 0.5 * skew(wrench[3:])
+    return _assembled(grad[1:], H12, ee, symmetric, T, L, lines)
+
+
+def _assembled(grad, H12, ee, symmetric: bool, T, L, lines) -> ElasticTerms:
+    """The terms with the platforms' (n, 12, 12) Hessians and the EE's rotation-block term
+    ``ee`` (3, 3) put together: dense up to :data:`DENSE_MAX_PLATFORMS`, else as blocks."""
+    n = H12.shape[0]
     if n <= DENSE_MAX_PLATFORMS:
         full = np.zeros((6 * n + 6, 6 * n + 6))
         for j in range(n):
             full[6 * j : 6 * j + 12, 6 * j : 6 * j + 12] += H12[j]
         full[-3:, -3:] += ee
-        return ElasticTerms(grad[1:], full[6:, 6:], None, None, symmetric, T, L, lines)
+        return ElasticTerms(grad, full[6:, 6:], None, None, symmetric, T, L, lines)
     diag = H12[:, 6:, 6:].copy()
     diag[:-1] += H12[1:, :6, :6]
     diag[-1, 3:, 3:] += ee
-    return ElasticTerms(grad[1:], None, diag, H12[1:, :6, 6:].copy(), symmetric, T, L, lines)
+    return ElasticTerms(grad, None, diag, H12[1:, :6, 6:].copy(), symmetric, T, L, lines)
 
 
 def tangent_solve(terms: ElasticTerms, rhs: np.ndarray) -> tuple[np.ndarray, np.ndarray, bool]:
@@ -315,6 +330,17 @@ def line_conditions(lines: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return inverse, np.where(np.isfinite(cond), cond, np.inf)
 
 
+def _singular(terms: ElasticTerms, limit: float) -> str | None:
+    cond = line_conditions(terms.lines)[1]
+    if cond.max() <= limit:
+        return None
+    j = int(np.argmax(cond))
+    return (
+        f"platform {j} is at a singular configuration (condition number {cond[j]:.3g} > {limit:.0g}): "
+        "its stiffness is not defined"
+    )
+
+
 def _step_size(x: np.ndarray, scale: float) -> float:
     return max(float(np.abs(x[:, :3]).max()), scale * float(np.abs(x[:, 3:]).max()))
 
@@ -348,13 +374,8 @@ def solve_equilibrium(
         if rest is None:
             rest = terms.lengths
         if it == 0 and condition_limit is not None:
-            cond = line_conditions(terms.lines)[1]
-            if not cond.max() <= condition_limit:
-                j = int(np.argmax(cond))
-                message = (
-                    f"platform {j} is at a singular configuration (condition number {cond[j]:.3g} > "
-                    f"{condition_limit:.0g}): its stiffness is not defined"
-                )
+            message = _singular(terms, condition_limit)
+            if message is not None:
                 break
         try:
             x, C, stable = tangent_solve(terms, -terms.gradient)
