@@ -27,6 +27,8 @@ _LAZY: dict[str, str] = {
     "Carrier": ".carrier",
     "carrier_statics": ".carrier",
     "CLIError": ".exceptions",
+    "compensated_lengths": ".compliance",
+    "CompensatedLengths": ".compliance",
     "closure_sidecar": ".urdf",
     "ConfigError": ".exceptions",
     "ConvergenceError": ".exceptions",
@@ -45,6 +47,9 @@ _LAZY: dict[str, str] = {
     "InitialConditionResult": ".helper_arm",
     "leg_geometry": ".geometry",
     "leg_state": ".kinematics",
+    "loaded_pose": ".compliance",
+    "LoadedPose": ".compliance",
+    "LoadError": ".exceptions",
     "LegConfig": ".config",
     "LegState": ".kinematics",
     "load_config": ".config",
@@ -79,6 +84,8 @@ _LAZY: dict[str, str] = {
     "StackFKResult": ".kinematics",
     "StackState": ".state",
     "StaticsResult": ".statics",
+    "stiffness": ".ee_stiffness",
+    "StiffnessResult": ".ee_stiffness",
     "taa_to_se3": ".kinematics",
     "to_se3": ".kinematics",
     "Trajectory": ".motion.timing",
@@ -106,13 +113,16 @@ def __dir__() -> list[str]:
 if TYPE_CHECKING:  # for type checkers and IDEs: the same names, imported eagerly
     from .capacity import CapacityResult, payload_capacity
     from .carrier import Carrier, carrier_statics, solve_on_carrier
+    from .compliance import CompensatedLengths, LoadedPose, compensated_lengths, loaded_pose
     from .config import AssemblerConfig, LegConfig, PayloadConfig, PlateConfig, load_config
     from .constraints import GoalTolerance, Violation, evaluate_constraints
+    from .ee_stiffness import StiffnessResult, stiffness
     from .exceptions import (
         AssemblerError,
         CLIError,
         ConfigError,
         ConvergenceError,
+        LoadError,
         ModelFileError,
         OptionsError,
         PoseError,

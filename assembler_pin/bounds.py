@@ -39,9 +39,7 @@ class Bound:
 #: and ``PlanOptions``/``plan_trajectory(rate=...)``).
 BOUNDS: dict[str, Bound] = {
     "plan.rate": Bound(1.0, 1000.0, "Hz", False, "samples per second of a trajectory file"),
-    "plan.duration": Bound(
-        0.0, 3600.0, "s", False, "a planned motion's duration"
-    ),
+    "plan.duration": Bound(0.0, 3600.0, "s", False, "a planned motion's duration"),
     "plan.samples": Bound(2, 1_000_000, "", True, "rows of one trajectory file (rate x duration)"),
     "trajectory.duration": Bound(0.0, 3600.0, "s", False, "the time span a trajectory file may cover"),
     "trajectory.rows": Bound(2, 1_000_000, "", True, "rows a trajectory file may hold"),
@@ -65,6 +63,7 @@ BOUNDS: dict[str, Bound] = {
     "simulate.drift_tolerance": Bound(1e-6, 1000.0, "mm", False, "simulate --drift-tolerance"),
     "leg.max_speed": Bound(1e-4, 100.0, "m/s", False, "config leg.max_speed: a leg's largest length rate"),
     "leg.max_acceleration": Bound(1e-4, 1000.0, "m/s^2", False, "config leg.max_acceleration"),
+    "leg.stiffness": Bound(1e3, 1e10, "N/m", False, "config leg.stiffness: a leg's axial stiffness"),
     "config.platforms": Bound(1, 64, "", True, "config platforms: Stewart platforms in the stack"),
     "batch.stacks": Bound(1, 10_000_000, "", True, "stacks in one batched statics call"),
 }

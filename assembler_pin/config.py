@@ -20,6 +20,10 @@ The YAML format (every key optional; a missing key takes the default shown)::
       max_compression: 200  # [N] > 0
       max_speed: 0.05       # [m/s] > 0, largest leg-length rate along a planned motion
       max_acceleration: 0.2 # [m/s^2] > 0, largest leg-length acceleration along a motion
+      stiffness: 1.0e6      # [N/m] axial stiffness of a leg, in [1e3, 1e10]: a ball-screw linear
+                            # actuator is 1e6-1e7 N/m (screw, nut, bearings, housing in series);
+                            # 1e6, the soft end, suits the small 200 N actuators of the prototype.
+                            # It is the MJCF servos' gain too.
     payload:
       mass: 5.0             # [kg] >= 0
       offset: 0.2           # [m] along the end-effector plate's local +z
@@ -80,6 +84,7 @@ class LegConfig:
         max_tension, max_compression: force limits, both positive magnitudes [N].
         max_speed, max_acceleration: limits of a leg's length rate [m/s] and its
             acceleration [m/s²] along a planned motion (:mod:`assembler_pin.motion`).
+        stiffness: axial stiffness of the leg [N/m] (:mod:`assembler_pin.ee_stiffness`).
     """
 
     min_length: float = 0.20
@@ -93,6 +98,7 @@ class LegConfig:
     max_compression: float = 200.0
     max_speed: float = 0.05
     max_acceleration: float = 0.2
+    stiffness: float = 1.0e6
 
     @property
     def mid_length(self) -> float:
@@ -174,9 +180,10 @@ LIMITS = {
     "mass": 1e5,  # [kg], any plate, motor, shaft or payload mass
     "length": 1e3,  # [m], radii, leg lengths, centres of mass, payload offset (absolute)
     "force": 1e9,  # [N], force limits
+    "stiffness": 1e10,  # [N/m], leg stiffness
 }
 _UNIT_OF = {"gravity": "gravity", "mass": "mass", "motor_mass": "mass", "shaft_mass": "mass",
-            "max_tension": "force", "max_compression": "force"}  # fmt: skip
+            "max_tension": "force", "max_compression": "force", "stiffness": "stiffness"}  # fmt: skip
 
 
 def _is_number(value: Any) -> bool:
@@ -245,6 +252,7 @@ def _validate(cfg: AssemblerConfig) -> None:
         _check(getattr(leg, key) > 0, f"leg.{key}", getattr(leg, key), "must be > 0 [N]")
     _check(leg.max_speed > 0, "leg.max_speed", leg.max_speed, "must be > 0 [m/s]")
     _check(leg.max_acceleration > 0, "leg.max_acceleration", leg.max_acceleration, "must be > 0 [m/s^2]")
+    _check(leg.stiffness >= 1e3, "leg.stiffness", leg.stiffness, "must be in [1e3, 1e10] [N/m]")
     chord = cfg.leg_chord
     if leg.mid_length <= chord * (1.0 + 1e-9):
         raise ConfigError(

@@ -88,3 +88,7 @@ class TrajectoryError(AssemblerError, ValueError):
 
 class GridError(AssemblerError, ValueError):
     """A grid or orientation SPEC that cannot be read."""
+
+
+class LoadError(AssemblerError, ValueError):
+    """An external load (a wrench on the end effector) that is malformed, not finite or absurd."""

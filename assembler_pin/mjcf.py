@@ -19,8 +19,9 @@ Layout (chosen so that both MuJoCo and Pinocchio's MJCF parser load the same fil
   0"/>``: the shaft frame origin and the top joint centre coincide in the reference
   configuration (the home pose), where MuJoCo computes the anchor in the plate's frame.
 * One ``<position>`` actuator per leg on its slide: ``ctrl`` is the commanded pin-to-pin
-  length [m] (``ctrlrange`` the stroke), gain :data:`ACTUATOR_KP`, damping
-  :data:`ACTUATOR_KV`, ``forcerange`` the config's force limits. MuJoCo's actuator force is
+  length [m] (``ctrlrange`` the stroke), gain the config's ``leg.stiffness`` (so MuJoCo's
+  servo is the leg spring of :mod:`assembler_pin.ee_stiffness`), damping and armature from
+  :func:`actuator_gains`, ``forcerange`` the config's force limits. MuJoCo's actuator force is
   positive when it pushes the shaft out, i.e. compression: the package's leg force (tension
   positive) is its negative.
 * Inertias and primitive geometry equal the URDF's (explicit ``<inertial>`` everywhere, so
@@ -57,16 +58,20 @@ __all__ = [
     "MJCF_FILENAME",
     "TIMESTEP",
     "MjcfLayout",
+    "actuator_gains",
     "assembler_mjcf",
 ]
 
 MJCF_FILENAME = "assembler.xml"
-#: Position gain of each leg actuator [N/m]: a stiff servo, 0.1 mm of length error per 100 N.
+#: Reference position gain of a leg actuator [N/m] (the default ``leg.stiffness``: 0.1 mm of
+#: length error per 100 N), at which :data:`ACTUATOR_KV` and :data:`ACTUATOR_ARMATURE` hold.
 ACTUATOR_KP = 1.0e6
-#: Velocity damping of each leg actuator [N s/m] (critically damps the slide's armature).
+#: Velocity damping of each leg actuator at :data:`ACTUATOR_KP` [N s/m] (overdamps the slide's
+#: armature: damping ratio 10).
 ACTUATOR_KV = 2.0e4
-#: Reflected inertia of each actuator's drive on its slide [kg] (MuJoCo ``armature``): it
-#: keeps the stiff position loop stable at :data:`TIMESTEP`; it has no effect on statics.
+#: Reflected inertia of each actuator's drive on its slide at :data:`ACTUATOR_KP` [kg] (MuJoCo
+#: ``armature``): it keeps the stiff position loop stable at :data:`TIMESTEP`; it has no effect
+#: on statics.
 ACTUATOR_ARMATURE = 1.0
 #: Integration timestep [s].
 TIMESTEP = 1.0e-3
@@ -109,6 +114,18 @@ class MjcfLayout:
         return cls(plate, legs, acts)
 
 
+def actuator_gains(stiffness: float) -> tuple[float, float, float]:
+    """(kp [N/m], kv [N s/m], armature [kg]) of a leg servo whose stiffness is ``stiffness``.
+
+    ``kp`` is the stiffness itself. Above :data:`ACTUATOR_KP` the armature grows with it, so
+    the loop's natural frequency (and its stability at :data:`TIMESTEP`) stays that of the
+    reference; ``kv`` keeps the reference damping ratio ``kv / (2 sqrt(kp · armature))``.
+    """
+    armature = ACTUATOR_ARMATURE * max(1.0, stiffness / ACTUATOR_KP)
+    kv = ACTUATOR_KV * float(np.sqrt(stiffness * armature / (ACTUATOR_KP * ACTUATOR_ARMATURE)))
+    return float(stiffness), kv, armature
+
+
 def _quat_wxyz(rotation: np.ndarray) -> str:
     x, y, z, w = pin.Quaternion(rotation).coeffs()
     return xml_vector(np.array([w, x, y, z]))
@@ -141,6 +158,7 @@ def assembler_mjcf(cfg: AssemblerConfig) -> str:
         geo.top_in_plate + cfg.home_height * np.array([0.0, 0.0, 1.0]) - geo.bottom_in_plate, axis=-1
     )
     defl = leg.max_deflection
+    kp, kv, armature = actuator_gains(leg.stiffness)
     root = ET.Element("mujoco", model="assembler")
     ET.SubElement(root, "compiler", angle="radian", autolimits="true")
     ET.SubElement(
@@ -213,7 +231,7 @@ def assembler_mjcf(cfg: AssemblerConfig) -> str:
                 type="slide",
                 axis="0 0 1",
                 ref=xml_number(home_length),
-                armature=xml_number(ACTUATOR_ARMATURE),
+                armature=xml_number(armature),
                 range=xml_vector(np.array([leg.min_length, leg.max_length])),
             )
             _cylinder_part(shaft, leg.shaft_mass, dim.shaft_radius, -leg.shaft_com, "shaft")
@@ -242,8 +260,8 @@ def assembler_mjcf(cfg: AssemblerConfig) -> str:
                 "position",
                 name=f"sp{j}_leg{i}",
                 joint=names.leg(j, i, "actuator"),
-                kp=xml_number(ACTUATOR_KP),
-                kv=xml_number(ACTUATOR_KV),
+                kp=xml_number(kp),
+                kv=xml_number(kv),
                 ctrlrange=xml_vector(np.array([leg.min_length, leg.max_length])),
                 forcerange=xml_vector(np.array([-leg.max_tension, leg.max_compression])),
             )

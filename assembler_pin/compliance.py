@@ -1,0 +1,280 @@
+"""The loaded pose of commanded leg lengths, and the lengths to command for a wanted pose.
+
+With legs of axial stiffness ``k = leg.stiffness`` (:mod:`assembler_pin.elastic`), commanding
+lengths ``L0`` does not put the plates at the rigid pose of ``L0`` (its forward kinematics):
+gravity, the payload and any wrench on the EE stretch or compress every leg by ``F / k``.
+
+* :func:`loaded_pose` — the nonlinear elastic equilibrium of commanded lengths: the plates, the
+  EE's sag from the rigid pose, the leg forces ``F = k (L - L0)`` (tension positive).
+* :func:`compensated_lengths` — the commanded lengths whose loaded equilibrium is a given pose:
+  ``L0 = L - F / k`` with ``F`` the statics forces of that pose (a leg in compression is
+  commanded longer than it ends up), confirmed by :func:`loaded_pose`.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+import numpy.typing as npt
+import pinocchio as pin
+
+from .ee_stiffness import stiffness
+from .elastic import line_conditions, solve_equilibrium
+from .exceptions import LoadError
+from .kinematics import PlateArrays, leg_vectors, plate_arrays, stack_forward_kinematics
+from .labels import leg_label
+from .model import AssemblerModel
+from .statics import CONDITION_LIMIT, solve_statics
+from .validation import as_float_array
+
+__all__ = [
+    "MAX_WRENCH",
+    "CompensatedLengths",
+    "LoadedPose",
+    "benchmark_stiffness",
+    "compensated_lengths",
+    "loaded_pose",
+]
+
+#: Largest force [N] or moment [N·m] component of an EE wrench accepted.
+MAX_WRENCH = 1e6
+
+
+@dataclass(frozen=True)
+class LoadedPose:
+    """The elastic equilibrium of commanded leg lengths (:func:`loaded_pose`).
+
+    Attributes:
+        plates: the loaded plate poses (the last iterate when not ``success``).
+        rigid: the rigid pose of the commanded lengths (stack forward kinematics).
+        translation, rotation: (3,) the EE's sag, loaded against rigid [m, rad], world axes
+            (rotation vector ``log3(R_loaded R_rigidᵀ)``).
+        forces: (n, 6) leg forces ``k (L - L0)`` [N], tension positive.
+        lengths: (n, 6) the loaded pin-to-pin lengths [m]; commanded: (n, 6) ``L0`` [m].
+        iterations: Newton steps; residual: the last step's size [m] (distance left).
+        success: converged to a stable equilibrium with no singular platform; message: why not.
+    """
+
+    plates: PlateArrays
+    rigid: PlateArrays
+    translation: np.ndarray
+    rotation: np.ndarray
+    forces: np.ndarray
+    lengths: np.ndarray
+    commanded: np.ndarray
+    iterations: int
+    residual: float
+    success: bool
+    message: str
+
+    def __repr__(self) -> str:
+        return (
+            f"LoadedPose(success={self.success}, EE sag {1e3 * float(np.linalg.norm(self.translation)):.4f} mm "
+            f"{np.rad2deg(float(np.linalg.norm(self.rotation))):.4f} deg, max|F| "
+            f"{float(np.abs(self.forces).max()):.3f} N, {self.iterations} steps, message={self.message!r})"
+        )
+
+    @classmethod
+    def failed(
+        cls, plates: PlateArrays, rigid: PlateArrays, rest: np.ndarray, iterations: int, step: float, message: str
+    ) -> LoadedPose:
+        """No equilibrium: NaN sag and forces, ``success`` false and why."""
+        nan3, nan = np.full(3, np.nan), np.full(rest.shape, np.nan)
+        return cls(plates, rigid, nan3, nan3, nan, nan, rest, iterations, step, False, message)
+
+    def to_dict(self) -> dict:
+        """The loaded pose as JSON-ready lists (NaN for a failed one: write it with ``dumps``)."""
+        return {
+            "success": self.success,
+            "message": self.message,
+            "sag": {"translation": self.translation.tolist(), "rotation": self.rotation.tolist()},
+            "leg_forces": self.forces.tolist(),
+            "lengths": self.lengths.tolist(),
+            "commanded": self.commanded.tolist(),
+            "plates": self.plates.as_matrices().tolist(),
+            "iterations": self.iterations,
+            "residual_m": self.residual,
+        }
+
+
+def _checked_wrench(wrench: npt.ArrayLike | None) -> np.ndarray | None:
+    if wrench is None:
+        return None
+    w = as_float_array(wrench, "EE wrench (six numbers fx fy fz mx my mz)", (6,), error=LoadError)
+    if not np.all(np.isfinite(w)):
+        raise LoadError(f"EE wrench contains NaN or infinite values: {w.tolist()}")
+    if np.abs(w).max() > MAX_WRENCH:
+        raise LoadError(
+            f"EE wrench components must be at most {MAX_WRENCH:g} N or N·m in magnitude, got {np.abs(w).max():.3g}"
+        )
+    return w
+
+
+def loaded_pose(
+    am: AssemblerModel,
+    lengths: npt.ArrayLike,
+    wrench: npt.ArrayLike | None = None,
+    base: pin.SE3 | npt.ArrayLike | None = None,
+    tol: float = 1e-12,
+    max_iterations: int = 30,
+) -> LoadedPose:
+    """The plates' elastic equilibrium under gravity, payload and ``wrench`` for commanded lengths.
+
+    Newton's method on the plate poses (SE(3) increments, the exact tangent stiffness of
+    :mod:`assembler_pin.elastic`) from the rigid pose of ``lengths``.
+
+    Args:
+        lengths: (n, 6) commanded (unloaded) pin-to-pin lengths [m].
+        wrench: (6,) ``[f, m]`` applied to the EE plate [N, N·m], world axes, moment about
+            the EE origin (default none).
+        base: plate 0's world pose (default identity).
+        tol: largest Newton step accepted as converged [m] (rotations times the node radius).
+
+    Raises:
+        PoseError: malformed lengths or base. LoadError: a non-finite or absurd wrench.
+    """
+    w = _checked_wrench(wrench)
+    rest = as_float_array(lengths, "leg lengths", (am.n, 6))
+    fk = stack_forward_kinematics(am, rest, base=base)
+    rigid = fk.plates
+    k = float(am.config.leg.stiffness)
+    if not fk.success:
+        return LoadedPose.failed(
+            rigid, rigid, rest, 0, math.inf, f"the commanded lengths have no rigid pose: {fk.message}"
+        )
+    eq = solve_equilibrium(am, rigid.R, rigid.p, rest, k, wrench=w, tol=tol, max_iterations=max_iterations)
+    message = eq.message
+    if message is None:
+        cond = line_conditions(eq.terms.lines)[1]
+        if not cond.max() <= CONDITION_LIMIT:
+            message = f"the loaded pose puts platform {int(np.argmax(cond))} at a singular configuration"
+        elif not eq.stable:
+            message = "the loaded equilibrium is not stable (the stack buckles under this load)"
+    plates = PlateArrays(eq.R, eq.p)
+    if message is not None:
+        return LoadedPose.failed(plates, rigid, rest, eq.iterations, eq.step, message)
+    now = leg_vectors(am, plates)[3]  # at the final pose (the terms are one tiny step behind it)
+    return LoadedPose(
+        plates,
+        rigid,
+        eq.p[-1] - rigid.p[-1],
+        pin.log3(eq.R[-1] @ rigid.R[-1].T),
+        k * (now - rest),
+        now,
+        rest,
+        eq.iterations,
+        eq.step,
+        True,
+        "converged",
+    )
+
+
+@dataclass(frozen=True)
+class CompensatedLengths:
+    """Commanded lengths that put the loaded stack at a given pose (:func:`compensated_lengths`).
+
+    Attributes:
+        lengths: (n, 6) the lengths to command [m]; geometric: (n, 6) the pose's own lengths [m].
+        forces: (n, 6) the statics forces of the pose [N, tension positive].
+        check: the :class:`LoadedPose` of ``lengths`` (the confirmation).
+        error: largest distance of a loaded plate from the wanted pose [m] (rotations
+            times the node radius).
+        within_stroke: every commanded length is within the legs' stroke.
+        success: the check converged, ``error`` ≤ ``tolerance`` and ``within_stroke``;
+            message: "ok" or why not.
+    """
+
+    lengths: np.ndarray
+    geometric: np.ndarray
+    forces: np.ndarray
+    check: LoadedPose
+    error: float
+    within_stroke: bool
+    success: bool
+    message: str
+
+    def __repr__(self) -> str:
+        return (
+            f"CompensatedLengths(success={self.success}, largest correction "
+            f"{1e3 * float(np.abs(self.lengths - self.geometric).max()):.4f} mm, plates within "
+            f"{self.error:.2g} m, message={self.message!r})"
+        )
+
+
+def _plate_distance(am: AssemblerModel, a: PlateArrays, b: PlateArrays) -> float:
+    """Largest distance between the plates of two poses [m] (rotations times the node radius)."""
+    M = np.matmul(a.R, np.swapaxes(b.R, 1, 2))
+    vee = np.stack([M[:, 2, 1] - M[:, 1, 2], M[:, 0, 2] - M[:, 2, 0], M[:, 1, 0] - M[:, 0, 1]], axis=1)
+    angle = np.arctan2(0.5 * np.linalg.norm(vee, axis=1), 0.5 * (np.trace(M, axis1=1, axis2=2) - 1.0))
+    return max(float(np.abs(a.p - b.p).max()), am.config.plate.node_radius * float(angle.max()))
+
+
+def _stroke_problem(am: AssemblerModel, cmd: np.ndarray) -> str | None:
+    leg = am.config.leg
+    over = np.maximum(leg.min_length - cmd, cmd - leg.max_length)
+    if over.max() <= 0:
+        return None
+    j, i = np.unravel_index(int(np.argmax(over)), over.shape)
+    return (
+        f"{int((over > 0).sum())} compensated length(s) outside the stroke [{leg.min_length:g}, "
+        f"{leg.max_length:g}] m, the worst {leg_label(j, i)} at {cmd[j, i]:.6f} m"
+    )
+
+
+def compensated_lengths(
+    am: AssemblerModel, plates: PlateArrays | Sequence | np.ndarray, tolerance: float = 1e-9
+) -> CompensatedLengths:
+    """The commanded lengths ``L - F / k`` whose loaded equilibrium is ``plates`` (to ``tolerance``
+    [m]), ``F`` the statics forces (:func:`~assembler_pin.statics.solve_statics`, tension
+    positive) and ``L`` the pose's lengths; confirmed by :func:`loaded_pose`. A leg in
+    compression is commanded longer than it ends up, one in tension shorter; ``success`` also
+    needs every commanded length within the stroke (a servo cannot be commanded beyond it).
+
+    Raises:
+        PoseError: malformed plates. SingularConfigurationError: the pose is singular.
+        LoadError: ``tolerance`` not in [1e-12, 1e-3] m.
+    """
+    if not (isinstance(tolerance, (int, float)) and 1e-12 <= tolerance <= 1e-3):
+        raise LoadError(f"tolerance of the compensated pose must be in [1e-12, 1e-3] m, got {tolerance!r}")
+    pa = plate_arrays(am, plates)
+    statics = solve_statics(am, pa, raise_on_singular=True)
+    geometric = leg_vectors(am, pa)[3]
+    cmd = geometric - statics.forces / float(am.config.leg.stiffness)
+    check = loaded_pose(am, cmd, base=pa.se3(0), tol=min(1e-12, 1e-3 * tolerance))
+    error = _plate_distance(am, check.plates, pa) if check.success else math.inf
+    stroke = _stroke_problem(am, cmd)
+    if not check.success:
+        message = check.message
+    elif error > tolerance:
+        message = f"the loaded pose of the compensated lengths is {error:.3g} m from the pose (> {tolerance:g} m)"
+    else:
+        message = stroke or "ok"
+    return CompensatedLengths(cmd, geometric, statics.forces, check, error, stroke is None, message == "ok", message)
+
+
+def benchmark_stiffness(am: AssemblerModel, repeat: int = 200) -> dict[str, float]:
+    """Median wall time [s] per call of :func:`~assembler_pin.ee_stiffness.stiffness`,
+    :func:`loaded_pose` and :func:`compensated_lengths` at the home pose (and, for scale,
+    :func:`~assembler_pin.statics.solve_statics`)."""
+    pa = plate_arrays(am, am.home)
+    lengths = compensated_lengths(am, pa).lengths
+    calls = {
+        "stiffness": lambda: stiffness(am, pa),
+        "loaded_pose": lambda: loaded_pose(am, lengths),
+        "compensated_lengths": lambda: compensated_lengths(am, pa),
+        "solve_statics": lambda: solve_statics(am, pa),
+    }
+    out = {}
+    for name, call in calls.items():
+        call()
+        times = []
+        for _ in range(repeat):
+            t0 = time.perf_counter()
+            call()
+            times.append(time.perf_counter() - t0)
+        out[name] = float(np.median(times))
+    return out

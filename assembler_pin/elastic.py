@@ -1,0 +1,403 @@
+"""The stack as an elastic truss: its total potential, gradient and Hessian over the plate poses,
+and the Newton solve of its loaded equilibrium (used by :mod:`assembler_pin.ee_stiffness` and
+:mod:`assembler_pin.compliance`).
+
+Model. Each leg is a linear spring along its pin-to-pin axis, stiffness ``k = leg.stiffness``
+[N/m], unloaded (commanded) length ``L0``: its tension is ``T = k (L - L0)`` (positive when
+stretched, the package's sign). The motor and shaft centres of mass lie on the leg axis, so
+with the plates placed every body is placed and the total potential is a function of the
+plate poses alone::
+
+    V = Σ_legs ½ k (L - L0)²  +  Σ_bodies m g z  -  f·p_n - m·θ_n
+
+(plates at their centres, motors ``motor_com`` above the bottom joint and shafts ``shaft_com``
+below the top joint on the axis, the payload ``payload.offset`` along the EE's z; an optional
+wrench ``[f, m]`` on the EE, world axes, the moment about the EE origin).
+
+Coordinates. Plates 1..n each move by ``(δp, δθ)``, world axes at the plate's origin:
+``p ← p + δp``, ``R ← exp3(δθ) R`` (plate 0 is fixed). A point ``x = p + r`` of the plate then
+moves by ``δp + δθ × r + ½ δθ × (δθ × r)``; its second-order term makes the Hessian exact in
+these coordinates (``sym(f rᵀ) - (f·r) I`` in the rotation block, ``f`` the point's gradient).
+
+Per leg, with ``d = t - b``, ``u = d / L``, ``a = (0, 0, -g)`` and the leg's lever
+``λ = m_m c_m - m_s c_s`` (the leg's weight reduced to its axis):
+
+* gradient in d: ``G = T u - λ (a - (a·u) u) / L``; in b: ``-G - m_m a``; in t: ``G - m_s a``;
+* Hessian in d: ``k u uᵀ`` (the elastic part) ``+ (T / L)(I - u uᵀ)`` (the preload)
+  ``+ λ (a uᵀ + u aᵀ + (a·u)(I - 3 u uᵀ)) / L²`` (the leg's own weight).
+
+The Hessian is block-tridiagonal over the plates (a leg joins plates j and j+1). Up to
+:data:`DENSE_MAX_PLATFORMS` platforms it is solved as one dense matrix (one LAPACK call, which
+also gives the EE's condensed compliance, the EE block of its inverse); above, by one sweep of
+its blocks from the base up (linear in n).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+import pinocchio as pin
+from scipy.linalg.lapack import dgesv, dposv, dpotrf
+
+from .linalg import cross, inverse_or_nan, skew
+from .model import AssemblerModel
+
+__all__ = [
+    "DENSE_MAX_PLATFORMS",
+    "MAX_STEP",
+    "ElasticTerms",
+    "Equilibrium",
+    "block_sweep",
+    "elastic_terms",
+    "exp3_batch",
+    "line_conditions",
+    "solve_equilibrium",
+    "tangent_solve",
+]
+
+_I3 = np.eye(3)
+_I6 = np.eye(6)
+
+#: Largest Newton step [m, or rad × node radius] taken at once; longer steps are scaled down.
+MAX_STEP = 0.02
+
+#: Up to this many platforms the tangent stiffness is one dense (6n, 6n) matrix solved by one
+#: LAPACK call; above, its blocks are swept (linear in n).
+DENSE_MAX_PLATFORMS = 16
+
+
+def exp3_batch(w: np.ndarray) -> np.ndarray:
+    """Rotation matrices (m, 3, 3) of rotation vectors (m, 3) [rad] (Rodrigues, series near 0)."""
+    if w.shape[0] <= 32:  # a few: Pinocchio's own is faster than the vectorized formula
+        return np.array([pin.exp3(x) for x in w]).reshape(-1, 3, 3)
+    th2 = (w * w).sum(axis=1)
+    small = th2 < 1e-8
+    th = np.sqrt(th2)
+    safe = np.where(small, 1.0, th)
+    a = np.where(small, 1.0 - th2 / 6.0, np.sin(safe) / safe)
+    b = np.where(small, 0.5 - th2 / 24.0, (1.0 - np.cos(safe)) / np.where(small, 1.0, th2))
+    K = skew(w)
+    return _I3 + a[:, None, None] * K + b[:, None, None] * np.matmul(K, K)
+
+
+@dataclass(frozen=True)
+class ElasticTerms:
+    """The potential's first and second derivatives at one pose (plates 1..n, see module doc).
+
+    Attributes:
+        gradient: (n, 6) ``∂V/∂(δp, δθ)`` of plates 1..n [N, N·m] (zero at an equilibrium).
+        hessian: (6n, 6n) the Hessian (up to :data:`DENSE_MAX_PLATFORMS` platforms), else None.
+        diag, off: above that, its blocks: (n, 6, 6) of plates 1..n and (n-1, 6, 6) of
+            (plate m, plate m+1), m = 1..n-1 (None when ``hessian`` is given).
+        symmetric: False when an EE moment makes the tangent unsymmetric.
+        tension: (n, 6) spring tensions ``k (L - L0)`` [N]; lengths: (n, 6) [m].
+        lines: (n, 6, 6) each leg's line ``[u, r × u]`` at its top plate's origin (world axes,
+            ``r`` the top joint from that origin): the rows of ``dL/d(δp, δθ)`` of the top plate.
+    """
+
+    gradient: np.ndarray
+    hessian: np.ndarray | None
+    diag: np.ndarray | None
+    off: np.ndarray | None
+    symmetric: bool
+    tension: np.ndarray
+    lengths: np.ndarray
+    lines: np.ndarray
+
+
+def _chart(f: np.ndarray, r: np.ndarray) -> np.ndarray:
+    """Σ over the points' last-but-one axis of ``sym(f rᵀ) - (f·r) I`` (the rotation block's
+    second-order term), (..., m, 3) arrays → (..., 3, 3)."""
+    M = np.matmul(np.swapaxes(f, -1, -2), r)  # Σ f ⊗ r
+    tr = M[..., 0, 0] + M[..., 1, 1] + M[..., 2, 2]
+    return 0.5 * (M + np.swapaxes(M, -1, -2)) - tr[..., None, None] * _I3
+
+
+def _platform_hessians(dirs, arms, c1, c2, c3, gravity: float) -> np.ndarray:
+    """(n, 12, 12) Hessians of each platform's legs over (bottom plate, top plate) coordinates.
+
+    A leg's Hessian in d, ``c1 u uᵀ + c2 I + c3 (a uᵀ + u aᵀ)`` with ``a = -g e_z``, is a sum of
+    outer products of directions ``e`` (``dirs`` (n, 6, 4, 3): u, e_x, e_y, e_z); each becomes
+    the 12-vector ``[-e, -(r_b × e), e, r_t × e]`` (its line at both plates; ``arms`` (2, n, 6,
+    4, 3) holds ``r_b × e`` and ``r_t × e``), so the platform's Hessian is a few (12 × 24)
+    matrix products.
+    """
+    n = dirs.shape[0]
+    lines = np.concatenate([-dirs, -arms[0], dirs, arms[1]], axis=-1)
+    weights = np.empty((n, 6, 4, 1))
+    weights[:, :, 0, 0] = c1
+    weights[:, :, 1:, 0] = c2[..., None]
+    V = lines.reshape(n, 24, 12)
+    H = np.matmul(np.swapaxes((lines * weights).reshape(n, 24, 12), 1, 2), V)
+    a_lines = (-gravity * c3)[..., None] * lines[:, :, 3]  # the gravity direction's lines, weighted
+    M = np.matmul(np.swapaxes(a_lines, 1, 2), lines[:, :, 0])
+    return H + M + np.swapaxes(M, 1, 2)
+
+
+def _joint_gradient(am: AssemblerModel, u, arm_x, along, across) -> tuple[np.ndarray, np.ndarray]:
+    """The gradient at the joints, ``f`` (2, n, 6, 3): bottom ``-G - m_m a``, top ``G - m_s a``
+    with ``G = along u - across a`` (a = -g e_z), and the plates' gradient (n+1, 6) from them,
+    their moments ``r × f`` and the plates' weight (the payload's is the caller's)."""
+    leg, g, n = am.config.leg, am.config.gravity, am.n
+    f = np.empty((2, n, 6, 3))
+    f[1] = along[..., None] * u
+    f[1, ..., 2] += g * (across + leg.shaft_mass)
+    f[0] = -f[1]
+    f[0, ..., 2] += g * (leg.motor_mass + leg.shaft_mass)
+    m_top = along[..., None] * arm_x[1, :, :, 0] + (g * (across + leg.shaft_mass))[..., None] * arm_x[1, :, :, 3]
+    m_bottom = -along[..., None] * arm_x[0, :, :, 0] + (g * (leg.motor_mass - across))[..., None] * arm_x[0, :, :, 3]
+    grad = np.zeros((n + 1, 6))
+    grad[1:, :3] = f[1].sum(axis=1)
+    grad[1:, 2] += am.config.plate.mass * g
+    grad[1:, 3:] = m_top.sum(axis=1)
+    grad[:-1, :3] += f[0].sum(axis=1)
+    grad[:-1, 3:] += m_bottom.sum(axis=1)
+    return f, grad
+
+
+def elastic_terms(
+    am: AssemblerModel,
+    R: np.ndarray,
+    p: np.ndarray,
+    rest: np.ndarray | None,
+    stiffness: float,
+    wrench: np.ndarray | None = None,
+    hessian: bool = True,
+) -> ElasticTerms:
+    """Gradient and Hessian of the total potential (module doc) at plates ``R`` (n+1, 3, 3),
+    ``p`` (n+1, 3) [m] for unloaded leg lengths ``rest`` (n, 6) [m] (None: the lengths here).
+
+    Args:
+        stiffness: each leg's axial stiffness [N/m].
+        wrench: (6,) ``[f, m]`` on the EE [N, N·m], world axes, moment about the EE origin.
+        hessian: False skips the Hessian.
+    """
+    cfg, geo, n = am.config, am.geometry, am.n
+    leg = cfg.leg
+    g = cfg.gravity
+    rb = np.matmul(geo.bottom_in_plate, np.swapaxes(R[:-1], 1, 2))  # bottom joints from plate j's origin
+    rt = np.matmul(geo.top_in_plate, np.swapaxes(R[1:], 1, 2))  # top joints from plate j+1's origin
+    d = rt - rb + (p[1:] - p[:-1])[:, None, :]
+    L = np.sqrt((d * d).sum(axis=2))
+    inv_L = 1.0 / L
+    u = d * inv_L[..., None]
+    dirs = np.empty((n, 6, 4, 3))
+    dirs[:, :, 0] = u
+    dirs[:, :, 1:] = _I3
+    arms = np.stack([rb, rt])
+    arm_x = cross(arms[:, :, :, None, :], dirs)  # r × e for the bottom and top joints
+    T = np.zeros_like(L) if rest is None else stiffness * (L - rest)
+    lam = leg.motor_mass * leg.motor_com - leg.shaft_mass * leg.shaft_com
+    au = -g * u[..., 2]
+    along = T + lam * au * inv_L  # G = along u - (λ/L) a: the potential's gradient in d
+    across = lam * inv_L
+    f, grad = _joint_gradient(am, u, arm_x, along, across)
+    r_pay = R[n, :, 2] * cfg.payload.offset
+    w_pay = cfg.payload.mass * g  # the payload's weight, along -z
+    grad[n, 2] += w_pay
+    grad[n, 3:5] += (w_pay * r_pay[1], -w_pay * r_pay[0])  # r × (0, 0, w)
+    if wrench is not None:
+        grad[n] -= wrench
+    lines = np.concatenate([u, arm_x[1, :, :, 0]], axis=2)
+    symmetric = wrench is None or not np.any(wrench[3:])
+    if not hessian:
+        return ElasticTerms(grad[1:], None, None, None, symmetric, T, L, lines)
+    c3 = lam * inv_L * inv_L
+    c2 = T * inv_L + c3 * au
+    c1 = stiffness - T * inv_L - 3.0 * c3 * au
+    H12 = _platform_hessians(dirs, arm_x, c1, c2, c3, g)
+    charts = _chart(f, arms)  # (2, n, 3, 3): bottom joints on plate j, top joints on plate j+1
+    H12[:, 9:, 9:] += charts[1]
+    H12[1:, 3:6, 3:6] += charts[0, 1:]
+    f_pay = np.array([0.0, 0.0, w_pay])
+    ee = 0.5 * (np.outer(f_pay, r_pay) + np.outer(r_pay, f_pay)) - (w_pay * r_pay[2]) * _I3
+    if not symmetric:  # a constant world moment on a rotating plate: -½ [m]× (not symmetric)
+        ee = ee - 0.5 * skew(wrench[3:])
+    return _assembled(grad[1:], H12, ee, symmetric, T, L, lines)
+
+
+def _assembled(grad, H12, ee, symmetric: bool, T, L, lines) -> ElasticTerms:
+    """The terms with the platforms' (n, 12, 12) Hessians and the EE's rotation-block term
+    ``ee`` (3, 3) put together: dense up to :data:`DENSE_MAX_PLATFORMS`, else as blocks."""
+    n = H12.shape[0]
+    if n <= DENSE_MAX_PLATFORMS:
+        full = np.zeros((6 * n + 6, 6 * n + 6))
+        for j in range(n):
+            full[6 * j : 6 * j + 12, 6 * j : 6 * j + 12] += H12[j]
+        full[-3:, -3:] += ee
+        return ElasticTerms(grad, full[6:, 6:], None, None, symmetric, T, L, lines)
+    diag = H12[:, 6:, 6:].copy()
+    diag[:-1] += H12[1:, :6, :6]
+    diag[-1, 3:, 3:] += ee
+    return ElasticTerms(grad, None, diag, H12[1:, :6, 6:].copy(), symmetric, T, L, lines)
+
+
+def tangent_solve(terms: ElasticTerms, rhs: np.ndarray) -> tuple[np.ndarray, np.ndarray, bool]:
+    """Solve ``H x = rhs`` (rhs (n, 6)) with the tangent stiffness of ``terms``.
+
+    Returns:
+        x (n, 6); the EE's condensed compliance (6, 6) (the EE block of ``H⁻¹``); and whether
+        the (symmetric part of the) tangent is positive definite: a stable equilibrium.
+
+    Raises:
+        numpy.linalg.LinAlgError: the tangent is singular.
+    """
+    n = rhs.shape[0]
+    if terms.hessian is None:
+        x, S = block_sweep(terms.diag, terms.off, rhs)
+        sym = 0.5 * (S + np.swapaxes(S, 1, 2))
+        return x, np.linalg.inv(S[-1]), bool(np.linalg.eigvalsh(sym).min() > 0)
+    H = terms.hessian
+    b = np.zeros((6 * n, 7))
+    b[:, 0] = rhs.ravel()
+    b[-6:, 1:] = _I6
+    info = 1
+    if terms.symmetric:
+        _, sol, info = dposv(H, b)  # Cholesky: succeeds exactly when H is positive definite
+        stable = info == 0
+    else:
+        stable = dpotrf(0.5 * (H + H.T))[1] == 0
+    if info != 0:
+        _, _, sol, info = dgesv(H, b)
+        if info != 0 or not np.all(np.isfinite(sol)):
+            raise np.linalg.LinAlgError("singular tangent stiffness")
+    return sol[:, 0].reshape(n, 6), sol[-6:, 1:], bool(stable)
+
+
+def block_sweep(diag: np.ndarray, off: np.ndarray, rhs: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Solve the block-tridiagonal ``H x = rhs`` (blocks ``diag`` (n, 6, 6), upper ``off``
+    (n-1, 6, 6), lower ``offᵀ``) by one sweep from plate 1 up, then back.
+
+    Returns:
+        x (n, 6), and the Schur complements S (n, 6, 6): ``S[m]`` is the stiffness of plate m+1
+        with plates 1..m condensed out, so ``S[-1]`` is the EE's condensed stiffness.
+
+    Raises:
+        numpy.linalg.LinAlgError: a Schur complement is exactly singular.
+    """
+    n = diag.shape[0]
+    S = np.empty_like(diag)
+    S[0] = diag[0]
+    y = rhs.copy()
+    factors = []
+    for m in range(1, n):
+        X = np.linalg.solve(S[m - 1], np.concatenate([off[m - 1], y[m - 1, :, None]], axis=1))
+        factors.append(X)
+        lower = off[m - 1].T
+        S[m] = diag[m] - lower @ X[:, :6]
+        y[m] -= lower @ X[:, 6]
+    x = np.empty_like(rhs)
+    x[-1] = np.linalg.solve(S[-1], y[-1])
+    for m in range(n - 2, -1, -1):
+        X = factors[m]
+        x[m] = X[:, 6] - X[:, :6] @ x[m + 1]
+    return x, S
+
+
+@dataclass(frozen=True)
+class Equilibrium:
+    """Outcome of :func:`solve_equilibrium`.
+
+    Attributes:
+        R, p: plate rotations (n+1, 3, 3) and positions (n+1, 3) at the end.
+        terms: the derivatives at the last evaluated pose (at most one tiny step before ``R, p``).
+        compliance: (6, 6) the EE's condensed compliance there (the EE block of ``H⁻¹``).
+        stable: the tangent stiffness there is positive definite.
+        iterations: Newton steps taken.
+        step: size of the last Newton step [m] (rotations times the node radius): the
+            distance left to the equilibrium.
+        message: None when converged, else why not.
+    """
+
+    R: np.ndarray
+    p: np.ndarray
+    terms: ElasticTerms
+    compliance: np.ndarray
+    stable: bool
+    iterations: int
+    step: float
+    message: str | None
+
+
+def line_conditions(lines: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Inverses (n, 6, 6) and 1-norm condition numbers (n,) of the platforms' leg-line matrices
+    (rows ``[u, r × u]`` per leg, world axes at the top plate's origin: ``dL/d(δp, δθ)``).
+    A singular matrix gives NaN inverses and an infinite condition number."""
+    inverse = inverse_or_nan(lines)
+    cond = np.abs(lines).sum(axis=1).max(axis=1) * np.abs(inverse).sum(axis=1).max(axis=1)
+    return inverse, np.where(np.isfinite(cond), cond, np.inf)
+
+
+def _singular(terms: ElasticTerms, limit: float) -> str | None:
+    cond = line_conditions(terms.lines)[1]
+    if cond.max() <= limit:
+        return None
+    j = int(np.argmax(cond))
+    return (
+        f"platform {j} is at a singular configuration (condition number {cond[j]:.3g} > {limit:.0g}): "
+        "its stiffness is not defined"
+    )
+
+
+def _step_size(x: np.ndarray, scale: float) -> float:
+    return max(float(np.abs(x[:, :3]).max()), scale * float(np.abs(x[:, 3:]).max()))
+
+
+def solve_equilibrium(
+    am: AssemblerModel,
+    R: np.ndarray,
+    p: np.ndarray,
+    rest: np.ndarray | None,
+    stiffness: float,
+    wrench: np.ndarray | None = None,
+    tol: float = 1e-12,
+    max_iterations: int = 30,
+    condition_limit: float | None = None,
+) -> Equilibrium:
+    """Newton's method on the plate poses for ``∇V = 0`` from the start ``R, p`` (plate 0 stays).
+
+    Converged when the Newton step is at most ``tol`` [m] (rotations scaled by the node
+    radius); steps longer than :data:`MAX_STEP` are shortened. Whether the answer is stable is
+    reported (``stable``), not required. With ``condition_limit``, a start whose leg lines are
+    worse conditioned (:func:`line_conditions`) is refused before any step (a singular pose).
+    ``rest`` None commands the lengths of the start.
+    """
+    R, p = R.copy(), p.copy()
+    scale = am.config.plate.node_radius
+    message = None
+    size = math.inf
+    C, stable = np.full((6, 6), np.nan), False
+    for it in range(max_iterations + 1):
+        terms = elastic_terms(am, R, p, rest, stiffness, wrench)
+        if rest is None:
+            rest = terms.lengths
+        if it == 0 and condition_limit is not None:
+            message = _singular(terms, condition_limit)
+            if message is not None:
+                break
+        try:
+            x, C, stable = tangent_solve(terms, -terms.gradient)
+        except np.linalg.LinAlgError:
+            message = "the tangent stiffness is singular (a mechanism: the legs do not hold the plates)"
+            break
+        size = _step_size(x, scale)
+        if not math.isfinite(size):
+            message = "the elastic equilibrium diverged (non-finite step)"
+            break
+        if size <= tol or it == max_iterations:
+            if size > tol:
+                message = (
+                    f"the elastic equilibrium did not converge in {max_iterations} Newton steps "
+                    f"(last step {size:.3g} m > {tol:.1g} m)"
+                )
+            else:
+                p[1:] += x[:, :3]
+                R[1:] = np.matmul(exp3_batch(x[:, 3:]), R[1:])
+            return Equilibrium(R, p, terms, C, stable, it, size, message)
+        if size > MAX_STEP:
+            x = x * (MAX_STEP / size)
+        p[1:] += x[:, :3]
+        R[1:] = np.matmul(exp3_batch(x[:, 3:]), R[1:])
+    return Equilibrium(R, p, terms, C, stable, it, size, message)
