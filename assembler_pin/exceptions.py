@@ -6,6 +6,20 @@ caller can catch one type. Messages say what was wrong and what is allowed.
 
 from __future__ import annotations
 
+#: Longest repr of a user's value quoted in a message [characters].
+REPR_LIMIT = 60
+
+
+def short_repr(value: object, limit: int = REPR_LIMIT) -> str:
+    """``repr(value)`` on one line, cut to ``limit`` characters (a huge value never makes a
+    huge message)."""
+    try:
+        text = repr(value)
+    except Exception:  # noqa: BLE001 - any object may be given; its repr must not be the error
+        text = f"<{type(value).__name__}>"
+    text = " ".join(text.split())
+    return text if len(text) <= limit else text[: limit - 1] + "…"
+
 
 class AssemblerError(Exception):
     """Root of every error raised on purpose by assembler_pin."""
@@ -88,3 +102,8 @@ class TrajectoryError(AssemblerError, ValueError):
 
 class GridError(AssemblerError, ValueError):
     """A grid or orientation SPEC that cannot be read."""
+
+
+class _SingularIterateError(AssemblerError, RuntimeError):
+    """The optimizer's solver accepted an iterate whose statics (or their derivatives) are
+    singular (raised and caught inside :mod:`assembler_pin.optimize`)."""

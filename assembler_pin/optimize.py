@@ -44,7 +44,7 @@ import numpy as np
 import pinocchio as pin
 
 from .constraints import leg_limit_margins
-from .exceptions import OptionsError, SingularConfigurationError
+from .exceptions import OptionsError, SingularConfigurationError, _SingularIterateError
 from .gradients import PoseDerivatives, pose_derivatives
 from .kinematics import LegState, PlateArrays, leg_state, plate_arrays, plate_deviation
 from .model import AssemblerModel
@@ -152,10 +152,6 @@ class _Values:
     cos_deflection: np.ndarray  # (n, 6, 2)
     rise: np.ndarray
     plate_angles: np.ndarray  # (n,) [rad]
-
-
-class _SingularIterateError(Exception):
-    """The solver accepted an iterate whose statics (or their derivatives) are singular."""
 
 
 class _Problem:
