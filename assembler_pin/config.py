@@ -35,7 +35,7 @@ import re
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import Any, ClassVar
 
 import yaml
 
@@ -260,7 +260,7 @@ def _section_from_mapping(name: str, cls: type, data: Any) -> Any:
     allowed = [f.name for f in dataclasses.fields(cls)]
     for key in data:
         if key not in allowed:
-            raise ConfigError(f"unknown config key '{name}.{shorten(str(key), 30)}'; allowed: {', '.join(allowed)}")
+            raise ConfigError(f"unknown config key '{name}.{shorten(str(key), 12)}'; allowed: {', '.join(allowed)}")
     for key, value in data.items():
         if not _is_number(value):
             raise ConfigError(f"config key '{name}.{key}' = {short_repr(value)} is invalid: must be a number")
@@ -293,7 +293,7 @@ class StrictLoader(yaml.SafeLoader):
     Every error is a :class:`~assembler_pin.exceptions.ConfigError` or a ``yaml.YAMLError``.
     """
 
-    yaml_implicit_resolvers: dict = {}
+    yaml_implicit_resolvers: ClassVar[dict] = {}
 
     def compose_node(self, parent: yaml.Node | None, index: object) -> yaml.Node:
         event = self.peek_event()
@@ -343,7 +343,7 @@ def load_yaml(text: str, what: str) -> Any:
         ConfigError: one line of at most :data:`MAX_MESSAGE` characters naming ``what``.
     """
     try:
-        return yaml.load(text, Loader=StrictLoader)  # noqa: S506 - StrictLoader is a SafeLoader
+        return yaml.load(text, Loader=StrictLoader)
     except ConfigError as exc:
         raise ConfigError(shorten(f"{what}: {exc}")) from None
     except yaml.YAMLError as exc:

@@ -15,7 +15,7 @@ def short_repr(value: object, limit: int = REPR_LIMIT) -> str:
     huge message)."""
     try:
         text = repr(value)
-    except Exception:  # noqa: BLE001 - any object may be given; its repr must not be the error
+    except Exception:
         text = f"<{type(value).__name__}>"
     text = " ".join(text.split())
     return text if len(text) <= limit else text[: limit - 1] + "…"
@@ -31,6 +31,10 @@ class ConfigError(AssemblerError, ValueError):
 
 class PoseError(AssemblerError, ValueError):
     """A pose, a list of plate poses or a vector of leg lengths is malformed."""
+
+
+class ArgumentError(AssemblerError, TypeError):
+    """An API argument of the wrong type (the message names the argument and what is allowed)."""
 
 
 class ModelFileError(AssemblerError):

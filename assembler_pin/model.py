@@ -19,14 +19,15 @@ from typing import Any
 
 import numpy as np
 import pinocchio as pin
+
 from .config import AssemblerConfig, PayloadConfig, load_config, load_yaml
-from .exceptions import ConfigError, ModelFileError, short_repr
+from .exceptions import ArgumentError, ConfigError, ModelFileError, short_repr
 from .geometry import LEGS_PER_PLATFORM, LegGeometry, home_plates, leg_geometry
 from .platform_model import PlatformModel, StackPlan
 from .urdf import SIDECAR_FILENAME, URDF_FILENAME, assembler_urdf, closure_sidecar, names
 from .urdf_check import parse_urdf, urdf_disagreements
 
-__all__ = ["WHOLE_DATA_MAX_PLATFORMS", "AssemblerModel", "Closure"]
+__all__ = ["WHOLE_DATA_MAX_PLATFORMS", "AssemblerModel", "Closure", "checked_model"]
 
 #: Largest stack whose whole-stack Pinocchio ``Data`` is created (its size grows as nv² and nv³).
 WHOLE_DATA_MAX_PLATFORMS = 8
@@ -293,6 +294,15 @@ class AssemblerModel:
         return float(sum(inertia.mass for inertia in self.model.inertias))
 
 
+def checked_model(am: object, what: str = "am") -> AssemblerModel:
+    """``am`` when it is an :class:`AssemblerModel`, else :class:`ArgumentError` naming ``what``."""
+    if not isinstance(am, AssemblerModel):
+        raise ArgumentError(
+            f"{what} must be an AssemblerModel (AssemblerModel.from_config(...)), got {type(am).__name__}"
+        )
+    return am
+
+
 #: Largest model file read [bytes] (the URDF of 64 platforms is about 2 MB).
 MAX_MODEL_FILE_BYTES = 64 << 20
 
@@ -365,6 +375,8 @@ def _sidecar_closures(sidecar: dict, cfg: AssemblerConfig, origin: str) -> tuple
     closures = []
     for c, (pair, kind) in enumerate(zip(pairs, types, strict=True)):
         if kind.lower() != "3d":
-            raise ModelFileError(f"closure {short_repr(pair, 60)}: only type '3d' is supported, got {short_repr(kind, 20)}")
+            raise ModelFileError(
+                f"closure {short_repr(pair, 60)}: only type '3d' is supported, got {short_repr(kind, 20)}"
+            )
         closures.append(Closure(pair[0], pair[1], c // 6, c % 6))
     return closures, name_mot

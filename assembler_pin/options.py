@@ -47,7 +47,8 @@ class GoalTolerance:
             value = getattr(self, name)
             if not (is_number(value) and 0 <= value < math.inf):
                 unit = "m" if name == "position" else "rad"
-                raise OptionsError(f"GoalTolerance.{name} must be a finite number >= 0 [{unit}], got {short_repr(value)}")
+                shown = short_repr(value)
+                raise OptionsError(f"GoalTolerance.{name} must be a finite number >= 0 [{unit}], got {shown}")
 
 
 def checked_options(value: object, cls: type, what: str) -> object:
@@ -114,7 +115,8 @@ class OptimizeOptions:
         ):
             value = getattr(self, name)
             if not (is_number(value) and math.isfinite(value) and (value > 0 if positive else value >= 0)):
-                raise OptionsError(f"{name} must be a finite number {'>' if positive else '>='} 0, got {short_repr(value)}")
+                sign = ">" if positive else ">="
+                raise OptionsError(f"{name} must be a finite number {sign} 0, got {short_repr(value)}")
         if self.w1 + self.w2 == 0:
             raise OptionsError("weights w1, w2 must not both be 0")
         if not (
@@ -130,7 +132,8 @@ class OptimizeOptions:
             if not isinstance(tol, GoalTolerance) or not all(
                 is_number(v) and 0 < v < math.inf for v in (tol.position, tol.rotation)
             ):
-                raise OptionsError(f"{name} must be a GoalTolerance of two finite numbers > 0 (m, rad), got {short_repr(tol)}")
+                shown = short_repr(tol)
+                raise OptionsError(f"{name} must be a GoalTolerance of two finite numbers > 0 (m, rad), got {shown}")
 
 
 @dataclass

@@ -27,7 +27,7 @@ __all__ = ["NUMBER_TOL", "parse_urdf", "urdf_disagreements", "urdf_facts"]
 NUMBER_TOL = 1e-9
 
 #: Most differences quoted in one message.
-_QUOTED = 3
+_QUOTED = 2
 
 #: The configuration keys each URDF quantity follows from (first matching pattern).
 _HINTS: tuple[tuple[str, str], ...] = (
@@ -40,8 +40,8 @@ _HINTS: tuple[tuple[str, str], ...] = (
     (r"^joint sp\d+_leg\d+_u[xy] limit", "leg.max_deflection_deg"),
     (r"^joint sp\d+_leg\d+_actuator limit effort", "leg.max_tension, leg.max_compression"),
     (r"^joint sp\d+_leg\d+_actuator limit", "leg.min_length, leg.max_length"),
-    (r"^joint sp\d+_leg\d+_ux origin", "plate.node_radius, plate.node_spacing_deg, leg lengths"),
-    (r"^joint sp\d+_plate origin", "home height: leg.min_length, leg.max_length, plate.node_radius"),
+    (r"^joint sp\d+_leg\d+_ux origin", "plate.node_radius, plate.node_spacing_deg, leg stroke"),
+    (r"^joint sp\d+_plate origin", "home height: leg stroke, plate.node_radius"),
     (r"^joint sp\d+_leg\d+_top_mount origin", "plate.node_radius, plate.node_spacing_deg"),
     (r"^joint payload_mount origin", "payload.offset"),
     (r"^link plate_\d+ (visual|collision)", "plate.node_radius"),
@@ -199,7 +199,7 @@ def _describe(key: str, given: _Fact | None, expected: _Fact | None) -> str:
         a, b = (_number(v, i) for v in (given, expected))
         if a == b:
             a, b = (_number(v, i, 17) for v in (given, expected))
-    return f"{what}: URDF {a} vs sidecar {b} [{_hint(key)}]"
+    return f"{what}: URDF {a}, sidecar {b} [{_hint(key)}]"
 
 
 def urdf_disagreements(given: ET.Element, expected: ET.Element) -> str | None:
@@ -226,9 +226,11 @@ def urdf_disagreements(given: ET.Element, expected: ET.Element) -> str | None:
     groups: dict[str, list[str]] = {}  # the same quantity of every leg or plate: one group
     for k in diffs:
         groups.setdefault(_hint(k), []).append(k)
+    # the quantities that follow from the fewest configuration keys first: they name the cause
+    ordered = sorted(groups.values(), key=lambda members: _hint(members[0]).count(","))
     parts = []
-    for members in list(groups.values())[:_QUOTED]:
-        alike = f" (and {len(members) - 1} alike)" if len(members) > 1 else ""
+    for members in ordered[:_QUOTED]:
+        alike = f" (+{len(members) - 1} alike)" if len(members) > 1 else ""
         parts.append(_describe(members[0], a.get(members[0]), b.get(members[0])) + alike)
-    more = f"; {len(groups) - _QUOTED} more kinds of quantity differ" if len(groups) > _QUOTED else ""
+    more = f"; {len(groups) - _QUOTED} more kinds differ" if len(groups) > _QUOTED else ""
     return "; ".join(parts) + more

@@ -128,7 +128,8 @@ def _plate_matrix(k: int, plate: object) -> list[list[float]]:
     for row in plate:
         for x in row:
             if isinstance(x, bool) or not isinstance(x, (int, float)):
-                raise CLIError(f"{where}: {json.dumps(x)[:30]} is not a number (write numbers, not strings or true/false)")
+                shown = json.dumps(x)[:30]
+                raise CLIError(f"{where}: {shown} is not a number (write numbers, not strings or true/false)")
             if not (isinstance(x, float) or abs(x) < 2**1023) or not math.isfinite(x):
                 raise CLIError(f"{where}: {str(x)[:30]} is not a finite number")
     return [[float(x) for x in row] for row in plate]
@@ -237,7 +238,7 @@ def optimize_options(args: argparse.Namespace):
     if args.ee_tolerance is not None:
         pos, rot = args.ee_tolerance
         if not (0 < pos < math.inf and 0 < rot < math.inf):
-            raise CLIError("--ee-tolerance POSITION ROTATION must both be finite numbers > 0 (m, rad)")
+            raise CLIError("--ee-tolerance POSITION ROTATION (ee_tolerance) must be finite numbers > 0 (m, rad)")
         ee = GoalTolerance(position=pos, rotation=rot)
     try:
         return OptimizeOptions(method=args.method, w1=args.w1, w2=args.w2, ee_tolerance=ee,

@@ -29,6 +29,7 @@ from ..exceptions import OptionsError
 from ..kinematics import PlateArrays, plate_arrays, stack_forward_kinematics
 from ..model import AssemblerModel
 from ..optimize import MotionTerm, OptimizeOptions, optimize_internal_poses
+from ..options import checked_options
 from ..state import StackState, evaluate_state
 from ..validation import is_number
 from .paths import EEPath
@@ -193,7 +194,7 @@ def plan_path(
             solution of the path's first pose (:func:`~assembler_pin.solver.solve`).
         options: see :class:`PlanOptions`.
     """
-    opts = options or PlanOptions()
+    opts = checked_options(options, PlanOptions, "options")
     t_start = time.perf_counter()
     first = path.at(0.0)
     if start is None:

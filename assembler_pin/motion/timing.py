@@ -31,6 +31,7 @@ from ..constraints import GoalTolerance, leg_limit_margins
 from ..exceptions import TrajectoryError
 from ..kinematics import PlateArrays, se3_to_taa, stack_forward_kinematics
 from ..model import AssemblerModel
+from ..options import checked_options
 from ..state import StackState, evaluate_state
 from .planner import PlanResult
 
@@ -431,7 +432,7 @@ def plan_trajectory(
     from .planner import PlanOptions, plan_path
 
     t0 = time.perf_counter()
-    opts = options or PlanOptions()
+    opts = checked_options(options, PlanOptions, "options")
     for attempt in range(refinements + 1):
         plan = plan_path(am, path, start, opts)
         if len(plan.states) < 2:
