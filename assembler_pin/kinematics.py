@@ -538,7 +538,7 @@ def _platform_fk(
         home_step = am.fk_home_inverse_jacobian[j].dot(target - am.config.leg.mid_length)
         pose = pin.exp6(home_step) * am.plate_joint_placement[j + 1]
     else:
-        pose = pin.SE3(guess)
+        pose = _projected_guess(guess)
     from scipy.linalg.lapack import dgesv  # imported on first use: keeps `import assembler_pin` fast
 
     target_sq = target * target
@@ -570,6 +570,26 @@ def _platform_fk(
     elif message is None:
         message = _foreign_mode(am, j, pose, vec)
     return FKResult(pose, message is None, iterations, residual, message or "converged")
+
+
+def _projected_guess(guess: object) -> pin.SE3:
+    """An FK starting pose on SE(3): the guess's rotation through its unit quaternion, so that
+    chained FK calls (each starting from the last answer) never accumulate rounding.
+
+    Raises:
+        PoseError: the guess is not a finite ``pin.SE3``.
+    """
+    if not isinstance(guess, pin.SE3):
+        what = type(guess).__name__
+        raise PoseError(f"an FK guess must be a pin.SE3 (top plate in the bottom plate's frame), got {what}")
+    if not np.all(np.isfinite(guess.homogeneous)):
+        raise PoseError("the FK guess contains NaN or infinite values")
+    quat = pin.Quaternion(guess.rotation)
+    norm = quat.norm()
+    if not norm > 0.0:
+        raise PoseError("the FK guess's rotation block is not a rotation")
+    quat.normalize()
+    return pin.SE3(quat.matrix(), guess.translation.copy())
 
 
 def _foreign_mode(am: AssemblerModel, j: int, pose: pin.SE3, vec: np.ndarray) -> str | None:
