@@ -314,11 +314,18 @@ class StrictLoader(yaml.SafeLoader):
 
     def construct_yaml12_int(self, node: yaml.ScalarNode) -> int:
         text = self.construct_scalar(node)
+        if not _YAML12_INT.match(text):  # an explicit !!int tag on text that is no YAML 1.2 integer
+            raise ConfigError(f"line {node.start_mark.line + 1}: {short_repr(text, 30)} is not an integer")
         base = {"0o": 8, "0x": 16}.get(text[:2], 10)
         return int(text[2:] if base != 10 else text, base)
 
     def construct_yaml12_float(self, node: yaml.ScalarNode) -> float:
-        text = self.construct_scalar(node).lower()
+        text = self.construct_scalar(node)
+        if not (_YAML12_FLOAT.match(text) or _YAML12_INT.match(text)):
+            raise ConfigError(f"line {node.start_mark.line + 1}: {short_repr(text, 30)} is not a number")
+        if _YAML12_INT.match(text) and text[:2] in ("0o", "0x"):
+            return float(self.construct_yaml12_int(node))
+        text = text.lower()
         return float(text.replace(".inf", "inf").replace(".nan", "nan"))
 
 

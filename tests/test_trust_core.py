@@ -394,6 +394,8 @@ def _config(tmp_path: Path, text: str) -> ap.AssemblerConfig:
     ("text", "needle"),
     [
         ("gravity: 9_81\n", "gravity"),
+        ("gravity: !!float 9_81\n", "not a number"),
+        ("platforms: !!int 1_0\n", "not an integer"),
         ("gravity: 1:30\n", "gravity"),
         ("platforms: 0b11\n", "platforms"),
         ("platforms: yes\n", "platforms"),

@@ -115,8 +115,8 @@ def read_json(source: str) -> object:
         raise CLIError(f"'{source}' holds a number that cannot be read: {str(exc)[:80]}") from None
 
 
-#: How far a plate file's rotation may be from orthonormal with det +1, and its bottom row
-#: from [0, 0, 0, 1].
+#: How far a plate file's rotation may be from orthonormal with det +1 (its bottom row must
+#: be [0, 0, 0, 1] to 1e-12).
 PLATE_FILE_TOL = 1e-9
 
 
@@ -140,7 +140,7 @@ def _check_plate_matrix(k: int, m: list[list[float]]) -> None:
     import numpy as np
 
     a = np.array(m)
-    if np.abs(a[3] - [0.0, 0.0, 0.0, 1.0]).max() > PLATE_FILE_TOL:
+    if np.abs(a[3] - [0.0, 0.0, 0.0, 1.0]).max() > 1e-12:
         raise CLIError(f"plate {k}: the bottom row must be [0, 0, 0, 1], got {a[3].tolist()}")
     rot = a[:3, :3]
     err = float(np.abs(rot.T @ rot - np.eye(3)).max())
@@ -155,7 +155,7 @@ def _check_plate_matrix(k: int, m: list[list[float]]) -> None:
 def plates_from_file(source: str) -> list:
     """The ``plates`` list of a JSON plate file (``{"plates": [n+1 4x4 world transforms]}``),
     every matrix checked: 4×4 finite numbers (not strings, booleans or null), bottom row
-    [0, 0, 0, 1] and a rotation block (orthonormal, det +1, to :data:`PLATE_FILE_TOL`).
+    [0, 0, 0, 1] (to 1e-12) and a rotation block (orthonormal, det +1, to :data:`PLATE_FILE_TOL`).
 
     Raises:
         CLIError: one line naming the plate index.
