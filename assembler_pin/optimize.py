@@ -44,11 +44,11 @@ import numpy as np
 import pinocchio as pin
 
 from .constraints import leg_limit_margins
-from .exceptions import OptionsError, SingularConfigurationError
+from .exceptions import OptionsError, SingularConfigurationError, _SingularIterateError
 from .gradients import PoseDerivatives, pose_derivatives
-from .kinematics import LegState, PlateArrays, leg_state, plate_arrays, plate_deviation
-from .model import AssemblerModel
-from .options import METHODS, OptimizeOptions
+from .kinematics import LegState, PlateArrays, checked_goal, leg_state, plate_arrays, plate_deviation
+from .model import AssemblerModel, checked_model
+from .options import METHODS, OptimizeOptions, checked_options
 from .state import StackState, evaluate_state
 from .statics import solve_statics
 from .validation import is_number
@@ -67,6 +67,7 @@ logger = logging.getLogger(__name__)
 #: Forces [N] standing in for the statics at a singular trial point: finite (SLSQP cannot
 #: handle NaN) and far outside every force limit, so such a step is infeasible.
 SINGULAR_FORCE = 1e6
+
 
 @dataclass(frozen=True)
 class MotionTerm:
@@ -152,10 +153,6 @@ class _Values:
     cos_deflection: np.ndarray  # (n, 6, 2)
     rise: np.ndarray
     plate_angles: np.ndarray  # (n,) [rad]
-
-
-class _SingularIterateError(Exception):
-    """The solver accepted an iterate whose statics (or their derivatives) are singular."""
 
 
 class _Problem:
@@ -397,7 +394,12 @@ def optimize_internal_poses(
         motion: continuity with a previous sample (:class:`MotionTerm`, slsqp only); the
             chosen state then also keeps every leg within ``max_step`` of it.
     """
-    opts = options or OptimizeOptions()
+    checked_model(am)
+    opts = checked_options(options, OptimizeOptions, "options")
+    if motion is not None and not isinstance(motion, MotionTerm):
+        raise OptionsError(f"motion must be a MotionTerm or None, got {type(motion).__name__}")
+    if goal is not None:
+        goal = checked_goal(goal, "goal")
     if motion is not None:
         if opts.method != "slsqp":
             raise OptionsError("a motion term needs method 'slsqp'")

@@ -16,9 +16,11 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 import pinocchio as pin
 
+from .exceptions import ArgumentError
 from .kinematics import PlateArrays, se3_to_taa, to_se3
-from .model import AssemblerModel
+from .model import AssemblerModel, checked_model
 from .optimize import OptimizeOptions, OptimizeResult, optimize_internal_poses
+from .options import checked_options
 from .state import StackState
 
 if TYPE_CHECKING:
@@ -146,9 +148,14 @@ def solve(
     Raises:
         PoseError: the goal is not a valid SE(3) pose.
     """
-    from .helper_arm import initial_condition
+    from .helper_arm import HelperArmOptions, initial_condition
 
+    checked_model(am)
     goal = to_se3(goal, "goal")
+    options = checked_options(options, OptimizeOptions, "options")
+    helper_options = checked_options(helper_options, HelperArmOptions, "helper_options")
+    if not isinstance(optimize, bool):
+        raise ArgumentError(f"optimize must be True or False, got {type(optimize).__name__}")
     t0 = time.perf_counter()
     init = initial_condition(am, goal, helper_options)
     timing = {"initial": time.perf_counter() - t0}
@@ -158,7 +165,7 @@ def solve(
     if init.attempts == 0 and not init.success:  # out of reach: nothing to start from
         timing["optimize"] = 0.0
         return SolveResult(goal, False, f"no valid initial condition: {init.message}", init, None, timing)
-    opts = options or OptimizeOptions()
+    opts = options
     t1 = time.perf_counter()
     starts = optimizer_starts(am, goal, init.plates_if_valid())
     runs = {name: optimize_internal_poses(am, start, goal, opts) for name, start in starts.items()}
