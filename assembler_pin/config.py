@@ -268,7 +268,7 @@ def _section_from_mapping(name: str, cls: type, data: Any) -> Any:
     allowed = [f.name for f in dataclasses.fields(cls)]
     for key in data:
         if key not in allowed:
-            raise ConfigError(f"unknown config key '{name}.{shorten(str(key), 12)}'; allowed: {', '.join(allowed)}")
+            raise ConfigError(f"unknown config key '{name}.{shorten(str(key), 12)}'; allowed: {','.join(allowed)}")
     for key, value in data.items():
         if not _is_number(value):
             raise ConfigError(f"config key '{name}.{key}' = {short_repr(value)} is invalid: must be a number")
