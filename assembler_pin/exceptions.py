@@ -92,3 +92,7 @@ class GridError(AssemblerError, ValueError):
 
 class LoadError(AssemblerError, ValueError):
     """An external load (a wrench on the end effector) that is malformed, not finite or absurd."""
+
+
+class SupportError(AssemblerError, ValueError):
+    """A support that is not one of the known ones (``base``, ``ee``, ``both``, ``none``)."""
