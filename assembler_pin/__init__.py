@@ -137,8 +137,6 @@ if TYPE_CHECKING:  # for type checkers and IDEs: the same names, imported eagerl
         ViewerError,
     )
     from .export import export_model_files
-    from .support_choice import ChosenDistribution, chosen_distribution
-    from .supports import TwoPointStatics, two_point_statics
     from .geometry import home_plates, leg_geometry
     from .helper_arm import (
         HelperArm,
@@ -171,4 +169,6 @@ if TYPE_CHECKING:  # for type checkers and IDEs: the same names, imported eagerl
     from .solver import SolveResult, solve
     from .state import StackState, evaluate_state
     from .statics import StaticsResult, solve_statics, solve_statics_batch
+    from .support_choice import ChosenDistribution, chosen_distribution
+    from .supports import TwoPointStatics, two_point_statics
     from .urdf import assembler_urdf, closure_sidecar
