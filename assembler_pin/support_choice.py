@@ -139,7 +139,9 @@ class ChosenDistribution:
 
     Attributes:
         support: ``base``, ``ee`` or ``both``.
-        forces: (n, 6) leg forces [N], tension positive, at the pose (NaN on failure).
+        plates: where the forces are chosen (the elastic distribution's loaded plates, or the
+            pose itself: see :func:`chosen_distribution`); the pose when it failed.
+        forces: (n, 6) leg forces [N], tension positive, at ``plates`` (NaN on failure).
         length_offsets: (n, 6) commanded minus the pose's own lengths, ``−F / k`` [m].
         commanded: (n, 6) the lengths to command [m].
         base_wrench, ee_wrench: (6,) what the supports apply to plates 0 and n [N, N·m], world
@@ -154,6 +156,7 @@ class ChosenDistribution:
     """
 
     support: str
+    plates: PlateArrays
     forces: np.ndarray
     length_offsets: np.ndarray
     commanded: np.ndarray
@@ -191,12 +194,13 @@ class ChosenDistribution:
             "residual": self.residual,
             "check_error": self.check_error,
             "within_stroke": self.within_stroke,
+            "plates": self.plates.as_matrices().tolist(),
         }
 
 
-def _failed(support: str, shape: tuple[int, int], message: str) -> ChosenDistribution:
-    nan, nan6 = np.full(shape, np.nan), np.full(6, np.nan)
-    return ChosenDistribution(support, nan, nan, nan, nan6, nan6, math.inf, math.nan, False, False, message)
+def _failed(support: str, pa: PlateArrays, message: str) -> ChosenDistribution:
+    nan, nan6 = np.full((len(pa) - 1, 6), np.nan), np.full(6, np.nan)
+    return ChosenDistribution(support, pa, nan, nan, nan, nan6, nan6, math.inf, math.nan, False, False, message)
 
 
 def _check(
@@ -274,20 +278,19 @@ def chosen_distribution(
         SupportError: an unknown support. PoseError: malformed plates.
     """
     pa = plate_arrays(am, plates)
-    shape = (am.n, 6)
     held = held_plates(am, support)
     at = _where(am, pa, support, loaded) if mechanism_message(support) is None else pa
     eq = held_equilibrium(am, at, support) if isinstance(at, PlateArrays) else at
     if isinstance(eq, str):
-        return _failed(support, shape, eq)
+        return _failed(support, pa, eq)
     lengths = leg_vectors(am, at)[3]
     lo, hi = force_bounds(am, lengths)
     w, note = _minmax(eq, lo, hi)
     if w is None:
-        return _failed(support, shape, note)
+        return _failed(support, pa, note)
     F = eq.particular + eq.null @ w
     if eq.null.shape[2] == 0 and not np.all((lo <= F) & (F <= hi)):
-        return _failed(support, shape, "the forces of this support exceed the force limits (or the stroke)")
+        return _failed(support, pa, "the forces of this support exceed the force limits (or the stroke)")
     k = float(am.config.leg.stiffness)
     commanded = lengths - F / k
     terms = elastic_terms(am, at.R, at.p, commanded, k, hessian=False)
@@ -300,5 +303,5 @@ def chosen_distribution(
     offsets = commanded - leg_vectors(am, pa)[3]
     within = _stroke_note(am, commanded) is None
     return ChosenDistribution(
-        support, F, offsets, commanded, *walls, residual, error, within, why is None, why or f"{note}; {checked}"
+        support, at, F, offsets, commanded, *walls, residual, error, within, why is None, why or f"{note}; {checked}"
     )
