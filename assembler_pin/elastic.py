@@ -142,7 +142,7 @@ def _platform_hessians(dirs, arms, c1, c2, c3, gravity: float) -> np.ndarray:
 def _joint_gradient(am: AssemblerModel, u, arm_x, along, across) -> tuple[np.ndarray, np.ndarray]:
     """The gradient at the joints, ``f`` (2, n, 6, 3): bottom ``-G - m_m a``, top ``G - m_s a``
     with ``G = along u - across a`` (a = -g e_z), and the plates' gradient (n+1, 6) from them,
-    their moments ``r × f`` and the plates' weight (the payload's is the caller's)."""
+    their moments ``r × f`` and the plates' weight, plate 0's included (the payload's is the caller's)."""
     leg, g, n = am.config.leg, am.config.gravity, am.n
     f = np.empty((2, n, 6, 3))
     f[1] = along[..., None] * u
@@ -153,7 +153,7 @@ def _joint_gradient(am: AssemblerModel, u, arm_x, along, across) -> tuple[np.nda
     m_bottom = -along[..., None] * arm_x[0, :, :, 0] + (g * (leg.motor_mass - across))[..., None] * arm_x[0, :, :, 3]
     grad = np.zeros((n + 1, 6))
     grad[1:, :3] = f[1].sum(axis=1)
-    grad[1:, 2] += am.config.plate.mass * g
+    grad[:, 2] += am.config.plate.mass * g  # plate 0 too: its row is what its support supplies
     grad[1:, 3:] = m_top.sum(axis=1)
     grad[:-1, :3] += f[0].sum(axis=1)
     grad[:-1, 3:] += m_bottom.sum(axis=1)
