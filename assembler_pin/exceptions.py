@@ -115,3 +115,7 @@ class LoadError(AssemblerError, ValueError):
 class _SingularIterateError(AssemblerError, RuntimeError):
     """The optimizer's solver accepted an iterate whose statics (or their derivatives) are
     singular (raised and caught inside :mod:`assembler_pin.optimize`)."""
+
+
+class SupportError(AssemblerError, ValueError):
+    """A support that is not one of the known ones (``base``, ``ee``, ``both``, ``none``)."""
