@@ -88,3 +88,7 @@ class TrajectoryError(AssemblerError, ValueError):
 
 class GridError(AssemblerError, ValueError):
     """A grid or orientation SPEC that cannot be read."""
+
+
+class MapError(AssemblerError, ValueError):
+    """A capability map that cannot be run, resumed or read (arguments, directory, parts, cluster)."""
