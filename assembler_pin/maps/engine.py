@@ -32,7 +32,7 @@ from ..config import AssemblerConfig
 from ..exceptions import AssemblerError, MapError
 from ..progress import ProgressCallback
 from .cells import COLUMNS, cell_key, compute_batch, config_hash, config_key, solver_hash
-from .cluster import check_scheduler, client_for
+from .cluster import check_scheduler, client_for, stop
 from .grid import Cell, Grid
 from .store import check_manifest, manifest_for, need_pyarrow, read_parts, remove_stale_temporaries, write_part
 
@@ -242,10 +242,10 @@ def _run_dask(batches: Iterator[Batch], write: _Writer, scheduler: str | None, n
             write(batch, _result(future, batch))
             future.release()
             submit()
-    finally:  # Ctrl-C included: pending tasks are cancelled, the local cluster stopped
-        client.close()
-        if cluster is not None:
-            cluster.close()
+    except BaseException:  # Ctrl-C included: pending tasks cancelled, local workers stopped at once
+        stop(client, cluster, abort=True)
+        raise
+    stop(client, cluster)
     return sent, n_workers
 
 

@@ -37,7 +37,7 @@ MAX_ROTATION_DEG = 360.0
 _SPEC_CHARS = 100_000
 """Longest SPEC text read (characters); longer ones cannot be within the bounds."""
 _NUMBER = re.compile(r"[+-]?(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?", re.ASCII)
-_COUNT = re.compile(r"\+?\d{1,12}", re.ASCII)
+_COUNT = re.compile(r"\+?\d{1,30}", re.ASCII)
 _ITEM = re.compile(r"\s*([A-Za-z]+)\s*=\s*([^\s=]+)\s*", re.ASCII)
 
 
