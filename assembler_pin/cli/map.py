@@ -66,6 +66,29 @@ def _configs(args: argparse.Namespace) -> list[tuple[str, AssemblerConfig]]:
     return [(name, load_config(c)) for name, c in zip(names, args.sweep, strict=True)]
 
 
+def _pictures(args: argparse.Namespace, table, configs: list, doc: dict) -> None:
+    """The ``--png`` heatmaps and the ``--html`` point cloud of the first configuration."""
+    from ..model import AssemblerModel
+
+    am = AssemblerModel.from_config(configs[0][1])
+    if args.png:
+        from ..maps.pictures import map_heatmaps
+        from ..plots import save
+
+        doc["png"] = str(save(map_heatmaps(table, am, configs[0][0]), args.png))
+    if args.html:
+        from ..maps.pictures import show_map_points
+        from ..viewer import StackViewer
+
+        with StackViewer(am) as viewer:
+            viewer.display(am.home)
+            lo, hi = show_map_points(viewer, table, config=configs[0][0])
+            viewer.set_title(f"Capability map: payload capacity {lo:.1f} (light) – {hi:.1f} kg (dark); "
+                             "gray: not reachable")  # fmt: skip
+            doc["html"] = str(Path(args.html).resolve())
+            viewer.static_html(doc["html"])
+
+
 def run(args: argparse.Namespace) -> int:
     """A capability map: per cell reachability, optimized max|F|, payload capacity, binding.
 
@@ -74,7 +97,6 @@ def run(args: argparse.Namespace) -> int:
     import numpy as np
 
     from ..maps import read_map, run_map
-    from ..model import AssemblerModel
 
     grid = _check_options(args)
     configs = _configs(args)
@@ -101,23 +123,7 @@ def run(args: argparse.Namespace) -> int:
            "cells_per_s": run.cells_per_second, "reachable": int(reach.sum()),
            "max_abs_force_range": finite_range(force), "capacity_kg_range": finite_range(cap)}  # fmt: skip
     if args.png or args.html:
-        am = AssemblerModel.from_config(configs[0][1])
-        if args.png:
-            from ..maps.pictures import map_heatmaps
-            from ..plots import save
-
-            doc["png"] = str(save(map_heatmaps(table, am, configs[0][0]), args.png))
-        if args.html:
-            from ..maps.pictures import show_map_points
-            from ..viewer import StackViewer
-
-            with StackViewer(am) as viewer:
-                viewer.display(am.home)
-                lo, hi = show_map_points(viewer, table, config=configs[0][0])
-                viewer.set_title(f"Capability map: payload capacity {lo:.1f} (light) – {hi:.1f} kg (dark); "
-                                 "gray: not reachable")  # fmt: skip
-                doc["html"] = str(Path(args.html).resolve())
-                viewer.static_html(doc["html"])
+        _pictures(args, table, configs, doc)
     if args.json:
         print(dumps(doc))
         return 0
