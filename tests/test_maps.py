@@ -51,9 +51,7 @@ def test_capacity_matches_a_bisection_with_the_ordinary_solve(am):
     while hi - lo > 0.002 * lo:
         mid = 0.5 * (lo + hi)
         lo, hi = (
-            (mid, hi)
-            if solve(ap.AssemblerModel.from_config({"payload": {"mass": mid}}), goal).success
-            else (lo, mid)
+            (mid, hi) if solve(ap.AssemblerModel.from_config({"payload": {"mass": mid}}), goal).success else (lo, mid)
         )
     assert result.capacity_kg == pytest.approx(0.5 * (lo + hi), rel=0.01)
     assert "array(" not in repr(result)
