@@ -119,3 +119,7 @@ class _SingularIterateError(AssemblerError, RuntimeError):
 
 class SupportError(AssemblerError, ValueError):
     """A support that is not one of the known ones (``base``, ``ee``, ``both``, ``none``)."""
+
+
+class MapError(AssemblerError, ValueError):
+    """A capability map that cannot be run, resumed or read (arguments, directory, parts, cluster)."""
