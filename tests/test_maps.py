@@ -14,7 +14,7 @@ import time
 import numpy as np
 import pinocchio as pin
 import pytest
-from assembler_pin.solve import solve
+from assembler_pin.solver import solve
 
 import assembler_pin as ap
 from assembler_pin.bench import random_reachable_plates
