@@ -498,7 +498,7 @@ def _quantity_panel(ax, q: _Quantity, j: int) -> None:
     gap = min(lo - q.lower, q.upper - hi)
     _, i = np.unravel_index(int(np.nanargmin(np.minimum(data - q.lower, q.upper - data))), data.shape)
     verdict = "beyond a limit by" if gap < 0 else "nearest limit"
-    ax.set_title(f"{platform_label(j)} {q.name}: {verdict} {abs(gap):.3g} {q.unit} (leg {i})", fontsize=8, loc="left")
+    ax.set_title(f"{platform_label(j)} {q.name}: {verdict} {abs(gap):.4g} {q.unit} (leg {i})", fontsize=8, loc="left")
 
 
 def _trajectory_quantities(am: AssemblerModel, traj, states, state_times) -> list[_Quantity]:
