@@ -107,7 +107,7 @@ class ElasticTerms:
     tension: np.ndarray
     lengths: np.ndarray
     lines: np.ndarray
-    base_gradient: np.ndarray | None = None
+    base_gradient: np.ndarray
 
 
 def _chart(f: np.ndarray, r: np.ndarray) -> np.ndarray:
@@ -216,7 +216,7 @@ def elastic_terms(
     H12[1:, 3:6, 3:6] += charts[0, 1:]
     f_pay = np.array([0.0, 0.0, w_pay])
     ee = 0.5 * (np.outer(f_pay, r_pay) + np.outer(r_pay, f_pay)) - (w_pay * r_pay[2]) * _I3
-    if not symmetric:  # a constant world moment on a rotating plate: -½ [m]× (not symmetric)
+    if wrench is not None and not symmetric:  # a constant world moment on a rotating plate: -½ [m]×
         ee = ee - 0.5 * skew(wrench[3:])
     return _assembled(grad, H12, ee, symmetric, T, L, lines)
 
@@ -251,6 +251,7 @@ def tangent_solve(terms: ElasticTerms, rhs: np.ndarray) -> tuple[np.ndarray, np.
     """
     n = rhs.shape[0]
     if terms.hessian is None:
+        assert terms.diag is not None and terms.off is not None, "terms computed without a Hessian"
         x, S = block_sweep(terms.diag, terms.off, rhs)
         sym = 0.5 * (S + np.swapaxes(S, 1, 2))
         return x, np.linalg.inv(S[-1]), bool(np.linalg.eigvalsh(sym).min() > 0)

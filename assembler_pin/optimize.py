@@ -38,7 +38,9 @@ from __future__ import annotations
 import logging
 import math
 import time
+from collections.abc import Callable
 from dataclasses import dataclass
+from typing import Protocol
 
 import numpy as np
 import pinocchio as pin
@@ -299,6 +301,7 @@ class _Problem:
         if not self.free_ee:
             return np.zeros(0)
         tol = self.opts.ee_tolerance
+        assert tol is not None  # free_ee: the EE may move within ee_tolerance
         dp = pa.p[self.n] - self.goal.translation
         if self.opts.method == "paper":
             rot = pin.log3(self.goal.rotation.T @ pa.R[self.n])
@@ -472,7 +475,7 @@ def optimize_internal_poses(
 
 def _run_solver(
     problem: _Problem, initial_state: StackState
-) -> tuple[OptimizeResult | object, object, np.ndarray, str]:
+) -> tuple[_SolverResult, Callable[[np.ndarray], PlateArrays], np.ndarray, str]:
     """Run SLSQP in the method's chart; returns (scipy result, chart map, final pose point,
     the reason when it stopped at a singular iterate else "")."""
     opts = problem.opts
@@ -502,6 +505,16 @@ def _run_solver(
     return res, to_plates, x_final, singular
 
 
+class _SolverResult(Protocol):
+    """What is read of a solver result: scipy's ``OptimizeResult`` or :class:`_StoppedEarly`."""
+
+    x: np.ndarray
+    message: str
+    success: bool
+    status: int
+    nit: int
+
+
 @dataclass
 class _StoppedEarly:
     """Stands in for scipy's result when the solve stopped early (no converged point)."""
@@ -514,7 +527,7 @@ class _StoppedEarly:
 
 
 def _verdict(
-    res: object, singular: str, converged: bool, final: StackState, chosen: StackState, initial: StackState
+    res: _SolverResult, singular: str, converged: bool, final: StackState, chosen: StackState, initial: StackState
 ) -> tuple[bool, str]:
     """(success, message) of an optimization: success only when the solver converged to a
     point that meets every constraint (or was pulled back inside) and that point was kept."""

@@ -10,6 +10,7 @@ from __future__ import annotations
 import math
 import numbers
 from dataclasses import dataclass, field
+from typing import TypeVar
 
 from .exceptions import OptionsError, short_repr
 
@@ -51,7 +52,10 @@ class GoalTolerance:
                 raise OptionsError(f"GoalTolerance.{name} must be a finite number >= 0 [{unit}], got {shown}")
 
 
-def checked_options(value: object, cls: type, what: str) -> object:
+_OptionsT = TypeVar("_OptionsT")
+
+
+def checked_options(value: object, cls: type[_OptionsT], what: str) -> _OptionsT:
     """``value`` when it is a ``cls`` instance, ``cls()`` when it is None, else OptionsError.
 
     Args:
@@ -179,7 +183,7 @@ class HelperArmOptions:
             raise OptionsError(f"d_step must be a positive number of metres, got {short_repr(self.d_step)}")
         for name, low in (("max_attempts", 1), ("restarts", 0), ("repair_starts", 0), ("perturbed_starts", 0)):
             value = getattr(self, name)
-            if not (isinstance(value, numbers.Integral) and not isinstance(value, bool) and value >= low):
+            if not (isinstance(value, numbers.Integral) and not isinstance(value, bool) and int(value) >= low):
                 raise OptionsError(f"{name} must be an integer >= {low}, got {short_repr(value)}")
         if not isinstance(self.tolerance, GoalTolerance):
             raise OptionsError(f"tolerance must be a GoalTolerance, got {short_repr(self.tolerance)}")

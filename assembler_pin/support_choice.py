@@ -31,13 +31,13 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.optimize import linprog
 
-from .compliance import loaded_pose
+from .compliance import LoadedPose, loaded_pose
 from .elastic import elastic_terms, line_conditions
 from .kinematics import PlateArrays, leg_vectors, plate_arrays
 from .labels import leg_label
 from .model import AssemblerModel
 from .statics import CONDITION_LIMIT
-from .supports import held_plates, mechanism_message, residual_tolerance, two_point_statics
+from .supports import TwoPointStatics, held_plates, mechanism_message, residual_tolerance, two_point_statics
 
 __all__ = [
     "CHECK_TOLERANCE",
@@ -210,6 +210,7 @@ def _check(
     difference [N] and a note (NaN when the support has no elastic solve yet)."""
     if support == "ee":
         return math.nan, "offsets not checked by an elastic solve (none yet for the EE-only support)"
+    got: TwoPointStatics | LoadedPose
     if support == "both":
         got = two_point_statics(am, pa, commanded)
     else:
@@ -227,7 +228,7 @@ def _stroke_note(am: AssemblerModel, commanded: np.ndarray) -> str | None:
     j, i = np.unravel_index(int(np.argmax(over)), over.shape)
     return (
         f"{int((over > 0).sum())} commanded length(s) outside the stroke [{leg.min_length:g}, {leg.max_length:g}] m, "
-        f"the worst {leg_label(j, i)} at {commanded[j, i]:.6f} m"
+        f"the worst {leg_label(int(j), int(i))} at {commanded[j, i]:.6f} m"
     )
 
 
@@ -236,6 +237,7 @@ def _where(am: AssemblerModel, pa: PlateArrays, support: str, loaded: bool) -> P
     lengths puts them (``loaded``, supports ``base`` and ``both``), else the pose itself."""
     if not loaded or support not in ("base", "both"):
         return pa
+    el: TwoPointStatics | LoadedPose
     if support == "both":
         el = two_point_statics(am, pa)
     else:
@@ -280,7 +282,9 @@ def chosen_distribution(
     pa = plate_arrays(am, plates)
     held = held_plates(am, support)
     at = _where(am, pa, support, loaded) if mechanism_message(support) is None else pa
-    eq = held_equilibrium(am, at, support) if isinstance(at, PlateArrays) else at
+    if isinstance(at, str):
+        return _failed(support, pa, at)
+    eq = held_equilibrium(am, at, support)
     if isinstance(eq, str):
         return _failed(support, pa, eq)
     lengths = leg_vectors(am, at)[3]

@@ -213,6 +213,7 @@ def two_point_statics(
         end = None if eq.message else elastic_terms(am, eq.R, eq.p, rest, k, hessian=False)
     loaded = PlateArrays(eq.R, eq.p)
     if end is None:
+        assert eq.message is not None  # no terms are computed after a failed solve
         return _failed(loaded, rest, its, math.inf, eq.message)
     residual = _residual(end)
     cond = line_conditions(end.lines)[1]

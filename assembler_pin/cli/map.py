@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import argparse
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 from ..exceptions import CLIError
 from .common import config_from_args, dumps, finite_range, progress_for, writable_parent
@@ -118,7 +118,7 @@ def run(args: argparse.Namespace) -> int:
     reach = np.asarray(table.column("reachable").to_pylist(), dtype=bool)
     cap = np.asarray(table.column("capacity_kg").to_pylist(), dtype=float)
     force = np.asarray(table.column("max_abs_force").to_pylist(), dtype=float)
-    doc = {"out": str(Path(args.out)), "cells": len(grid) * len(configs), "computed": run.computed,
+    doc: dict[str, Any] = {"out": str(Path(args.out)), "cells": len(grid) * len(configs), "computed": run.computed,
            "already_done": run.skipped, "workers": run.workers, "time_s": run.time_s,
            "cells_per_s": run.cells_per_second, "reachable": int(reach.sum()),
            "max_abs_force_range": finite_range(force), "capacity_kg_range": finite_range(cap)}  # fmt: skip

@@ -12,6 +12,7 @@ import json
 import math
 import time
 from collections.abc import Sequence
+from typing import TypedDict
 
 import numpy as np
 
@@ -44,7 +45,15 @@ COLUMNS = ("config", "cell", "ix", "iy", "iz", "io", "x", "y", "z", "rx", "ry", 
 """The columns of a map file, in order. Positions [m], rotation vector [rad], forces [N];
 ``key``: what the row was computed from (:func:`cell_key`)."""
 
-CAPACITY_OPTIONS = {"rtol": 1e-3, "max_iterations": 12}
+
+class _CapacitySettings(TypedDict):
+    """Arguments of :func:`~assembler_pin.capacity.payload_capacity`: ``rtol`` and ``max_iterations``."""
+
+    rtol: float
+    max_iterations: int
+
+
+CAPACITY_OPTIONS: _CapacitySettings = {"rtol": 1e-3, "max_iterations": 12}
 """The payload-capacity search settings of every cell (:func:`~assembler_pin.capacity.payload_capacity`)."""
 
 _MODELS: dict[str, PayloadModels] = {}

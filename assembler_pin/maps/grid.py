@@ -116,10 +116,10 @@ def _float_tuple(values: object, what: str, size: int | None = None) -> tuple[fl
     """``values`` as a tuple of finite floats (not bools), else a GridError naming ``what``."""
     if isinstance(values, (str, bytes)) or not hasattr(values, "__len__") or not hasattr(values, "__iter__"):
         raise GridError(f"{what} must be a sequence of numbers, got {type(values).__name__}")
-    if size is not None and len(values) != size:  # type: ignore[arg-type]
-        raise GridError(f"{what} must have {size} numbers, got {len(values)}")  # type: ignore[arg-type]
+    if size is not None and len(values) != size:
+        raise GridError(f"{what} must have {size} numbers, got {len(values)}")
     out = []
-    for v in values:  # type: ignore[union-attr]
+    for v in values:
         if isinstance(v, (bool, np.bool_)) or not isinstance(v, (int, float, np.integer, np.floating)):
             raise GridError(f"{what} must hold numbers, got {type(v).__name__}")
         if not math.isfinite(float(v)):

@@ -136,7 +136,8 @@ def read_parts(out: Path) -> list:
             rows, or repeats a (config, cell) of another part.
     """
     pa, pq = need_pyarrow()
-    tables, seen = [], {}
+    tables: list = []
+    seen: dict[tuple[str, int], Path] = {}  # (config, cell) -> the part holding it
     for path in sorted(out.glob("part-*.parquet")):
         table = _read_part(path, pa, pq)
         for name, cell in zip(table.column("config").to_pylist(), table.column("cell").to_pylist(), strict=True):
