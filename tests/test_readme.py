@@ -196,7 +196,7 @@ COMMANDS: list[tuple[str, str, str]] = [
     (r"assembler-pin map ", "", "a Dask map of many cells takes minutes (tests/test_maps.py runs small ones)"),
     (r"assembler-pin solve --goal [-\d. ]+ --carrier ur10$", "", "searches the carrier's joints (test_carrier.py)"),
     (r"assembler-pin plan --to", "", "plans a motion of 50-130 samples (tests/test_motion.py)"),
-    (r"assembler-pin plan --waypoints examples/waypoints\.json", "", "plans through three waypoints (tests/test_examples.py reads the file)"),
+    (r"assembler-pin plan --waypoints examples/waypoints\.json", "", "plans three waypoints"),
     (r"assembler-pin simulate --trajectory", "", "needs a planned trajectory (tests/test_mujoco.py runs one)"),
 ]
 
