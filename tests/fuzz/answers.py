@@ -99,7 +99,7 @@ def goal_of(doc_goal) -> pin.SE3 | None:
     return None
 
 
-def check_solve_doc(am, doc: dict, code: int, what: str) -> None:
+def check_solve_doc(am, doc: dict, code: int, what: str, ee_tol: float = 1e-6) -> None:
     """``solve --json``: success needs a finite goal and an optimized (or initial) state
     that is feasible at it; exit status agrees with success."""
     if not isinstance(doc, dict) or "success" not in doc:
@@ -108,7 +108,7 @@ def check_solve_doc(am, doc: dict, code: int, what: str) -> None:
     goal = goal_of(doc.get("goal"))
     for key in ("initial", "optimized"):
         if isinstance(doc.get(key), dict):
-            check_state_doc(am, doc[key], f"{what} ({key})", goal)
+            check_state_doc(am, doc[key], f"{what} ({key})", goal, ee_tol)
     if doc["success"] is not True:
         return
     if goal is None:
@@ -144,12 +144,18 @@ def check_trajectory_file(am, path: Path, what: str, claimed_valid: bool) -> Non
         dp = float(np.linalg.norm(ee.translation - written[:3]))
         dr = float(np.linalg.norm(pin.log3(ee.rotation.T @ pin.exp3(written[3:]))))
         if dp > ROW_EE_TOL or dr > ROW_EE_TOL:
-            fail("wrong-answer", f"{what}: row {k} of {len(traj.times)}: written EE {dp:.3g} m / {dr:.3g} rad "
-                 "from FK of the row's own lengths")  # fmt: skip
+            fail(
+                "wrong-answer",
+                f"{what}: row {k} of {len(traj.times)}: written EE {dp:.3g} m / {dr:.3g} rad "
+                "from FK of the row's own lengths",
+            )
         forces = ap.solve_statics(am, pa).forces
         if abs(float(np.abs(forces).max()) - float(traj.max_abs_force[k])) > ROW_FORCE_TOL:
-            fail("wrong-answer", f"{what}: row {k}: written max|F| {traj.max_abs_force[k]:.9g} N, statics of its "
-                 f"lengths {np.abs(forces).max():.9g} N")  # fmt: skip
+            fail(
+                "wrong-answer",
+                f"{what}: row {k}: written max|F| {traj.max_abs_force[k]:.9g} N, statics of its "
+                f"lengths {np.abs(forces).max():.9g} N",
+            )
         if claimed_valid or bool(traj.feasible[k]):
             problems = kinematic_problems(am.config, pa, tol=1e-9)
             over = forces.max() > leg.max_tension or forces.min() < -leg.max_compression

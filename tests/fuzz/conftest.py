@@ -63,7 +63,9 @@ def pytest_runtest_makereport(item: pytest.Item, call: pytest.CallInfo):
         value = call.excinfo.value
         parts = list(getattr(value, "exceptions", None) or [value])  # a hypothesis ExceptionGroup: each
         lines = [(str(e).strip().splitlines() or [""])[0] for e in parts]
-        _RESULTS[case_id(item)] = " || ".join(f"{type(e).__name__}: {line[:500]}" for e, line in zip(parts, lines))
+        _RESULTS[case_id(item)] = " || ".join(
+            f"{type(e).__name__}: {line[:500]}" for e, line in zip(parts, lines, strict=True)
+        )
 
 
 def pytest_sessionfinish(session: pytest.Session) -> None:

@@ -32,7 +32,8 @@ class CliCase:
 
     Attributes:
         id: the case id (the pytest id; :mod:`.known_failures` lists failing ones).
-        argv: the arguments, ``{d}`` standing for the workspace directory.
+        argv: the arguments, ``{d}`` standing for the workspace directory and ``{case}``
+            for the case id (an output directory of its own).
         expect: ``"refuse"``, ``"answer"`` or ``"any"``.
         isolate: run as a memory-limited child process.
         slow: takes more than a few seconds when answered (``@pytest.mark.slow``).
@@ -59,16 +60,41 @@ UNDER_FILE = "{d}/afile/out"  # a path whose parent is a regular file: unwritabl
 
 
 def _statics_config_cases() -> list[CliCase]:
-    refuse = ["missing.yaml", "adir", "cfg_9_81.yaml", "cfg_sexagesimal.yaml", "cfg_octal_underscore.yaml",
-              "cfg_bool.yaml", "cfg_nan.yaml", "cfg_inf.yaml", "cfg_overflow.yaml", "cfg_string.yaml",
-              "cfg_null.yaml", "cfg_null_section.yaml", "cfg_dup.yaml", "cfg_alias.yaml", "cfg_alias_bomb_small.yaml",
-              "cfg_deep_list.yaml", "cfg_deep_map.yaml", "cfg_toplist.yaml", "cfg_python_tag.yaml",
-              "cfg_binary.yaml", "cfg_nonutf8.yaml", "cfg_long_value.yaml", "cfg_long_key.yaml",
-              "cfg_platforms_huge.yaml", "cfg_platforms_float.yaml", "cfg_platforms_bool.yaml",
-              "cfg_negative_mass.yaml", "cfg_multi_doc.yaml", "cfg_truncated.yaml", "cfg_unknown.yaml",
-              "cfg_complex.yaml", "cfg_timestamp.yaml"]  # fmt: skip
-    cases = [_case(f"config.{Path(n).stem}", ["statics", "--home", "--json", "--config", f"{{d}}/{n}"])
-             for n in refuse]  # fmt: skip
+    refuse = [
+        "missing.yaml",
+        "adir",
+        "cfg_9_81.yaml",
+        "cfg_sexagesimal.yaml",
+        "cfg_octal_underscore.yaml",
+        "cfg_bool.yaml",
+        "cfg_nan.yaml",
+        "cfg_inf.yaml",
+        "cfg_overflow.yaml",
+        "cfg_string.yaml",
+        "cfg_null.yaml",
+        "cfg_null_section.yaml",
+        "cfg_dup.yaml",
+        "cfg_alias.yaml",
+        "cfg_alias_bomb_small.yaml",
+        "cfg_deep_list.yaml",
+        "cfg_deep_map.yaml",
+        "cfg_toplist.yaml",
+        "cfg_python_tag.yaml",
+        "cfg_binary.yaml",
+        "cfg_nonutf8.yaml",
+        "cfg_long_value.yaml",
+        "cfg_long_key.yaml",
+        "cfg_platforms_huge.yaml",
+        "cfg_platforms_float.yaml",
+        "cfg_platforms_bool.yaml",
+        "cfg_negative_mass.yaml",
+        "cfg_multi_doc.yaml",
+        "cfg_truncated.yaml",
+        "cfg_unknown.yaml",
+        "cfg_complex.yaml",
+        "cfg_timestamp.yaml",
+    ]
+    cases = [_case(f"config.{Path(n).stem}", ["statics", "--home", "--json", "--config", f"{{d}}/{n}"]) for n in refuse]
     cases += [
         _case("config.empty", "statics --home --json --config {d}/cfg_empty.yaml", "any", check="state"),
         _case("config.comment_only", "statics --home --json --config {d}/cfg_comment.yaml", "any", check="state"),
@@ -78,13 +104,35 @@ def _statics_config_cases() -> list[CliCase]:
     return cases
 
 
-PLATE_REFUSE = ["missing.json", "adir", "plates_empty.json", "plates_truncated.json", "plates_nonutf8.json",
-                "plates_deep.json", "plates_dupkey.json", "plates_strings.json", "plates_one_string.json",
-                "plates_bools.json", "plates_nan.json", "plates_infinity.json", "plates_overflow.json",
-                "plates_bigint.json", "plates_complex.json", "plates_null.json", "plates_scaled.json",
-                "plates_reflection.json", "plates_shear.json", "plates_lastrow.json", "plates_count.json",
-                "plates_3x3.json", "plates_ragged.json", "plates_toplist.json", "plates_object.json",
-                "plates_many.json", "plates_quaternion_zero.json"]  # fmt: skip
+PLATE_REFUSE = [
+    "missing.json",
+    "adir",
+    "plates_empty.json",
+    "plates_truncated.json",
+    "plates_nonutf8.json",
+    "plates_deep.json",
+    "plates_dupkey.json",
+    "plates_strings.json",
+    "plates_one_string.json",
+    "plates_bools.json",
+    "plates_nan.json",
+    "plates_infinity.json",
+    "plates_overflow.json",
+    "plates_bigint.json",
+    "plates_complex.json",
+    "plates_null.json",
+    "plates_scaled.json",
+    "plates_reflection.json",
+    "plates_shear.json",
+    "plates_lastrow.json",
+    "plates_count.json",
+    "plates_3x3.json",
+    "plates_ragged.json",
+    "plates_toplist.json",
+    "plates_object.json",
+    "plates_many.json",
+    "plates_quaternion_zero.json",
+]
 
 
 def _statics_cases() -> list[CliCase]:
@@ -93,8 +141,9 @@ def _statics_cases() -> list[CliCase]:
         _case("statics.home", "statics --home --json", "answer", check="state"),
         _case("statics.home_file", "statics --plates {d}/plates_home.json --json", "answer", check="state"),
         _case("statics.far", "statics --plates {d}/plates_far.json --json", "any", check="state"),
-        _case("statics.huge_translation", "statics --plates {d}/plates_huge_translation.json --json", "any",
-              check="state"),
+        _case(
+            "statics.huge_translation", "statics --plates {d}/plates_huge_translation.json --json", "any", check="state"
+        ),
         _case("statics.extra_key", "statics --plates {d}/plates_extra.json --json", "any", check="state"),
         _case("statics.no_source", "statics --json"),
         _case("statics.stdin_empty", "statics --plates - --json"),
@@ -143,16 +192,24 @@ def _solve_cases() -> list[CliCase]:
         _case("solve.carrier_bogus", s + " --carrier bogus"),
         _case("solve.carrier_q_nan", s + " --carrier ur5 --carrier-q nan 0 0 0 0 0"),
         _case("solve.carrier_mount_nan", s + " --carrier ur5 --mount 0 0 nan 0 0 0"),
-        _case("solve.max_attempts_huge_tiny_step",
-              "solve --json --goal " + UNREACHABLE + " --max-attempts 1000000000 --d-step 1e-9", isolate=True),
+        _case(
+            "solve.max_attempts_huge_tiny_step",
+            "solve --json --goal " + UNREACHABLE + " --max-attempts 1000000000 --d-step 1e-9",
+            isolate=True,
+        ),
         _case("solve.max_iterations_huge", s + " --max-iterations 1000000000000", isolate=True),
         _case("solve.unreachable", "solve --json --no-optimize --goal " + UNREACHABLE, "answer", check="solve"),
         _case("solve.reachable", s, "answer", slow=True, check="solve"),
         _case("solve.reachable_no_optimize", s + " --no-optimize", "answer", slow=True, check="solve"),
         _case("solve.capacity", s + " --capacity", "answer", slow=True, check="solve"),
         _case("solve.ee_tolerance_huge", s + " --ee-tolerance 1e9 1e9", "any", slow=True, check="solve"),
-        _case("solve.carrier_capacity", "solve --json --carrier ur5 --capacity --goal 0.3 0.2 1.4 0 0 0", "any",
-              slow=True, check="carrier_capacity"),
+        _case(
+            "solve.carrier_capacity",
+            "solve --json --carrier ur5 --capacity --goal 0.3 0.2 1.4 0 0 0",
+            "any",
+            slow=True,
+            check="carrier_capacity",
+        ),
     ]
     return cases
 
@@ -201,16 +258,43 @@ def _plan_cases() -> list[CliCase]:
         _case("plan.path_bogus", p + " --path bogus"),
         _case("plan.from_with_waypoints", "plan --json --waypoints {d}/wp_valid.json --from 0 0 0.9 0 0 0"),
         _case("plan.compare_rate_huge", "plan --compare --json --rate 1e9", isolate=True),
-        _case("plan.tiny_speed", p + " --config {d}/cfg_tiny_speed.yaml --out {d}/plan_slow.csv", "any",
-              isolate=True, slow=True),
-        _case("plan.tiny_acceleration", p + " --config {d}/cfg_tiny_accel.yaml --out {d}/plan_slow2.csv", "any",
-              isolate=True, slow=True),
+        _case(
+            "plan.tiny_speed",
+            p + " --config {d}/cfg_tiny_speed.yaml --out {d}/plan_slow.csv",
+            "any",
+            isolate=True,
+            slow=True,
+        ),
+        _case(
+            "plan.tiny_acceleration",
+            p + " --config {d}/cfg_tiny_accel.yaml --out {d}/plan_slow2.csv",
+            "any",
+            isolate=True,
+            slow=True,
+        ),
         _case("plan.near_home", p + " --out {d}/plan_near.csv", "answer", slow=True, check="plan"),
+        _case(
+            "plan.waypoints_valid",
+            "plan --json --waypoints {d}/wp_valid.json --out {d}/plan_wp.csv",
+            "answer",
+            slow=True,
+            check="plan_success",
+        ),
         _case("plan.near_home_json_out", p + " --out {d}/plan_near.json", "answer", slow=True, check="plan"),
-        _case("plan.unreachable", "plan --json --to 0 0 0.9 1.5 0 0 --out {d}/plan_unreachable.csv", "answer",
-              slow=True, check="plan"),
-        _case("plan.waypoint_times", "plan --json --waypoints {d}/wp_times_given.json --out {d}/plan_times.csv",
-              "any", slow=True, check="plan_times"),
+        _case(
+            "plan.unreachable",
+            "plan --json --to 0 0 0.9 1.5 0 0 --out {d}/plan_unreachable.csv",
+            "answer",
+            slow=True,
+            check="plan",
+        ),
+        _case(
+            "plan.waypoint_times",
+            "plan --json --waypoints {d}/wp_times_given.json --out {d}/plan_times.csv",
+            "any",
+            slow=True,
+            check="plan_times",
+        ),
     ]
     for name in WAYPOINT_REFUSE:
         cases.append(_case(f"plan.{name.replace('.', '_')}", ["plan", "--json", "--waypoints", f"{{d}}/{name}"]))
@@ -218,54 +302,115 @@ def _plan_cases() -> list[CliCase]:
     return cases
 
 
-WAYPOINT_REFUSE = ["missing.json", "adir", "wp_empty.json", "wp_nonutf8.json", "wp_deep.json", "wp_dup.json",
-                   "wp_toplist.json", "wp_degrees_string.json", "wp_degrees_int.json", "wp_times_nan.json",
-                   "wp_times_decreasing.json", "wp_times_count.json", "wp_times_strings.json", "wp_one.json",
-                   "wp_five.json", "wp_strings.json", "wp_bools.json", "wp_nan.json", "wp_unknown_key.json",
-                   "wp_header_only.csv", "wp_mixed.csv", "wp_nan.csv", "wp_nonutf8.csv", "wp_text.csv"]  # fmt: skip
+WAYPOINT_REFUSE = [
+    "missing.json",
+    "adir",
+    "wp_empty.json",
+    "wp_nonutf8.json",
+    "wp_deep.json",
+    "wp_dup.json",
+    "wp_toplist.json",
+    "wp_degrees_string.json",
+    "wp_degrees_int.json",
+    "wp_times_nan.json",
+    "wp_times_decreasing.json",
+    "wp_times_count.json",
+    "wp_times_strings.json",
+    "wp_one.json",
+    "wp_five.json",
+    "wp_strings.json",
+    "wp_bools.json",
+    "wp_nan.json",
+    "wp_unknown_key.json",
+    "wp_header_only.csv",
+    "wp_mixed.csv",
+    "wp_nan.csv",
+    "wp_nonutf8.csv",
+    "wp_text.csv",
+]
 
 
 GRID_REFUSE = {
-    "empty": "", "axis_empty": "x=", "count_zero": "x=0:1:0", "count_negative": "x=0:1:-1",
-    "count_float": "x=0:1:2.5", "count_exp": "x=0:1:1e9", "nan": "x=nan", "inf": "x=inf", "overflow": "x=1e400",
-    "stop_nan": "x=0:nan:3", "unknown_axis": "q=1", "twice": "x=0,x=1", "four_parts": "x=0:1:3:4",
-    "semicolon": "x=0;y=0", "too_many_cells": "x=0:1:10000,y=0:1:10000", "axis_too_long": "x=0:1:100000",
+    "empty": "",
+    "axis_empty": "x=",
+    "count_zero": "x=0:1:0",
+    "count_negative": "x=0:1:-1",
+    "count_float": "x=0:1:2.5",
+    "count_exp": "x=0:1:1e9",
+    "nan": "x=nan",
+    "inf": "x=inf",
+    "overflow": "x=1e400",
+    "stop_nan": "x=0:nan:3",
+    "unknown_axis": "q=1",
+    "twice": "x=0,x=1",
+    "four_parts": "x=0:1:3:4",
+    "semicolon": "x=0;y=0",
+    "too_many_cells": "x=0:1:10000,y=0:1:10000",
+    "axis_too_long": "x=0:1:100000",
     "overflowing_span": "x=1e308:-1e308:3",
-}  # fmt: skip
-ORIENTATION_REFUSE = {"nan": "nan 0 0", "two": "0 0", "overflow": "1e400 0 0", "text": "a b c",
-                      "too_many": "0 0 0;" * 20000}  # fmt: skip
+}
+ORIENTATION_REFUSE = {
+    "nan": "nan 0 0",
+    "two": "0 0",
+    "overflow": "1e400 0 0",
+    "text": "a b c",
+    "too_many": "0 0 0;" * 20000,
+}
 
 
 def _map_cases() -> list[CliCase]:
     m = "map --json --workers 0 --no-progress --grid x=0,y=0,z=0.85 --out "
-    cases = [_case(f"map.grid_{k}", ["map", "--json", "--workers", "0", "--grid", v, "--out", "{d}/map_refused"])
-             for k, v in GRID_REFUSE.items()]  # fmt: skip
-    cases += [_case(f"map.orientations_{k}", ["map", "--json", "--workers", "0", "--grid", "x=0,y=0,z=0.85",
-                                              "--orientations", v, "--out", "{d}/map_refused"])
-              for k, v in ORIENTATION_REFUSE.items()]  # fmt: skip
+    cases = [
+        _case(f"map.grid_{k}", ["map", "--json", "--workers", "0", "--grid", v, "--out", "{d}/map_{case}"])
+        for k, v in GRID_REFUSE.items()
+    ]
     cases += [
-        _case("map.grid_axis_huge", "map --json --workers 0 --grid x=0:1:1000000000 --out {d}/map_refused",
-              isolate=True),
-        _case("map.workers_negative", m + "{d}/map_refused --workers -1"),
-        _case("map.workers_huge", m + "{d}/map_refused --workers 1000000", isolate=True),
-        _case("map.batch_zero", m + "{d}/map_refused --batch-size 0"),
-        _case("map.batch_huge", m + "{d}/map_refused --batch-size 1000000000"),
-        _case("map.scheduler_bogus", m + "{d}/map_refused --scheduler not-an-address", isolate=True),
-        _case("map.scheduler_closed_port", m + "{d}/map_refused --scheduler tcp://127.0.0.1:1", isolate=True),
+        _case(
+            f"map.orientations_{k}",
+            [
+                "map",
+                "--json",
+                "--workers",
+                "0",
+                "--grid",
+                "x=0,y=0,z=0.85",
+                "--orientations",
+                v,
+                "--out",
+                "{d}/map_{case}",
+            ],
+        )
+        for k, v in ORIENTATION_REFUSE.items()
+    ]
+    cases += [
+        _case(
+            "map.grid_axis_huge", "map --json --workers 0 --grid x=0:1:1000000000 --out {d}/map_{case}", isolate=True
+        ),
+        _case("map.workers_negative", m + "{d}/map_{case} --workers -1"),
+        _case("map.workers_huge", m + "{d}/map_{case} --workers 1000000", isolate=True),
+        _case("map.batch_zero", m + "{d}/map_{case} --batch-size 0"),
+        _case("map.batch_huge", m + "{d}/map_{case} --batch-size 1000000000"),
+        _case("map.scheduler_bogus", m + "{d}/map_{case} --scheduler not-an-address", isolate=True),
+        _case("map.scheduler_closed_port", m + "{d}/map_{case} --scheduler tcp://127.0.0.1:1", isolate=True),
         _case("map.out_is_file", m + "{d}/afile"),
         _case("map.out_under_file", m + UNDER_FILE),
-        _case("map.png_under_file", m + "{d}/map_refused --png " + UNDER_FILE + ".png"),
-        _case("map.html_under_file", m + "{d}/map_refused --html " + UNDER_FILE + ".html"),
-        _case("map.sweep_missing", m + "{d}/map_refused --sweep {d}/missing.yaml"),
-        _case("map.sweep_dir", m + "{d}/map_refused --sweep {d}/adir"),
-        _case("map.sweep_same_names", m + "{d}/map_refused --sweep {d}/cfg_other.yaml {d}/sub/cfg_other.yaml"),
-        _case("map.sweep_invalid", m + "{d}/map_refused --sweep {d}/cfg_9_81.yaml"),
+        _case("map.png_under_file", m + "{d}/map_{case} --png " + UNDER_FILE + ".png"),
+        _case("map.html_under_file", m + "{d}/map_{case} --html " + UNDER_FILE + ".html"),
+        _case("map.sweep_missing", m + "{d}/map_{case} --sweep {d}/missing.yaml"),
+        _case("map.sweep_dir", m + "{d}/map_{case} --sweep {d}/adir"),
+        _case("map.sweep_same_names", m + "{d}/map_{case} --sweep {d}/cfg_other.yaml {d}/sub/cfg_other.yaml"),
+        _case("map.sweep_invalid", m + "{d}/map_{case} --sweep {d}/cfg_9_81.yaml"),
         _case("map.parts_junk", m + "{d}/map_junk"),
         _case("map.parts_empty", m + "{d}/map_empty_part"),
         _case("map.parts_wrong_schema", m + "{d}/map_wrong_schema"),
         _case("map.one_cell", m + "{d}/map_one", "answer", slow=True, check="map"),
-        _case("map.unreachable_cell", "map --json --workers 0 --no-progress --grid x=5,y=0,z=0.5 --out {d}/map_far",
-              "answer", slow=True, check="map"),
+        _case(
+            "map.unreachable_cell",
+            "map --json --workers 0 --no-progress --grid x=5,y=0,z=0.5 --out {d}/map_far",
+            "answer",
+            slow=True,
+            check="map",
+        ),
     ]
     return cases
 
@@ -288,25 +433,45 @@ def _simulate_cases() -> list[CliCase]:
         _case("simulate.plates_scaled", "simulate --json --plates {d}/plates_scaled.json"),
         _case("simulate.no_source", "simulate --json"),
         _case("simulate.trajectory_with_html", "simulate --trajectory {d}/traj_valid.csv --html {d}/sim.html"),
-        _case("simulate.trajectory_seconds_nan", "simulate --json --trajectory {d}/traj_valid.csv --drift-tolerance nan"),
+        _case(
+            "simulate.trajectory_seconds_nan", "simulate --json --trajectory {d}/traj_valid.csv --drift-tolerance nan"
+        ),
         _case("simulate.home", h, "answer", slow=True, check="held"),
-        _case("simulate.trajectory_valid_csv", "simulate --json --trajectory {d}/traj_valid.csv", "answer", slow=True,
-              check="followed"),
-        _case("simulate.trajectory_valid_json", "simulate --json --trajectory {d}/traj_valid.json", "answer",
-              slow=True, check="followed"),
-    ]  # fmt: skip
+        _case(
+            "simulate.trajectory_valid_csv",
+            "simulate --json --trajectory {d}/traj_valid.csv",
+            "answer",
+            slow=True,
+            check="followed",
+        ),
+        _case(
+            "simulate.trajectory_valid_json",
+            "simulate --json --trajectory {d}/traj_valid.json",
+            "answer",
+            slow=True,
+            check="followed",
+        ),
+    ]
     for name, (expect, formats) in TRAJECTORY_MUTATIONS.items():
         if name == "valid":
             continue
         for fmt in formats:
-            case = _case(f"simulate.traj_{name}.{fmt}", ["simulate", "--json", "--trajectory",
-                                                         f"{{d}}/traj_{name}.{fmt}"], expect,
-                         slow=expect != "refuse", isolate=name in HANG_PRONE_TRAJECTORIES)  # fmt: skip
+            case = _case(
+                f"simulate.traj_{name}.{fmt}",
+                ["simulate", "--json", "--trajectory", f"{{d}}/traj_{name}.{fmt}"],
+                expect,
+                slow=expect != "refuse",
+                isolate=name in HANG_PRONE_TRAJECTORIES,
+            )
             cases.append(case)
-    cases += [_case("simulate.traj_missing", "simulate --json --trajectory {d}/missing.csv"),
-              _case("simulate.traj_dir", "simulate --json --trajectory {d}/adir"),
-              _case("simulate.traj_other_platforms", "simulate --json --trajectory {d}/traj_valid.csv --config "
-                    "{d}/cfg_three.yaml")]  # fmt: skip
+    cases += [
+        _case("simulate.traj_missing", "simulate --json --trajectory {d}/missing.csv"),
+        _case("simulate.traj_dir", "simulate --json --trajectory {d}/adir"),
+        _case(
+            "simulate.traj_other_platforms",
+            "simulate --json --trajectory {d}/traj_valid.csv --config {d}/cfg_three.yaml",
+        ),
+    ]
     return cases
 
 
@@ -314,8 +479,9 @@ def _view_cases() -> list[CliCase]:
     html = " --html {d}/view.html"
     cases = [
         _case("view.home", "view --home" + html, "answer", slow=True, check="html"),
-        _case("view.trajectory_valid", "view --trajectory {d}/traj_valid.csv" + html, "answer", slow=True,
-              check="html"),
+        _case(
+            "view.trajectory_valid", "view --trajectory {d}/traj_valid.csv" + html, "answer", slow=True, check="html"
+        ),
         _case("view.frames_zero", "view --trajectory {d}/traj_valid.csv --frames 0" + html),
         _case("view.frames_one", "view --trajectory {d}/traj_valid.csv --frames 1" + html),
         _case("view.frames_huge", "view --trajectory {d}/traj_valid.csv --frames 1000000000" + html),
@@ -335,8 +501,13 @@ def _view_cases() -> list[CliCase]:
         _case("view.config_bad", "view --home --config {d}/cfg_alias.yaml" + html),
     ]
     for name in ("empty", "truncated_rows", "length_nudged", "time_huge", "nonutf8", "column_missing"):
-        cases.append(_case(f"view.traj_{name}", ["view", "--trajectory", f"{{d}}/traj_{name}.csv", "--html",
-                                                 "{d}/view.html"], TRAJECTORY_MUTATIONS[name][0]))  # fmt: skip
+        cases.append(
+            _case(
+                f"view.traj_{name}",
+                ["view", "--trajectory", f"{{d}}/traj_{name}.csv", "--html", "{d}/view.html"],
+                TRAJECTORY_MUTATIONS[name][0],
+            )
+        )
     return cases
 
 
@@ -693,7 +864,9 @@ def build_workspace(root: Path, am, plan: Callable[[], tuple[str, str]]) -> Work
     for name, (_, formats) in TRAJECTORY_MUTATIONS.items():
         for fmt in formats:
             original = traj_csv if fmt == "csv" else traj_json
-            files[f"traj_{name}.{fmt}"] = original.encode() if name == "valid" else mutate_trajectory(name, fmt, original)
+            files[f"traj_{name}.{fmt}"] = (
+                original.encode() if name == "valid" else mutate_trajectory(name, fmt, original)
+            )
     for name, content in files.items():
         (root / name).write_bytes(content)
     map_dirs(root)
@@ -807,7 +980,6 @@ def _sidecar_with(c: ApiContext, old: str, new: str) -> str:
 def _api_cases() -> list[ApiCase]:
     import assembler_pin as ap
     from assembler_pin.maps import parse_grid, parse_orientations, run_map
-
     from assembler_pin.solve import solve  # the function: ``ap.solve`` (see api.solve.name_is_callable)
 
     GT = ap.GoalTolerance
@@ -816,33 +988,74 @@ def _api_cases() -> list[ApiCase]:
         # states and statics
         ApiCase("api.evaluate_state.nonrotation_arrays", lambda c: ap.evaluate_state(c.am, _nonrotation_arrays(c))),
         ApiCase("api.solve_statics.nonrotation_arrays", lambda c: ap.solve_statics(c.am, _nonrotation_arrays(c))),
-        ApiCase("api.evaluate_state.nan_arrays", lambda c: ap.evaluate_state(
-            c.am, ap.PlateArrays(np.full((c.am.n + 1, 3, 3), np.nan), np.zeros((c.am.n + 1, 3))))),
-        ApiCase("api.evaluate_state.wrong_shape_arrays", lambda c: ap.evaluate_state(
-            c.am, ap.PlateArrays(np.zeros((c.am.n + 1, 2, 2)), np.zeros((c.am.n + 1, 3))))),
-        ApiCase("api.evaluate_state.reflection", lambda c: ap.evaluate_state(
-            c.am, _plates_with(c, 1, np.diag([1.0, 1.0, -1.0, 1.0]) @ c.am.home[1].homogeneous))),
+        ApiCase(
+            "api.evaluate_state.nan_arrays",
+            lambda c: ap.evaluate_state(
+                c.am, ap.PlateArrays(np.full((c.am.n + 1, 3, 3), np.nan), np.zeros((c.am.n + 1, 3)))
+            ),
+        ),
+        ApiCase(
+            "api.evaluate_state.wrong_shape_arrays",
+            lambda c: ap.evaluate_state(c.am, ap.PlateArrays(np.zeros((c.am.n + 1, 2, 2)), np.zeros((c.am.n + 1, 3)))),
+        ),
+        ApiCase(
+            "api.evaluate_state.reflection",
+            lambda c: ap.evaluate_state(
+                c.am, _plates_with(c, 1, np.diag([1.0, 1.0, -1.0, 1.0]) @ c.am.home[1].homogeneous)
+            ),
+        ),
         ApiCase("api.evaluate_state.string", lambda c: ap.evaluate_state(c.am, "home")),
         ApiCase("api.evaluate_state.dict", lambda c: ap.evaluate_state(c.am, {"plates": []})),
-        ApiCase("api.evaluate_state.complex", lambda c: ap.evaluate_state(
-            c.am, np.array([m.homogeneous for m in c.am.home], dtype=complex))),
-        ApiCase("api.evaluate_state.object_array", lambda c: ap.evaluate_state(
-            c.am, np.array([m.homogeneous for m in c.am.home], dtype=object))),
-        ApiCase("api.evaluate_state.goal_nan", lambda c: ap.evaluate_state(c.am, home(c), goal=_se3(p=NAN_GOAL_P)),
-                "any", verdict="feasible"),
-        ApiCase("api.evaluate_state.goal_matrix_nan", lambda c: ap.evaluate_state(
-            c.am, home(c), goal=np.full((4, 4), np.nan)), "any", verdict="feasible"),
-        ApiCase("api.evaluate_state.tolerance_nan", lambda c: ap.evaluate_state(
-            c.am, home(c), goal=_se3(p=c.am.home[-1].translation + [0.3, 0, 0]), tolerance=GT(np.nan, np.nan)),
-            "any", verdict="feasible"),
-        ApiCase("api.evaluate_state.tolerance_negative", lambda c: ap.evaluate_state(
-            c.am, home(c), goal=c.am.home[-1], tolerance=GT(-1.0, -1.0)), "any", verdict="feasible"),
-        ApiCase("api.evaluate_state.tolerance_string", lambda c: ap.evaluate_state(
-            c.am, home(c), goal=c.am.home[-1], tolerance="tight")),
-        ApiCase("api.solve_statics_batch.nan", lambda c: ap.solve_statics_batch(
-            c.am, np.full((2, c.am.n + 1, 4, 4), np.nan))),
-        ApiCase("api.solve_statics_batch.empty", lambda c: ap.solve_statics_batch(c.am, np.zeros((0, c.am.n + 1, 4, 4))),
-                "any"),
+        ApiCase(
+            "api.evaluate_state.complex",
+            lambda c: ap.evaluate_state(c.am, np.array([m.homogeneous for m in c.am.home], dtype=complex)),
+        ),
+        ApiCase(
+            "api.evaluate_state.object_array",
+            lambda c: ap.evaluate_state(c.am, np.array([m.homogeneous for m in c.am.home], dtype=object)),
+        ),
+        ApiCase(
+            "api.evaluate_state.goal_nan",
+            lambda c: ap.evaluate_state(c.am, home(c), goal=_se3(p=NAN_GOAL_P)),
+            "any",
+            verdict="feasible",
+        ),
+        ApiCase(
+            "api.evaluate_state.goal_matrix_nan",
+            lambda c: ap.evaluate_state(c.am, home(c), goal=np.full((4, 4), np.nan)),
+            "any",
+            verdict="feasible",
+        ),
+        ApiCase(
+            "api.evaluate_state.tolerance_nan",
+            lambda c: ap.evaluate_state(
+                c.am,
+                home(c),
+                goal=_se3(p=c.am.home[-1].translation + np.array([0.3, 0, 0])),
+                tolerance=GT(np.nan, np.nan),
+            ),
+            "any",
+            verdict="feasible",
+        ),
+        ApiCase(
+            "api.evaluate_state.tolerance_negative",
+            lambda c: ap.evaluate_state(c.am, home(c), goal=c.am.home[-1], tolerance=GT(-1.0, -1.0)),
+            "any",
+            verdict="feasible",
+        ),
+        ApiCase(
+            "api.evaluate_state.tolerance_string",
+            lambda c: ap.evaluate_state(c.am, home(c), goal=c.am.home[-1], tolerance="tight"),
+        ),
+        ApiCase(
+            "api.solve_statics_batch.nan",
+            lambda c: ap.solve_statics_batch(c.am, np.full((2, c.am.n + 1, 4, 4), np.nan)),
+        ),
+        ApiCase(
+            "api.solve_statics_batch.empty",
+            lambda c: ap.solve_statics_batch(c.am, np.zeros((0, c.am.n + 1, 4, 4))),
+            "any",
+        ),
         ApiCase("api.solve_statics_batch.wrong_shape", lambda c: ap.solve_statics_batch(c.am, np.zeros((3, 4, 4)))),
         ApiCase("api.plates_from_q.zero_quaternions", lambda c: ap.plates_from_q(c.am, np.zeros(c.am.nq))),
         ApiCase("api.plates_from_q.nan", lambda c: ap.plates_from_q(c.am, np.full(c.am.nq, np.nan))),
@@ -856,52 +1069,114 @@ def _api_cases() -> list[ApiCase]:
         ApiCase("api.fk.lengths_shape", lambda c: ap.stack_forward_kinematics(c.am, np.full((c.am.n, 5), 0.27))),
         ApiCase("api.fk.lengths_strings", lambda c: ap.stack_forward_kinematics(c.am, [["0.27"] * 6] * c.am.n)),
         ApiCase("api.fk.lengths_bools", lambda c: ap.stack_forward_kinematics(c.am, np.ones((c.am.n, 6), bool))),
-        ApiCase("api.fk.lengths_huge", lambda c: ap.stack_forward_kinematics(c.am, np.full((c.am.n, 6), 1e300)),
-                "any", verdict="success"),
-        ApiCase("api.fk.lengths_negative", lambda c: ap.stack_forward_kinematics(c.am, np.full((c.am.n, 6), -0.27)),
-                "any", verdict="success"),
-        ApiCase("api.fk.tol_nan", lambda c: ap.stack_forward_kinematics(c.am, np.full((c.am.n, 6), 0.27), tol=np.nan), fk_lengths=0.27),
-        ApiCase("api.fk.tol_negative", lambda c: ap.stack_forward_kinematics(c.am, np.full((c.am.n, 6), 0.27),
-                                                                              tol=-1.0), fk_lengths=0.27),
-        ApiCase("api.fk.max_iterations_negative", lambda c: ap.stack_forward_kinematics(
-            c.am, np.full((c.am.n, 6), 0.27), max_iterations=-1), fk_lengths=0.27),
-        ApiCase("api.fk.max_iterations_bool", lambda c: ap.stack_forward_kinematics(
-            c.am, np.full((c.am.n, 6), 0.27), max_iterations=True), fk_lengths=0.27),
-        ApiCase("api.fk.max_iterations_huge", lambda c: ap.stack_forward_kinematics(
-            c.am, np.full((c.am.n, 6), 0.9), max_iterations=10**12), "refuse", isolate=True, fk_lengths=0.9),
-        ApiCase("api.fk.guess_garbage", lambda c: ap.stack_forward_kinematics(
-            c.am, np.full((c.am.n, 6), 0.27), guess="home"), fk_lengths=0.27),
-        ApiCase("api.fk.guess_nonrotation", lambda c: ap.stack_forward_kinematics(
-            c.am, np.full((c.am.n, 6), 0.27), guess=_nonrotation_arrays(c)), fk_lengths=0.27),
-        ApiCase("api.fk.base_nonrotation", lambda c: ap.stack_forward_kinematics(
-            c.am, np.full((c.am.n, 6), 0.27), base=np.diag([2.0, 2.0, 2.0, 1.0])), fk_lengths=0.27),
-        ApiCase("api.fk.base_nan", lambda c: ap.stack_forward_kinematics(
-            c.am, np.full((c.am.n, 6), 0.27), base=np.full((4, 4), np.nan)), fk_lengths=0.27),
+        ApiCase(
+            "api.fk.lengths_huge",
+            lambda c: ap.stack_forward_kinematics(c.am, np.full((c.am.n, 6), 1e300)),
+            "any",
+            verdict="success",
+        ),
+        ApiCase(
+            "api.fk.lengths_negative",
+            lambda c: ap.stack_forward_kinematics(c.am, np.full((c.am.n, 6), -0.27)),
+            "any",
+            verdict="success",
+        ),
+        ApiCase(
+            "api.fk.tol_nan",
+            lambda c: ap.stack_forward_kinematics(c.am, np.full((c.am.n, 6), 0.27), tol=np.nan),
+            fk_lengths=0.27,
+        ),
+        ApiCase(
+            "api.fk.tol_negative",
+            lambda c: ap.stack_forward_kinematics(c.am, np.full((c.am.n, 6), 0.27), tol=-1.0),
+            fk_lengths=0.27,
+        ),
+        ApiCase(
+            "api.fk.max_iterations_negative",
+            lambda c: ap.stack_forward_kinematics(c.am, np.full((c.am.n, 6), 0.27), max_iterations=-1),
+            fk_lengths=0.27,
+        ),
+        ApiCase(
+            "api.fk.max_iterations_bool",
+            lambda c: ap.stack_forward_kinematics(c.am, np.full((c.am.n, 6), 0.27), max_iterations=True),
+            fk_lengths=0.27,
+        ),
+        ApiCase(
+            "api.fk.max_iterations_huge",
+            lambda c: ap.stack_forward_kinematics(c.am, np.full((c.am.n, 6), 0.9), max_iterations=10**12),
+            "refuse",
+            isolate=True,
+            fk_lengths=0.9,
+        ),
+        ApiCase(
+            "api.fk.guess_garbage",
+            lambda c: ap.stack_forward_kinematics(c.am, np.full((c.am.n, 6), 0.27), guess="home"),
+            fk_lengths=0.27,
+        ),
+        ApiCase(
+            "api.fk.guess_nonrotation",
+            lambda c: ap.stack_forward_kinematics(c.am, np.full((c.am.n, 6), 0.27), guess=_nonrotation_arrays(c)),
+            fk_lengths=0.27,
+        ),
+        ApiCase(
+            "api.fk.base_nonrotation",
+            lambda c: ap.stack_forward_kinematics(c.am, np.full((c.am.n, 6), 0.27), base=np.diag([2.0, 2.0, 2.0, 1.0])),
+            fk_lengths=0.27,
+        ),
+        ApiCase(
+            "api.fk.base_nan",
+            lambda c: ap.stack_forward_kinematics(c.am, np.full((c.am.n, 6), 0.27), base=np.full((4, 4), np.nan)),
+            fk_lengths=0.27,
+        ),
         ApiCase("api.sp_fk.lengths_nan", lambda c: ap.sp_forward_kinematics(c.am, 0, np.full(6, np.nan))),
         # solve, initial condition, optimizer, capacity
-        ApiCase("api.solve.goal_nan", lambda c: solve(c.am, _se3(p=NAN_GOAL_P), optimize=False), "any",
-                verdict="success"),
-        ApiCase("api.solve.goal_matrix_nan", lambda c: solve(c.am, np.full((4, 4), np.nan)), "any",
-                verdict="success"),
+        ApiCase(
+            "api.solve.goal_nan", lambda c: solve(c.am, _se3(p=NAN_GOAL_P), optimize=False), "any", verdict="success"
+        ),
+        ApiCase("api.solve.goal_matrix_nan", lambda c: solve(c.am, np.full((4, 4), np.nan)), "any", verdict="success"),
         ApiCase("api.solve.goal_nonrotation", lambda c: solve(c.am, np.diag([2.0, 2.0, 2.0, 1.0]))),
         ApiCase("api.solve.goal_string", lambda c: solve(c.am, "goal")),
         ApiCase("api.solve.options_wrong_type", lambda c: solve(c.am, _se3(p=REACH_P), options="slsqp")),
         ApiCase("api.solve.options_dict", lambda c: solve(c.am, _se3(p=REACH_P), options={"w1": 1.0})),
-        ApiCase("api.solve.helper_options_wrong_type", lambda c: solve(
-            c.am, _se3(p=REACH_P), optimize=False, helper_options=ap.OptimizeOptions())),
+        ApiCase(
+            "api.solve.helper_options_wrong_type",
+            lambda c: solve(c.am, _se3(p=REACH_P), optimize=False, helper_options=ap.OptimizeOptions()),
+        ),
         ApiCase("api.solve.model_wrong_type", lambda c: solve("model", _se3(p=REACH_P))),
-        ApiCase("api.solve.name_is_callable", lambda c: (importlib.import_module("assembler_pin.solve"),
-                                                          ap.solve(c.am, _se3(p=(10.0, 0, 0.9)), optimize=False))[1],
-                "any", verdict="success"),
-        ApiCase("api.initial_condition.goal_nan", lambda c: ap.initial_condition(c.am, _se3(p=NAN_GOAL_P)), "any",
-                verdict="success"),
-        ApiCase("api.initial_condition.options_wrong_type", lambda c: ap.initial_condition(
-            c.am, _se3(p=REACH_P), options={"d_step": 0.01})),
-        ApiCase("api.optimize.goal_nan", lambda c: ap.optimize_internal_poses(c.am, home(c), goal=_se3(p=NAN_GOAL_P)),
-                "any", verdict="success"),
-        ApiCase("api.optimize.goal_far_nan_tolerance", lambda c: ap.optimize_internal_poses(
-            c.am, home(c), goal=_se3(p=c.am.home[-1].translation + [0.3, 0, 0]),
-            options=ap.OptimizeOptions(goal_tolerance=GT(np.nan, np.nan)))),
+        ApiCase(
+            "api.solve.name_is_callable",
+            lambda c: (
+                importlib.import_module("assembler_pin.solve"),
+                ap.solve(c.am, _se3(p=(10.0, 0, 0.9)), optimize=False),
+            )[1],
+            "any",
+            verdict="success",
+        ),
+        ApiCase(
+            "api.initial_condition.goal_nan",
+            lambda c: ap.initial_condition(c.am, _se3(p=NAN_GOAL_P)),
+            "any",
+            verdict="success",
+        ),
+        ApiCase(
+            "api.initial_condition.options_wrong_type",
+            lambda c: ap.initial_condition(c.am, _se3(p=REACH_P), options={"d_step": 0.01}),
+        ),
+        ApiCase(
+            "api.optimize.goal_nan",
+            lambda c: ap.optimize_internal_poses(c.am, home(c), goal=_se3(p=NAN_GOAL_P)),
+            "any",
+            verdict="success",
+        ),
+        ApiCase(
+            "api.optimize.goal_far_nan_tolerance",
+            lambda c: ap.optimize_internal_poses(
+                c.am,
+                home(c),
+                goal=_se3(p=c.am.home[-1].translation + np.array([0.3, 0, 0])),
+                options=ap.OptimizeOptions(goal_tolerance=GT(np.nan, np.nan)),
+            ),
+        ),
         ApiCase("api.optimize.options_wrong_type", lambda c: ap.optimize_internal_poses(c.am, home(c), options=5)),
         ApiCase("api.optimize.initial_garbage", lambda c: ap.optimize_internal_poses(c.am, "home")),
         ApiCase("api.optimize_options.w1_nan", lambda c: ap.OptimizeOptions(w1=np.nan)),
@@ -913,31 +1188,59 @@ def _api_cases() -> list[ApiCase]:
         ApiCase("api.optimize_options.ee_tolerance_string", lambda c: ap.OptimizeOptions(ee_tolerance="loose")),
         ApiCase("api.optimize_options.ee_tolerance_nan", lambda c: ap.OptimizeOptions(ee_tolerance=GT(np.nan, 1.0))),
         ApiCase("api.optimize_options.goal_tolerance_inf", lambda c: ap.OptimizeOptions(goal_tolerance=GT(np.inf, 1))),
-        ApiCase("api.helper_options.tiny_step_huge_attempts", lambda c: ap.HelperArmOptions(d_step=1e-9,
-                                                                                           max_attempts=10**9)),
+        ApiCase(
+            "api.helper_options.tiny_step_huge_attempts", lambda c: ap.HelperArmOptions(d_step=1e-9, max_attempts=10**9)
+        ),
         ApiCase("api.helper_options.d_step_nan", lambda c: ap.HelperArmOptions(d_step=np.nan)),
         ApiCase("api.helper_options.max_attempts_bool", lambda c: ap.HelperArmOptions(max_attempts=True)),
         ApiCase("api.helper_options.tolerance_wrong_type", lambda c: ap.HelperArmOptions(tolerance=1e-9)),
-        ApiCase("api.capacity.goal_nan", lambda c: ap.payload_capacity(c.am, _se3(p=NAN_GOAL_P)), "any",
-                verdict="success"),
+        ApiCase(
+            "api.capacity.goal_nan", lambda c: ap.payload_capacity(c.am, _se3(p=NAN_GOAL_P)), "any", verdict="success"
+        ),
         ApiCase("api.capacity.rtol_nan", lambda c: ap.payload_capacity(c.am, _se3(p=REACH_P), rtol=np.nan)),
-        ApiCase("api.capacity.max_iterations_negative", lambda c: ap.payload_capacity(
-            c.am, _se3(p=REACH_P), max_iterations=-1)),
-        ApiCase("api.capacity.max_iterations_huge", lambda c: ap.payload_capacity(
-            c.am, _se3(p=REACH_P), max_iterations=10**9), isolate=True),
+        ApiCase(
+            "api.capacity.max_iterations_negative",
+            lambda c: ap.payload_capacity(c.am, _se3(p=REACH_P), max_iterations=-1),
+        ),
+        ApiCase(
+            "api.capacity.max_iterations_huge",
+            lambda c: ap.payload_capacity(c.am, _se3(p=REACH_P), max_iterations=10**9),
+            isolate=True,
+        ),
         ApiCase("api.capacity.start_garbage", lambda c: ap.payload_capacity(c.am, _se3(p=REACH_P), start="home")),
         # motion
-        ApiCase("api.plan.rate_nan", lambda c: ap.plan_trajectory(c.am, ap.EEPath((c.am.home[-1], c.am.home[-1] *
-                _se3(p=(0, 0, -0.01)))), c.am.home, rate=np.nan)),
-        ApiCase("api.plan.rate_huge", lambda c: ap.plan_trajectory(c.am, ap.EEPath((c.am.home[-1], c.am.home[-1] *
-                _se3(p=(0, 0, -0.01)))), c.am.home, rate=1e9), isolate=True),
-        ApiCase("api.plan.refinements_negative", lambda c: ap.plan_trajectory(c.am, ap.EEPath(
-            (c.am.home[-1], c.am.home[-1] * _se3(p=(0, 0, -0.01)))), c.am.home, refinements=-1)),
+        ApiCase(
+            "api.plan.rate_nan",
+            lambda c: ap.plan_trajectory(
+                c.am, ap.EEPath((c.am.home[-1], c.am.home[-1] * _se3(p=(0, 0, -0.01)))), c.am.home, rate=np.nan
+            ),
+        ),
+        ApiCase(
+            "api.plan.rate_huge",
+            lambda c: ap.plan_trajectory(
+                c.am, ap.EEPath((c.am.home[-1], c.am.home[-1] * _se3(p=(0, 0, -0.01)))), c.am.home, rate=1e9
+            ),
+            isolate=True,
+        ),
+        ApiCase(
+            "api.plan.refinements_negative",
+            lambda c: ap.plan_trajectory(
+                c.am, ap.EEPath((c.am.home[-1], c.am.home[-1] * _se3(p=(0, 0, -0.01)))), c.am.home, refinements=-1
+            ),
+        ),
         ApiCase("api.plan.path_wrong_type", lambda c: ap.plan_trajectory(c.am, [c.am.home[-1]], c.am.home)),
-        ApiCase("api.plan.options_wrong_type", lambda c: ap.plan_trajectory(c.am, ap.EEPath(
-            (c.am.home[-1], c.am.home[-1] * _se3(p=(0, 0, -0.01)))), c.am.home, options="fast")),
-        ApiCase("api.plan.start_garbage", lambda c: ap.plan_trajectory(c.am, ap.EEPath(
-            (c.am.home[-1], c.am.home[-1] * _se3(p=(0, 0, -0.01)))), start="home")),
+        ApiCase(
+            "api.plan.options_wrong_type",
+            lambda c: ap.plan_trajectory(
+                c.am, ap.EEPath((c.am.home[-1], c.am.home[-1] * _se3(p=(0, 0, -0.01)))), c.am.home, options="fast"
+            ),
+        ),
+        ApiCase(
+            "api.plan.start_garbage",
+            lambda c: ap.plan_trajectory(
+                c.am, ap.EEPath((c.am.home[-1], c.am.home[-1] * _se3(p=(0, 0, -0.01)))), start="home"
+            ),
+        ),
         ApiCase("api.eepath.nan_waypoint", lambda c: ap.EEPath((c.am.home[-1], _se3(p=NAN_GOAL_P)))),
         ApiCase("api.eepath.matrix_waypoints", lambda c: ap.EEPath((np.eye(4), np.eye(4)))),
         ApiCase("api.eepath.times_bools", lambda c: ap.EEPath((c.am.home[-1], c.am.home[-1]), times=(False, True))),
@@ -950,8 +1253,9 @@ def _api_cases() -> list[ApiCase]:
         ApiCase("api.load_config.bytes", lambda c: ap.load_config(b"gravity: 1.0")),
         ApiCase("api.load_config.dir", lambda c: ap.load_config(c.ws.root / "adir")),
         ApiCase("api.load_config.list", lambda c: ap.load_config([("gravity", 1.0)])),
-        ApiCase("api.load_config.alias_bomb", lambda c: ap.load_config(c.ws.root / "cfg_alias_bomb.yaml"),
-                isolate=True),
+        ApiCase(
+            "api.load_config.alias_bomb", lambda c: ap.load_config(c.ws.root / "cfg_alias_bomb.yaml"), isolate=True
+        ),
         ApiCase("api.load_config.nested_numpy", lambda c: ap.load_config({"payload": {"mass": np.float64("nan")}})),
         ApiCase("api.load_config.numpy_bool", lambda c: ap.load_config({"gravity": np.bool_(True)})),
         ApiCase("api.load_config.complex", lambda c: ap.load_config({"gravity": 9.81 + 0j})),
@@ -962,53 +1266,117 @@ def _api_cases() -> list[ApiCase]:
         ApiCase("api.from_files.missing", lambda c: ap.AssemblerModel.from_files(c.ws.root / "missing.urdf")),
         ApiCase("api.from_files.empty_dir", lambda c: ap.AssemblerModel.from_files(c.ws.root / "adir")),
         ApiCase("api.from_files.roundtrip", lambda c: ap.AssemblerModel.from_files(c.ws.model_dir), "answer"),
-        ApiCase("api.from_files.urdf_garbage", lambda c: ap.AssemblerModel.from_files(
-            c.model_files("urdf_garbage", urdf="<robot name='x'><link"))),
-        ApiCase("api.from_files.urdf_empty", lambda c: ap.AssemblerModel.from_files(c.model_files("urdf_empty", urdf=""))),
-        ApiCase("api.from_files.urdf_nonutf8", lambda c: ap.AssemblerModel.from_files(
-            c.model_files("urdf_nonutf8", urdf=b"<robot \xff\xfe>"))),
-        ApiCase("api.from_files.sidecar_empty", lambda c: ap.AssemblerModel.from_files(
-            c.model_files("sidecar_empty", sidecar=""))),
-        ApiCase("api.from_files.sidecar_nonutf8", lambda c: ap.AssemblerModel.from_files(
-            c.model_files("sidecar_nonutf8", sidecar=b"closed_loop: \xff\n"))),
-        ApiCase("api.from_files.sidecar_list", lambda c: ap.AssemblerModel.from_files(
-            c.model_files("sidecar_list", sidecar="- 1\n- 2\n"))),
-        ApiCase("api.from_files.sidecar_closed_loop_int", lambda c: ap.AssemblerModel.from_files(
-            c.model_files("sidecar_int", sidecar="closed_loop: 5\ntype: 5\nname_mot: 5\n"))),
-        ApiCase("api.from_files.sidecar_pairs_strings", lambda c: ap.AssemblerModel.from_files(
-            c.model_files("sidecar_str", sidecar="closed_loop: " + json.dumps(["ab"] * 24) + "\ntype: "
-                          + json.dumps(["3d"] * 24) + "\nname_mot: []\n"))),
-        ApiCase("api.from_files.sidecar_alias_bomb", lambda c: ap.AssemblerModel.from_files(
-            c.model_files("sidecar_bomb", sidecar=_alias_bomb(10, 10) + "closed_loop: *a9\ntype: *a9\n"
-                          "name_mot: *a9\n")), isolate=True),
-        ApiCase("api.from_files.sidecar_9_81", lambda c: ap.AssemblerModel.from_files(
-            c.model_files("sidecar_9_81", sidecar=_sidecar_with(c, "gravity: 9.81", "gravity: 9_81")))),
-        ApiCase("api.from_files.sidecar_payload_disagrees", lambda c: ap.AssemblerModel.from_files(
-            c.model_files("sidecar_payload", sidecar=_sidecar_with(c, "mass: 5.0", "mass: 50.0")))),
-        ApiCase("api.from_files.sidecar_platforms_disagree", lambda c: ap.AssemblerModel.from_files(
-            c.model_files("sidecar_platforms", sidecar=_sidecar_with(c, "platforms: 4", "platforms: 3")))),
-        ApiCase("api.from_files.sidecar_dup_keys", lambda c: ap.AssemblerModel.from_files(
-            c.model_files("sidecar_dup", sidecar=c.sidecar() + "closed_loop: []\n"))),
-        ApiCase("api.from_files.sidecar_is_dir", lambda c: ap.AssemblerModel.from_files(
-            c.ws.model_dir / "assembler.urdf", c.ws.root / "adir")),
+        ApiCase(
+            "api.from_files.urdf_garbage",
+            lambda c: ap.AssemblerModel.from_files(c.model_files("urdf_garbage", urdf="<robot name='x'><link")),
+        ),
+        ApiCase(
+            "api.from_files.urdf_empty", lambda c: ap.AssemblerModel.from_files(c.model_files("urdf_empty", urdf=""))
+        ),
+        ApiCase(
+            "api.from_files.urdf_nonutf8",
+            lambda c: ap.AssemblerModel.from_files(c.model_files("urdf_nonutf8", urdf=b"<robot \xff\xfe>")),
+        ),
+        ApiCase(
+            "api.from_files.sidecar_empty",
+            lambda c: ap.AssemblerModel.from_files(c.model_files("sidecar_empty", sidecar="")),
+        ),
+        ApiCase(
+            "api.from_files.sidecar_nonutf8",
+            lambda c: ap.AssemblerModel.from_files(c.model_files("sidecar_nonutf8", sidecar=b"closed_loop: \xff\n")),
+        ),
+        ApiCase(
+            "api.from_files.sidecar_list",
+            lambda c: ap.AssemblerModel.from_files(c.model_files("sidecar_list", sidecar="- 1\n- 2\n")),
+        ),
+        ApiCase(
+            "api.from_files.sidecar_closed_loop_int",
+            lambda c: ap.AssemblerModel.from_files(
+                c.model_files("sidecar_int", sidecar="closed_loop: 5\ntype: 5\nname_mot: 5\n")
+            ),
+        ),
+        ApiCase(
+            "api.from_files.sidecar_pairs_strings",
+            lambda c: ap.AssemblerModel.from_files(
+                c.model_files(
+                    "sidecar_str",
+                    sidecar="closed_loop: "
+                    + json.dumps(["ab"] * 24)
+                    + "\ntype: "
+                    + json.dumps(["3d"] * 24)
+                    + "\nname_mot: []\n",
+                )
+            ),
+        ),
+        ApiCase(
+            "api.from_files.sidecar_alias_bomb",
+            lambda c: ap.AssemblerModel.from_files(
+                c.model_files(
+                    "sidecar_bomb", sidecar=_alias_bomb(10, 10) + "closed_loop: *a9\ntype: *a9\nname_mot: *a9\n"
+                )
+            ),
+            isolate=True,
+        ),
+        ApiCase(
+            "api.from_files.sidecar_9_81",
+            lambda c: ap.AssemblerModel.from_files(
+                c.model_files("sidecar_9_81", sidecar=_sidecar_with(c, "gravity: 9.81", "gravity: 9_81"))
+            ),
+        ),
+        ApiCase(
+            "api.from_files.sidecar_payload_disagrees",
+            lambda c: ap.AssemblerModel.from_files(
+                c.model_files("sidecar_payload", sidecar=_sidecar_with(c, "mass: 5.0", "mass: 50.0"))
+            ),
+        ),
+        ApiCase(
+            "api.from_files.sidecar_platforms_disagree",
+            lambda c: ap.AssemblerModel.from_files(
+                c.model_files("sidecar_platforms", sidecar=_sidecar_with(c, "platforms: 4", "platforms: 3"))
+            ),
+        ),
+        ApiCase(
+            "api.from_files.sidecar_dup_keys",
+            lambda c: ap.AssemblerModel.from_files(
+                c.model_files("sidecar_dup", sidecar=c.sidecar() + "closed_loop: []\n")
+            ),
+        ),
+        ApiCase(
+            "api.from_files.sidecar_is_dir",
+            lambda c: ap.AssemblerModel.from_files(c.ws.model_dir / "assembler.urdf", c.ws.root / "adir"),
+        ),
         # maps
         ApiCase("api.parse_grid.none", lambda c: parse_grid(None)),
         ApiCase("api.parse_grid.int", lambda c: parse_grid(5)),
         ApiCase("api.parse_grid.axis_huge", lambda c: parse_grid("x=0:1:1000000000"), isolate=True),
         ApiCase("api.parse_grid.axis_astronomic", lambda c: parse_grid("x=0:1:10000000000000")),
         ApiCase("api.parse_orientations.int", lambda c: parse_orientations(5)),
-        ApiCase("api.run_map.workers_negative", lambda c: run_map(parse_grid("x=0,y=0,z=0.85"), [("d", c.am.config)],
-                                                                  c.ws.root / "api_map_w", workers=-1), isolate=True),
-        ApiCase("api.run_map.batch_negative", lambda c: run_map(parse_grid("x=0,y=0,z=0.85"), [("d", c.am.config)],
-                                                                c.ws.root / "api_map_b", workers=0, batch_size=-1)),
-        ApiCase("api.run_map.workers_string", lambda c: run_map(parse_grid("x=0,y=0,z=0.85"), [("d", c.am.config)],
-                                                                c.ws.root / "api_map_s", workers="2")),
-        ApiCase("api.run_map.configs_wrong", lambda c: run_map(parse_grid("x=0,y=0,z=0.85"), ["default"],
-                                                               c.ws.root / "api_map_c", workers=0)),
-        ApiCase("api.run_map.grid_wrong", lambda c: run_map("x=0", [("d", c.am.config)], c.ws.root / "api_map_g",
-                                                            workers=0)),
-        ApiCase("api.run_map.out_is_file", lambda c: run_map(parse_grid("x=0,y=0,z=0.85"), [("d", c.am.config)],
-                                                             c.ws.root / "afile", workers=0)),
+        ApiCase(
+            "api.run_map.workers_negative",
+            lambda c: run_map(parse_grid("x=0,y=0,z=0.85"), [("d", c.am.config)], c.ws.root / "api_map_w", workers=-1),
+            isolate=True,
+        ),
+        ApiCase(
+            "api.run_map.batch_negative",
+            lambda c: run_map(
+                parse_grid("x=0,y=0,z=0.85"), [("d", c.am.config)], c.ws.root / "api_map_b", workers=0, batch_size=-1
+            ),
+        ),
+        ApiCase(
+            "api.run_map.workers_string",
+            lambda c: run_map(parse_grid("x=0,y=0,z=0.85"), [("d", c.am.config)], c.ws.root / "api_map_s", workers="2"),
+        ),
+        ApiCase(
+            "api.run_map.configs_wrong",
+            lambda c: run_map(parse_grid("x=0,y=0,z=0.85"), ["default"], c.ws.root / "api_map_c", workers=0),
+        ),
+        ApiCase(
+            "api.run_map.grid_wrong", lambda c: run_map("x=0", [("d", c.am.config)], c.ws.root / "api_map_g", workers=0)
+        ),
+        ApiCase(
+            "api.run_map.out_is_file",
+            lambda c: run_map(parse_grid("x=0,y=0,z=0.85"), [("d", c.am.config)], c.ws.root / "afile", workers=0),
+        ),
         # carrier
         ApiCase("api.carrier.bogus", lambda c: ap.Carrier("bogus")),
         ApiCase("api.carrier.name_int", lambda c: ap.Carrier(5)),
@@ -1018,29 +1386,54 @@ def _api_cases() -> list[ApiCase]:
         ApiCase("api.carrier.check_q_nan", lambda c: c.carrier.check_q(np.full(6, np.nan))),
         ApiCase("api.carrier.check_q_strings", lambda c: c.carrier.check_q(["0"] * 6)),
         ApiCase("api.carrier.base_pose_wrong_count", lambda c: c.carrier.base_pose(np.zeros(3))),
-        ApiCase("api.carrier.ik_target_nan", lambda c: c.carrier.ik(_se3(p=NAN_GOAL_P), c.carrier.upright_q),
-                "any", verdict="success"),
-        ApiCase("api.carrier.ik_iterations_negative", lambda c: c.carrier.ik(_se3(p=REACH_P), c.carrier.upright_q,
-                                                                              max_iterations=-1)),
-        ApiCase("api.carrier_statics.q_nan", lambda c: ap.carrier_statics(c.am, c.carrier, np.full(6, np.nan),
-                                                                          c.am.home)),
-        ApiCase("api.carrier_statics.plates_nonrotation", lambda c: ap.carrier_statics(
-            c.am, c.carrier, c.carrier.upright_q, _nonrotation_arrays(c))),
-        ApiCase("api.carrier_statics.carrier_wrong_type", lambda c: ap.carrier_statics(c.am, "ur5", np.zeros(6),
-                                                                                       c.am.home)),
-        ApiCase("api.solve_on_carrier.goal_nan", lambda c: ap.solve_on_carrier(
-            c.am, c.carrier, _se3(p=NAN_GOAL_P), move_carrier=False), "any", verdict="success"),
-        ApiCase("api.solve_on_carrier.blends_zero", lambda c: ap.solve_on_carrier(
-            c.am, c.carrier, _se3(p=(0.3, 0.2, 1.4)), blends=0)),
-        ApiCase("api.solve_on_carrier.blends_huge", lambda c: ap.solve_on_carrier(
-            c.am, c.carrier, _se3(p=(0.3, 0.2, 1.4)), blends=10**9), isolate=True),
-        ApiCase("api.solve_on_carrier.w_carrier_nan", lambda c: ap.solve_on_carrier(
-            c.am, c.carrier, _se3(p=(0.3, 0.2, 1.4)), w_carrier=np.nan)),
-        ApiCase("api.solve_on_carrier.max_iterations_negative", lambda c: ap.solve_on_carrier(
-            c.am, c.carrier, _se3(p=(0.3, 0.2, 1.4)), max_iterations=-1)),
-        ApiCase("api.solve_on_carrier.q0_wrong_count", lambda c: ap.solve_on_carrier(
-            c.am, c.carrier, _se3(p=(0.3, 0.2, 1.4)), q0=np.zeros(2))),
-    ]  # fmt: skip
+        ApiCase(
+            "api.carrier.ik_target_nan",
+            lambda c: c.carrier.ik(_se3(p=NAN_GOAL_P), c.carrier.upright_q),
+            "any",
+            verdict="success",
+        ),
+        ApiCase(
+            "api.carrier.ik_iterations_negative",
+            lambda c: c.carrier.ik(_se3(p=REACH_P), c.carrier.upright_q, max_iterations=-1),
+        ),
+        ApiCase(
+            "api.carrier_statics.q_nan", lambda c: ap.carrier_statics(c.am, c.carrier, np.full(6, np.nan), c.am.home)
+        ),
+        ApiCase(
+            "api.carrier_statics.plates_nonrotation",
+            lambda c: ap.carrier_statics(c.am, c.carrier, c.carrier.upright_q, _nonrotation_arrays(c)),
+        ),
+        ApiCase(
+            "api.carrier_statics.carrier_wrong_type", lambda c: ap.carrier_statics(c.am, "ur5", np.zeros(6), c.am.home)
+        ),
+        ApiCase(
+            "api.solve_on_carrier.goal_nan",
+            lambda c: ap.solve_on_carrier(c.am, c.carrier, _se3(p=NAN_GOAL_P), move_carrier=False),
+            "any",
+            verdict="success",
+        ),
+        ApiCase(
+            "api.solve_on_carrier.blends_zero",
+            lambda c: ap.solve_on_carrier(c.am, c.carrier, _se3(p=(0.3, 0.2, 1.4)), blends=0),
+        ),
+        ApiCase(
+            "api.solve_on_carrier.blends_huge",
+            lambda c: ap.solve_on_carrier(c.am, c.carrier, _se3(p=(0.3, 0.2, 1.4)), blends=10**9),
+            isolate=True,
+        ),
+        ApiCase(
+            "api.solve_on_carrier.w_carrier_nan",
+            lambda c: ap.solve_on_carrier(c.am, c.carrier, _se3(p=(0.3, 0.2, 1.4)), w_carrier=np.nan),
+        ),
+        ApiCase(
+            "api.solve_on_carrier.max_iterations_negative",
+            lambda c: ap.solve_on_carrier(c.am, c.carrier, _se3(p=(0.3, 0.2, 1.4)), max_iterations=-1),
+        ),
+        ApiCase(
+            "api.solve_on_carrier.q0_wrong_count",
+            lambda c: ap.solve_on_carrier(c.am, c.carrier, _se3(p=(0.3, 0.2, 1.4)), q0=np.zeros(2)),
+        ),
+    ]
     return cases
 
 

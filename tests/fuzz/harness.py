@@ -124,7 +124,7 @@ def run_cli(argv: Sequence[str], cwd: Path | None = None, timeout: float = TIMEO
         result.hung = True
     except SystemExit as exc:
         result.code = exc.code if isinstance(exc.code, int) else 1
-    except BaseException as exc:  # noqa: BLE001 - an escaped exception is what is judged
+    except BaseException as exc:  # an escaped exception is what is judged
         result.exc = exc
         result.exc_text = "".join(traceback.format_exception_only(type(exc), exc)).strip()
     finally:
@@ -147,26 +147,39 @@ def child_env() -> dict[str, str]:
     return env
 
 
-def run_child(command: Sequence[str], cwd: Path | None = None, timeout: float = TIMEOUT,
-              stdin: bytes = b"") -> Outcome:  # fmt: skip
+def run_child(command: Sequence[str], cwd: Path | None = None, timeout: float = TIMEOUT, stdin: bytes = b"") -> Outcome:
     """A child process (its own session, memory-limited), killed with its group after
     ``timeout`` s."""
     t0 = time.perf_counter()
-    proc = subprocess.Popen(list(command), cwd=cwd, env=child_env(), stdin=subprocess.PIPE, stdout=subprocess.PIPE,
-                            stderr=subprocess.PIPE, start_new_session=True, preexec_fn=_limit_memory)  # fmt: skip
+    proc = subprocess.Popen(
+        list(command),
+        cwd=cwd,
+        env=child_env(),
+        stdin=subprocess.PIPE,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        start_new_session=True,
+        preexec_fn=_limit_memory,
+    )
     try:
         out, err = proc.communicate(stdin, timeout=timeout)
     except subprocess.TimeoutExpired:
         with contextlib.suppress(ProcessLookupError):
             os.killpg(proc.pid, signal.SIGKILL)
         out, err = proc.communicate()
-        return Outcome(None, out.decode(errors="replace"), err.decode(errors="replace"), hung=True,
-                       seconds=time.perf_counter() - t0)  # fmt: skip
+        return Outcome(
+            None,
+            out.decode(errors="replace"),
+            err.decode(errors="replace"),
+            hung=True,
+            seconds=time.perf_counter() - t0,
+        )
     finally:
         with contextlib.suppress(ProcessLookupError, PermissionError):
             os.killpg(proc.pid, signal.SIGKILL)  # workers a command left behind
-    return Outcome(proc.returncode, out.decode(errors="replace"), err.decode(errors="replace"),
-                   seconds=time.perf_counter() - t0)  # fmt: skip
+    return Outcome(
+        proc.returncode, out.decode(errors="replace"), err.decode(errors="replace"), seconds=time.perf_counter() - t0
+    )
 
 
 def run_cli_child(argv: Sequence[str], cwd: Path | None = None, timeout: float = TIMEOUT) -> Outcome:
@@ -183,7 +196,7 @@ def fail(kind: str, message: str) -> None:
     raise ContractError(f"[{kind}] {' '.join(message.split())[:600]}")
 
 
-def judge_cli(o: Outcome, expect: str, what: str) -> None:
+def judge_cli(o: Outcome, expect: str, what: str, timeout: float = TIMEOUT) -> None:
     """The outcome of one command against the contract.
 
     Args:
@@ -192,7 +205,7 @@ def judge_cli(o: Outcome, expect: str, what: str) -> None:
         what: the command, for messages.
     """
     if o.hung:
-        fail("hang", f"{what}: no answer within {TIMEOUT:g} s")
+        fail("hang", f"{what}: no answer within {timeout:g} s")
     if o.exc is not None:
         fail("traceback", f"{what}: {o.exc_text}")
     if "Traceback (most recent call last)" in o.err:
@@ -254,10 +267,12 @@ def call_api(fn: Callable[[], object], expect: str, what: str, timeout: float = 
         return Called(error=exc)
     except RuntimeWarning as exc:
         fail("non-assembler-error", f"{what}: a numpy warning escaped: {exc}")
-    except Exception as exc:  # noqa: BLE001 - any other exception is the defect judged here
+    except Exception as exc:  # any other exception: the defect judged here
         where = traceback.extract_tb(exc.__traceback__)[-1]
-        fail("non-assembler-error", f"{what}: {type(exc).__name__}: {str(exc)[:200]} "
-             f"(at {Path(where.filename).name}:{where.lineno})")  # fmt: skip
+        fail(
+            "non-assembler-error",
+            f"{what}: {type(exc).__name__}: {str(exc)[:200]} (at {Path(where.filename).name}:{where.lineno})",
+        )
     if expect == "refuse":
         fail("accepted", f"{what}: returned {type(result).__name__} {str(result)[:200]}")
     return Called(result=result)

@@ -63,8 +63,10 @@ def test_api(case: ApiCase, context: ApiContext):
     if not case.isolate:
         run_case(case, context)
         return
-    code = (f"import sys; sys.path.insert(0, {str(REPO / 'tests')!r}); from fuzz.test_api_corpus import "
-            f"run_isolated; run_isolated({case.id!r}, {str(context.ws.root)!r})")  # fmt: skip
+    code = (
+        f"import sys; sys.path.insert(0, {str(REPO / 'tests')!r}); from fuzz.test_api_corpus import "
+        f"run_isolated; run_isolated({case.id!r}, {str(context.ws.root)!r})"
+    )
     outcome = run_child([sys.executable, "-c", code], cwd=context.ws.root)
     if outcome.hung:
         fail("hang", f"{case.id}: no answer within the time limit")

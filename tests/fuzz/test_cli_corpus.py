@@ -15,7 +15,7 @@ import assembler_pin as ap
 
 from . import answers
 from .corpus import CLI_CASES, CliCase
-from .harness import fail, judge_cli, run_cli, run_cli_child
+from .harness import TIMEOUT, fail, judge_cli, run_cli, run_cli_child
 
 
 @cache
@@ -59,14 +59,22 @@ def check_answer(case: CliCase, argv: list[str], code: int, out: str, what: str)
         if doc.get("within_limits") is True and not all(r <= 1 + 1e-9 for r in doc["carrier_torque_ratio"]):
             fail("wrong-answer", f"{what}: carrier within limits with torque ratios {doc['carrier_torque_ratio']}")
     elif kind == "solve":
-        answers.check_solve_doc(am, doc, code, what)
+        tolerance = (
+            argv[argv.index("--ee-tolerance") + 1 : argv.index("--ee-tolerance") + 3]
+            if ("--ee-tolerance" in argv)
+            else None
+        )
+        ee_tol = max(float(v) for v in tolerance) * (1 + 1e-9) if tolerance else 1e-6
+        answers.check_solve_doc(am, doc, code, what, ee_tol)
     elif kind == "carrier_capacity":
         answers.exit_agrees(code, doc.get("success"), what)
         if "capacity" not in doc:
             fail("accepted", f"{what}: --capacity with --carrier answered without a capacity (option dropped)")
-    elif kind in ("plan", "plan_times"):
+    elif kind in ("plan", "plan_times", "plan_success"):
         out_file = _option(argv, "--out")
         answers.check_plan_doc(am, doc, code, what, Path(out_file) if out_file else None)
+        if kind == "plan_success" and doc.get("success") is not True:
+            fail("valid-input-refused", f"{what}: a short path near home answered not possible: {doc.get('reason')}")
         if kind == "plan_times" and out_file and Path(out_file).exists():
             duration = ap.read_trajectory(out_file).duration
             if duration < 30.0 - 1e-9:
@@ -94,10 +102,12 @@ def _params():
 
 @pytest.mark.parametrize("case", _params())
 def test_cli(case: CliCase, ws):
-    argv = [a.replace("{d}", str(ws.root)) for a in case.argv]
+    argv = [a.replace("{d}", str(ws.root)).replace("{case}", case.id) for a in case.argv]
     what = "assembler-pin " + " ".join(a.replace(str(ws.root), "D")[:60] for a in argv)
-    outcome = run_cli_child(argv, cwd=ws.root) if case.isolate else run_cli(argv, cwd=ws.root)
-    judge_cli(outcome, case.expect, what)
+    timeout = TIMEOUT / 2 if case.expect == "refuse" else TIMEOUT  # a refusal comes before any real work
+    run = run_cli_child if case.isolate else run_cli
+    outcome = run(argv, cwd=ws.root, timeout=timeout)
+    judge_cli(outcome, case.expect, what, timeout)
     if outcome.code in (0, 1):
         try:
             check_answer(case, argv, outcome.code, outcome.out, what)

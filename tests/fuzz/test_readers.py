@@ -9,6 +9,7 @@ spellings and forward-kinematics inputs.
 
 from __future__ import annotations
 
+import itertools
 import json
 import math
 import re
@@ -28,8 +29,9 @@ from .harness import call_api, fail
 
 #: No example database and no shrinking or patch files: a run leaves nothing behind, and a
 #: known failure costs no more than finding it.
-_QUIET = dict(deadline=None, suppress_health_check=list(HealthCheck), database=None,
-              phases=(Phase.explicit, Phase.generate))  # fmt: skip
+_QUIET = dict(
+    deadline=None, suppress_health_check=list(HealthCheck), database=None, phases=(Phase.explicit, Phase.generate)
+)
 FEW = settings(max_examples=25, **_QUIET)
 SOME = settings(max_examples=80, **_QUIET)
 
@@ -104,14 +106,15 @@ def test_planned_trajectory_rows_agree_with_their_lengths(am, ws, tmp_path):
 @st.composite
 def waypoint_docs(draw):
     good = [[0.0, 0.0, 0.95, 0.0, 0.0, 0.0], [0.01, 0.0, 0.95, 0.0, 0.0, 0.1]]
-    rows = draw(st.one_of(
-        st.just(good),
-        st.lists(st.lists(st.one_of(hostile_scalars, st.floats(-1, 1)), min_size=5, max_size=7), max_size=4),
-    ))  # fmt: skip
+    rows = draw(
+        st.one_of(
+            st.just(good),
+            st.lists(st.lists(st.one_of(hostile_scalars, st.floats(-1, 1)), min_size=5, max_size=7), max_size=4),
+        )
+    )
     doc: dict = {"waypoints": rows}
     if draw(st.booleans()):
-        doc["times"] = draw(st.one_of(st.lists(hostile_scalars, max_size=3), hostile_scalars,
-                                      st.just([0.0, 2.0])))  # fmt: skip
+        doc["times"] = draw(st.one_of(st.lists(hostile_scalars, max_size=3), hostile_scalars, st.just([0.0, 2.0])))
     if draw(st.booleans()):
         doc["degrees"] = draw(st.one_of(st.booleans(), hostile_scalars))
     return doc
@@ -131,9 +134,17 @@ def test_waypoint_files_are_read_as_written(tmp_path_factory, doc):
         len(rows) >= 2
         and all(isinstance(r, list) and len(r) == 6 and all(_is_real(v) for v in r) for r in rows)
         and isinstance(degrees, bool)
-        and (times is None or (isinstance(times, list) and len(times) == len(rows) and all(_is_real(t) for t in times)
-                               and times[0] == 0 and all(b > a for a, b in zip(times, times[1:]))))
-    )  # fmt: skip
+        and (
+            times is None
+            or (
+                isinstance(times, list)
+                and len(times) == len(rows)
+                and all(_is_real(t) for t in times)
+                and times[0] == 0
+                and all(b > a for a, b in itertools.pairwise(times))
+            )
+        )
+    )
     called = call_api(lambda: read_waypoints(path), "any" if well_formed else "refuse", f"read_waypoints({doc})")
     if called.error is not None:
         if well_formed and max(abs(v) for r in rows for v in r) < 1e3:
@@ -151,10 +162,13 @@ def test_waypoint_files_are_read_as_written(tmp_path_factory, doc):
 # ---------------------------------------------------------------------- SPECs
 axis_items = st.one_of(
     st.sampled_from(["0", "0.5", "-0.2", "nan", "inf", "1e400", "", "a", "1:2", "0:1:3:4", "0:1:2.5", "0:1:1e2"]),
-    st.builds(lambda a, b, n: f"{a}:{b}:{n}", st.sampled_from(["0", "-1", "nan", "1e308", "0.2"]),
-              st.sampled_from(["1", "inf", "-1e308", "0.7"]),
-              st.sampled_from(["-1", "0", "1", "2", "3", "9", "10000000000000"])),
-)  # fmt: skip
+    st.builds(
+        lambda a, b, n: f"{a}:{b}:{n}",
+        st.sampled_from(["0", "-1", "nan", "1e308", "0.2"]),
+        st.sampled_from(["1", "inf", "-1e308", "0.7"]),
+        st.sampled_from(["-1", "0", "1", "2", "3", "9", "10000000000000"]),
+    ),
+)
 grid_specs = st.lists(
     st.tuples(st.sampled_from(["x", "y", "z", "X", "q", " x"]), axis_items).map(lambda t: f"{t[0]}={t[1]}"),
     max_size=4,
@@ -195,9 +209,39 @@ def test_grid_specs_are_refused_or_read_as_written(spec, orientations):
             fail("accepted", f"parse_grid({spec!r}): '{parts[0]}' accepted as a number")
 
 
-yaml_numbers = st.sampled_from(["9.81", "1.5", "2", "+1.5", "1e1", "1.0e1", "9_81", "1:30", "0x1F", "0o17", "017",
-                                ".nan", ".inf", "-.inf", "yes", "no", "on", "~", "'9.81'", "1e400", "0b101",
-                                "9.81.1", "1_000.5", "0.", ".5", "12e-1", "!!float 3", "!!int 3", "&a 3"])  # fmt: skip
+yaml_numbers = st.sampled_from(
+    [
+        "9.81",
+        "1.5",
+        "2",
+        "+1.5",
+        "1e1",
+        "1.0e1",
+        "9_81",
+        "1:30",
+        "0x1F",
+        "0o17",
+        "017",
+        ".nan",
+        ".inf",
+        "-.inf",
+        "yes",
+        "no",
+        "on",
+        "~",
+        "'9.81'",
+        "1e400",
+        "0b101",
+        "9.81.1",
+        "1_000.5",
+        "0.",
+        ".5",
+        "12e-1",
+        "!!float 3",
+        "!!int 3",
+        "&a 3",
+    ]
+)
 yaml_keys = st.sampled_from([("gravity",), ("payload", "mass"), ("plate", "mass"), ("leg", "max_tension")])
 
 
@@ -224,8 +268,10 @@ def test_yaml_numbers_are_refused_or_read_as_decimals(tmp_path_factory, key, tex
 @FEW
 @given(data=st.data())
 def test_fk_of_hostile_lengths(am, data):
-    lengths = np.array(data.draw(st.lists(st.one_of(hostile_floats, st.floats(0.2, 0.35)), min_size=am.n * 6,
-                                          max_size=am.n * 6)), dtype=float).reshape(am.n, 6)  # fmt: skip
+    lengths = np.array(
+        data.draw(st.lists(st.one_of(hostile_floats, st.floats(0.2, 0.35)), min_size=am.n * 6, max_size=am.n * 6)),
+        dtype=float,
+    ).reshape(am.n, 6)
     expect = "any" if np.all(np.isfinite(lengths)) else "refuse"
     called = call_api(lambda: ap.stack_forward_kinematics(am, lengths), expect, f"FK of {lengths.tolist()}")
     if called.error is None and called.result.success:
@@ -243,8 +289,10 @@ def test_non_finite_goals_never_succeed(am, p):
     from assembler_pin.solve import solve
 
     goal = pin.SE3(np.eye(3), np.array(p, dtype=float))
-    for name, fn in (("initial_condition", lambda: ap.initial_condition(am, goal)),
-                     ("solve", lambda: solve(am, goal, optimize=False))):  # fmt: skip
+    for name, fn in (
+        ("initial_condition", lambda: ap.initial_condition(am, goal)),
+        ("solve", lambda: solve(am, goal, optimize=False)),
+    ):
         called = call_api(fn, "any", f"{name}(goal p={p})")
         if called.error is None and getattr(called.result, "success", False):
             fail("wrong-answer", f"{name}(goal p={p}): success for a goal that is not finite")
