@@ -30,7 +30,7 @@ import numpy as np
 TIMEOUT = float(os.environ.get("ASSEMBLER_PIN_FUZZ_TIMEOUT", "60"))
 #: Address-space limit of a child process [bytes]: an unbounded allocation fails there
 #: instead of exhausting the machine.
-CHILD_MEMORY = int(float(os.environ.get("ASSEMBLER_PIN_FUZZ_MEMORY_GB", "6")) * 2**30)
+CHILD_MEMORY = int(float(os.environ.get("ASSEMBLER_PIN_FUZZ_MEMORY_GB", "4")) * 2**30)
 #: Longest acceptable one-line refusal [characters].
 MAX_LINE = 1000
 REPO = Path(__file__).resolve().parents[2]

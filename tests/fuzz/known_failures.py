@@ -65,7 +65,6 @@ KNOWN: set[str] = {
     "bench.repeat_huge",
     "map.grid_axis_too_long",
     "map.orientations_too_many",
-    "map.scheduler_closed_port",
     "map.workers_huge",
     "plan.tiny_acceleration",
     "simulate.traj_time_huge.csv",
