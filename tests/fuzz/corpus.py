@@ -980,7 +980,7 @@ def _sidecar_with(c: ApiContext, old: str, new: str) -> str:
 def _api_cases() -> list[ApiCase]:
     import assembler_pin as ap
     from assembler_pin.maps import parse_grid, parse_orientations, run_map
-    from assembler_pin.solve import solve  # the function: ``ap.solve`` (see api.solve.name_is_callable)
+    from assembler_pin.solver import solve  # the function: ``ap.solve`` (see api.solve.name_is_callable)
 
     GT = ap.GoalTolerance
     home = lambda c: c.am.home  # noqa: E731
@@ -1146,7 +1146,7 @@ def _api_cases() -> list[ApiCase]:
         ApiCase(
             "api.solve.name_is_callable",
             lambda c: (
-                importlib.import_module("assembler_pin.solve"),
+                importlib.import_module("assembler_pin.solver"),
                 ap.solve(c.am, _se3(p=(10.0, 0, 0.9)), optimize=False),
             )[1],
             "any",

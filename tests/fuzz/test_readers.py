@@ -286,7 +286,7 @@ def test_fk_of_hostile_lengths(am, data):
 def test_non_finite_goals_never_succeed(am, p):
     import pinocchio as pin
 
-    from assembler_pin.solve import solve
+    from assembler_pin.solver import solve
 
     goal = pin.SE3(np.eye(3), np.array(p, dtype=float))
     for name, fn in (
