@@ -11,6 +11,7 @@ import math
 import numbers
 from dataclasses import dataclass, field
 
+from .bounds import check_bound
 from .exceptions import OptionsError
 
 __all__ = [
@@ -98,6 +99,7 @@ class OptimizeOptions:
             raise OptionsError("weights w1, w2 must not both be 0")
         if not (isinstance(self.max_iterations, numbers.Integral) and self.max_iterations >= 1):
             raise OptionsError(f"max_iterations must be an integer >= 1, got {self.max_iterations!r}")
+        check_bound("optimize.max_iterations", self.max_iterations, "max_iterations")
         for name in ("ee_tolerance", "goal_tolerance"):
             tol = getattr(self, name)
             if tol is None and name == "ee_tolerance":
@@ -155,3 +157,5 @@ class HelperArmOptions:
                 raise OptionsError(f"{name} must be an integer >= {low}, got {value!r}")
         if not isinstance(self.tolerance, GoalTolerance):
             raise OptionsError(f"tolerance must be a GoalTolerance, got {self.tolerance!r}")
+        check_bound("helper.max_attempts", self.max_attempts, "max_attempts")
+        check_bound("helper.d_step", self.d_step, "d_step")
