@@ -121,9 +121,12 @@ def run(args: argparse.Namespace) -> int:
     import time
     import webbrowser
 
+    from ..bounds import check_bound
     from ..model import AssemblerModel
     from ..viewer import StackViewer, interrupt_on_signals
 
+    check_bound("view.animate", args.animate, "--animate", CLIError)
+    check_bound("view.frames", args.frames, "--frames", CLIError)
     if args.html:
         writable_parent(args.html, "--html file")
     am = AssemblerModel.from_config(config_from_args(args))
