@@ -11,7 +11,7 @@ import signal
 import threading
 from collections.abc import Callable, Sequence
 
-__all__ = ["StopRequested", "interrupt_on_signals"]
+__all__ = ["StopRequested", "forget_interrupt", "interrupt_on_signals"]
 
 
 class StopRequested(KeyboardInterrupt):
@@ -52,3 +52,14 @@ def interrupt_on_signals(names: Sequence[str] = ("SIGTERM", "SIGHUP")) -> Callab
             signal.signal(sig, handler)
 
     return restore
+
+
+def forget_interrupt() -> None:
+    """Call after handling a ``KeyboardInterrupt``: keep it from killing the process at exit.
+
+    CPython marks a ``KeyboardInterrupt`` that leaves code run from a string (``exec`` of a
+    string, as numpy and scipy do while importing) as unhandled, even when a caller catches
+    it; the interpreter then ends by killing itself with SIGINT instead of exiting with the
+    status the program chose. Running a string that succeeds clears the mark.
+    """
+    exec("pass", {})

@@ -173,9 +173,6 @@ def test_an_interrupted_html_page_leaves_the_previous_page(monkeypatch, tmp_path
     code, _, err = _run(capsys, ["view", "--home", "--html", str(page)])
     assert code == 130 and err[-1].startswith("assembler-pin view:"), err
     assert page.read_text() == "<html>previous</html>" and _leftovers(tmp_path) == []
-    monkeypatch.undo()
-    assert _run(capsys, ["view", "--home", "--html", str(page)])[0] == 0
-    assert "<html" in page.read_text() and "previous" not in page.read_text()
 
 
 def _half_then_interrupt(monkeypatch, after: int = 0) -> list[str]:
@@ -227,15 +224,16 @@ def solved_outcomes(am):
 def test_an_interrupted_report_leaves_the_previous_report_and_figures(monkeypatch, tmp_path, am, solved_outcomes):
     from assembler_pin.reproduce import write_report
 
-    solved = solved_outcomes
-    path = write_report(am, solved, tmp_path)
-    before = {p.name: p.read_bytes() for p in tmp_path.iterdir()}
-    assert "report.md" in before and len(before) == 4  # the report and its three figures
-    _half_then_interrupt(monkeypatch, after=2)  # the third figure is cut short
+    name = solved_outcomes[0].scenario.name
+    before = {"report.md": b"# previous report"}
+    before |= {f"{name}_{kind}.png": b"previous png" for kind in ("views", "forces", "heatmap")}
+    for file, data in before.items():
+        (tmp_path / file).write_bytes(data)
+    written = _half_then_interrupt(monkeypatch, after=2)  # the third figure is cut short
     with pytest.raises(KeyboardInterrupt):
-        write_report(am, solved, tmp_path)
-    assert {p.name: p.read_bytes() for p in tmp_path.iterdir()} == before  # not even the two whole figures
-    assert path.read_text().startswith("# Internal-pose optimization")
+        write_report(am, solved_outcomes, tmp_path)
+    assert len(written) == 2  # two whole figures were written, to temporary files...
+    assert {p.name: p.read_bytes() for p in tmp_path.iterdir()} == before  # ...and none replaced a file
 
 
 @pytest.mark.skipif(not Path("/proc/self/maps").exists(), reason="watches the child's libraries in /proc")
@@ -491,13 +489,17 @@ def test_reproduce_reports_progress_per_scenario(am, monkeypatch):
     monkeypatch.setattr(reproduce, "solve", lambda am_, goal, **kw: ap.solve(am_, goal, optimize=False))
     monkeypatch.setattr(reproduce, "reference", lambda *a, **k: None)
     calls = []
-    reproduce.run_scenarios(am, progress=lambda *c: calls.append(c))
-    assert calls == [(k + 1, len(SCENARIOS), name) for k, name in enumerate(SCENARIOS)]
+    names = list(SCENARIOS)[:2]
+    reproduce.run_scenarios(am, names, progress=lambda *c: calls.append(c))
+    assert calls == [(k + 1, 2, name) for k, name in enumerate(names)]
 
 
-def test_bench_reports_progress_per_figure(am):
+def test_bench_reports_progress_per_figure(am, monkeypatch):
+    import assembler_pin.bench as bench
     from assembler_pin.bench import run_benchmarks
 
+    monkeypatch.setattr(bench, "BATCH_STACKS", 40)  # the figures' values are not the point here
+    monkeypatch.setattr(bench, "benchmark_initial_condition", lambda am, **kw: {"initial_success_rate": 1.0})
     stream = io.StringIO()
     prog = TerminalProgress("bench", enabled=True, stream=stream, min_interval=0.0)
     calls = []

@@ -70,7 +70,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     traceback only with ``-v``); 130 / 143: interrupted by Ctrl-C / SIGTERM (one line).
     Warnings of the numerical libraries are logged at debug level, never printed.
     """
-    from ..signals import interrupt_on_signals
+    from ..signals import forget_interrupt, interrupt_on_signals
 
     command = "assembler-pin"
     restore_signals = interrupt_on_signals(("SIGTERM",))
@@ -91,6 +91,8 @@ def main(argv: Sequence[str] | None = None) -> int:
             )
             return _run(args, command)
     except KeyboardInterrupt as stop:  # Ctrl-C, or SIGTERM through interrupt_on_signals
+        logger.debug("interrupted", exc_info=True)
+        forget_interrupt()
         signum = getattr(stop, "signum", signal.SIGINT)
         how = "" if signum == signal.SIGINT else f" ({stop})"
         print(f"{command}: interrupted{how}", file=sys.stderr)
