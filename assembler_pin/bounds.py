@@ -39,9 +39,7 @@ class Bound:
 #: and ``PlanOptions``/``plan_trajectory(rate=...)``).
 BOUNDS: dict[str, Bound] = {
     "plan.rate": Bound(1.0, 1000.0, "Hz", False, "samples per second of a trajectory file"),
-    "plan.duration": Bound(
-        0.0, 3600.0, "s", False, "a planned motion's duration"
-    ),
+    "plan.duration": Bound(0.0, 3600.0, "s", False, "a planned motion's duration"),
     "plan.samples": Bound(2, 1_000_000, "", True, "rows of one trajectory file (rate x duration)"),
     "trajectory.duration": Bound(0.0, 3600.0, "s", False, "the time span a trajectory file may cover"),
     "trajectory.rows": Bound(2, 1_000_000, "", True, "rows a trajectory file may hold"),

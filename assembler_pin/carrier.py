@@ -346,7 +346,8 @@ class CarrierSolveResult:
         moved_carrier: whether the carrier's joints were searched.
         candidates: every carrier placement tried: ``(t, q, Ω_c or nan, note)`` with ``t``
             the blend from the goal seen from the start placement (0) to the home EE pose (1);
-            the joint optimization's answer last, with ``t`` nan.
+            the joint optimization's answer last, with ``t`` nan (its JSON row says
+            ``"stage": "joint_optimization"``, the others ``"placement"``).
         time_s: wall time [s].
     """
 
@@ -363,9 +364,14 @@ class CarrierSolveResult:
         return None if self.statics is None else self.statics.binding
 
     def to_dict(self) -> dict:
-        out = {"success": self.success, "message": self.message, "moved_carrier": self.moved_carrier,
-               "goal": self.goal.homogeneous.tolist(), "time_s": self.time_s,
-               "candidates": [_candidate_dict(*c) for c in self.candidates]}  # fmt: skip
+        out = {
+            "success": self.success,
+            "message": self.message,
+            "moved_carrier": self.moved_carrier,
+            "goal": self.goal.homogeneous.tolist(),
+            "time_s": self.time_s,
+            "candidates": [_candidate_dict(*c) for c in self.candidates],
+        }
         if self.statics is not None:
             out |= self.statics.to_dict()
             out["state"] = self.statics.state.to_dict()

@@ -166,6 +166,7 @@ def test_an_interrupted_export_leaves_the_previous_files(monkeypatch, tmp_path, 
     assert _leftovers(tmp_path) == [] and not (tmp_path / "helper_arm.urdf").exists()
 
 
+@pytest.mark.slow
 def test_an_interrupted_html_page_leaves_the_previous_page(monkeypatch, tmp_path, capsys):
     page = tmp_path / "page.html"
     page.write_text("<html>previous</html>")
@@ -221,6 +222,7 @@ def solved_outcomes(am):
     return outcomes
 
 
+@pytest.mark.slow
 def test_an_interrupted_report_leaves_the_previous_report_and_figures(monkeypatch, tmp_path, am, solved_outcomes):
     from assembler_pin.reproduce import write_report
 
@@ -276,6 +278,7 @@ HUGE_COUNTS = [
 ]
 
 
+@pytest.mark.slow
 def test_huge_counts_are_refused_at_once():
     """Each is refused in one line, exit 2, before anything is allocated: all of them in one
     fresh interpreter within a minute (each used to hang or exhaust memory)."""
@@ -515,6 +518,7 @@ class _Terminal(io.StringIO):
         return True
 
 
+@pytest.mark.slow
 def test_the_cli_progress_shows_on_a_terminal_only(am, monkeypatch, capsys):
     import assembler_pin.carrier as carrier_mod
 
