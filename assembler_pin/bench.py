@@ -14,8 +14,10 @@ from typing import Any
 
 import numpy as np
 
+from .bounds import check_bound
 from .kinematics import PlateArrays, q_from_plates, sp_forward_kinematics, stack_forward_kinematics
 from .model import AssemblerModel
+from .progress import ProgressCallback
 from .statics import solve_statics, solve_statics_batch
 
 __all__ = [
@@ -65,16 +67,23 @@ BATCH_STACKS = 10_000
 
 
 def run_benchmarks(
-    am: AssemblerModel, repeat: int = 300, seed: int = 0, optimize: bool = True, quick: bool = False
+    am: AssemblerModel,
+    repeat: int = 300,
+    seed: int = 0,
+    optimize: bool = True,
+    quick: bool = False,
+    progress: ProgressCallback | None = None,
 ) -> dict[str, Any]:
     """Median per-call times [µs] of statics, SP FK, stack FK and closed-form q, then the
     helper-arm initial condition (:func:`benchmark_initial_condition`: ``initial_scenarios_ms``,
     ``initial_random_ms`` [ms], ``initial_success_rate``), then the optimization of each
     scenario by both methods (:func:`benchmark_optimization`).
 
-    Each per-call figure is the median over ``repeat`` calls, cycling through 20 random poses.
-    ``quick`` cuts the goal sets to a minimum (for smoke tests, not for figures).
+    Each per-call figure is the median over ``repeat`` calls (bound ``bench.repeat``),
+    cycling through 20 random poses. ``quick`` cuts the goal sets to a minimum (for smoke
+    tests, not for figures). ``progress`` is called ``(done, total, figure)`` after each figure.
     """
+    check_bound("bench.repeat", repeat, "repeat")
     rng = np.random.default_rng(seed)
     samples = [random_reachable_plates(am, rng) for _ in range(20)]
     counter = iter(range(10**9))
@@ -82,21 +91,32 @@ def run_benchmarks(
     def pick() -> tuple[np.ndarray, PlateArrays]:
         return samples[next(counter) % len(samples)]
 
-    results = {
-        "statics_us": median_time_us(lambda: solve_statics(am, pick()[1]), repeat),
-        "sp_fk_us": median_time_us(lambda: sp_forward_kinematics(am, 0, pick()[0][0]), repeat),
-        "stack_fk_us": median_time_us(lambda: stack_forward_kinematics(am, pick()[0]), repeat),
-        "q_from_plates_us": median_time_us(lambda: q_from_plates(am, pick()[1]), repeat),
-        "statics_from_matrices_us": median_time_us(lambda: solve_statics(am, pick()[1].as_matrices()), repeat),
-    }
     batch = np.array([s[1].as_matrices() for s in samples])
     batch = np.tile(batch, (max(1, BATCH_STACKS // len(batch)), 1, 1, 1))
-    results["statics_batch_stacks_per_s"] = len(batch) / (
-        1e-6 * median_time_us(lambda: solve_statics_batch(am, batch), 5)
-    )
-    results.update(benchmark_initial_condition(am, n_random=3 if quick else 20, seed=seed))
+    figures: dict[str, Callable[[], Any]] = {
+        "statics_us": lambda: median_time_us(lambda: solve_statics(am, pick()[1]), repeat),
+        "sp_fk_us": lambda: median_time_us(lambda: sp_forward_kinematics(am, 0, pick()[0][0]), repeat),
+        "stack_fk_us": lambda: median_time_us(lambda: stack_forward_kinematics(am, pick()[0]), repeat),
+        "q_from_plates_us": lambda: median_time_us(lambda: q_from_plates(am, pick()[1]), repeat),
+        "statics_from_matrices_us": lambda: median_time_us(lambda: solve_statics(am, pick()[1].as_matrices()), repeat),
+        "statics_batch_stacks_per_s": lambda: (
+            len(batch) / (1e-6 * median_time_us(lambda: solve_statics_batch(am, batch), 5))
+        ),
+        "initial_condition": lambda: benchmark_initial_condition(am, n_random=3 if quick else 20, seed=seed),
+    }
     if optimize:
-        results.update(benchmark_optimization(am, names=["orientation_transition"] if quick else None))
+        figures["optimization"] = lambda: benchmark_optimization(
+            am, names=["orientation_transition"] if quick else None
+        )
+    results: dict[str, Any] = {}
+    for k, (name, figure) in enumerate(figures.items()):
+        value = figure()
+        if isinstance(value, dict):
+            results.update(value)
+        else:
+            results[name] = value
+        if progress is not None:
+            progress(k + 1, len(figures), name)
     return results
 
 
@@ -193,7 +213,9 @@ LEVEL_GRID = tuple(
 )
 
 
-def benchmark_solve_grid(am: AssemblerModel, goals: tuple = LEVEL_GRID) -> dict[str, Any]:
+def benchmark_solve_grid(
+    am: AssemblerModel, goals: tuple = LEVEL_GRID, progress: ProgressCallback | None = None
+) -> dict[str, Any]:
     """Whole ``solve`` (helper arm, then the optimizer from every start) on a goal grid.
 
     Returns:
@@ -216,6 +238,8 @@ def benchmark_solve_grid(am: AssemblerModel, goals: tuple = LEVEL_GRID) -> dict[
             won[result.start] = won.get(result.start, 0) + 1
         else:
             unsolved.append(list(xyz))
+        if progress is not None:
+            progress(len(times), len(goals), "grid goal")
     return {
         "grid_goals": len(goals),
         "grid_solved": len(solved_times),
@@ -260,7 +284,9 @@ def benchmark_platform_count(n: int, repeat: int = 50, seed: int = 0, optimize: 
     return row
 
 
-def benchmark_platforms_sweep(counts: tuple[int, ...] = SWEEP_PLATFORMS, optimize_limit_s: float = 60.0) -> list[dict]:
+def benchmark_platforms_sweep(
+    counts: tuple[int, ...] = SWEEP_PLATFORMS, optimize_limit_s: float = 60.0, progress: ProgressCallback | None = None
+) -> list[dict]:
     """:func:`benchmark_platform_count` for each n, each in a fresh process (so the resident
     memory is that size's own); the optimization is skipped, and said so, where it would take
     longer than ``optimize_limit_s`` (estimated from the previous size, growing as n³)."""
@@ -284,6 +310,8 @@ def benchmark_platforms_sweep(counts: tuple[int, ...] = SWEEP_PLATFORMS, optimiz
         if not optimize:
             row["optimize_note"] = f"skipped: estimated {estimate:.0f} s > {optimize_limit_s:.0f} s"
         rows.append(row)
+        if progress is not None:
+            progress(len(rows), len(counts), f"n = {n}")
     return rows
 
 

@@ -31,9 +31,11 @@ import numpy.typing as npt
 import pinocchio as pin
 
 from .choices import CARRIER_NAMES, check_names
-from .exceptions import AssemblerError, PoseError, UnknownCarrierError
+from .exceptions import AssemblerError, OptionsError, PoseError, UnknownCarrierError
 from .kinematics import PlateArrays, plate_arrays, to_se3
 from .model import AssemblerModel
+from .options import DEFAULT_GOAL_TOLERANCE, GoalTolerance, HelperArmOptions, OptimizeOptions
+from .progress import ProgressCallback
 from .state import StackState, evaluate_state
 
 __all__ = [
@@ -289,6 +291,7 @@ def carrier_statics(
     q: npt.ArrayLike,
     plates: PlateArrays | list | np.ndarray,
     goal: pin.SE3 | None = None,
+    tolerance: GoalTolerance = DEFAULT_GOAL_TOLERANCE,
 ) -> CarrierStatics:
     """Leg forces and carrier torques holding the mounted stack still.
 
@@ -297,6 +300,7 @@ def carrier_statics(
         plates: poses of plates 0..n relative to the base plate (plate 0 the identity, e.g.
             ``am.home`` or a plates file); they are placed in the world by the carrier.
         goal: optional EE goal in the world, checked like any state's.
+        tolerance: how close plate n must be to ``goal`` (m, rad).
 
     The torques are Pinocchio's ``computeStaticTorque``: the carrier's gravity torques minus
     the joint torques of the external force on the tool joint — the stack's reaction, the
@@ -308,7 +312,7 @@ def carrier_statics(
         raise PoseError("plates are relative to the base plate: plate 0 must be the identity")
     base = carrier.base_pose(q)
     world = PlateArrays(np.einsum("ab,kbc->kac", base.rotation, rel.R), rel.p @ base.rotation.T + base.translation)
-    state = evaluate_state(am, world, goal=goal) if goal is not None else evaluate_state(am, world)
+    state = evaluate_state(am, world, goal=goal, tolerance=tolerance)
     torques = carrier_torques(carrier, q, world.p[0], state.statics.base_wrench)
     with np.errstate(divide="ignore", invalid="ignore"):
         ratio = np.where(carrier.effort_limit > 0, np.abs(torques) / carrier.effort_limit, 0.0)
@@ -342,7 +346,8 @@ class CarrierSolveResult:
         moved_carrier: whether the carrier's joints were searched.
         candidates: every carrier placement tried: ``(t, q, Ω_c or nan, note)`` with ``t``
             the blend from the goal seen from the start placement (0) to the home EE pose (1);
-            the joint optimization's answer last, with ``t`` nan.
+            the joint optimization's answer last, with ``t`` nan (its JSON row says
+            ``"stage": "joint_optimization"``, the others ``"placement"``).
         time_s: wall time [s].
     """
 
@@ -359,10 +364,14 @@ class CarrierSolveResult:
         return None if self.statics is None else self.statics.binding
 
     def to_dict(self) -> dict:
-        out = {"success": self.success, "message": self.message, "moved_carrier": self.moved_carrier,
-               "goal": self.goal.homogeneous.tolist(), "time_s": self.time_s,
-               "candidates": [{"t": t, "q": q.tolist(), "score": None if math.isnan(s) else s, "note": note}
-                              for t, q, s, note in self.candidates]}  # fmt: skip
+        out = {
+            "success": self.success,
+            "message": self.message,
+            "moved_carrier": self.moved_carrier,
+            "goal": self.goal.homogeneous.tolist(),
+            "time_s": self.time_s,
+            "candidates": [_candidate_dict(*c) for c in self.candidates],
+        }
         if self.statics is not None:
             out |= self.statics.to_dict()
             out["state"] = self.statics.state.to_dict()
@@ -374,24 +383,80 @@ class CarrierSolveResult:
                 f"{self.time_s:.2f} s, message={self.message!r})")  # fmt: skip
 
 
-def _stack_on(am: AssemblerModel, carrier: Carrier, q: np.ndarray, goal: pin.SE3) -> tuple[CarrierStatics | None, str]:
-    """The force-optimized stack for a world goal with the carrier held at ``q``."""
+@dataclass(frozen=True)
+class _Search:
+    """What :func:`solve_on_carrier` solves with: the model, the carrier, the world goal and
+    the settings, read once."""
+
+    am: AssemblerModel
+    carrier: Carrier
+    goal: pin.SE3
+    options: OptimizeOptions
+    helper: HelperArmOptions | None
+    optimize: bool
+    w_carrier: float
+
+    @property
+    def tolerance(self) -> GoalTolerance:
+        """How close plate n must be to the goal: the EE tolerance when the EE may move."""
+        return self.options.ee_tolerance or DEFAULT_GOAL_TOLERANCE
+
+    def score(self, statics: CarrierStatics | None) -> float:
+        return math.nan if statics is None else carrier_objective(self.am, statics, self.w_carrier, self.options)
+
+    def rank(self, statics: CarrierStatics) -> tuple[bool, float]:
+        """Within limits first, then the lower Ω_c."""
+        return (not statics.within_limits, self.score(statics))
+
+
+def _candidate_dict(t: float, q: np.ndarray, score: float, note: str) -> dict:
+    """One row of ``candidates`` in JSON: ``stage`` says a placement (with its blend ``t``)
+    or the joint optimization (``t`` null)."""
+    stage = "joint_optimization" if math.isnan(t) else "placement"
+    t_value = None if math.isnan(t) else t
+    score_value = None if math.isnan(score) else score
+    return {"stage": stage, "t": t_value, "q": q.tolist(), "score": score_value, "note": note}
+
+
+def _stack_on(s: _Search, q: np.ndarray) -> tuple[CarrierStatics | None, str]:
+    """The stack for the world goal with the carrier held at ``q``: the helper arm and (with
+    ``s.optimize``) the force optimization for the goal seen from the base, then optimized
+    again under the world's gravity; without ``s.optimize`` the helper arm's pose as it is."""
     from .optimize import optimize_internal_poses
     from .solver import solve
 
-    base = carrier.base_pose(q)
-    rel_goal = base.actInv(goal)
-    first = solve(am, rel_goal)  # kinematics and a start, with gravity along the base's −z
-    start = first.best
+    am = s.am
+    base = s.carrier.base_pose(q)
+    first = solve(am, base.actInv(s.goal), optimize=s.optimize, options=s.options, helper_options=s.helper)
+    start = first.best  # with gravity along the base's −z
     if start is None:
         return None, f"the stack cannot reach the goal from this placement: {first.message}"
     world = [base * start.plates.se3(k) for k in range(am.n + 1)]
-    result = optimize_internal_poses(am, world, goal)  # again, under the world's gravity
-    if not result.success:
-        return None, f"no valid stack pose under the mounted gravity: {result.message}"
-    rel = [base.actInv(result.optimized.plates.se3(k)) for k in range(am.n + 1)]
-    rel[0] = pin.SE3.Identity()
-    return carrier_statics(am, carrier, q, rel, goal=goal), "converged"
+    why = "helper-arm pose (not optimized)"
+    if s.optimize:
+        result = optimize_internal_poses(am, world, s.goal, s.options)  # again, under the world's gravity
+        if not result.success:
+            return None, f"no valid stack pose under the mounted gravity: {result.message}"
+        world, why = result.optimized.plates.as_se3(), "converged"
+    rel = [pin.SE3.Identity()] + [base.actInv(world[k]) for k in range(1, am.n + 1)]
+    return carrier_statics(am, s.carrier, q, rel, goal=s.goal, tolerance=s.tolerance), why
+
+
+def _checked_settings(
+    options: OptimizeOptions | None, helper_options: HelperArmOptions | None, blends: int, max_iterations: int | None
+) -> tuple[OptimizeOptions, int]:
+    """(options, joint-optimization iteration limit), or an :class:`OptionsError`."""
+    from .bounds import check_bound
+
+    if options is not None and not isinstance(options, OptimizeOptions):
+        raise OptionsError(f"options must be an OptimizeOptions, got {type(options).__name__}")
+    if helper_options is not None and not isinstance(helper_options, HelperArmOptions):
+        raise OptionsError(f"helper_options must be a HelperArmOptions, got {type(helper_options).__name__}")
+    check_bound("carrier.blends", blends, "blends")
+    opts = options or OptimizeOptions()
+    limit = opts.max_iterations if max_iterations is None else max_iterations
+    check_bound("optimize.max_iterations", limit, "max_iterations")
+    return opts, int(limit)
 
 
 def solve_on_carrier(
@@ -403,7 +468,11 @@ def solve_on_carrier(
     blends: int = 5,
     polish: bool = True,
     w_carrier: float = W_CARRIER,
-    max_iterations: int = 100,
+    max_iterations: int | None = None,
+    options: OptimizeOptions | None = None,
+    helper_options: HelperArmOptions | None = None,
+    optimize: bool = True,
+    progress: ProgressCallback | None = None,
 ) -> CarrierSolveResult:
     """Reach a world EE goal with the stack on its carrier.
 
@@ -415,176 +484,108 @@ def solve_on_carrier(
     base is blended from where ``q0`` puts it (t = 0) to the stack's home EE pose (t = 1) in
     ``blends`` steps; for each, the carrier's joint-limited IK places the base so, and the
     stack is solved there; the candidate within every limit with the lowest Ω_c wins. From
-    it (``polish``), one SLSQP over the
-    carrier's joints (within their limits) and the internal plates together minimizes
-    Ω_c = w1·max|F| + w2·sqrt(Σλ²) + ``w_carrier``·max|τ|/τ_max (:func:`carrier_objective`),
-    every leg limit and force limit holding and no joint over its effort limit, with
-    forward-difference gradients; its answer is kept when its Ω_c is lower.
+    it (``polish``), one SLSQP over the carrier's joints (within their limits) and the
+    internal plates together minimizes Ω_c = w1·max|F| + w2·sqrt(Σλ²) +
+    ``w_carrier``·max|τ|/τ_max (:func:`carrier_objective`), every leg limit and force limit
+    holding and no joint over its effort limit, with forward-difference gradients. Its
+    answer is kept only when SLSQP converged, a fresh :func:`carrier_statics` of it holds
+    every limit and its Ω_c is lower; otherwise the placement is kept and the message says why.
 
     Args:
         q0: the carrier's configuration (default: the spec's upright one) [rad].
-        blends: placements tried between the start and the home EE pose.
+        blends: placements tried between the start and the home EE pose (2..100).
         polish: run the joint optimization after the placement search.
         w_carrier: weight of the carrier's torque term in Ω_c [N].
-        max_iterations: iteration limit of the joint optimization.
+        max_iterations: iteration limit of the joint optimization (default
+            ``options.max_iterations``).
+        options: the stack optimizer's settings (method, w1, w2, EE tolerance, iteration
+            limit, ftol); w1, w2 and ftol are the joint optimization's too (which is always
+            SLSQP, with the EE at the goal). Default :class:`OptimizeOptions`.
+        helper_options: the helper arm's settings (the initial condition at each placement).
+        optimize: False: the helper arm's pose at each placement under the world's gravity,
+            with neither force nor joint optimization.
+        progress: called ``(done, total, note)`` after each placement and the joint optimization.
     """
     t0 = time.perf_counter()
     goal = to_se3(goal, "goal")
+    opts, limit = _checked_settings(options, helper_options, blends, max_iterations)
     q0 = carrier.upright_q if q0 is None else carrier.check_q(q0, "q0")
+    s = _Search(am, carrier, goal, opts, helper_options, bool(optimize), float(w_carrier))
     if not move_carrier:
-        statics, why = _stack_on(am, carrier, q0, goal)
-        ok = statics is not None and statics.within_limits
+        statics, why = _stack_on(s, q0)
         msg = why if statics is None else _verdict(statics)
-        return CarrierSolveResult(ok, msg, goal, statics, False, [(0.0, q0, _score(am, statics, w_carrier), msg)],
-                                  time.perf_counter() - t0)  # fmt: skip
-    start_rel = carrier.base_pose(q0).actInv(goal)
-    home_ee = am.home[-1]
+        ok = statics is not None and statics.within_limits
+        return CarrierSolveResult(
+            ok, msg, goal, statics, False, [(0.0, q0, s.score(statics), msg)], time.perf_counter() - t0
+        )
+    best, candidates = _placements(s, q0, blends, progress)
+    if best is None:
+        message = "no carrier placement gave a valid stack pose"
+        return CarrierSolveResult(False, message, goal, None, True, candidates, time.perf_counter() - t0)
+    note = ""
+    if polish and s.optimize and best.within_limits:
+        best, note = _polish(s, best, limit, candidates)
+    message = _verdict(best) + note
+    if progress is not None:
+        progress(len(candidates), len(candidates), "done")
+    return CarrierSolveResult(best.within_limits, message, goal, best, True, candidates, time.perf_counter() - t0)
+
+
+def _placements(
+    s: _Search, q0: np.ndarray, blends: int, progress: ProgressCallback | None
+) -> tuple[CarrierStatics | None, list[tuple[float, np.ndarray, float, str]]]:
+    """The placement search of :func:`solve_on_carrier`: (best statics or None, candidates)."""
+    start_rel = s.carrier.base_pose(q0).actInv(s.goal)
+    home_ee = s.am.home[-1]
     candidates: list[tuple[float, np.ndarray, float, str]] = []
     best: CarrierStatics | None = None
-    for t in np.linspace(0.0, 1.0, max(2, blends)):
+    blend_values = np.linspace(0.0, 1.0, max(2, int(blends)))
+    total = len(blend_values) + (1 if s.optimize else 0)
+    for k, t in enumerate(blend_values):
         rel = pin.SE3.Interpolate(start_rel, home_ee, float(t))
-        ik = carrier.ik(goal * rel.inverse(), q0)
+        ik = s.carrier.ik(s.goal * rel.inverse(), q0)
         if not ik.success:
             candidates.append((float(t), ik.q, math.nan, f"carrier IK failed (error {ik.error:.2e})"))
-            continue
-        statics, why = _stack_on(am, carrier, ik.q, goal)
-        candidates.append(
-            (float(t), ik.q, _score(am, statics, w_carrier), why if statics is None else _verdict(statics))
-        )
-        if statics is not None and (best is None or _rank(am, statics, w_carrier) < _rank(am, best, w_carrier)):
-            best = statics
-    if best is None:
-        return CarrierSolveResult(False, "no carrier placement gave a valid stack pose", goal, None, True, candidates,
-                                  time.perf_counter() - t0)  # fmt: skip
-    if polish and best.within_limits:
-        polished, why = _joint_polish(am, carrier, goal, best, w_carrier, max_iterations)
-        better = polished is not None and carrier_objective(am, polished, w_carrier) < carrier_objective(
-            am, best, w_carrier)  # fmt: skip
-        note = f"joint optimization: {why}{'' if better else ' (kept the placement)'}"
-        candidates.append(
-            (math.nan, polished.q if polished is not None else best.q, _score(am, polished, w_carrier), note)
-        )
-        if better:
-            best = polished
-    return CarrierSolveResult(best.within_limits, _verdict(best), goal, best, True, candidates,
-                              time.perf_counter() - t0)  # fmt: skip
+        else:
+            statics, why = _stack_on(s, ik.q)
+            candidates.append((float(t), ik.q, s.score(statics), why if statics is None else _verdict(statics)))
+            if statics is not None and (best is None or s.rank(statics) < s.rank(best)):
+                best = statics
+        if progress is not None:
+            progress(k + 1, total, f"placement t = {t:.2f}")
+    return best, candidates
 
 
-def carrier_objective(am: AssemblerModel, statics: CarrierStatics, w_carrier: float = W_CARRIER) -> float:
+def _polish(
+    s: _Search, best: CarrierStatics, max_iterations: int, candidates: list[tuple[float, np.ndarray, float, str]]
+) -> tuple[CarrierStatics, str]:
+    """The joint optimization from the best placement: (the state kept, a note for the
+    message, empty when the polished point is kept); its candidate row is appended."""
+    from .carrier_polish import joint_polish
+
+    polished, q, why = joint_polish(s.am, s.carrier, s.goal, best, s.w_carrier, s.options, max_iterations, s.tolerance)
+    better = polished is not None and s.score(polished) < s.score(best)
+    if polished is None:
+        candidates.append((math.nan, q, math.nan, f"joint optimization: {why}; kept the best placement"))
+        return best, f" (the joint optimization was not kept: {why})"
+    note = f"joint optimization: {why}{'' if better else ' (no lower Ω_c: kept the placement)'}"
+    candidates.append((math.nan, polished.q, s.score(polished), note))
+    return (polished, "") if better else (best, "")
+
+
+def carrier_objective(
+    am: AssemblerModel, statics: CarrierStatics, w_carrier: float = W_CARRIER, options: OptimizeOptions | None = None
+) -> float:
     """Ω_c = w1·max|F| + w2·sqrt(Σλ²) + w_carrier·max|τ|/τ_max of a mounted state (the paper's
-    eq. 10 with the optimizer's default weights, plus the carrier's torque term)."""
+    eq. 10 with the weights of ``options``, default :class:`OptimizeOptions`, plus the
+    carrier's torque term) [w1 in 1/N, w2 in 1/rad, w_carrier in N]."""
     from .kinematics import plate_deviation
-    from .optimize import OptimizeOptions
 
-    o = OptimizeOptions()
+    o = options or OptimizeOptions()
     lam = plate_deviation(am, statics.state.plates).angles
     return float(
         o.w1 * statics.state.max_abs_force + o.w2 * np.sqrt(np.sum(lam**2)) + w_carrier * statics.carrier_ratio
     )
-
-
-class _JointProblem:
-    """The carrier's joints and the internal plates together: x = [q, ξ_1..ξ_{n-1}, s, t],
-    the plates as twists in the base plate's frame (``T_k = T_k⁰·exp6(ξ_k)``), plate n at the
-    goal (``T_n = base(q)⁻¹·goal``), ``s >= |F_i|`` within the force limits and
-    ``t >= |τ_k|/τ_max,k``, ``t <= 1``; every leg limit. Ω_c = w1·s + w2·sqrt(Σλ²) + w_c·t.
-    Gradients by forward differences (one statics evaluation per variable)."""
-
-    def __init__(self, am: AssemblerModel, carrier: Carrier, goal: pin.SE3, start: CarrierStatics, w_carrier: float):
-        from .optimize import OptimizeOptions
-
-        self.am, self.carrier, self.goal, self.w_carrier = am, carrier, goal, w_carrier
-        self.opts = OptimizeOptions()
-        base = carrier.base_pose(start.q)
-        self.ref = [base.actInv(start.state.plates.se3(k)) for k in range(am.n + 1)]
-        self.nq = carrier.model.nq
-        self.nx = self.nq + 6 * (am.n - 1) + 2
-        self._cache: dict[bytes, np.ndarray] = {}
-
-    def world(self, x: np.ndarray) -> tuple[np.ndarray, PlateArrays]:
-        q = x[: self.nq]
-        base = self.carrier.base_pose(q)
-        rel = [self.ref[0]] + [self.ref[k] * pin.exp6(x[self.nq + 6 * (k - 1) : self.nq + 6 * k])
-                               for k in range(1, self.am.n)] + [base.actInv(self.goal)]  # fmt: skip
-        return q, PlateArrays.from_se3([base * T for T in rel])
-
-    def vector(self, x: np.ndarray) -> np.ndarray:
-        """[Ω_c, constraint rows (>= 0)...] at x (cached)."""
-        from .constraints import leg_limit_margins
-        from .kinematics import leg_state, plate_deviation
-        from .optimize import SINGULAR_FORCE
-        from .statics import solve_statics
-
-        key = x.tobytes()
-        if key in self._cache:
-            return self._cache[key]
-        q, world = self.world(x)
-        leg = self.am.config.leg
-        legs = leg_state(self.am, world)
-        statics = solve_statics(self.am, world, legs=legs)
-        forces = np.where(np.isfinite(statics.forces), statics.forces, SINGULAR_FORCE).ravel()
-        margins = leg_limit_margins(leg, legs.lengths, np.cos(legs.deflection), legs.rise, self.opts.limit_margin,
-                                    rise_margin=self.opts.rise_margin).ravel()  # fmt: skip
-        angles = plate_deviation(self.am, world).angles
-        ratio = carrier_torques(self.carrier, q, world.p[0], statics.base_wrench) / self.carrier.effort_limit
-        s, t = x[-2], x[-1]
-        omega = self.opts.w1 * s + self.opts.w2 * np.sqrt(np.sum(angles**2)) + self.w_carrier * t
-        rows = np.concatenate([[omega], s - forces, s + forces, leg.max_tension - 1e-6 - forces,
-                               forces + leg.max_compression - 1e-6, t - ratio, t + ratio, margins])  # fmt: skip
-        if len(self._cache) > 512:
-            self._cache.clear()
-        self._cache[key] = rows
-        return rows
-
-    def jacobian(self, x: np.ndarray, step: float = 1e-7) -> np.ndarray:
-        f0 = self.vector(x)
-        out = np.empty((f0.size, x.size))
-        for i in range(x.size):
-            xp = x.copy()
-            xp[i] += step
-            out[:, i] = (self.vector(xp) - f0) / step
-        return out
-
-
-def _joint_polish(
-    am: AssemblerModel, carrier: Carrier, goal: pin.SE3, start: CarrierStatics, w_carrier: float, max_iterations: int
-) -> tuple[CarrierStatics | None, str]:
-    """SLSQP over the carrier's joints and the internal plates from a valid mounted state."""
-    from scipy.optimize import minimize
-
-    problem = _JointProblem(am, carrier, goal, start, w_carrier)
-    nq, margin = problem.nq, 1e-3
-    x0 = np.zeros(problem.nx)
-    x0[:nq] = np.clip(start.q, carrier.lower + margin, carrier.upper - margin)
-    x0[-2], x0[-1] = start.state.max_abs_force, min(start.carrier_ratio, 1.0 - 1e-6)
-    bounds = [(lo + margin, hi - margin) for lo, hi in zip(carrier.lower, carrier.upper, strict=True)]
-    bounds += [(None, None)] * (6 * (am.n - 1)) + [(0.0, None), (0.0, 1.0 - 1e-6)]
-    jac_cache: dict[bytes, np.ndarray] = {}
-
-    def jac(x: np.ndarray) -> np.ndarray:
-        key = x.tobytes()
-        if key not in jac_cache:
-            jac_cache.clear()
-            jac_cache[key] = problem.jacobian(x)
-        return jac_cache[key]
-
-    res = minimize(lambda x: problem.vector(x)[0], x0, jac=lambda x: jac(x)[0], method="SLSQP", bounds=bounds,
-                   constraints=[{"type": "ineq", "fun": lambda x: problem.vector(x)[1:], "jac": lambda x: jac(x)[1:]}],
-                   options={"maxiter": max_iterations, "ftol": 1e-6})  # fmt: skip
-    q, world = problem.world(res.x)
-    base = carrier.base_pose(q)
-    rel = [pin.SE3.Identity()] + [base.actInv(world.se3(k)) for k in range(1, am.n + 1)]
-    statics = carrier_statics(am, carrier, q, rel, goal=goal)
-    return (statics if statics.within_limits else None), f"{res.message} ({res.nit} iterations)"
-
-
-def _score(am: AssemblerModel, statics: CarrierStatics | None, w_carrier: float) -> float:
-    return math.nan if statics is None else carrier_objective(am, statics, w_carrier)
-
-
-def _rank(am: AssemblerModel, statics: CarrierStatics, w_carrier: float) -> tuple[bool, float]:
-    """Within limits first, then the lower Ω_c."""
-    return (not statics.within_limits, carrier_objective(am, statics, w_carrier))
 
 
 def _verdict(statics: CarrierStatics) -> str:

@@ -6,6 +6,7 @@ from __future__ import annotations
 from pathlib import Path
 
 from .config import AssemblerConfig
+from .files import write_atomic
 from .helper_arm import HELPER_ARM_URDF_FILENAME, helper_arm_urdf
 from .mjcf import MJCF_FILENAME, assembler_mjcf
 from .urdf import SIDECAR_FILENAME, URDF_FILENAME, assembler_urdf, closure_sidecar
@@ -16,6 +17,9 @@ __all__ = ["export_model_files"]
 def export_model_files(cfg: AssemblerConfig, out_dir: str | Path, mjcf: bool = False) -> dict[str, Path]:
     """Write the stack URDF, its closure sidecar and the helper arm's URDF into ``out_dir``;
     with ``mjcf``, also the MuJoCo model ``assembler.xml`` (:mod:`assembler_pin.mjcf`).
+
+    Each file is written atomically (:func:`~assembler_pin.files.write_atomic`): an
+    interrupted export leaves every file either as it was or complete.
 
     Returns:
         A mapping from file role (``urdf``, ``sidecar``, ``helper_arm``, ``mjcf``) to the
@@ -28,10 +32,10 @@ def export_model_files(cfg: AssemblerConfig, out_dir: str | Path, mjcf: bool = F
         "sidecar": out / SIDECAR_FILENAME,
         "helper_arm": out / HELPER_ARM_URDF_FILENAME,
     }
-    paths["urdf"].write_text(assembler_urdf(cfg))
-    paths["sidecar"].write_text(closure_sidecar(cfg))
-    paths["helper_arm"].write_text(helper_arm_urdf(cfg))
+    texts = {"urdf": assembler_urdf(cfg), "sidecar": closure_sidecar(cfg), "helper_arm": helper_arm_urdf(cfg)}
     if mjcf:
         paths["mjcf"] = out / MJCF_FILENAME
-        paths["mjcf"].write_text(assembler_mjcf(cfg))
+        texts["mjcf"] = assembler_mjcf(cfg)
+    for role, text in texts.items():  # every text built first, then each file written atomically
+        write_atomic(paths[role], text)
     return paths

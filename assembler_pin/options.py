@@ -12,6 +12,7 @@ import numbers
 from dataclasses import dataclass, field
 from typing import TypeVar
 
+from .bounds import check_bound
 from .exceptions import OptionsError, short_repr
 
 __all__ = [
@@ -129,6 +130,7 @@ class OptimizeOptions:
             and self.max_iterations >= 1
         ):
             raise OptionsError(f"max_iterations must be an integer >= 1, got {short_repr(self.max_iterations)}")
+        check_bound("optimize.max_iterations", self.max_iterations, "max_iterations")
         for name in ("ee_tolerance", "goal_tolerance"):
             tol = getattr(self, name)
             if tol is None and name == "ee_tolerance":
@@ -189,3 +191,5 @@ class HelperArmOptions:
             raise OptionsError(f"tolerance must be a GoalTolerance, got {short_repr(self.tolerance)}")
         if not isinstance(self.free_link_length, bool):
             raise OptionsError(f"free_link_length must be True or False, got {short_repr(self.free_link_length)}")
+        check_bound("helper.max_attempts", self.max_attempts, "max_attempts")
+        check_bound("helper.d_step", self.d_step, "d_step")

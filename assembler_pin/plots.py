@@ -451,9 +451,16 @@ def workspace_slice(am: AssemblerModel, state_function=None, **kwargs) -> tuple[
 
 
 def save(fig: Figure, path: str | Path, dpi: int = 150) -> Path:
-    """Write a figure to PNG (parent directories created) and return the path."""
+    """Write a figure to PNG (parent directories created) and return the path.
+
+    The file is written atomically (:func:`~assembler_pin.files.atomic_path`): an interrupted
+    write leaves the previous file, never a truncated one.
+    """
+    from .files import atomic_path
+
     out = Path(path)
     out.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(out, dpi=dpi, format="png")
+    with atomic_path(out) as tmp:
+        fig.savefig(tmp, dpi=dpi, format="png")  # explicit: the temporary name ends in .tmp
     logger.info("wrote %s", out)
     return out

@@ -10,10 +10,12 @@ its Tables I–II layout — beside the paper's own figures.
 
 from __future__ import annotations
 
+import contextlib
 import logging
-from collections.abc import Sequence
+from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 import pinocchio as pin
@@ -21,9 +23,15 @@ import pinocchio as pin
 from .labels import leg_label, platform_label
 from .model import AssemblerModel
 from .optimize import OptimizeOptions, optimize_internal_poses
+from .progress import ProgressCallback
 from .scenarios import SCENARIOS, Scenario
 from .solver import SolveResult, solve
 from .state import StackState, evaluate_state
+
+if TYPE_CHECKING:
+    from matplotlib.figure import Figure
+
+    from .config import LegConfig
 
 __all__ = ["ScenarioOutcome", "force_tables", "run_scenarios", "summary_table", "write_report"]
 
@@ -88,8 +96,10 @@ def run_scenarios(
     am: AssemblerModel,
     names: Sequence[str] | None = None,
     options: OptimizeOptions | None = None,
+    progress: ProgressCallback | None = None,
 ) -> list[ScenarioOutcome]:
-    """Solve the named scenarios (default: all, in the paper's order)."""
+    """Solve the named scenarios (default: all, in the paper's order); ``progress`` is
+    called ``(done, total, scenario name)`` after each."""
     chosen = list(SCENARIOS) if names is None else list(names)
     outcomes = []
     for name in chosen:
@@ -98,6 +108,8 @@ def run_scenarios(
         logger.info("scenario %s: %s", name, result.message)
         ref = reference(am, result, options) if result.initial is not None and result.optimized is not None else None
         outcomes.append(ScenarioOutcome(scn, result, (am.config.leg.min_length, am.config.leg.max_length), ref))
+        if progress is not None:
+            progress(len(outcomes), len(chosen), name)
     return outcomes
 
 
@@ -248,11 +260,32 @@ def force_tables(outcome: ScenarioOutcome, markdown: bool = False) -> str:
 
 
 def write_report(am: AssemblerModel, outcomes: Sequence[ScenarioOutcome], out_dir: str | Path) -> Path:
-    """Write ``report.md`` and its PNG figures into ``out_dir``; returns the report path."""
-    from . import plots
+    """Write ``report.md`` and its PNG figures into ``out_dir``; returns the report path.
+
+    Every file is first written to a temporary file beside it; they are moved into place
+    together once all are written, ``report.md`` last, so an interrupted run leaves the
+    previous report (or none) and never a partial one.
+    """
+    from .files import atomic_path
 
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
+    with contextlib.ExitStack() as files:
+        report = files.enter_context(atomic_path(out / "report.md"))  # entered first: replaced last
+
+        def target(name: str) -> Path:
+            """A temporary path that becomes ``out/name`` with the report."""
+            return files.enter_context(atomic_path(out / name))
+
+        text = _report_text(am, outcomes, target)
+        report.write_text(text, encoding="utf-8")
+    return out / "report.md"
+
+
+def _report_text(am: AssemblerModel, outcomes: Sequence[ScenarioOutcome], target: Callable[[str], Path]) -> str:
+    """The markdown of the report; each figure is saved to ``target(file name)``."""
+    from . import plots
+
     leg = am.config.leg
     parts = [
         "# Internal-pose optimization: the paper's scenarios",
@@ -271,35 +304,22 @@ def write_report(am: AssemblerModel, outcomes: Sequence[ScenarioOutcome], out_di
         if o.initial is None or o.optimized is None:
             parts += [f"Not solved: {o.result.message}", ""]
             continue
-        arm = o.result.initial_result.arm_points
-        heading = figure_title(s)
-        files = {
-            "views": plots.save(
-                plots.pose_views(o.initial, o.optimized, arm_points=arm, title=heading, goal=s.goal, floor_z=s.floor_z),
-                out / f"{s.name}_views.png",
-            ),
-            "bars": plots.save(
-                plots.force_bars(
-                    o.initial, o.optimized, limits=(leg.max_tension, leg.max_compression), leg=leg, title=heading
-                ),
-                out / f"{s.name}_forces.png",
-            ),
-            "heatmap": plots.save(
-                plots.force_heatmaps(o.initial, o.optimized, leg=leg, title=heading), out / f"{s.name}_heatmap.png"
-            ),
-        }
-        parts += [
-            f"![{s.name} views]({files['views'].name})",
-            "",
-            f"![{s.name} forces]({files['bars'].name})",
-            "",
-            f"![{s.name} heatmap]({files['heatmap'].name})",
-            "",
-            force_tables(o, markdown=True),
-            "",
-            f"Result: {o.result.message}.",
-            "",
-        ]
-    path = out / "report.md"
-    path.write_text("\n".join(parts))
-    return path
+        for kind, fig in _figures(o, leg):
+            name = f"{s.name}_{kind}.png"
+            plots.save(fig, target(name))
+            parts += [f"![{s.name} {kind}]({name})", ""]
+        parts += [force_tables(o, markdown=True), "", f"Result: {o.result.message}.", ""]
+    return "\n".join(parts)
+
+
+def _figures(o: ScenarioOutcome, leg: LegConfig) -> Iterator[tuple[str, Figure]]:
+    """A solved scenario's figures, one at a time: (kind, figure) for its views, force bars
+    and force heatmaps."""
+    from . import plots
+
+    s, heading = o.scenario, figure_title(o.scenario)
+    arm = o.result.initial_result.arm_points
+    yield "views", plots.pose_views(o.initial, o.optimized, arm, title=heading, goal=s.goal, floor_z=s.floor_z)
+    limits = (leg.max_tension, leg.max_compression)
+    yield "forces", plots.force_bars(o.initial, o.optimized, limits=limits, leg=leg, title=heading)
+    yield "heatmap", plots.force_heatmaps(o.initial, o.optimized, leg=leg, title=heading)

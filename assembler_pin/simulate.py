@@ -20,15 +20,18 @@ are the package's: tension positive.
 from __future__ import annotations
 
 import logging
+import math
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
 import pinocchio as pin
 
+from .bounds import check_bound
 from .exceptions import SimulationError, SingularConfigurationError
 from .kinematics import PlateArrays, leg_vectors, plate_arrays, q_from_arrays
 from .model import AssemblerModel
+from .options import is_number
 from .urdf import names
 
 __all__ = [
@@ -246,13 +249,30 @@ def mujoco_statics(
     try:
         x = np.linalg.solve(A, d.qfrc_bias)
     except np.linalg.LinAlgError:
-        raise SingularConfigurationError("MuJoCo's statics system is singular at this pose") from None
+        cond, platform = _singular_system(A, am.n, m.nu)
+        raise SingularConfigurationError(
+            f"MuJoCo's statics system is singular at this pose (condition number {cond:.3g}, worst: platform "
+            f"{platform})",
+            condition_number=cond,
+            platform=platform,
+        ) from None
     # efc forces act along +efc_J; the constraint's force on the shaft is its first body's row
     return MujocoStatics(
         forces=-x[: m.nu].reshape(am.n, 6),
         ball_forces=-x[m.nu :].reshape(am.n, 6, 3),
         closure_residual=stack.closure_residual(),
     )
+
+
+def _singular_system(A: np.ndarray, n: int, nu: int) -> tuple[float, int]:
+    """(condition number, platform) of a singular statics system ``A x = b`` of
+    :func:`mujoco_statics`: the platform owning the unknown (an actuator force, 6 per
+    platform, or a ball-joint force, 18 per platform) that weighs most in A's null vector."""
+    s, vh = np.linalg.svd(A)[1:]
+    cond = float(s[0] / s[-1]) if s[-1] > 0 else math.inf
+    k = int(np.argmax(np.abs(vh[-1])))
+    platform = k // 6 if k < nu else (k - nu) // 18
+    return cond, min(platform, n - 1)
 
 
 def hold_pose(
@@ -268,22 +288,23 @@ def hold_pose(
 
     Args:
         plates: the pose; the actuators are commanded to its leg lengths.
-        seconds: simulated time [s] (> 0, ≤ 600).
-        samples: number of stored samples, evenly spaced (≥ 2).
-        drift_tolerance: largest EE displacement [m] of a held pose (> 0).
+        seconds: simulated time [s], in [1e-3, 600] (bounds ``simulate.seconds``).
+        samples: number of stored samples, evenly spaced, in [2, 100000].
+        drift_tolerance: largest EE displacement [m] of a held pose, in [1e-9, 1].
         joint_limits: keep the joints' limits (slide end stops at the stroke, hinge stops at
             the deflection limit) as MuJoCo constraints; False lets the servos alone hold the
             pose, which is what the statics describe.
 
     Returns:
         The time series and the verdict (:class:`HoldResult`).
+
+    Raises:
+        SimulationError: a count or duration outside its bound (:data:`~assembler_pin.bounds.BOUNDS`).
     """
-    if not (np.isfinite(seconds) and 0.0 < seconds <= 600.0):
-        raise SimulationError(f"seconds must be in (0, 600], got {seconds}")
-    if not (isinstance(samples, int) and 2 <= samples <= 100_000):
-        raise SimulationError(f"samples must be an integer in [2, 100000], got {samples}")
-    if not (np.isfinite(drift_tolerance) and drift_tolerance > 0.0):
-        raise SimulationError(f"drift tolerance must be > 0 m, got {drift_tolerance}")
+    check_bound("simulate.seconds", seconds, "seconds", SimulationError)
+    check_bound("simulate.samples", samples, "samples", SimulationError)
+    tolerance_mm = 1e3 * drift_tolerance if is_number(drift_tolerance) else drift_tolerance
+    check_bound("simulate.drift_tolerance", tolerance_mm, "drift tolerance [mm]", SimulationError)
     stack = stack or MujocoStack(am)
     target = stack.set_plates(plates)
     m, d = stack.model, stack.data

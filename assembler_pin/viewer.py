@@ -33,9 +33,7 @@ import contextlib
 import io
 import logging
 import math
-import signal
-import threading
-from collections.abc import Callable, Sequence
+from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -54,6 +52,7 @@ from .geometry import DIMENSIONS
 from .kinematics import PlateArrays, leg_state, plate_arrays, q_from_plates, stack_forward_kinematics
 from .meshcat_server import DEFAULT_HOST, ServerProcess, start_server
 from .model import WHOLE_DATA_MAX_PLATFORMS, AssemblerModel
+from .signals import StopRequested, interrupt_on_signals
 from .state import StackState, evaluate_state
 from .urdf import names
 
@@ -245,47 +244,6 @@ def interpolate_states(
             gap,
         )
     return states
-
-
-class StopRequested(KeyboardInterrupt):
-    """A stop signal turned into an interrupt by :func:`interrupt_on_signals`.
-
-    Attributes:
-        signum: the signal received (``128 + signum`` is the shell's exit status for it).
-    """
-
-    def __init__(self, signum: int) -> None:
-        super().__init__(f"stopped by {signal.Signals(signum).name}")
-        self.signum = signum
-
-
-def interrupt_on_signals(names: Sequence[str] = ("SIGTERM", "SIGHUP")) -> Callable[[], None]:
-    """Make the named signals raise :class:`StopRequested` (a ``KeyboardInterrupt``), as Ctrl-C does.
-
-    A program that serves a viewer until it is stopped then unwinds the same way for
-    ``kill``, a closed terminal and Ctrl-C, running its ``finally`` blocks (which stop the
-    meshcat server). Signals this platform lacks are skipped; outside the main thread
-    nothing is installed.
-
-    Returns:
-        A function restoring the previous handlers.
-    """
-
-    def interrupt(signum: int, frame: object) -> None:
-        raise StopRequested(signum)
-
-    previous: dict[int, object] = {}
-    if threading.current_thread() is threading.main_thread():
-        for name in names:
-            sig = getattr(signal, name, None)
-            if sig is not None:
-                previous[sig] = signal.signal(sig, interrupt)
-
-    def restore() -> None:
-        for sig, handler in previous.items():
-            signal.signal(sig, handler)
-
-    return restore
 
 
 class _CallerPlacedVisualizer(MeshcatVisualizer):
@@ -880,7 +838,7 @@ class StackViewer:
         """The standalone HTML page of the scene (no server needed to open it).
 
         Args:
-            path: write the page there too.
+            path: write the page there too (atomically: a reader sees the whole page or none).
             frame: set the side camera framing the stack first (:meth:`frame`).
         """
         if frame:
@@ -888,7 +846,9 @@ class StackViewer:
         html = self.meshcat.static_html()
         html = html.replace("</body>", self.overlay_html() + "\n</body>", 1)
         if path is not None:
-            Path(path).write_text(html)
+            from .files import write_atomic
+
+            write_atomic(path, html)
             logger.info("wrote %s (%d bytes)", path, len(html))
         return html
 

@@ -369,7 +369,7 @@ def test_cli_solve_json_contract(am, capsys):
 
 def test_cli_solve_unreachable_and_errors(capsys):
     args = ["solve", "--goal", "3", "0", "0.8", "0", "0", "0", "--no-optimize", "--json", "--max-attempts", "2"]
-    assert main(args) == 0
+    assert main(args) == 1  # answered: not possible
     doc = json.loads(capsys.readouterr().out)
     assert doc["success"] is False and "reach" in doc["message"]
     assert main(["solve", "--goal", "nan", "0", "0.8", "0", "0", "0", "--no-optimize"]) == 2

@@ -9,7 +9,10 @@ from __future__ import annotations
 import argparse
 import logging
 import re
+import signal
 import sys
+import traceback
+import warnings
 from collections.abc import Sequence
 from typing import NoReturn
 
@@ -54,26 +57,80 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+#: Exit statuses of every subcommand: answered and successful, answered "not
+#: possible", refused input, a bug (``EX_SOFTWARE``), interrupted by Ctrl-C (128 + SIGINT).
+EXIT_OK, EXIT_NOT_POSSIBLE, EXIT_REFUSED, EXIT_BUG, EXIT_INTERRUPTED = 0, 1, 2, 70, 130
+
+
 def main(argv: Sequence[str] | None = None) -> int:
-    """Run the command; input problems end it with exit status 2 and one line on stderr."""
-    parser = build_parser()
+    """Run the command and return its exit status.
+
+    0: answered and successful; 1: answered, not possible (the answer is still printed);
+    2: refused input (one line on stderr); 70: an unexpected error, a bug (one line, the
+    traceback only with ``-v``); 130 / 143: interrupted by Ctrl-C / SIGTERM (one line).
+    Warnings of the numerical libraries are logged at debug level, never printed.
+    """
+    from ..signals import forget_interrupt, interrupt_on_signals
+
+    command = "assembler-pin"
+    restore_signals = interrupt_on_signals(("SIGTERM",))
     try:
-        args = parser.parse_args(argv)
-    except CLIError as exc:
-        print(f"assembler-pin: error: {_one_line(exc)}", file=sys.stderr)
-        return 2
-    logging.basicConfig(
-        level=logging.INFO if args.verbose else logging.WARNING, format="%(levelname)s %(name)s: %(message)s"
-    )
+        with warnings.catch_warnings():
+            warnings.showwarning = _log_warning
+            warnings.simplefilter("default")
+            parser = build_parser()
+            try:
+                args = parser.parse_args(argv)
+            except CLIError as exc:
+                print(f"assembler-pin: error: {_one_line(exc)}", file=sys.stderr)
+                return EXIT_REFUSED
+            command = f"assembler-pin {args.command}"
+            logging.basicConfig(
+                level=logging.INFO if args.verbose else logging.WARNING,
+                format="%(levelname)s %(name)s: %(message)s",
+            )
+            return _run(args, command)
+    except KeyboardInterrupt as stop:  # Ctrl-C, or SIGTERM through interrupt_on_signals
+        logger.debug("interrupted", exc_info=True)
+        forget_interrupt()
+        signum = getattr(stop, "signum", signal.SIGINT)
+        how = "" if signum == signal.SIGINT else f" ({stop})"
+        print(f"{command}: interrupted{how}", file=sys.stderr)
+        return 128 + int(signum)
+    finally:
+        restore_signals()
+
+
+def _run(args: argparse.Namespace, command: str) -> int:
+    """``args.func(args)`` with every error but an interrupt turned into one line and a status."""
     try:
         return int(args.func(args))
     except AssemblerError as exc:
-        print(f"assembler-pin {args.command}: error: {_one_line(exc)}", file=sys.stderr)
-        return 2
+        print(f"{command}: error: {_one_line(exc)}", file=sys.stderr)
+        return EXIT_REFUSED
     except OSError as exc:  # an output path that cannot be written
         where = f" '{exc.filename}'" if exc.filename else ""
-        print(f"assembler-pin {args.command}: error: cannot write{where}: {exc.strerror or exc}", file=sys.stderr)
-        return 2
+        print(f"{command}: error: cannot write{where}: {exc.strerror or exc}", file=sys.stderr)
+        return EXIT_REFUSED
+    except Exception as exc:  # anything else is a bug: one line, the traceback only with -v
+        if args.verbose:
+            traceback.print_exc(file=sys.stderr)
+        hint = "" if args.verbose else "; run with -v for the traceback"
+        what = f"{type(exc).__name__}: {_one_line(exc)[:300]}"
+        print(f"{command}: internal error (a bug, please report it): {what}{hint}", file=sys.stderr)
+        return EXIT_BUG
+
+
+def _log_warning(
+    message: Warning | str,
+    category: type[Warning],
+    filename: str,
+    lineno: int,
+    file: object = None,
+    line: str | None = None,
+) -> None:
+    """``warnings.showwarning`` of the command: a warning is logged at debug level, not printed."""
+    logger.debug("%s: %s (%s:%s)", category.__name__, message, filename, lineno)
 
 
 def _one_line(exc: BaseException) -> str:

@@ -12,6 +12,7 @@ if TYPE_CHECKING:
 from .common import (
     config_from_args,
     dumps,
+    progress_for,
 )
 
 
@@ -34,15 +35,17 @@ def add_parser(add) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    """Median times of the hot computations; progress per figure on a terminal."""
     from ..bench import run_benchmarks
+    from ..bounds import check_bound
     from ..model import AssemblerModel
 
-    if args.repeat < 1:
-        raise CLIError(f"--repeat must be an integer >= 1, got {args.repeat}")
+    check_bound("bench.repeat", args.repeat, "--repeat", CLIError)
     if args.platforms_sweep:
         from ..bench import benchmark_platforms_sweep, format_sweep
 
-        rows = benchmark_platforms_sweep()
+        with progress_for(args, "bench: platforms") as prog:
+            rows = benchmark_platforms_sweep(progress=prog)
         print(dumps(rows) if args.json else format_sweep(rows))
         return 0
     if args.maps:
@@ -58,11 +61,13 @@ def run(args: argparse.Namespace) -> int:
         rows = benchmark_mujoco(am)
         print(dumps(rows) if args.json else format_mujoco(rows))
         return 0
-    results = run_benchmarks(am, repeat=args.repeat, optimize=not args.no_optimize, quick=args.quick)
+    with progress_for(args, "bench") as prog:
+        results = run_benchmarks(am, repeat=args.repeat, optimize=not args.no_optimize, quick=args.quick, progress=prog)
     if args.grid:
         from ..bench import benchmark_solve_grid
 
-        results.update(benchmark_solve_grid(am))
+        with progress_for(args, "bench: grid") as prog:
+            results.update(benchmark_solve_grid(am, progress=prog))
     if args.json:
         print(dumps(results))
         return 0

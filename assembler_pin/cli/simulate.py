@@ -35,14 +35,20 @@ def add_parser(add) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    """Hold a pose with MuJoCo's position actuators: EE drift and actuator forces over time."""
+    """Hold a pose with MuJoCo's position actuators: EE drift and actuator forces over time
+    (exit 0 when held, 1 when not: the answer is printed either way)."""
     import numpy as np
 
+    from ..bounds import check_bound
     from ..labels import leg_label
     from ..model import AssemblerModel
     from ..simulate import hold_pose
     from ..state import evaluate_state
 
+    check_bound("simulate.drift_tolerance", args.drift_tolerance, "--drift-tolerance", CLIError)
+    if not args.trajectory:
+        check_bound("simulate.seconds", args.seconds, "--seconds", CLIError)
+        check_bound("simulate.samples", args.samples, "--samples", CLIError)
     if args.html:
         writable_parent(args.html, "--html file")
     am = AssemblerModel.from_config(config_from_args(args))
@@ -79,7 +85,7 @@ def run(args: argparse.Namespace) -> int:
             path = Path(args.html).resolve()
             viewer.static_html(path)
         print(f"wrote {path}")
-    return 0
+    return 0 if result.held else 1
 
 
 def _simulate_trajectory(args: argparse.Namespace, am: AssemblerModel) -> int:

@@ -21,6 +21,7 @@ from .common import (
     format_state_table,
     goal_from_args,
     optimize_options,
+    progress_for,
 )
 
 
@@ -41,24 +42,22 @@ def add_parser(add) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Internal poses for an EE goal: helper-arm initial condition, then (by default) the
-    force optimization. An unreachable goal is an answer (exit 0, success false)."""
-    import numpy as np
-
-    from ..helper_arm import HelperArmOptions
-    from ..kinematics import se3_to_taa
+    force optimization. Exit 0 when solved; an unreachable goal is an answer too (printed,
+    success false), with exit status 1, as is ``--capacity`` finding no capacity."""
+    from ..bounds import check_bound
     from ..model import AssemblerModel
     from ..solver import solve
 
     goal = goal_from_args(args)
-    try:
-        helper = HelperArmOptions(d_step=args.d_step, max_attempts=args.max_attempts)
-    except ValueError as exc:
-        raise CLIError(str(exc)) from None
+    _refuse_carrier_options(args)
+    check_bound("optimize.max_iterations", args.max_iterations, "--max-iterations", CLIError)
+    helper = helper_options(args)
     options = None if args.no_optimize else optimize_options(args)
     am = AssemblerModel.from_config(config_from_args(args))
+    _check_scan_length(am, helper)
     carrier, q = carrier_from_args(args)
     if carrier is not None:
-        return _solve_on_carrier(args, am, carrier, q, goal)
+        return _solve_on_carrier(args, am, carrier, q, goal, helper)
     result = solve(am, goal, optimize=not args.no_optimize, options=options, helper_options=helper)
     capacity = None
     if args.capacity:
@@ -71,7 +70,53 @@ def run(args: argparse.Namespace) -> int:
         if capacity is not None:
             doc["capacity"] = capacity.to_dict()
         print(dumps(doc))
-        return 0
+    else:
+        _print_result(args, result, capacity)
+    return 0 if result.success and (capacity is None or capacity.success) else 1
+
+
+def helper_options(args: argparse.Namespace):
+    """The helper arm's options of ``--d-step`` and ``--max-attempts``, bounds checked."""
+    from ..bounds import check_bound
+    from ..options import HelperArmOptions
+
+    check_bound("helper.max_attempts", args.max_attempts, "--max-attempts", CLIError)
+    check_bound("helper.d_step", args.d_step, "--d-step", CLIError)
+    try:
+        return HelperArmOptions(d_step=args.d_step, max_attempts=args.max_attempts)
+    except ValueError as exc:
+        raise CLIError(str(exc)) from None
+
+
+def _check_scan_length(am: AssemblerModel, helper) -> None:
+    """The helper arm's scan, (height range) / ``--d-step`` link lengths, within its bound."""
+    import math
+
+    from ..bounds import check_bound
+    from ..helper_arm import height_range
+
+    lo, hi = height_range(am.config)
+    values = max(1, math.ceil((hi - lo) / helper.d_step)) if math.isfinite(hi - lo) else hi - lo
+    check_bound("helper.scan_values", values, f"the scan of --d-step {helper.d_step:g} over {hi - lo:.4g} m", CLIError)
+
+
+def _refuse_carrier_options(args: argparse.Namespace) -> None:
+    """One line for an option that cannot apply with (or without) ``--carrier``."""
+    if args.fixed_carrier and not args.carrier:
+        raise CLIError("--fixed-carrier needs --carrier NAME")
+    if args.carrier and args.capacity:
+        raise CLIError(
+            "--capacity is computed on a fixed base and is not available with --carrier; "
+            "run 'solve --capacity' without --carrier for the goal seen from the base"
+        )
+
+
+def _print_result(args: argparse.Namespace, result, capacity) -> None:
+    """The text answer of ``solve``: the goal, the initial condition, the optimization."""
+    import numpy as np
+
+    from ..kinematics import se3_to_taa
+
     taa = se3_to_taa(result.goal)
     print(
         f"goal: p = ({', '.join(f'{x:.4f}' if abs(x) < 1e6 else f'{x:.4g}' for x in taa[:3])}) m, "
@@ -101,25 +146,41 @@ def run(args: argparse.Namespace) -> int:
                   f"{capacity.iterations} optimizations, {capacity.time_s:.2f} s)")  # fmt: skip
         else:
             print(f"\npayload capacity: none — {capacity.message}")
-    return 0
 
 
-def _solve_on_carrier(args: argparse.Namespace, am: AssemblerModel, carrier, q, goal) -> int:
-    """``solve --carrier``: a world goal, the carrier moving unless ``--fixed-carrier``."""
+def _solve_on_carrier(args: argparse.Namespace, am: AssemblerModel, carrier, q, goal, helper) -> int:
+    """``solve --carrier``: a world goal, the carrier moving unless ``--fixed-carrier``; every
+    optimizer and helper-arm option applies (the joint optimization is always SLSQP)."""
     import numpy as np
 
     from ..carrier import solve_on_carrier
 
-    result = solve_on_carrier(am, carrier, goal, q, move_carrier=not args.fixed_carrier)
+    prog = progress_for(args, f"solve on {carrier.name}")
+    options = optimize_options(args)  # its weights score the placements even with --no-optimize
+    moving, optimize = not args.fixed_carrier, not args.no_optimize
+    result = solve_on_carrier(
+        am,
+        carrier,
+        goal,
+        q,
+        move_carrier=moving,
+        options=options,
+        helper_options=helper,
+        optimize=optimize,
+        progress=prog,
+    )
+    prog.close()
     if args.json:
         print(dumps(result.to_dict()))
-        return 0
+        return 0 if result.success else 1
     print(f"solve on {carrier.name} ({'carrier held' if args.fixed_carrier else 'carrier moving'}): "
           f"{'success' if result.success else 'FAILED'} — {result.message} [{result.time_s:.2f} s]")  # fmt: skip
     for t, cq, _score, note in result.candidates:
-        print(f"  placement t = {t:.2f}: q = {np.round(cq, 3).tolist()}: {note}")
+        where = "joint optimization (carrier joints and plates together)" if np.isnan(t) else f"placement t = {t:.2f}"
+        print(f"  {where}: q = {np.round(cq, 3).tolist()}: {note}")
     if result.statics is not None:
         print(f"carrier q = {np.round(result.statics.q, 4).tolist()} rad")
-        print(format_state_table(result.statics.state, "Optimized (world gravity)"))
+        title = "Optimized" if optimize else "Helper-arm pose (not optimized)"
+        print(format_state_table(result.statics.state, f"{title} (world gravity)"))
         print(format_carrier(carrier, result.statics))
-    return 0
+    return 0 if result.success else 1

@@ -121,9 +121,13 @@ def run(args: argparse.Namespace) -> int:
     import time
     import webbrowser
 
+    from ..bounds import check_bound
     from ..model import AssemblerModel
+    from ..signals import forget_interrupt
     from ..viewer import StackViewer, interrupt_on_signals
 
+    check_bound("view.animate", args.animate, "--animate", CLIError)
+    check_bound("view.frames", args.frames, "--frames", CLIError)
     if args.html:
         writable_parent(args.html, "--html file")
     am = AssemblerModel.from_config(config_from_args(args))
@@ -187,8 +191,10 @@ def run(args: argparse.Namespace) -> int:
             while True:
                 time.sleep(0.5)
         except KeyboardInterrupt:
+            forget_interrupt()
             return 0  # serving until stopped: stopping is the normal end
     except KeyboardInterrupt as stop:  # stopped before the view was ready
+        forget_interrupt()
         print(f"assembler-pin view: {stop or 'interrupted'} before the view was ready", file=sys.stderr)
         return 128 + getattr(stop, "signum", 2)  # the shell's status for a signal (SIGINT = 2)
     finally:
