@@ -227,7 +227,10 @@ def benchmark_solve_grid(
 
     from .solver import solve
 
-    times, solved_times, won, unsolved = [], [], {}, []
+    times: list[float] = []
+    solved_times: list[float] = []
+    won: dict[str | None, int] = {}
+    unsolved: list = []
     for xyz in goals:
         t0 = time.perf_counter()
         result = solve(am, pin.SE3(np.eye(3), np.array(xyz)))

@@ -74,7 +74,7 @@ def _quantity_panel(ax, q: _Quantity, j: int) -> None:
     lo, hi = float(np.nanmin(data)), float(np.nanmax(data))
     _limit_view(ax, lo, hi, q.lower, q.upper)
     gap = min(lo - q.lower, q.upper - hi)
-    _, i = np.unravel_index(int(np.nanargmin(np.minimum(data - q.lower, q.upper - data))), data.shape)
+    i = int(np.unravel_index(int(np.nanargmin(np.minimum(data - q.lower, q.upper - data))), data.shape)[1])
     verdict = "beyond a limit by" if gap < 0 else "nearest limit"
     ax.set_title(f"{platform_label(j)} {q.name}: {verdict} {abs(gap):.4g} {q.unit} (leg {i})", fontsize=8, loc="left")
 

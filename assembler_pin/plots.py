@@ -18,6 +18,7 @@ import logging
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import numpy.typing as npt
@@ -150,6 +151,7 @@ def force_heatmaps(
             Patch(fill=False, ec=VIOLATION_COLOR, lw=2, label="at the force bound"),
         ]
         fig.legend(handles=frames, loc="outside lower center", ncol=2, fontsize=7, frameon=False)
+    assert image is not None  # at least one state is drawn
     fig.colorbar(image, ax=list(axes), label="force [N] (tension +, compression −)", shrink=0.9)
     if title:
         fig.suptitle(title)
@@ -340,11 +342,13 @@ def default_state_function(am: AssemblerModel) -> Callable[[pin.SE3], StackState
     """``goal -> state``: the optimized state of :func:`assembler_pin.solver.solve` (falling
     back to its initial state when the optimization gives none), or, without the solve
     module, the helper-arm initial condition. None when no valid state is found."""
+    solver_solve: Callable[..., Any] | None
     try:
-        from .solver import solve
+        from .solver import solve as solver_solve
     except ImportError:
-        solve = None
-    if solve is not None:
+        solver_solve = None
+    if solver_solve is not None:
+        solve = solver_solve
 
         def by_solve(goal: pin.SE3) -> StackState | None:
             res = solve(am, goal)

@@ -137,6 +137,7 @@ def random_valid_poses(
 def reference(am: AssemblerModel, result: SolveResult, options: OptimizeOptions | None = None) -> Reference | None:
     """The :class:`Reference` of a solved goal: :data:`REFERENCE_SAMPLES` random valid poses
     around the helper arm's initial pose, each also optimized (the multistart)."""
+    assert result.initial is not None and result.optimized is not None, "a reference needs a solved goal"
     poses = random_valid_poses(am, result.goal, result.initial, REFERENCE_SAMPLES)
     if not poses:
         return None
@@ -202,7 +203,7 @@ def summary_table(outcomes: Sequence[ScenarioOutcome], markdown: bool = False) -
                 s.name,
                 f"{o.initial.max_abs_force:.1f} ({_argmax_label(o.initial)})",
                 f"{o.optimized.max_abs_force:.1f} ({_argmax_label(o.optimized)})",
-                f"{100 * o.reduction:.0f}%",
+                "—" if o.reduction is None else f"{100 * o.reduction:.0f}%",
                 paper,
                 f"{o.initial.mean_abs_force:.1f} → {o.optimized.mean_abs_force:.1f}",
                 paper_mean,
@@ -224,9 +225,10 @@ def summary_table(outcomes: Sequence[ScenarioOutcome], markdown: bool = False) -
 
 def _reference_cells(o: ScenarioOutcome) -> list[str]:
     """ "-37% / -52% (n = 8)" and "+0.4%": our optimum against the reference poses."""
-    ref, ours = o.reference, o.optimized.max_abs_force
-    if ref is None:
+    ref = o.reference
+    if ref is None or o.optimized is None:
         return ["—", "—"]
+    ours = o.optimized.max_abs_force
     vs = (
         f"{100 * (1 - ours / ref.median):.0f}% / {100 * (1 - ours / ref.worst):.0f}% (n = {ref.sample_max_forces.size})"
     )

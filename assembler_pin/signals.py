@@ -10,6 +10,7 @@ from __future__ import annotations
 import signal
 import threading
 from collections.abc import Callable, Sequence
+from typing import Any
 
 __all__ = ["StopRequested", "forget_interrupt", "interrupt_on_signals"]
 
@@ -40,7 +41,7 @@ def interrupt_on_signals(names: Sequence[str] = ("SIGTERM", "SIGHUP")) -> Callab
     def interrupt(signum: int, frame: object) -> None:
         raise StopRequested(signum)
 
-    previous: dict[int, object] = {}
+    previous: dict[int, Any] = {}
     if threading.current_thread() is threading.main_thread():
         for name in names:
             sig = getattr(signal, name, None)

@@ -330,7 +330,9 @@ class StackViewer:
         else:  # an empty Data stands in: nothing runs kinematics on it
             viz = _CallerPlacedVisualizer(self.am.model, None, self.visual_model, copy_models=False, data=pin.Data())
         viz.initViewer(viewer=self.meshcat)
-        viz.loadViewerModel(rootNodeName=root, visual_color=None if rgba is None else list(rgba))
+        viz.loadViewerModel(
+            rootNodeName=root, visual_color=None if rgba is None else [float(c) for c in np.asarray(rgba)]
+        )
         return viz
 
     def _index_leg_geometries(self) -> dict[tuple[int, int], list[int]]:
@@ -351,7 +353,7 @@ class StackViewer:
         and its placement in the frame of the joint that moves it (4×4), as Pinocchio
         stores it: the plate's, the universal joint's (motor) or the actuator's (shaft)."""
         frames = self.am.model.frames
-        out = []
+        out: list[tuple[str, tuple[int, ...], np.ndarray]] = []
         for g in self.visual_model.geometryObjects:
             name = frames[g.parentFrame].name
             local = g.placement.homogeneous
@@ -736,6 +738,7 @@ class StackViewer:
                     rod_end = plates.R[-1] @ np.array([0.0, 0.0, self.am.config.payload.offset]) + plates.p[-1]
                     frame[f"{self.prefix}_payload_rod"]["rod"].set_transform(_cylinder_between(plates.p[-1], rod_end))
                 if color_forces:
+                    assert isinstance(st, StackState)  # checked above
                     self._force_band_frame(frame, st)
             self._extra_points[f"anim{k}"] = self._stack_points(plates)
         if color_forces and f"{self.prefix}_force_bands" not in self._roots:

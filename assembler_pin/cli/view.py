@@ -157,7 +157,9 @@ def run(args: argparse.Namespace) -> int:
             arm = getattr(getattr(result, "initial_result", None), "arm_points", None)
             viewer.show_comparison(result.initial, result.optimized, None if args.no_arm else arm)
             viewer.set_title(_view_title(args, result))
-            shown = result.optimized if result.optimized is not None else result.initial
+            best = result.optimized if result.optimized is not None else result.initial
+            assert best is not None  # refused above when both are None
+            shown = best
             if args.animate and result.initial is not None and result.optimized is not None:
                 from ..viewer import interpolate_states
 
