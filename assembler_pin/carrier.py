@@ -35,6 +35,7 @@ from .exceptions import AssemblerError, PoseError, UnknownCarrierError
 from .kinematics import PlateArrays, plate_arrays, to_se3
 from .model import AssemblerModel
 from .state import StackState, evaluate_state
+from .threads import one_blas_thread
 
 __all__ = [
     "CARRIERS",
@@ -394,6 +395,7 @@ def _stack_on(am: AssemblerModel, carrier: Carrier, q: np.ndarray, goal: pin.SE3
     return carrier_statics(am, carrier, q, rel, goal=goal), "converged"
 
 
+@one_blas_thread
 def solve_on_carrier(
     am: AssemblerModel,
     carrier: Carrier,

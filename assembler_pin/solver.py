@@ -20,6 +20,7 @@ from .kinematics import PlateArrays, se3_to_taa, to_se3
 from .model import AssemblerModel
 from .optimize import OptimizeOptions, OptimizeResult, optimize_internal_poses
 from .state import StackState
+from .threads import one_blas_thread
 
 if TYPE_CHECKING:
     from .helper_arm import HelperArmOptions, InitialConditionResult
@@ -124,6 +125,7 @@ class SolveResult:
         return out
 
 
+@one_blas_thread
 def solve(
     am: AssemblerModel,
     goal: pin.SE3 | np.ndarray,

@@ -20,6 +20,7 @@ from ..geometry import reach_bound
 from ..kinematics import PlateArrays, leg_state, to_se3
 from ..model import AssemblerModel
 from ..state import StackState, evaluate_state
+from ..threads import one_blas_thread
 from .arm import ArmCache
 from .limits import cluster_limits, height_range
 from .options import HelperArmOptions
@@ -175,6 +176,7 @@ def arm_cache(am: AssemblerModel) -> ArmCache:
     return am.helper_arms
 
 
+@one_blas_thread
 def initial_condition(
     am: AssemblerModel,
     goal: pin.SE3 | npt.ArrayLike,
