@@ -1,0 +1,269 @@
+"""A compiled kernel of the closed-form statics, for batches of stacks and single stacks.
+
+The equilibrium is the one of :func:`~assembler_pin.gradients.equilibrium` (each leg
+balances its own weight; the top plate of each platform the weight above it and the six
+ball forces; module docstring of :mod:`assembler_pin.gradients`), written as plain loops
+over the stacks, platforms and legs and compiled by numba (``cache=True``: compiled once
+per install and Python version, then loaded from numba's cache). Per platform it solves
+the 6×6 system in the top plate's own frame (moments about its origin) by Gauss–Jordan
+elimination with partial pivoting; the same inverse gives the 1-norm condition number of
+:func:`~assembler_pin.statics.solve_statics`.
+
+The numpy path (:func:`~assembler_pin.gradients.equilibrium`) stays the reference and the
+fallback: it is used when numba is not installed, when ``ASSEMBLER_PIN_STATICS=numpy`` is
+set in the environment, or with ``backend="numpy"``. The tests hold both to Pinocchio's
+statics (:func:`~assembler_pin.statics.solve_statics`) to 1e-10 N.
+
+Frames: world poses of plates 0..n; forces [N], tension positive.
+"""
+
+from __future__ import annotations
+
+import logging
+import os
+from typing import Any
+
+import numpy as np
+
+from .exceptions import OptionsError
+from .linalg import cross, inverse_or_nan
+from .model import AssemblerModel
+
+__all__ = ["BACKENDS", "ENV_VAR", "closed_form_forces", "kernel_available", "resolve_backend"]
+
+logger = logging.getLogger(__name__)
+
+#: The backends of :func:`closed_form_forces`.
+BACKENDS = ("auto", "numba", "numpy")
+
+#: Environment variable forcing a backend (``numpy`` or ``numba``; unset: ``auto``).
+ENV_VAR = "ASSEMBLER_PIN_STATICS"
+
+_kernel: Any = None  # the compiled function, once built (None: not yet; False: unavailable)
+
+
+def _build_kernel() -> Any:
+    """Compile (or load from numba's cache) the kernel; False when numba is missing."""
+    try:
+        import numba
+    except ImportError:
+        return False
+
+    @numba.njit(cache=True, nogil=True)
+    def kernel(R, p, bottom, top, consts, forces, condition):  # pragma: no cover - compiled
+        """consts: gravity, motor mass, shaft mass, motor CoM, shaft CoM, plate mass,
+        payload mass, payload offset. Fills forces (B, n, 6) and condition (B, n)."""
+        g = consts[0]
+        mm, ms, mc, sc, mplate, mpay, off = consts[1], consts[2], consts[3], consts[4], consts[5], consts[6], consts[7]
+        lever = mc * mm - sc * ms
+        B, n = R.shape[0], R.shape[1] - 1
+        lev_f = np.zeros(n + 1)  # each level's weight [N] (every weight is vertical, -z)
+        lev_m = np.zeros((n + 1, 2))  # x, y of each level's moment about the world origin
+        t = np.zeros((n, 6, 3))
+        u = np.zeros((n, 6, 3))
+        fp = np.zeros((n, 6, 3))
+        gu = np.zeros((n, 6))
+        bx = np.zeros(3)
+        rhs = np.zeros(6)
+        mw = np.zeros(3)
+        rl = np.zeros(6)
+        ul = np.zeros(3)
+        A = np.zeros((6, 12))
+        for s in range(B):
+            # a weight w at x has the moment x × (0, 0, -w) = (-x_y w, x_x w, 0)
+            lev_f[:] = 0.0
+            lev_m[:] = 0.0
+            for k in range(1, n + 1):
+                lev_f[k] += mplate * g
+                lev_m[k, 0] -= p[s, k, 1] * mplate * g
+                lev_m[k, 1] += p[s, k, 0] * mplate * g
+            pay_x = R[s, n, 0, 2] * off + p[s, n, 0]
+            pay_y = R[s, n, 1, 2] * off + p[s, n, 1]
+            lev_f[n] += mpay * g
+            lev_m[n, 0] -= pay_y * mpay * g
+            lev_m[n, 1] += pay_x * mpay * g
+            for j in range(n):
+                for i in range(6):
+                    for a in range(3):
+                        bx[a] = p[s, j, a]
+                        t[j, i, a] = p[s, j + 1, a]
+                        for c in range(3):
+                            bx[a] += R[s, j, a, c] * bottom[j, i, c]
+                            t[j, i, a] += R[s, j + 1, a, c] * top[j, i, c]
+                    dx, dy, dz = t[j, i, 0] - bx[0], t[j, i, 1] - bx[1], t[j, i, 2] - bx[2]
+                    L = np.sqrt(dx * dx + dy * dy + dz * dz)
+                    u[j, i, 0], u[j, i, 1], u[j, i, 2] = dx / L, dy / L, dz / L
+                    gu[j, i] = -g * u[j, i, 2]
+                    sf = ms + lever / L
+                    for a in range(3):  # f⊥ = -s (g - (g·u) u), g = (0, 0, -g)
+                        fp[j, i, a] = -sf * ((-g if a == 2 else 0.0) - gu[j, i] * u[j, i, a])
+                    cx = mm * (bx[0] + mc * u[j, i, 0]) + ms * (t[j, i, 0] - sc * u[j, i, 0])
+                    cy = mm * (bx[1] + mc * u[j, i, 1]) + ms * (t[j, i, 1] - sc * u[j, i, 1])
+                    lev_f[j] += (mm + ms) * g
+                    lev_m[j, 0] -= cy * g
+                    lev_m[j, 1] += cx * g
+            fz, mx, my = 0.0, 0.0, 0.0
+            for j in range(n - 1, -1, -1):
+                # the weight above plate j+1 (levels j+1..n), less the legs' transverse forces
+                fz += lev_f[j + 1]
+                mx += lev_m[j + 1, 0]
+                my += lev_m[j + 1, 1]
+                rhs[:] = 0.0
+                rhs[2] = -fz
+                rhs[3] = mx
+                rhs[4] = my
+                for i in range(6):
+                    tx, ty, tz = t[j, i, 0], t[j, i, 1], t[j, i, 2]
+                    fx, fy, fzz = fp[j, i, 0], fp[j, i, 1], fp[j, i, 2]
+                    rhs[0] -= fx
+                    rhs[1] -= fy
+                    rhs[2] -= fzz
+                    rhs[3] -= ty * fzz - tz * fy
+                    rhs[4] -= tz * fx - tx * fzz
+                    rhs[5] -= tx * fy - ty * fx
+                # in the top plate's frame, about its origin: f_l = Rᵀ f, m_l = Rᵀ (m - p × f)
+                pj = p[s, j + 1]
+                mw[0] = rhs[3] - (pj[1] * rhs[2] - pj[2] * rhs[1])
+                mw[1] = rhs[4] - (pj[2] * rhs[0] - pj[0] * rhs[2])
+                mw[2] = rhs[5] - (pj[0] * rhs[1] - pj[1] * rhs[0])
+                rl[:] = 0.0
+                for a in range(3):
+                    for c in range(3):
+                        rl[a] += R[s, j + 1, c, a] * rhs[c]
+                        rl[3 + a] += R[s, j + 1, c, a] * mw[c]
+                # Wᵀ rows (one per leg): [u_l, top × u_l]; A = [Wᵀ | I]
+                for i in range(6):
+                    for a in range(3):
+                        ul[a] = 0.0
+                        for c in range(3):
+                            ul[a] += R[s, j + 1, c, a] * u[j, i, c]
+                    tp = top[j, i]
+                    A[i, 0], A[i, 1], A[i, 2] = ul[0], ul[1], ul[2]
+                    A[i, 3] = tp[1] * ul[2] - tp[2] * ul[1]
+                    A[i, 4] = tp[2] * ul[0] - tp[0] * ul[2]
+                    A[i, 5] = tp[0] * ul[1] - tp[1] * ul[0]
+                    for c in range(6):
+                        A[i, 6 + c] = 1.0 if c == i else 0.0
+                norm = 0.0
+                for i in range(6):
+                    row = 0.0
+                    for c in range(6):
+                        row += abs(A[i, c])
+                    norm = max(norm, row)
+                ok = True
+                for c in range(6):  # Gauss–Jordan, partial pivoting
+                    piv = c
+                    for r in range(c + 1, 6):
+                        if abs(A[r, c]) > abs(A[piv, c]):
+                            piv = r
+                    if A[piv, c] == 0.0 or not np.isfinite(A[piv, c]):
+                        ok = False
+                        break
+                    if piv != c:
+                        for q in range(12):
+                            A[c, q], A[piv, q] = A[piv, q], A[c, q]
+                    inv_p = 1.0 / A[c, c]
+                    for q in range(12):
+                        A[c, q] *= inv_p
+                    for r in range(6):
+                        if r != c and A[r, c] != 0.0:
+                            f = A[r, c]
+                            for q in range(12):
+                                A[r, q] -= f * A[c, q]
+                if not ok:
+                    condition[s, j] = np.nan
+                    for i in range(6):
+                        forces[s, j, i] = np.nan
+                    continue
+                inorm = 0.0
+                for i in range(6):
+                    row = 0.0
+                    for c in range(6):
+                        row += abs(A[i, 6 + c])
+                    inorm = max(inorm, row)
+                condition[s, j] = norm * inorm
+                # K_local a = rl with K_local = W = (Wᵀ)ᵀ: a = (Wᵀ)⁻ᵀ rl
+                for i in range(6):
+                    a_i = 0.0
+                    for c in range(6):
+                        a_i += A[c, 6 + i] * rl[c]
+                    forces[s, j, i] = a_i + ms * gu[j, i]
+
+    return kernel
+
+
+def kernel_available() -> bool:
+    """Whether the compiled kernel can be used (numba importable); compiles it on first call."""
+    global _kernel
+    if _kernel is None:
+        _kernel = _build_kernel()
+        if _kernel is False:
+            logger.info("numba is not installed: the statics use the numpy path")
+    return _kernel is not False
+
+
+def resolve_backend(backend: str | None = None) -> str:
+    """``numba`` or ``numpy``: ``backend`` (default ``auto``, or the :data:`ENV_VAR`
+    setting); ``auto`` is numba when it is installed.
+
+    Raises:
+        OptionsError: an unknown backend.
+    """
+    choice = backend if backend is not None else os.environ.get(ENV_VAR, "auto") or "auto"
+    if choice not in BACKENDS:
+        raise OptionsError(f"statics backend must be one of {', '.join(BACKENDS)}, got {choice!r}")
+    if choice == "numpy":
+        return "numpy"
+    if kernel_available():
+        return "numba"
+    if choice == "numba":
+        raise OptionsError("the numba statics backend needs numba: pip install numba")
+    return "numpy"
+
+
+def _constants(am: AssemblerModel) -> np.ndarray:
+    cfg, leg = am.config, am.config.leg
+    return np.array(
+        [cfg.gravity, leg.motor_mass, leg.shaft_mass, leg.motor_com, leg.shaft_com, cfg.plate.mass,
+         cfg.payload.mass, cfg.payload.offset],
+    )  # fmt: skip
+
+
+def _numpy_forces(am: AssemblerModel, R: np.ndarray, p: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The reference path: :func:`~assembler_pin.gradients.equilibrium` and the condition
+    number of the legs' lines in each top plate's frame."""
+    from .gradients import equilibrium
+
+    eq, _ = equilibrium(am, R, p)
+    u_local = np.einsum("bjka,bjik->bjia", R[:, 1:], eq.u)
+    lines_t = np.concatenate([u_local, cross(am.geometry.top_in_plate, u_local)], axis=-1)  # (B, n, legs, 6)
+    inverse_t = inverse_or_nan(lines_t)
+    condition = np.abs(lines_t).sum(axis=-1).max(axis=-1) * np.abs(inverse_t).sum(axis=-1).max(axis=-1)
+    return eq.forces, condition
+
+
+def closed_form_forces(
+    am: AssemblerModel, R: np.ndarray, p: np.ndarray, backend: str | None = None
+) -> tuple[np.ndarray, np.ndarray]:
+    """Actuator forces and condition numbers of B stacks by the closed-form statics.
+
+    Args:
+        R: (B, n+1, 3, 3) plate rotations; p: (B, n+1, 3) plate positions, world [m]
+            (checked by the caller).
+        backend: ``auto``, ``numba`` or ``numpy`` (see :func:`resolve_backend`).
+
+    Returns:
+        (forces (B, n, 6) [N, tension positive], condition (B, n): 1-norm condition number
+        of each platform's 6×6 system; NaN for both where the system is exactly singular).
+    """
+    if resolve_backend(backend) == "numpy":
+        return _numpy_forces(am, R, p)
+    R = np.ascontiguousarray(R, dtype=float)
+    p = np.ascontiguousarray(p, dtype=float)
+    B, n = R.shape[0], am.n
+    forces = np.empty((B, n, 6))
+    condition = np.empty((B, n))
+    geo = am.geometry
+    _kernel(R, p, np.ascontiguousarray(geo.bottom_in_plate), np.ascontiguousarray(geo.top_in_plate),
+            _constants(am), forces, condition)  # fmt: skip
+    return forces, condition
