@@ -19,6 +19,7 @@ Frames: world poses of plates 0..n; forces [N], tension positive.
 
 from __future__ import annotations
 
+import importlib.util
 import logging
 import os
 from typing import Any
@@ -29,7 +30,7 @@ from .exceptions import OptionsError
 from .linalg import cross, inverse_or_nan
 from .model import AssemblerModel
 
-__all__ = ["BACKENDS", "ENV_VAR", "closed_form_forces", "kernel_available", "resolve_backend"]
+__all__ = ["BACKENDS", "ENV_VAR", "KERNEL_MIN_STACKS", "closed_form_forces", "kernel_available", "resolve_backend"]
 
 logger = logging.getLogger(__name__)
 
@@ -38,6 +39,10 @@ BACKENDS = ("auto", "numba", "numpy")
 
 #: Environment variable forcing a backend (``numpy`` or ``numba``; unset: ``auto``).
 ENV_VAR = "ASSEMBLER_PIN_STATICS"
+
+#: ``auto`` loads the kernel for a call of at least this many stacks (importing numba and
+#: loading the cached kernel take ~0.5–1 s; the numpy path does ~60k stacks/s).
+KERNEL_MIN_STACKS = 5000
 
 _kernel: Any = None  # the compiled function, once built (None: not yet; False: unavailable)
 
@@ -193,7 +198,8 @@ def _build_kernel() -> Any:
 
 
 def kernel_available() -> bool:
-    """Whether the compiled kernel can be used (numba importable); compiles it on first call."""
+    """Whether the compiled kernel can be used (numba importable); compiles it on first call
+    (or loads it from numba's cache)."""
     global _kernel
     if _kernel is None:
         _kernel = _build_kernel()
@@ -202,23 +208,30 @@ def kernel_available() -> bool:
     return _kernel is not False
 
 
-def resolve_backend(backend: str | None = None) -> str:
-    """``numba`` or ``numpy``: ``backend`` (default ``auto``, or the :data:`ENV_VAR`
-    setting); ``auto`` is numba when it is installed.
+def resolve_backend(backend: str | None = None, stacks: int = 1) -> str:
+    """``numba`` or ``numpy`` for a call on ``stacks`` stacks.
+
+    ``backend`` (default: the :data:`ENV_VAR` setting, else ``auto``): ``numpy``, ``numba``
+    (refused without numba), or ``auto``: numba when it is installed and either the kernel
+    is loaded in this process already or the call has at least :data:`KERNEL_MIN_STACKS`
+    stacks (a one-off small call does not pay numba's import and the kernel's load).
 
     Raises:
-        OptionsError: an unknown backend.
+        OptionsError: an unknown backend, or ``numba`` without numba.
     """
-    choice = backend if backend is not None else os.environ.get(ENV_VAR, "auto") or "auto"
+    choice = backend if backend is not None else os.environ.get(ENV_VAR, "") or "auto"
     if choice not in BACKENDS:
         raise OptionsError(f"statics backend must be one of {', '.join(BACKENDS)}, got {choice!r}")
     if choice == "numpy":
         return "numpy"
+    if choice == "auto":
+        if _kernel is False or importlib.util.find_spec("numba") is None:
+            return "numpy"
+        if _kernel is None and stacks < KERNEL_MIN_STACKS:
+            return "numpy"
     if kernel_available():
         return "numba"
-    if choice == "numba":
-        raise OptionsError("the numba statics backend needs numba: pip install numba")
-    return "numpy"
+    raise OptionsError("the numba statics backend needs numba: pip install numba")
 
 
 def _constants(am: AssemblerModel) -> np.ndarray:
@@ -256,7 +269,7 @@ def closed_form_forces(
         (forces (B, n, 6) [N, tension positive], condition (B, n): 1-norm condition number
         of each platform's 6×6 system; NaN for both where the system is exactly singular).
     """
-    if resolve_backend(backend) == "numpy":
+    if resolve_backend(backend, R.shape[0]) == "numpy":
         return _numpy_forces(am, R, p)
     R = np.ascontiguousarray(R, dtype=float)
     p = np.ascontiguousarray(p, dtype=float)
