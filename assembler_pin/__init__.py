@@ -27,6 +27,8 @@ _LAZY: dict[str, str] = {
     "Carrier": ".carrier",
     "carrier_statics": ".carrier",
     "CLIError": ".exceptions",
+    "chosen_distribution": ".support_choice",
+    "ChosenDistribution": ".support_choice",
     "compensated_lengths": ".compliance",
     "CompensatedLengths": ".compliance",
     "closure_sidecar": ".urdf",
@@ -50,6 +52,9 @@ _LAZY: dict[str, str] = {
     "loaded_pose": ".compliance",
     "LoadedPose": ".compliance",
     "LoadError": ".exceptions",
+    "SupportError": ".exceptions",
+    "two_point_statics": ".supports",
+    "TwoPointStatics": ".supports",
     "LegConfig": ".config",
     "LegState": ".kinematics",
     "load_config": ".config",
@@ -127,6 +132,7 @@ if TYPE_CHECKING:  # for type checkers and IDEs: the same names, imported eagerl
         OptionsError,
         PoseError,
         SingularConfigurationError,
+        SupportError,
         UnknownScenarioError,
         ViewerError,
     )
@@ -163,4 +169,6 @@ if TYPE_CHECKING:  # for type checkers and IDEs: the same names, imported eagerl
     from .solver import SolveResult, solve
     from .state import StackState, evaluate_state
     from .statics import StaticsResult, solve_statics, solve_statics_batch
+    from .support_choice import ChosenDistribution, chosen_distribution
+    from .supports import TwoPointStatics, two_point_statics
     from .urdf import assembler_urdf, closure_sidecar

@@ -82,11 +82,16 @@ def check_bound(key: str, value: object, what: str | None = None, error: type[Ex
     name = what or key
     unit = f" {bound.unit}" if bound.unit else ""
     allowed = f"{'an integer' if bound.integer else 'a number'} in [{bound.low:g}, {bound.high:g}]{unit}"
-    ok_type = isinstance(value, numbers.Integral if bound.integer else numbers.Real) and not isinstance(value, bool)
-    if not ok_type or not math.isfinite(float(value)) or not bound.low <= float(value) <= bound.high:  # type: ignore[arg-type]
+    kind = numbers.Integral if bound.integer else numbers.Real
+    if (
+        not isinstance(value, kind)
+        or isinstance(value, bool)
+        or not math.isfinite(float(value))
+        or not bound.low <= float(value) <= bound.high
+    ):
         shown = repr(value) if len(repr(value)) <= 40 else repr(value)[:37] + "..."
         raise error(f"{name} must be {allowed} ({bound.why}), got {shown}")
-    return float(value)  # type: ignore[arg-type]
+    return float(value)
 
 
 def limits_markdown() -> str:

@@ -8,6 +8,8 @@ tables carry exactly these names (:mod:`~assembler_pin.scenarios`,
 
 from __future__ import annotations
 
+from collections.abc import Iterable
+
 __all__ = ["CARRIER_NAMES", "FORCE_SCALES", "PATH_KINDS", "SCENARIO_NAMES", "check_names"]
 
 #: The paper's scenarios (:data:`assembler_pin.scenarios.SCENARIOS`), in the paper's order.
@@ -24,8 +26,8 @@ FORCE_SCALES = ("auto", "limit", "max")
 PATH_KINDS = ("screw", "linear")
 
 
-def check_names(table: object, names: tuple[str, ...], what: str) -> None:
+def check_names(table: Iterable[str], names: tuple[str, ...], what: str) -> None:
     """Raise ``RuntimeError`` at import when a table's keys differ from its declared names."""
-    keys = tuple(table)  # type: ignore[call-overload]
+    keys = tuple(table)
     if keys != names:
         raise RuntimeError(f"{what} {keys} differ from assembler_pin.choices {names}")

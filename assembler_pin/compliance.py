@@ -221,7 +221,7 @@ def _stroke_problem(am: AssemblerModel, cmd: np.ndarray) -> str | None:
     j, i = np.unravel_index(int(np.argmax(over)), over.shape)
     return (
         f"{int((over > 0).sum())} compensated length(s) outside the stroke [{leg.min_length:g}, "
-        f"{leg.max_length:g}] m, the worst {leg_label(j, i)} at {cmd[j, i]:.6f} m"
+        f"{leg.max_length:g}] m, the worst {leg_label(int(j), int(i))} at {cmd[j, i]:.6f} m"
     )
 
 

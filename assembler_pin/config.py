@@ -39,12 +39,12 @@ import re
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import Any, ClassVar
 
 import yaml
 
-from .exceptions import ConfigError
-from .validation import is_number
+from .exceptions import ConfigError, short_repr
+from .options import is_number
 
 __all__ = [
     "AssemblerConfig",
@@ -192,7 +192,7 @@ def _is_number(value: Any) -> bool:
 
 def _check(condition: bool, key: str, value: Any, allowed: str) -> None:
     if not condition:
-        raise ConfigError(f"config key '{key}' = {value!r} is invalid: {allowed}")
+        raise ConfigError(shorten(f"config key '{key}' = {short_repr(value)} is invalid: {allowed}"))
 
 
 def _validate(cfg: AssemblerConfig) -> None:
@@ -264,37 +264,116 @@ def _validate(cfg: AssemblerConfig) -> None:
 
 def _section_from_mapping(name: str, cls: type, data: Any) -> Any:
     if not isinstance(data, Mapping):
-        raise ConfigError(f"config key '{name}' must be a mapping of keys to values, got {data!r}")
+        raise ConfigError(f"config key '{name}' must be a mapping of keys to values, got {short_repr(data)}")
     allowed = [f.name for f in dataclasses.fields(cls)]
     for key in data:
         if key not in allowed:
-            raise ConfigError(f"unknown config key '{name}.{key}'; allowed keys in '{name}': {', '.join(allowed)}")
+            raise ConfigError(f"unknown config key '{name}.{shorten(str(key), 12)}'; allowed: {','.join(allowed)}")
     for key, value in data.items():
         if not _is_number(value):
-            raise ConfigError(f"config key '{name}.{key}' = {value!r} is invalid: must be a number")
+            raise ConfigError(f"config key '{name}.{key}' = {short_repr(value)} is invalid: must be a number")
     return cls(**{k: float(v) for k, v in data.items()})
 
 
-class _StrictLoader(yaml.SafeLoader):
-    """YAML with two fixes for configuration files: a key given twice is an error (not the
-    last one silently winning), and ``2e-1``/``1e5`` are numbers (YAML 1.1 reads a float
-    without a dot as a string)."""
+#: Longest configuration file read [bytes] (a real one is under 2 kB).
+MAX_CONFIG_BYTES = 1 << 20
+
+#: Longest message of a :class:`ConfigError` [characters].
+MAX_MESSAGE = 200
+
+_YAML12_INT = re.compile(r"^(?:[-+]?[0-9]+|0o[0-7]+|0x[0-9a-fA-F]+)$")
+_YAML12_FLOAT = re.compile(
+    r"^(?:[-+]?(?:\.[0-9]+|[0-9]+(?:\.[0-9]*)?)(?:[eE][-+]?[0-9]+)?|[-+]?\.(?:inf|Inf|INF)|\.(?:nan|NaN|NAN))$"
+)
+
+
+class StrictLoader(yaml.SafeLoader):
+    """YAML for the package's own files, read by the YAML 1.2 core schema.
+
+    * Numbers are YAML 1.2's: ``9_81``, ``1:30``, ``0b1`` or ``017``-as-octal are not numbers
+      (YAML 1.1 reads ``9_81`` as 981 and ``1:30`` as 90) but strings, refused where a number
+      belongs; ``2e-1`` and ``1e5`` are numbers. ``true``/``false`` are the only booleans
+      (``yes``, ``on`` are strings), ``null``/``~`` the only nulls; no merge keys (``<<``).
+    * Aliases and anchors (``*name``, ``&name``) are refused: a configuration never needs
+      them, and nested aliases expand exponentially (an "alias bomb").
+    * A key given twice is an error (not the last one silently winning).
+
+    Every error is a :class:`~assembler_pin.exceptions.ConfigError` or a ``yaml.YAMLError``.
+    """
+
+    yaml_implicit_resolvers: ClassVar[dict] = {}
+
+    def compose_node(self, parent: yaml.Node | None, index: object) -> yaml.Node:
+        event = self.peek_event()
+        if isinstance(event, yaml.AliasEvent) or getattr(event, "anchor", None) is not None:
+            raise ConfigError(
+                f"line {event.start_mark.line + 1}: YAML anchors and aliases (&name, *name) are not accepted"
+            )
+        return super().compose_node(parent, index)
 
     def construct_mapping(self, node: yaml.MappingNode, deep: bool = False) -> dict:
         seen = set()
         for key_node, _ in node.value:
             key = self.construct_object(key_node, deep=deep)
             if key in seen:
-                raise ConfigError(f"config key '{key}' is given twice (line {key_node.start_mark.line + 1})")
+                raise ConfigError(f"key {short_repr(key)} is given twice (line {key_node.start_mark.line + 1})")
             seen.add(key)
         return super().construct_mapping(node, deep=deep)
 
+    def construct_yaml12_int(self, node: yaml.ScalarNode) -> int:
+        text = self.construct_scalar(node)
+        if not _YAML12_INT.match(text):  # an explicit !!int tag on text that is no YAML 1.2 integer
+            raise ConfigError(f"line {node.start_mark.line + 1}: {short_repr(text, 30)} is not an integer")
+        base = {"0o": 8, "0x": 16}.get(text[:2], 10)
+        return int(text[2:] if base != 10 else text, base)
 
-_StrictLoader.add_implicit_resolver(
-    "tag:yaml.org,2002:float",
-    re.compile(r"^[-+]?(?:[0-9][0-9_]*)(?:\.[0-9_]*)?[eE][-+]?[0-9]+$"),
-    list("-+0123456789"),
-)
+    def construct_yaml12_float(self, node: yaml.ScalarNode) -> float:
+        text = self.construct_scalar(node)
+        if not (_YAML12_FLOAT.match(text) or _YAML12_INT.match(text)):
+            raise ConfigError(f"line {node.start_mark.line + 1}: {short_repr(text, 30)} is not a number")
+        if _YAML12_INT.match(text) and text[:2] in ("0o", "0x"):
+            return float(self.construct_yaml12_int(node))
+        text = text.lower()
+        return float(text.replace(".inf", "inf").replace(".nan", "nan"))
+
+
+for _tag, _regex, _first in (
+    ("bool", re.compile(r"^(?:true|True|TRUE|false|False|FALSE)$"), list("tTfF")),
+    ("null", re.compile(r"^(?:~|null|Null|NULL|)$"), ["~", "n", "N", ""]),
+    ("int", _YAML12_INT, list("-+0123456789")),
+    ("float", _YAML12_FLOAT, list("-+.0123456789")),
+):
+    StrictLoader.add_implicit_resolver(f"tag:yaml.org,2002:{_tag}", _regex, _first)
+StrictLoader.add_constructor("tag:yaml.org,2002:int", StrictLoader.construct_yaml12_int)
+StrictLoader.add_constructor("tag:yaml.org,2002:float", StrictLoader.construct_yaml12_float)
+
+
+def load_yaml(text: str, what: str) -> Any:
+    """Parse YAML text with :class:`StrictLoader`.
+
+    Args:
+        what: the source, for the message (e.g. "config file 'c.yaml'").
+
+    Raises:
+        ConfigError: one line of at most :data:`MAX_MESSAGE` characters naming ``what``.
+    """
+    try:
+        return yaml.load(text, Loader=StrictLoader)
+    except ConfigError as exc:
+        raise ConfigError(shorten(f"{what}: {exc}")) from None
+    except yaml.YAMLError as exc:
+        first = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
+        mark = getattr(exc, "problem_mark", None)
+        where = f" (line {mark.line + 1})" if mark is not None else ""
+        raise ConfigError(shorten(f"{what} is not valid YAML{where}: {first}")) from None
+    except (RecursionError, ValueError, OverflowError):
+        raise ConfigError(f"{what} is not a readable configuration (nested too deeply or a malformed number)") from None
+
+
+def shorten(message: str, limit: int = MAX_MESSAGE) -> str:
+    """``message`` on one line of at most ``limit`` characters."""
+    line = " ".join(message.split())
+    return line if len(line) <= limit else line[: limit - 1] + "…"
 
 
 def config_from_dict(data: Mapping[str, Any] | None) -> AssemblerConfig:
@@ -306,11 +385,11 @@ def config_from_dict(data: Mapping[str, Any] | None) -> AssemblerConfig:
     if data is None:
         data = {}
     if not isinstance(data, Mapping):
-        raise ConfigError(f"a configuration must be a mapping of keys to values, got {data!r}")
+        raise ConfigError(f"a configuration must be a mapping of keys to values, got {short_repr(data)}")
     allowed = list(_TOP_SCALARS) + list(_SECTIONS)
     for key in data:
         if key not in allowed:
-            raise ConfigError(f"unknown config key '{key}'; allowed keys: {', '.join(allowed)}")
+            raise ConfigError(f"unknown config key '{shorten(str(key), 30)}'; allowed keys: {', '.join(allowed)}")
     kwargs: dict[str, Any] = {}
     if "platforms" in data:
         value = data["platforms"]
@@ -332,6 +411,22 @@ def config_from_dict(data: Mapping[str, Any] | None) -> AssemblerConfig:
     return AssemblerConfig(**kwargs)
 
 
+def _read_text(path: Path, short_path: str) -> str:
+    """The text of a configuration file, at most :data:`MAX_CONFIG_BYTES` of UTF-8."""
+    try:
+        with path.open("rb") as f:
+            raw = f.read(MAX_CONFIG_BYTES + 1)
+    except (OSError, ValueError) as exc:  # ValueError: a NUL in the path
+        why = getattr(exc, "strerror", None) or exc
+        raise ConfigError(shorten(f"cannot read config file '{short_path}': {why}")) from None
+    if len(raw) > MAX_CONFIG_BYTES:
+        raise ConfigError(f"config file '{short_path}' is larger than {MAX_CONFIG_BYTES} bytes")
+    try:
+        return raw.decode("utf-8")
+    except UnicodeDecodeError:
+        raise ConfigError(f"config file '{short_path}' is not UTF-8 text") from None
+
+
 def load_config(source: str | Path | Mapping[str, Any] | AssemblerConfig | None = None) -> AssemblerConfig:
     """Load a configuration from a YAML file path, a mapping, or return the default.
 
@@ -348,21 +443,16 @@ def load_config(source: str | Path | Mapping[str, Any] | AssemblerConfig | None 
         return source
     if isinstance(source, Mapping):
         return config_from_dict(source)
+    if not isinstance(source, (str, Path)):
+        raise ConfigError(
+            f"a configuration must be a YAML path, a mapping, an AssemblerConfig or None, got {short_repr(source)}"
+        )
     path = Path(source)
-    try:
-        text = path.read_text(encoding="utf-8")
-    except OSError as exc:
-        raise ConfigError(f"cannot read config file '{path}': {exc.strerror or exc}") from None
-    except UnicodeDecodeError:
-        raise ConfigError(f"config file '{path}' is not UTF-8 text") from None
-    try:
-        data = yaml.load(text, Loader=_StrictLoader)
-    except yaml.YAMLError as exc:
-        first = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
-        raise ConfigError(f"config file '{path}' is not valid YAML: {first}") from None
-    except RecursionError:
-        raise ConfigError(f"config file '{path}' is nested too deeply") from None
+    short_path = shorten(path.name, 40)
+    text = _read_text(path, short_path)
+    data = load_yaml(text, f"config file '{short_path}'")
     try:
         return config_from_dict(data)
     except ConfigError as exc:
-        raise ConfigError(f"{path}: {exc}") from None
+        message = f"{short_path}: {exc}"  # the file's name when the line has room for it
+        raise ConfigError(message if len(message) <= MAX_MESSAGE else shorten(str(exc))) from None

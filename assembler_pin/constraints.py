@@ -20,7 +20,7 @@ import numpy as np
 import pinocchio as pin
 
 from .config import AssemblerConfig, LegConfig
-from .exceptions import PoseError
+from .exceptions import OptionsError, PoseError
 from .kinematics import LegState, PlateArrays
 from .labels import leg_label, platform_label
 from .options import DEFAULT_GOAL_TOLERANCE, GoalTolerance
@@ -161,13 +161,16 @@ def evaluate_constraints(
         for j in np.nonzero(~(statics.condition <= CONDITION_LIMIT))[0]:
             out.append(Violation("singular", int(j), None, float(statics.condition[j]), CONDITION_LIMIT))
     if goal is not None:
+        if not isinstance(tolerance, GoalTolerance):
+            raise OptionsError(f"tolerance must be a GoalTolerance, got {type(tolerance).__name__}")
         if plates is None:
             raise PoseError("evaluate_constraints: a goal needs the plate poses")
         ee = plates.se3(len(plates) - 1)
         dist = math.hypot(*(ee.translation - goal.translation))  # no overflow warning for huge goals
         angle = float(np.linalg.norm(pin.log3(goal.rotation.T @ ee.rotation)))
-        if dist > tolerance.position:
+        # "not <=": a NaN distance or tolerance is a violation, never a pass
+        if not dist <= tolerance.position:
             out.append(Violation("ee_position", None, None, dist, tolerance.position))
-        if angle > tolerance.rotation:
+        if not angle <= tolerance.rotation:
             out.append(Violation("ee_rotation", None, None, angle, tolerance.rotation))
     return out

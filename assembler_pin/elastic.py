@@ -35,7 +35,7 @@ its blocks from the base up (linear in n).
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 import pinocchio as pin
@@ -95,6 +95,8 @@ class ElasticTerms:
         tension: (n, 6) spring tensions ``k (L - L0)`` [N]; lengths: (n, 6) [m].
         lines: (n, 6, 6) each leg's line ``[u, r × u]`` at its top plate's origin (world axes,
             ``r`` the top joint from that origin): the rows of ``dL/d(δp, δθ)`` of the top plate.
+        base_gradient: (6,) ``∂V/∂(δp, δθ)`` of plate 0 [N, N·m]: the wrench a support holding
+            it supplies at equilibrium (world axes, moment about its origin).
     """
 
     gradient: np.ndarray
@@ -105,6 +107,7 @@ class ElasticTerms:
     tension: np.ndarray
     lengths: np.ndarray
     lines: np.ndarray
+    base_gradient: np.ndarray
 
 
 def _chart(f: np.ndarray, r: np.ndarray) -> np.ndarray:
@@ -139,7 +142,7 @@ def _platform_hessians(dirs, arms, c1, c2, c3, gravity: float) -> np.ndarray:
 def _joint_gradient(am: AssemblerModel, u, arm_x, along, across) -> tuple[np.ndarray, np.ndarray]:
     """The gradient at the joints, ``f`` (2, n, 6, 3): bottom ``-G - m_m a``, top ``G - m_s a``
     with ``G = along u - across a`` (a = -g e_z), and the plates' gradient (n+1, 6) from them,
-    their moments ``r × f`` and the plates' weight (the payload's is the caller's)."""
+    their moments ``r × f`` and the plates' weight, plate 0's included (the payload's is the caller's)."""
     leg, g, n = am.config.leg, am.config.gravity, am.n
     f = np.empty((2, n, 6, 3))
     f[1] = along[..., None] * u
@@ -150,7 +153,7 @@ def _joint_gradient(am: AssemblerModel, u, arm_x, along, across) -> tuple[np.nda
     m_bottom = -along[..., None] * arm_x[0, :, :, 0] + (g * (leg.motor_mass - across))[..., None] * arm_x[0, :, :, 3]
     grad = np.zeros((n + 1, 6))
     grad[1:, :3] = f[1].sum(axis=1)
-    grad[1:, 2] += am.config.plate.mass * g
+    grad[:, 2] += am.config.plate.mass * g  # plate 0 too: its row is what its support supplies
     grad[1:, 3:] = m_top.sum(axis=1)
     grad[:-1, :3] += f[0].sum(axis=1)
     grad[:-1, 3:] += m_bottom.sum(axis=1)
@@ -203,7 +206,7 @@ def elastic_terms(
     lines = np.concatenate([u, arm_x[1, :, :, 0]], axis=2)
     symmetric = wrench is None or not np.any(wrench[3:])
     if not hessian:
-        return ElasticTerms(grad[1:], None, None, None, symmetric, T, L, lines)
+        return ElasticTerms(grad[1:], None, None, None, symmetric, T, L, lines, grad[0])
     c3 = lam * inv_L * inv_L
     c2 = T * inv_L + c3 * au
     c1 = stiffness - T * inv_L - 3.0 * c3 * au
@@ -213,25 +216,27 @@ def elastic_terms(
     H12[1:, 3:6, 3:6] += charts[0, 1:]
     f_pay = np.array([0.0, 0.0, w_pay])
     ee = 0.5 * (np.outer(f_pay, r_pay) + np.outer(r_pay, f_pay)) - (w_pay * r_pay[2]) * _I3
-    if not symmetric:  # a constant world moment on a rotating plate: -½ [m]× (not symmetric)
+    if wrench is not None and not symmetric:  # a constant world moment on a rotating plate: -½ [m]×
         ee = ee - 0.5 * skew(wrench[3:])
-    return _assembled(grad[1:], H12, ee, symmetric, T, L, lines)
+    return _assembled(grad, H12, ee, symmetric, T, L, lines)
 
 
 def _assembled(grad, H12, ee, symmetric: bool, T, L, lines) -> ElasticTerms:
     """The terms with the platforms' (n, 12, 12) Hessians and the EE's rotation-block term
-    ``ee`` (3, 3) put together: dense up to :data:`DENSE_MAX_PLATFORMS`, else as blocks."""
+    ``ee`` (3, 3) put together: dense up to :data:`DENSE_MAX_PLATFORMS`, else as blocks;
+    ``grad`` (n+1, 6) holds plate 0's row too."""
     n = H12.shape[0]
+    base, grad = grad[0], grad[1:]
     if n <= DENSE_MAX_PLATFORMS:
         full = np.zeros((6 * n + 6, 6 * n + 6))
         for j in range(n):
             full[6 * j : 6 * j + 12, 6 * j : 6 * j + 12] += H12[j]
         full[-3:, -3:] += ee
-        return ElasticTerms(grad, full[6:, 6:], None, None, symmetric, T, L, lines)
+        return ElasticTerms(grad, full[6:, 6:], None, None, symmetric, T, L, lines, base)
     diag = H12[:, 6:, 6:].copy()
     diag[:-1] += H12[1:, :6, :6]
     diag[-1, 3:, 3:] += ee
-    return ElasticTerms(grad, None, diag, H12[1:, :6, 6:].copy(), symmetric, T, L, lines)
+    return ElasticTerms(grad, None, diag, H12[1:, :6, 6:].copy(), symmetric, T, L, lines, base)
 
 
 def tangent_solve(terms: ElasticTerms, rhs: np.ndarray) -> tuple[np.ndarray, np.ndarray, bool]:
@@ -246,6 +251,7 @@ def tangent_solve(terms: ElasticTerms, rhs: np.ndarray) -> tuple[np.ndarray, np.
     """
     n = rhs.shape[0]
     if terms.hessian is None:
+        assert terms.diag is not None and terms.off is not None, "terms computed without a Hessian"
         x, S = block_sweep(terms.diag, terms.off, rhs)
         sym = 0.5 * (S + np.swapaxes(S, 1, 2))
         return x, np.linalg.inv(S[-1]), bool(np.linalg.eigvalsh(sym).min() > 0)
@@ -341,6 +347,24 @@ def _singular(terms: ElasticTerms, limit: float) -> str | None:
     )
 
 
+def _held_solve(terms: ElasticTerms) -> tuple[np.ndarray, np.ndarray, bool]:
+    """The Newton step of plates 1..n-1 with the EE held (its row of the step zero); the
+    compliance returned is plate n-1's."""
+    n = terms.gradient.shape[0]
+    if n == 1:
+        return np.zeros((1, 6)), np.zeros((6, 6)), True
+    H, diag, off = terms.hessian, terms.diag, terms.off
+    free = replace(
+        terms,
+        gradient=terms.gradient[:-1],
+        hessian=None if H is None else H[:-6, :-6],
+        diag=None if diag is None else diag[:-1],
+        off=None if off is None else off[:-1],
+    )
+    x, C, stable = tangent_solve(free, -free.gradient)
+    return np.vstack([x, np.zeros((1, 6))]), C, stable
+
+
 def _step_size(x: np.ndarray, scale: float) -> float:
     return max(float(np.abs(x[:, :3]).max()), scale * float(np.abs(x[:, 3:]).max()))
 
@@ -355,8 +379,10 @@ def solve_equilibrium(
     tol: float = 1e-12,
     max_iterations: int = 30,
     condition_limit: float | None = None,
+    hold_ee: bool = False,
 ) -> Equilibrium:
-    """Newton's method on the plate poses for ``∇V = 0`` from the start ``R, p`` (plate 0 stays).
+    """Newton's method on the plate poses for ``∇V = 0`` from the start ``R, p`` (plate 0 stays;
+    with ``hold_ee`` the EE plate n stays too and plates 1..n-1 move: both ends held).
 
     Converged when the Newton step is at most ``tol`` [m] (rotations scaled by the node
     radius); steps longer than :data:`MAX_STEP` are shortened. Whether the answer is stable is
@@ -378,7 +404,7 @@ def solve_equilibrium(
             if message is not None:
                 break
         try:
-            x, C, stable = tangent_solve(terms, -terms.gradient)
+            x, C, stable = _held_solve(terms) if hold_ee else tangent_solve(terms, -terms.gradient)
         except np.linalg.LinAlgError:
             message = "the tangent stiffness is singular (a mechanism: the legs do not hold the plates)"
             break

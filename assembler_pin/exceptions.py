@@ -6,6 +6,20 @@ caller can catch one type. Messages say what was wrong and what is allowed.
 
 from __future__ import annotations
 
+#: Longest repr of a user's value quoted in a message [characters].
+REPR_LIMIT = 60
+
+
+def short_repr(value: object, limit: int = REPR_LIMIT) -> str:
+    """``repr(value)`` on one line, cut to ``limit`` characters (a huge value never makes a
+    huge message)."""
+    try:
+        text = repr(value)
+    except Exception:
+        text = f"<{type(value).__name__}>"
+    text = " ".join(text.split())
+    return text if len(text) <= limit else text[: limit - 1] + "…"
+
 
 class AssemblerError(Exception):
     """Root of every error raised on purpose by assembler_pin."""
@@ -17,6 +31,10 @@ class ConfigError(AssemblerError, ValueError):
 
 class PoseError(AssemblerError, ValueError):
     """A pose, a list of plate poses or a vector of leg lengths is malformed."""
+
+
+class ArgumentError(AssemblerError, TypeError):
+    """An API argument of the wrong type (the message names the argument and what is allowed)."""
 
 
 class ModelFileError(AssemblerError):
@@ -92,3 +110,16 @@ class GridError(AssemblerError, ValueError):
 
 class LoadError(AssemblerError, ValueError):
     """An external load (a wrench on the end effector) that is malformed, not finite or absurd."""
+
+
+class _SingularIterateError(AssemblerError, RuntimeError):
+    """The optimizer's solver accepted an iterate whose statics (or their derivatives) are
+    singular (raised and caught inside :mod:`assembler_pin.optimize`)."""
+
+
+class SupportError(AssemblerError, ValueError):
+    """A support that is not one of the known ones (``base``, ``ee``, ``both``, ``none``)."""
+
+
+class MapError(AssemblerError, ValueError):
+    """A capability map that cannot be run, resumed or read (arguments, directory, parts, cluster)."""

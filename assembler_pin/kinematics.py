@@ -31,6 +31,7 @@ __all__ = [
     "PlateArrays",
     "PlateDeviation",
     "StackFKResult",
+    "checked_goal",
     "checked_rotations",
     "ee_jacobian_wrt_lengths",
     "leg_state",
@@ -48,7 +49,12 @@ __all__ = [
     "to_se3",
 ]
 
-ORTHONORMAL_TOL = 1e-6
+#: How far from orthonormal (largest entry of ``RᵀR - I``) and from det +1 a given rotation
+#: may be; beyond it a pose is refused, never projected onto SO(3).
+ORTHONORMAL_TOL = 1e-9
+
+#: How far from 1 the norm of a quaternion in ``q`` may be.
+QUATERNION_NORM_TOL = 1e-9
 
 #: Largest rotation-vector component accepted in a TAA pose [rad]: beyond it exp3 loses
 #: every digit of the angle (a rotation never needs more than π).
@@ -93,7 +99,8 @@ class PlateArrays:
 def to_se3(pose: pin.SE3 | npt.ArrayLike, what: str = "pose") -> pin.SE3:
     """Validate one pose (``pin.SE3`` or 4×4 homogeneous matrix) and return it as SE3.
 
-    A rotation within 1e-6 of orthonormal is projected onto SO(3).
+    A rotation within :data:`ORTHONORMAL_TOL` of orthonormal (and of det +1) is projected
+    onto SO(3); one further off is refused.
 
     Raises:
         PoseError: not 4×4, not finite, last row not [0 0 0 1], or not a rotation.
@@ -101,19 +108,26 @@ def to_se3(pose: pin.SE3 | npt.ArrayLike, what: str = "pose") -> pin.SE3:
     matrix = pose.homogeneous if isinstance(pose, pin.SE3) else as_float_array(pose, f"{what} (a 4x4 matrix)", (4, 4))
     if not np.all(np.isfinite(matrix)):
         raise PoseError(f"{what} contains NaN or infinite values")
-    if not np.allclose(matrix[3], [0.0, 0.0, 0.0, 1.0], atol=1e-9):
+    if not np.abs(matrix[3] - [0.0, 0.0, 0.0, 1.0]).max() <= 1e-12:
         raise PoseError(f"{what}: the last row must be [0, 0, 0, 1], got {matrix[3].tolist()}")
     rot = matrix[:3, :3]
     err = np.abs(rot.T @ rot - np.eye(3)).max()
-    if err > ORTHONORMAL_TOL or np.linalg.det(rot) <= 0:
+    if not (err <= ORTHONORMAL_TOL and abs(np.linalg.det(rot) - 1.0) <= ORTHONORMAL_TOL):
         raise PoseError(
             f"{what}: the 3x3 block is not a rotation (|RᵀR - I| = {err:.2g}, det = "
             f"{np.linalg.det(rot):.3g}); it must be orthonormal to {ORTHONORMAL_TOL} with det +1"
         )
     if err > 1e-14:
-        u, _, vt = np.linalg.svd(rot)
-        rot = u @ vt
+        rot = nearest_rotations(rot[None])[0]
     return pin.SE3(rot, matrix[:3, 3].copy())
+
+
+def nearest_rotations(R: np.ndarray) -> np.ndarray:
+    """(m, 3, 3) matrices → the nearest rotations (Frobenius norm), by SVD with det +1."""
+    u, _, vt = np.linalg.svd(R)
+    d = np.sign(np.linalg.det(np.matmul(u, vt)))
+    u[:, :, 2] *= d[:, None]
+    return np.matmul(u, vt)
 
 
 def taa_to_se3(taa: npt.ArrayLike, degrees: bool = False, what: str = "goal") -> pin.SE3:
@@ -151,8 +165,8 @@ def plate_arrays(am: AssemblerModel, plates: PlateArrays | Sequence | np.ndarray
         PoseError: wrong count of plates or a malformed pose.
     """
     if isinstance(plates, PlateArrays):
-        if len(plates) != am.n + 1:
-            raise PoseError(f"expected {am.n + 1} plate poses (plates 0..{am.n}), got {len(plates)}")
+        if not plates.__dict__.get("_checked", False):
+            _check_plate_arrays(plates, am.n + 1)
         return plates
     if isinstance(plates, (list, tuple)) and plates and all(isinstance(m, pin.SE3) for m in plates):
         matrices = np.array([m.homogeneous for m in plates])
@@ -167,10 +181,51 @@ def plate_arrays(am: AssemblerModel, plates: PlateArrays | Sequence | np.ndarray
     return PlateArrays(*checked_rotations(matrices))
 
 
+def _check_plate_arrays(pa: PlateArrays, count: int) -> None:
+    """A PlateArrays built by the caller: ``count`` finite poses whose ``R`` are rotations
+    (orthonormal and det +1 to :data:`ORTHONORMAL_TOL`); marked checked once it passes.
+
+    Raises:
+        PoseError: naming the first plate that fails.
+    """
+    R, p = pa.R, pa.p
+    if not (isinstance(R, np.ndarray) and isinstance(p, np.ndarray)) or R.dtype.kind != "f" or p.dtype.kind != "f":
+        raise PoseError("PlateArrays.R and .p must be float arrays of shape (n+1, 3, 3) and (n+1, 3)")
+    if R.shape != (count, 3, 3) or p.shape != (count, 3):
+        raise PoseError(
+            f"expected {count} plate poses (plates 0..{count - 1}): PlateArrays.R of shape ({count}, 3, 3) and "
+            f".p of shape ({count}, 3), got {R.shape} and {p.shape}"
+        )
+    bad = ~(np.isfinite(R).all(axis=(1, 2)) & np.isfinite(p).all(axis=1))
+    if bad.any():
+        raise PoseError(f"PlateArrays: plate {int(np.argmax(bad))} contains NaN or infinite values")
+    err = np.abs(np.matmul(R.transpose(0, 2, 1), R) - np.eye(3)).max(axis=(1, 2))
+    det = np.linalg.det(R)
+    wrong = ~((err <= ORTHONORMAL_TOL) & (np.abs(det - 1.0) <= ORTHONORMAL_TOL))
+    if wrong.any():
+        k = int(np.argmax(wrong))
+        raise PoseError(
+            f"PlateArrays: R[{k}] is not a rotation (|RᵀR - I| = {err[k]:.2g}, det = {det[k]:.3g}); "
+            f"it must be orthonormal with det +1 to {ORTHONORMAL_TOL:g}"
+        )
+    object.__setattr__(pa, "_checked", True)
+
+
+def checked_goal(goal: object, what: str = "goal") -> pin.SE3:
+    """An EE goal given as ``pin.SE3`` or a 4×4 matrix, checked by :func:`to_se3`.
+
+    Raises:
+        PoseError: naming ``what``: not a pose, not finite, or not a rotation.
+    """
+    if not isinstance(goal, (pin.SE3, np.ndarray, list, tuple)):
+        raise PoseError(f"{what} must be a pin.SE3 or a 4x4 matrix, got {type(goal).__name__}")
+    return to_se3(goal, what)
+
+
 def checked_rotations(matrices: np.ndarray, what: str = "plate") -> tuple[np.ndarray, np.ndarray]:
     """(m, 4, 4) homogeneous matrices → (R (m, 3, 3), p (m, 3)), checked all at once: finite,
-    last row ``[0, 0, 0, 1]``, rotation orthonormal to :data:`ORTHONORMAL_TOL` with det +1
-    (then projected onto SO(3) where not exact to 1e-14).
+    last row ``[0, 0, 0, 1]`` (to 1e-12), rotation orthonormal and of det +1 to
+    :data:`ORTHONORMAL_TOL` (then projected onto SO(3) where not exact to 1e-14).
 
     Raises:
         PoseError: naming the first pose that fails.
@@ -178,14 +233,14 @@ def checked_rotations(matrices: np.ndarray, what: str = "plate") -> tuple[np.nda
     bad = ~np.isfinite(matrices).all(axis=(1, 2))
     if bad.any():
         raise PoseError(f"{what} {int(np.argmax(bad))} contains NaN or infinite values")
-    last = np.abs(matrices[:, 3] - np.array([0.0, 0.0, 0.0, 1.0])).max(axis=1) > 1e-9
+    last = np.abs(matrices[:, 3] - np.array([0.0, 0.0, 0.0, 1.0])).max(axis=1) > 1e-12
     if last.any():
         k = int(np.argmax(last))
         raise PoseError(f"{what} {k}: the last row must be [0, 0, 0, 1], got {matrices[k, 3].tolist()}")
     R = matrices[:, :3, :3].copy()
     err = np.abs(np.matmul(R.transpose(0, 2, 1), R) - np.eye(3)).max(axis=(1, 2))
     det = np.linalg.det(R)
-    wrong = (err > ORTHONORMAL_TOL) | (det <= 0)
+    wrong = ~((err <= ORTHONORMAL_TOL) & (np.abs(det - 1.0) <= ORTHONORMAL_TOL))
     if wrong.any():
         k = int(np.argmax(wrong))
         raise PoseError(
@@ -194,8 +249,7 @@ def checked_rotations(matrices: np.ndarray, what: str = "plate") -> tuple[np.nda
         )
     inexact = err > 1e-14
     if inexact.any():
-        u, _, vt = np.linalg.svd(R[inexact])
-        R[inexact] = np.matmul(u, vt)
+        R[inexact] = nearest_rotations(R[inexact])
     return R, matrices[:, :3, 3].copy()
 
 
@@ -306,6 +360,17 @@ def plates_from_q(am: AssemblerModel, q: np.ndarray) -> PlateArrays:
     :func:`q_from_plates`): plate 0 from the root free-flyer, plate j+1 = plate j · its joint's
     home placement · its free-flyer, in closed form (no Pinocchio data of the whole stack)."""
     q = as_float_array(q, "q", (am.nq,))
+    if not np.all(np.isfinite(q)):
+        raise PoseError(f"q contains NaN or infinite values (at index {int(np.argmax(~np.isfinite(q)))})")
+    starts = np.array([int(k) + 3 for k in am.plate_idx_q])  # each free-flyer's quaternion (x, y, z, w)
+    norms = np.linalg.norm(q[starts[:, None] + np.arange(4)], axis=1)
+    off = np.abs(norms - 1.0) > QUATERNION_NORM_TOL
+    if off.any():
+        k = int(np.argmax(off))
+        raise PoseError(
+            f"q: the quaternion of plate {k} (q[{starts[k]}:{starts[k] + 4}]) has norm {norms[k]:.6g}; "
+            f"it must be a unit quaternion (to {QUATERNION_NORM_TOL:g})"
+        )
     poses = [pin.XYZQUATToSE3(q[0:7])]
     for j in range(am.n):
         k = int(am.plate_idx_q[j + 1])
@@ -374,10 +439,26 @@ def platform_configurations(am: AssemblerModel, pa: PlateArrays, vec: np.ndarray
 class FKResult:
     """Result of one Stewart platform's forward kinematics.
 
+    The mechanism's own assembly mode — the one it is built in and moves in continuously
+    from home while its legs stay in the stroke — is where all of these hold:
+
+    * every top joint is above its bottom joint in the bottom plate's frame (rise > 0);
+    * every bottom joint is below its top joint in the top plate's frame (each leg meets the
+      top plate from below);
+    * the top plate is turned less than 90° from the bottom plate (angle of the relative
+      rotation, so both its tilt and its twist about the plate normal are under 90°);
+    * each leg's direction is less than 90° from its home direction at both joints (a
+      joint cannot fold its leg past the plate).
+
+    Lengths of a platform's stroke have many other solutions (mirror images, plates turned
+    upside down or twisted by more than 90°, legs crossing); FK reports success only in
+    this mode. These rules are per platform: a stack whose platforms each stay in the mode
+    may still, over many platforms, bend its EE plate below the base.
+
     Attributes:
         pose: top plate in the bottom plate's frame (the last iterate if not converged).
         success: True only when the length residual is below the tolerance and the
-            solution is the mechanism's assembly mode (every top joint above its bottom).
+            solution is in the mechanism's assembly mode (above).
         iterations: Newton iterations used.
         residual: largest |L_i(pose) - L_i| [m].
         message: why it failed, or "converged".
@@ -463,7 +544,7 @@ def _platform_fk(
         home_step = am.fk_home_inverse_jacobian[j].dot(target - am.config.leg.mid_length)
         pose = pin.exp6(home_step) * am.plate_joint_placement[j + 1]
     else:
-        pose = pin.SE3(guess)
+        pose = _projected_guess(guess)
     from scipy.linalg.lapack import dgesv  # imported on first use: keeps `import assembler_pin` fast
 
     target_sq = target * target
@@ -492,10 +573,50 @@ def _platform_fk(
     if message is None and not residual <= tol:
         message = (f"platform {j}: FK did not converge in {max_iterations} iterations "
                    f"(length residual {residual:.3g} m > {tol:.1g} m)")  # fmt: skip
-    elif message is None and vec[:, 2].min() <= 0.0:
-        message = (f"platform {j}: converged to an assembly mode with a top joint below its bottom "
-                   "joint (not this mechanism's branch)")  # fmt: skip
+    elif message is None:
+        message = _foreign_mode(am, j, pose, vec)
     return FKResult(pose, message is None, iterations, residual, message or "converged")
+
+
+def _projected_guess(guess: object) -> pin.SE3:
+    """An FK starting pose on SE(3): the guess's rotation through its unit quaternion, so that
+    chained FK calls (each starting from the last answer) never accumulate rounding.
+
+    Raises:
+        PoseError: the guess is not a finite ``pin.SE3``.
+    """
+    if not isinstance(guess, pin.SE3):
+        what = type(guess).__name__
+        raise PoseError(f"an FK guess must be a pin.SE3 (top plate in the bottom plate's frame), got {what}")
+    if not np.all(np.isfinite(guess.homogeneous)):
+        raise PoseError("the FK guess contains NaN or infinite values")
+    quat = pin.Quaternion(guess.rotation)
+    norm = quat.norm()
+    if not norm > 0.0:
+        raise PoseError("the FK guess's rotation block is not a rotation")
+    quat.normalize()
+    return pin.SE3(quat.matrix(), guess.translation.copy())
+
+
+def _foreign_mode(am: AssemblerModel, j: int, pose: pin.SE3, vec: np.ndarray) -> str | None:
+    """Why the converged pose of platform j is not the mechanism's assembly mode (the rules of
+    :class:`FKResult`), None when it is. ``vec``: (6, 3) bottom→top leg vectors, bottom frame."""
+    R = pose.rotation
+    home = am.geometry.home_direction[j]
+    in_top = vec.dot(R)  # leg vectors in the top plate's frame
+    why = None
+    if vec[:, 2].min() <= 0.0:
+        why = "a top joint below its bottom joint"
+    elif in_top[:, 2].min() <= 0.0:
+        why = "a leg meeting the top plate from above"
+    elif not np.trace(R) > 1.0:  # cos(angle) = (tr R - 1) / 2
+        angle = math.degrees(math.acos(min(1.0, max(-1.0, 0.5 * (np.trace(R) - 1.0)))))
+        why = f"the top plate turned {angle:.0f}° from the bottom plate (at most 90°)"
+    elif min((vec * home).sum(axis=1).min(), (in_top * home).sum(axis=1).min()) <= 0.0:
+        why = "a leg deflected 90° or more from its home direction"
+    if why is None:
+        return None
+    return f"platform {j}: FK converged to another assembly mode ({why}), not the mechanism's own"
 
 
 @dataclass

@@ -35,6 +35,7 @@ import tempfile
 import threading
 from collections.abc import Sequence
 from dataclasses import dataclass, field
+from typing import IO
 
 __all__ = ["DEFAULT_HOST", "SET_OVERLAY", "ServerProcess", "main", "start_server"]
 
@@ -74,7 +75,7 @@ class ServerProcess:
     process: subprocess.Popen
     zmq_url: str
     web_url: str
-    _stderr: object = field(default=None, repr=False)
+    _stderr: IO[bytes] | None = field(default=None, repr=False)
 
     @property
     def pid(self) -> int:
@@ -102,7 +103,8 @@ class ServerProcess:
                 continue
         for stream in (self.process.stdout, self._stderr):
             with contextlib.suppress(Exception):
-                stream.close()
+                if stream is not None:
+                    stream.close()
 
 
 def _url_host(host: str) -> str:
@@ -193,6 +195,7 @@ def _check_host_and_port(host: str, port: int | None) -> None:
 
 
 def _read_urls(proc: subprocess.Popen, urls: dict[str, str]) -> None:
+    assert proc.stdout is not None  # started with stdout=PIPE
     for raw in proc.stdout:
         key, _, value = raw.decode("utf-8", "replace").strip().partition("=")
         if key in ("zmq_url", "web_url"):

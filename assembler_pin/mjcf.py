@@ -148,8 +148,10 @@ def _cylinder_part(body: ET.Element, mass: float, radius: float, com_z: float, m
         ET.SubElement(body, "geom", type="cylinder", size=size, pos=xml_vector(centre), material=material)
 
 
-def assembler_mjcf(cfg: AssemblerConfig) -> str:
-    """The MJCF text of the stack described by ``cfg`` (see module docstring)."""
+def assembler_mjcf(cfg: AssemblerConfig, weld_ee: bool = False) -> str:
+    """The MJCF text of the stack described by ``cfg`` (see module docstring); ``weld_ee`` adds
+    the equality ``<weld name="ee_weld" body1="plate_n"/>`` holding the EE plate to the world
+    (both ends held; its ``eq_data`` relative pose is the home one until set)."""
     # Long by design: it writes the MJCF in document order, plate by plate and leg by leg.
     geo = leg_geometry(cfg)
     dim = DIMENSIONS
@@ -252,6 +254,8 @@ def assembler_mjcf(cfg: AssemblerConfig) -> str:
                 body2=names.plate(j + 1),
                 anchor="0 0 0",
             )
+    if weld_ee:
+        ET.SubElement(equality, "weld", name="ee_weld", body1=names.plate(cfg.platforms))
     actuator = ET.SubElement(root, "actuator")
     for j in range(cfg.platforms):
         for i in range(LEGS_PER_PLATFORM):

@@ -19,15 +19,15 @@ from typing import Any
 
 import numpy as np
 import pinocchio as pin
-import yaml
 
-from .config import AssemblerConfig, PayloadConfig, load_config
-from .exceptions import ConfigError, ModelFileError
+from .config import AssemblerConfig, PayloadConfig, load_config, load_yaml
+from .exceptions import ArgumentError, ConfigError, ModelFileError, short_repr
 from .geometry import LEGS_PER_PLATFORM, LegGeometry, home_plates, leg_geometry
 from .platform_model import PlatformModel, StackPlan
 from .urdf import SIDECAR_FILENAME, URDF_FILENAME, assembler_urdf, closure_sidecar, names
+from .urdf_check import parse_urdf, urdf_disagreements
 
-__all__ = ["WHOLE_DATA_MAX_PLATFORMS", "AssemblerModel", "Closure"]
+__all__ = ["WHOLE_DATA_MAX_PLATFORMS", "AssemblerModel", "Closure", "checked_model"]
 
 #: Largest stack whose whole-stack Pinocchio ``Data`` is created (its size grows as nv² and nv³).
 WHOLE_DATA_MAX_PLATFORMS = 8
@@ -152,60 +152,51 @@ class AssemblerModel:
             config: an :class:`AssemblerConfig`, a YAML path, a mapping, or None (defaults).
         """
         cfg = load_config(config)
-        return cls._from_texts(assembler_urdf(cfg), closure_sidecar(cfg), "<generated>")
+        return cls._from_texts(assembler_urdf(cfg), closure_sidecar(cfg), "<generated>", check=False)
 
     @classmethod
     def from_files(cls, urdf_path: str | Path, sidecar_path: str | Path | None = None) -> AssemblerModel:
         """Load an exported ``assembler.urdf`` and its closure sidecar.
+
+        The two files must agree: every mass, inertia, centre of mass, joint origin, joint
+        limit and the platform count of the URDF are compared with what the sidecar's
+        ``assembler_config`` gives (:mod:`~assembler_pin.urdf_check`, relative tolerance 1e-9).
 
         Args:
             urdf_path: the URDF file, or a directory holding ``assembler.urdf``.
             sidecar_path: the sidecar; default ``assembler.yaml`` beside the URDF.
 
         Raises:
-            ModelFileError: a file is missing or does not describe an Assembler.
+            ModelFileError: a file is missing, unreadable or malformed, does not describe an
+                Assembler, or the two files disagree (one line naming the quantities and both values).
         """
         urdf_path = Path(urdf_path)
         if urdf_path.is_dir():
             urdf_path = urdf_path / URDF_FILENAME
         sidecar_path = Path(sidecar_path) if sidecar_path else urdf_path.with_name(SIDECAR_FILENAME)
-        try:
-            urdf_text = urdf_path.read_text()
-            sidecar_text = sidecar_path.read_text()
-        except OSError as exc:
-            raise ModelFileError(f"cannot read model file: {exc}") from None
-        return cls._from_texts(urdf_text, sidecar_text, str(sidecar_path))
+        urdf_text = _read_model_file(urdf_path)
+        sidecar_text = _read_model_file(sidecar_path)
+        return cls._from_texts(urdf_text, sidecar_text, sidecar_path.name)
 
     @classmethod
-    def _from_texts(cls, urdf_text: str, sidecar_text: str, origin: str) -> AssemblerModel:
-        try:
-            sidecar = yaml.safe_load(sidecar_text)
-        except yaml.YAMLError as exc:
-            raise ModelFileError(f"closure sidecar {origin} is not valid YAML: {exc}") from None
-        if not isinstance(sidecar, dict) or not {"closed_loop", "type", "name_mot"} <= set(sidecar):
-            raise ModelFileError(f"closure sidecar {origin} must have the keys closed_loop, type, name_mot")
-        try:
-            cfg = load_config(sidecar.get("assembler_config") or {})
-        except ConfigError as exc:
-            raise ModelFileError(f"closure sidecar {origin}: assembler_config: {exc}") from None
-        pairs, types = sidecar["closed_loop"], sidecar["type"]
-        if len(pairs) != len(types) or len(pairs) != 6 * cfg.platforms:
-            raise ModelFileError(
-                f"closure sidecar {origin}: expected {6 * cfg.platforms} closures with one type "
-                f"each, got {len(pairs)} pairs and {len(types)} types"
-            )
-        closures = []
-        for c, (pair, kind) in enumerate(zip(pairs, types, strict=True)):
-            if str(kind).lower() != "3d":
-                raise ModelFileError(f"closure {pair}: only type '3d' is supported, got {kind!r}")
-            closures.append(Closure(str(pair[0]), str(pair[1]), c // 6, c % 6))
+    def _from_texts(cls, urdf_text: str, sidecar_text: str, origin: str, check: bool = True) -> AssemblerModel:
+        sidecar, cfg = _read_sidecar(sidecar_text, origin)
+        if check:
+            given = parse_urdf(urdf_text, "the URDF")
+            why = urdf_disagreements(given, parse_urdf(assembler_urdf(cfg), "the generated URDF"))
+            if why is not None:
+                raise ModelFileError(f"the URDF and the sidecar {origin} disagree: {why}")
+        closures, name_mot = _sidecar_closures(sidecar, cfg, origin)
         try:
             model = pin.buildModelFromXML(urdf_text, pin.JointModelFreeFlyer())
         except (RuntimeError, ValueError) as exc:
-            raise ModelFileError(f"Pinocchio cannot parse the URDF: {exc}") from None
+            raise ModelFileError(f"Pinocchio cannot parse the URDF: {' '.join(str(exc).split())[:150]}") from None
         expected_mot = [names.leg(j, i, "actuator") for j in range(cfg.platforms) for i in range(6)]
-        if list(sidecar["name_mot"]) != expected_mot:
-            raise ModelFileError(f"closure sidecar {origin}: name_mot must list {expected_mot}")
+        if name_mot != expected_mot:
+            raise ModelFileError(
+                f"closure sidecar {origin}: name_mot must list the {len(expected_mot)} actuators "
+                f"{expected_mot[0]} .. {expected_mot[-1]} in order"
+            )
         return cls(cfg, model, closures, urdf_text)
 
     def _home_inverse_jacobians(self) -> np.ndarray:
@@ -301,3 +292,91 @@ class AssemblerModel:
     def total_mass(self) -> float:
         """Mass of every body of the stack, payload included [kg]."""
         return float(sum(inertia.mass for inertia in self.model.inertias))
+
+
+def checked_model(am: object, what: str = "am") -> AssemblerModel:
+    """``am`` when it is an :class:`AssemblerModel`, else :class:`ArgumentError` naming ``what``."""
+    if not isinstance(am, AssemblerModel):
+        raise ArgumentError(
+            f"{what} must be an AssemblerModel (AssemblerModel.from_config(...)), got {type(am).__name__}"
+        )
+    return am
+
+
+#: Largest model file read [bytes] (the URDF of 64 platforms is about 2 MB).
+MAX_MODEL_FILE_BYTES = 64 << 20
+
+
+def _read_model_file(path: Path) -> str:
+    """The UTF-8 text of a URDF or sidecar file (at most :data:`MAX_MODEL_FILE_BYTES`)."""
+    try:
+        with path.open("rb") as f:
+            raw = f.read(MAX_MODEL_FILE_BYTES + 1)
+    except (OSError, ValueError) as exc:
+        raise ModelFileError(f"cannot read model file '{path.name}': {getattr(exc, 'strerror', None) or exc}") from None
+    if len(raw) > MAX_MODEL_FILE_BYTES:
+        raise ModelFileError(f"model file '{path.name}' is larger than {MAX_MODEL_FILE_BYTES} bytes")
+    try:
+        return raw.decode("utf-8")
+    except UnicodeDecodeError:
+        raise ModelFileError(f"model file '{path.name}' is not UTF-8 text") from None
+
+
+def _string_list(sidecar: dict, key: str, origin: str, pairs: bool = False) -> list:
+    value = sidecar[key]
+    item_ok = (
+        (lambda x: isinstance(x, list) and len(x) == 2 and all(isinstance(y, str) for y in x))
+        if pairs
+        else (lambda x: isinstance(x, str))
+    )
+    if not isinstance(value, list) or not all(item_ok(x) for x in value):
+        shape = "a list of [shaft frame, anchor frame] name pairs" if pairs else "a list of names"
+        raise ModelFileError(f"closure sidecar {origin}: {key} must be {shape}, got {short_repr(value, 40)}")
+    return value
+
+
+def _read_sidecar(text: str, origin: str) -> tuple[dict, AssemblerConfig]:
+    """The mapping of a closure sidecar's text and its configuration.
+
+    Raises:
+        ModelFileError: invalid YAML (aliases and duplicate keys included), a key missing,
+            or an invalid assembler_config.
+    """
+    try:
+        sidecar = load_yaml(text, f"closure sidecar {origin}")
+    except ConfigError as exc:
+        raise ModelFileError(str(exc)) from None
+    required = ("closed_loop", "type", "name_mot", "assembler_config")
+    if not isinstance(sidecar, dict) or not set(required[:3]) <= set(sidecar):
+        raise ModelFileError(f"closure sidecar {origin} must have the keys {', '.join(required)}")
+    if "assembler_config" not in sidecar or not isinstance(sidecar["assembler_config"], dict):
+        raise ModelFileError(
+            f"closure sidecar {origin}: assembler_config must be the mapping of the configuration the files were "
+            "generated from (write both files with 'assembler-pin export')"
+        )
+    try:
+        cfg = load_config(sidecar["assembler_config"])
+    except ConfigError as exc:
+        raise ModelFileError(f"closure sidecar {origin}: assembler_config: {exc}") from None
+    return sidecar, cfg
+
+
+def _sidecar_closures(sidecar: dict, cfg: AssemblerConfig, origin: str) -> tuple[list[Closure], list[str]]:
+    """The closures and actuator names of a sidecar (ModelFileError: wrong types or counts,
+    a closure that is not ``3d``)."""
+    pairs = _string_list(sidecar, "closed_loop", origin, pairs=True)
+    types = _string_list(sidecar, "type", origin)
+    name_mot = _string_list(sidecar, "name_mot", origin)
+    if len(pairs) != len(types) or len(pairs) != 6 * cfg.platforms:
+        raise ModelFileError(
+            f"closure sidecar {origin}: expected {6 * cfg.platforms} closures with one type "
+            f"each, got {len(pairs)} pairs and {len(types)} types"
+        )
+    closures = []
+    for c, (pair, kind) in enumerate(zip(pairs, types, strict=True)):
+        if kind.lower() != "3d":
+            raise ModelFileError(
+                f"closure {short_repr(pair, 60)}: only type '3d' is supported, got {short_repr(kind, 20)}"
+            )
+        closures.append(Closure(pair[0], pair[1], c // 6, c % 6))
+    return closures, name_mot

@@ -38,17 +38,19 @@ from __future__ import annotations
 import logging
 import math
 import time
+from collections.abc import Callable
 from dataclasses import dataclass
+from typing import Protocol
 
 import numpy as np
 import pinocchio as pin
 
 from .constraints import leg_limit_margins
-from .exceptions import OptionsError, SingularConfigurationError
+from .exceptions import OptionsError, SingularConfigurationError, _SingularIterateError
 from .gradients import PoseDerivatives, pose_derivatives
-from .kinematics import LegState, PlateArrays, leg_state, plate_arrays, plate_deviation
-from .model import AssemblerModel
-from .options import METHODS, OptimizeOptions
+from .kinematics import LegState, PlateArrays, checked_goal, leg_state, plate_arrays, plate_deviation
+from .model import AssemblerModel, checked_model
+from .options import METHODS, OptimizeOptions, checked_options
 from .state import StackState, evaluate_state
 from .statics import solve_statics
 from .threads import one_blas_thread
@@ -68,6 +70,7 @@ logger = logging.getLogger(__name__)
 #: Forces [N] standing in for the statics at a singular trial point: finite (SLSQP cannot
 #: handle NaN) and far outside every force limit, so such a step is infeasible.
 SINGULAR_FORCE = 1e6
+
 
 @dataclass(frozen=True)
 class MotionTerm:
@@ -153,10 +156,6 @@ class _Values:
     cos_deflection: np.ndarray  # (n, 6, 2)
     rise: np.ndarray
     plate_angles: np.ndarray  # (n,) [rad]
-
-
-class _SingularIterateError(Exception):
-    """The solver accepted an iterate whose statics (or their derivatives) are singular."""
 
 
 class _Problem:
@@ -303,6 +302,7 @@ class _Problem:
         if not self.free_ee:
             return np.zeros(0)
         tol = self.opts.ee_tolerance
+        assert tol is not None  # free_ee: the EE may move within ee_tolerance
         dp = pa.p[self.n] - self.goal.translation
         if self.opts.method == "paper":
             rot = pin.log3(self.goal.rotation.T @ pa.R[self.n])
@@ -399,7 +399,12 @@ def optimize_internal_poses(
         motion: continuity with a previous sample (:class:`MotionTerm`, slsqp only); the
             chosen state then also keeps every leg within ``max_step`` of it.
     """
-    opts = options or OptimizeOptions()
+    checked_model(am)
+    opts = checked_options(options, OptimizeOptions, "options")
+    if motion is not None and not isinstance(motion, MotionTerm):
+        raise OptionsError(f"motion must be a MotionTerm or None, got {type(motion).__name__}")
+    if goal is not None:
+        goal = checked_goal(goal, "goal")
     if motion is not None:
         if opts.method != "slsqp":
             raise OptionsError("a motion term needs method 'slsqp'")
@@ -472,7 +477,7 @@ def optimize_internal_poses(
 
 def _run_solver(
     problem: _Problem, initial_state: StackState
-) -> tuple[OptimizeResult | object, object, np.ndarray, str]:
+) -> tuple[_SolverResult, Callable[[np.ndarray], PlateArrays], np.ndarray, str]:
     """Run SLSQP in the method's chart; returns (scipy result, chart map, final pose point,
     the reason when it stopped at a singular iterate else "")."""
     opts = problem.opts
@@ -502,6 +507,16 @@ def _run_solver(
     return res, to_plates, x_final, singular
 
 
+class _SolverResult(Protocol):
+    """What is read of a solver result: scipy's ``OptimizeResult`` or :class:`_StoppedEarly`."""
+
+    x: np.ndarray
+    message: str
+    success: bool
+    status: int
+    nit: int
+
+
 @dataclass
 class _StoppedEarly:
     """Stands in for scipy's result when the solve stopped early (no converged point)."""
@@ -514,7 +529,7 @@ class _StoppedEarly:
 
 
 def _verdict(
-    res: object, singular: str, converged: bool, final: StackState, chosen: StackState, initial: StackState
+    res: _SolverResult, singular: str, converged: bool, final: StackState, chosen: StackState, initial: StackState
 ) -> tuple[bool, str]:
     """(success, message) of an optimization: success only when the solver converged to a
     point that meets every constraint (or was pulled back inside) and that point was kept."""

@@ -10,8 +10,9 @@ from __future__ import annotations
 import math
 import numbers
 from dataclasses import dataclass, field
+from typing import TypeVar
 
-from .exceptions import OptionsError
+from .exceptions import OptionsError, short_repr
 
 __all__ = [
     "DEFAULT_GOAL_TOLERANCE",
@@ -20,6 +21,7 @@ __all__ = [
     "GoalTolerance",
     "HelperArmOptions",
     "OptimizeOptions",
+    "checked_options",
     "is_number",
 ]
 
@@ -40,6 +42,30 @@ class GoalTolerance:
 
     position: float = 1e-6
     rotation: float = 1e-6
+
+    def __post_init__(self) -> None:
+        for name in ("position", "rotation"):
+            value = getattr(self, name)
+            if not (is_number(value) and 0 <= value < math.inf):
+                unit = "m" if name == "position" else "rad"
+                shown = short_repr(value)
+                raise OptionsError(f"GoalTolerance.{name} must be a finite number >= 0 [{unit}], got {shown}")
+
+
+_OptionsT = TypeVar("_OptionsT")
+
+
+def checked_options(value: object, cls: type[_OptionsT], what: str) -> _OptionsT:
+    """``value`` when it is a ``cls`` instance, ``cls()`` when it is None, else OptionsError.
+
+    Args:
+        what: the argument's name, for the message (e.g. ``"options"``).
+    """
+    if value is None:
+        return cls()
+    if not isinstance(value, cls):
+        raise OptionsError(f"{what} must be a {cls.__name__} (or None for the defaults), got {type(value).__name__}")
+    return value
 
 
 DEFAULT_GOAL_TOLERANCE = GoalTolerance()
@@ -82,8 +108,8 @@ class OptimizeOptions:
     goal_tolerance: GoalTolerance = field(default_factory=lambda: GoalTolerance(1e-9, 1e-9))
 
     def __post_init__(self) -> None:
-        if self.method not in METHODS:
-            raise OptionsError(f"method must be one of {', '.join(METHODS)}, got {self.method!r}")
+        if not isinstance(self.method, str) or self.method not in METHODS:
+            raise OptionsError(f"method must be one of {', '.join(METHODS)}, got {short_repr(self.method)}")
         for name, positive in (
             ("w1", False),
             ("w2", False),
@@ -93,11 +119,16 @@ class OptimizeOptions:
         ):
             value = getattr(self, name)
             if not (is_number(value) and math.isfinite(value) and (value > 0 if positive else value >= 0)):
-                raise OptionsError(f"{name} must be a finite number {'>' if positive else '>='} 0, got {value!r}")
+                sign = ">" if positive else ">="
+                raise OptionsError(f"{name} must be a finite number {sign} 0, got {short_repr(value)}")
         if self.w1 + self.w2 == 0:
             raise OptionsError("weights w1, w2 must not both be 0")
-        if not (isinstance(self.max_iterations, numbers.Integral) and self.max_iterations >= 1):
-            raise OptionsError(f"max_iterations must be an integer >= 1, got {self.max_iterations!r}")
+        if not (
+            isinstance(self.max_iterations, numbers.Integral)
+            and not isinstance(self.max_iterations, bool)
+            and self.max_iterations >= 1
+        ):
+            raise OptionsError(f"max_iterations must be an integer >= 1, got {short_repr(self.max_iterations)}")
         for name in ("ee_tolerance", "goal_tolerance"):
             tol = getattr(self, name)
             if tol is None and name == "ee_tolerance":
@@ -105,7 +136,8 @@ class OptimizeOptions:
             if not isinstance(tol, GoalTolerance) or not all(
                 is_number(v) and 0 < v < math.inf for v in (tol.position, tol.rotation)
             ):
-                raise OptionsError(f"{name} must be a GoalTolerance of two finite numbers > 0 (m, rad), got {tol!r}")
+                shown = short_repr(tol)
+                raise OptionsError(f"{name} must be a GoalTolerance of two finite numbers > 0 (m, rad), got {shown}")
 
 
 @dataclass
@@ -146,12 +178,14 @@ class HelperArmOptions:
         for name in ("d_step", "regularization", "constraint_weight", "arm_tolerance"):
             value = getattr(self, name)
             if not (is_number(value) and math.isfinite(value) and value >= 0):
-                raise OptionsError(f"{name} must be a finite number >= 0, got {value!r}")
+                raise OptionsError(f"{name} must be a finite number >= 0, got {short_repr(value)}")
         if not self.d_step > 0:
-            raise OptionsError(f"d_step must be a positive number of metres, got {self.d_step!r}")
+            raise OptionsError(f"d_step must be a positive number of metres, got {short_repr(self.d_step)}")
         for name, low in (("max_attempts", 1), ("restarts", 0), ("repair_starts", 0), ("perturbed_starts", 0)):
             value = getattr(self, name)
-            if not (isinstance(value, numbers.Integral) and not isinstance(value, bool) and value >= low):
-                raise OptionsError(f"{name} must be an integer >= {low}, got {value!r}")
+            if not (isinstance(value, numbers.Integral) and not isinstance(value, bool) and int(value) >= low):
+                raise OptionsError(f"{name} must be an integer >= {low}, got {short_repr(value)}")
         if not isinstance(self.tolerance, GoalTolerance):
-            raise OptionsError(f"tolerance must be a GoalTolerance, got {self.tolerance!r}")
+            raise OptionsError(f"tolerance must be a GoalTolerance, got {short_repr(self.tolerance)}")
+        if not isinstance(self.free_link_length, bool):
+            raise OptionsError(f"free_link_length must be True or False, got {short_repr(self.free_link_length)}")

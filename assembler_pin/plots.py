@@ -5,10 +5,11 @@ state (so it works headless, with any backend, and in notebooks: a Figure displa
 inline there); :func:`save` writes one to PNG.
 
 Conventions (as everywhere in the package): forces in newtons, **tension positive**;
-positions in metres in the world frame O (z up). Colors follow the paper's §V figures:
-the initial condition is green, the optimized pose blue (plates) and red (legs). Force
-maps use a diverging colormap centred at 0 — red tension, blue compression — matching
-the leg colors of the Meshcat viewer.
+positions in metres in the world frame O (z up). Colours are the package's one colour
+language (:mod:`~assembler_pin.palette`): the initial condition green, the optimized pose
+charcoal, the helper arm violet; force scales run blue (compression) ↔ grey (0) ↔ red
+(tension), the viewer's leg colours, so red always means tension. Legends sit outside
+the drawn data.
 """
 
 from __future__ import annotations
@@ -25,10 +26,13 @@ from matplotlib.colors import Normalize, TwoSlopeNorm
 from matplotlib.figure import Figure
 from matplotlib.patches import Patch, Rectangle
 
+from . import palette
 from .config import LegConfig
 from .exceptions import AssemblerError
 from .labels import leg_label, platform_label
 from .model import AssemblerModel
+from .palette import hex_color
+from .plan_figure import trajectory_plot
 from .state import StackState
 
 __all__ = [
@@ -51,18 +55,21 @@ __all__ = [
 
 logger = logging.getLogger(__name__)
 
-INITIAL_COLOR = "#2ca02c"
+INITIAL_COLOR = hex_color(palette.INITIAL)
 """Green: the initial condition (paper §V)."""
-OPTIMIZED_PLATE_COLOR = "#1f3fbf"
-"""Blue: plates of the optimized pose."""
-OPTIMIZED_LEG_COLOR = "#d62728"
-"""Red: legs of the optimized pose."""
-ARM_COLOR = "#9940cc"
+OPTIMIZED_PLATE_COLOR = hex_color(palette.OPTIMIZED)
+"""Charcoal: plates of the optimized pose."""
+OPTIMIZED_LEG_COLOR = hex_color(palette.OPTIMIZED)
+"""Charcoal: legs of the optimized pose (red is tension only)."""
+ARM_COLOR = hex_color(palette.ARM)
 """Violet: the helper arm's links (as in the viewer, a color no leg takes)."""
-ARM_JOINT_COLOR = "#66198c"
+ARM_JOINT_COLOR = hex_color(palette.ARM_JOINT)
 """Dark violet: the helper arm's joint clusters."""
-FORCE_CMAP = "RdBu_r"
-"""Diverging colormap: blue = compression (negative), red = tension (positive)."""
+FORCE_CMAP = palette.force_cmap()
+"""Diverging colormap: blue = compression (negative), grey = 0, red = tension (positive)."""
+VIOLATION_COLOR = hex_color(palette.VIOLATION)
+"""Yellow: a leg at a force bound, a grid point violating a limit."""
+GOAL_FACE, GOAL_EDGE = hex_color(palette.GOAL_FACE), hex_color(palette.GOAL_EDGE)
 
 
 def _named_states(
@@ -104,10 +111,11 @@ def force_heatmaps(
 
     Rows are legs 0..5, columns platforms SP0..SP(n-1) (0-based, as the arrays:
     :mod:`~assembler_pin.labels`); each cell is annotated with its force [N]. The
-    colormap is diverging and centred at 0 (red tension, blue compression) with one
+    colormap is diverging and centred at 0 (red tension, grey 0, blue compression) with one
     symmetric scale for both panels: ±``limit`` if given, else ±max |F| over the states
     shown. With ``leg`` (the leg limits), a leg at a stroke end gets a black frame and
-    a leg at the force bound a yellow one (see :func:`leg_flags`); ``title`` heads the figure.
+    a leg at the force bound a yellow one (see :func:`leg_flags`), listed in a legend beside
+    the colour bar; ``title`` heads the figure.
     """
     states = _named_states(initial, optimized, titles)
     vmax = limit if limit is not None else max(float(np.abs(s.forces).max()) for _, s in states)
@@ -133,13 +141,15 @@ def force_heatmaps(
         ax.set_ylabel("leg")
         ax.set_title(f"{name}: max |F| {state.max_abs_force:.1f} N, mean {state.mean_abs_force:.1f} N", fontsize=9)
         if leg is not None:
-            for mask, color in zip(leg_flags(state, leg), ("black", "gold"), strict=True):
+            for mask, color in zip(leg_flags(state, leg), ("black", VIOLATION_COLOR), strict=True):
                 for j, i in zip(*np.nonzero(mask), strict=True):
                     ax.add_patch(Rectangle((j - 0.46, i - 0.46), 0.92, 0.92, fill=False, ec=color, lw=2.2))
     if leg is not None:
-        axes[-1].legend(handles=[Patch(fill=False, ec="black", lw=2, label="at a stroke end"),
-                                 Patch(fill=False, ec="gold", lw=2, label="at the force bound")],
-                        loc="upper left", bbox_to_anchor=(1.25, 1.0), fontsize=7)  # fmt: skip
+        frames = [
+            Patch(fill=False, ec="black", lw=2, label="at a stroke end"),
+            Patch(fill=False, ec=VIOLATION_COLOR, lw=2, label="at the force bound"),
+        ]
+        fig.legend(handles=frames, loc="outside lower center", ncol=2, fontsize=7, frameon=False)
     fig.colorbar(image, ax=list(axes), label="force [N] (tension +, compression −)", shrink=0.9)
     if title:
         fig.suptitle(title)
@@ -154,10 +164,11 @@ def force_bars(
     leg: LegConfig | None = None,
     title: str | None = None,
 ) -> Figure:
-    """Per-actuator force bars [N], initial (green) next to optimized (red), labelled ``SPj leg i``.
+    """Per-actuator force bars [N], initial (green) next to optimized (charcoal), labelled ``SPj leg i``.
 
     Args:
-        limits: optional ``(max_tension, max_compression)`` [N] drawn as dashed lines.
+        limits: optional ``(max_tension, max_compression)`` [N] drawn as dashed lines (red
+            tension, blue compression). The legend sits to the right of the axes.
         leg: the leg limits: legs at a stroke end are marked ▲ above (below) their bar,
             legs at the force bound ◆ (see :func:`leg_flags`).
         title: figure title.
@@ -167,6 +178,7 @@ def force_bars(
     x = np.arange(6 * n)
     width = 0.8 / len(states)
     colors = {titles[0]: INITIAL_COLOR, titles[1]: OPTIMIZED_LEG_COLOR}
+    tension, compression = hex_color(palette.TENSION), hex_color(palette.COMPRESSION)
     fig = Figure(figsize=(max(6.0, 0.38 * 6 * n), 3.6), layout="constrained")
     ax = fig.subplots()
     for k, (name, state) in enumerate(states):
@@ -183,14 +195,14 @@ def force_bars(
                             mec="k", ms=5, ls="none", label=f"{name}: at a {what}")  # fmt: skip
     ax.axhline(0.0, color="black", lw=0.8)
     if limits is not None:
-        ax.axhline(limits[0], color="gray", ls="--", lw=0.8, label="limits")
-        ax.axhline(-limits[1], color="gray", ls="--", lw=0.8)
+        ax.axhline(limits[0], color=tension, ls="--", lw=0.8, label="tension limit")
+        ax.axhline(-limits[1], color=compression, ls="--", lw=0.8, label="compression limit")
     for j in range(1, n):
         ax.axvline(6 * j - 0.5, color="0.85", lw=0.8)
     ax.set_xticks(x, [leg_label(j, i) for j in range(n) for i in range(6)], fontsize=7, rotation=90)
     ax.set_xlabel("leg")
     ax.set_ylabel("force [N] (tension +)")
-    ax.legend(fontsize=7, ncol=2)
+    ax.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1.0))
     if title:
         ax.set_title(title)
     return fig
@@ -248,11 +260,12 @@ def pose_views(
 ) -> Figure:
     """Side (x–z), front (y–z) and top (x–y) views of one or two states, as in the paper's figures.
 
-    The initial state is drawn green, the optimized one with blue plates and red legs;
+    The initial state is drawn green, the optimized one charcoal (red is tension only);
     legs join their two joint centres, plates are outlined through their leg joints (filled
     translucent, so plates stacked in the top view stay readable; the front view separates
     them in height). ``arm_points`` ((n+2, 3) world points [m]) adds the helper arm: violet
-    links, dark violet joint clusters.
+    links, dark violet joint clusters. One legend for the three views, below them (it
+    hides nothing drawn).
 
     Args:
         title: figure title (e.g. the scenario and its goal); max|F| of each state is added.
@@ -278,17 +291,18 @@ def pose_views(
             ax.plot(arm[1:-1, idx[0]], arm[1:-1, idx[1]], "o", color=ARM_JOINT_COLOR, ms=7, label="helper arm joints")
         if goal is not None:
             p, z = goal.translation, goal.rotation[:, 2]
-            ax.plot(p[idx[0]], p[idx[1]], "*", color="k", ms=14, mfc="gold", label="EE goal", zorder=5)
+            ax.plot(p[idx[0]], p[idx[1]], "*", color=GOAL_EDGE, ms=14, mfc=GOAL_FACE, label="EE goal", zorder=5)
             tip = (p[idx[0]] + 0.12 * z[idx[0]], p[idx[1]] + 0.12 * z[idx[1]])
             ax.annotate("", xy=tip, xytext=(p[idx[0]], p[idx[1]]), arrowprops={"arrowstyle": "->", "color": "k"})
         if floor_z is not None and idx[1] == 2:
-            ax.axhline(floor_z, color="saddlebrown", lw=2.0, label="floor")
+            ax.axhline(floor_z, color=hex_color(palette.FLOOR), lw=2.0, label="floor")
         ax.set_aspect("equal", adjustable="datalim")
         ax.set_xlabel("xyz"[idx[0]] + " [m]")
         ax.set_ylabel("xyz"[idx[1]] + " [m]")
         ax.set_title(name)
         ax.grid(True, lw=0.4, alpha=0.5)
-    side.legend(fontsize=7, loc="best")
+    handles, labels = side.get_legend_handles_labels()
+    fig.legend(handles, labels, loc="outside lower center", ncol=min(len(labels), 8), fontsize=8, frameon=False)
     forces = ", ".join(f"max|F| {t} {st.max_abs_force:.1f} N" for t, st in named)
     fig.suptitle(f"{title}: {forces}" if title else forces)
     return fig
@@ -410,23 +424,23 @@ def plot_workspace_slice(ws: WorkspaceSlice, vmax: float | None = None) -> Figur
         np.ma.masked_invalid(ws.max_abs_force),
         origin="lower",
         extent=extent,
-        cmap="viridis",
+        cmap=palette.CAPACITY_CMAP,
         norm=Normalize(0.0, top),
         aspect="equal",
     )
     uu, vv = np.meshgrid(ws.u, ws.v)
     miss = ~ws.reachable
-    ax.plot(uu[miss], vv[miss], "x", color="0.6", ms=4, label="no state found")
+    ax.plot(uu[miss], vv[miss], "x", color=hex_color(palette.UNREACHABLE), ms=4, label="no state found")
     infeasible = ws.reachable & ~ws.feasible
     if infeasible.any():
-        ax.plot(uu[infeasible], vv[infeasible], "o", mfc="none", color="orange", ms=6, label="violates a limit")
+        ax.plot(uu[infeasible], vv[infeasible], "o", mfc="none", mec="k", ms=6, label="violates a limit")
     ax.set_xlabel(f"{ws.plane[0]} [m]")
     ax.set_ylabel(f"{ws.plane[1]} [m]")
     third = "xyz".replace(ws.plane[0], "").replace(ws.plane[1], "")
     ax.set_title(f"max |F| over EE positions ({third} = {ws.fixed:g} m)", fontsize=10)
     fig.colorbar(image, ax=ax, label="max |F| [N]")
     if miss.any() or infeasible.any():
-        ax.legend(fontsize=8, loc="upper right")
+        fig.legend(fontsize=8, loc="outside lower center", ncol=2, frameon=False)
     return fig
 
 
@@ -434,60 +448,6 @@ def workspace_slice(am: AssemblerModel, state_function=None, **kwargs) -> tuple[
     """:func:`compute_workspace_slice` then :func:`plot_workspace_slice`; returns both."""
     ws = compute_workspace_slice(am, state_function, **kwargs)
     return plot_workspace_slice(ws), ws
-
-
-def trajectory_plot(
-    am: AssemblerModel,
-    traj,
-    states: Sequence[StackState] | None = None,
-    state_times: npt.ArrayLike | None = None,
-    title: str = "Planned motion",
-) -> Figure:
-    """Leg lengths, leg speeds and actuator forces of a trajectory over time, limits dashed.
-
-    Args:
-        traj: a :class:`~assembler_pin.motion.timing.Trajectory`.
-        states: the stack at some of its samples (e.g. from
-            :func:`~assembler_pin.motion.timing.trajectory_states`) for the per-leg forces;
-            without them the force panel shows the trajectory's max|F| only.
-        state_times: (len(states),) times of ``states`` [s].
-        title: figure title (the path, e.g. "home → vertical_lift").
-    """
-    leg = am.config.leg
-    fig = Figure(figsize=(9, 8.5), layout="constrained")
-    ax_len, ax_speed, ax_force = fig.subplots(3, 1, sharex=True)
-    t = traj.times
-    n_legs = traj.lengths.shape[1] * 6
-    ax_len.plot(t, traj.lengths.reshape(len(t), -1), lw=0.8, alpha=0.7)
-    for value, label in ((leg.min_length, "stroke limits"), (leg.max_length, None)):
-        ax_len.axhline(value, color="k", ls="--", lw=1.2, label=label)
-    ax_len.set_ylabel("leg length [m]")
-    ax_len.set_title(f"{n_legs} leg lengths (one line per leg)", fontsize=9, loc="left")
-    ax_len.legend(loc="upper right", fontsize=8)
-    mid = 0.5 * (t[1:] + t[:-1])
-    ax_speed.plot(mid, traj.speeds().reshape(len(mid), -1), lw=0.8, alpha=0.7)
-    for value, label in ((leg.max_speed, "speed limit"), (-leg.max_speed, None)):
-        ax_speed.axhline(value, color="k", ls="--", lw=1.2, label=label)
-    ax_speed.set_ylabel("leg speed [m/s]")
-    ax_speed.legend(loc="upper right", fontsize=8)
-    if states:
-        ts = np.asarray(state_times, dtype=float)
-        forces = np.array([st.forces.ravel() for st in states])
-        ax_force.plot(ts, forces, lw=0.8, alpha=0.7)
-    ax_force.plot(t, traj.max_abs_force, color="k", lw=2.0, label="max|F|")
-    ax_force.axhline(leg.max_tension, color="#d62728", ls="--", lw=1.2, label="tension limit")
-    ax_force.axhline(-leg.max_compression, color="#1f77b4", ls="--", lw=1.2, label="compression limit")
-    ax_force.set_ylabel("actuator force [N]\n(tension +)")
-    ax_force.set_xlabel("time [s]")
-    ax_force.legend(loc="upper right", fontsize=8, ncol=3)
-    infeasible = ~np.asarray(traj.feasible, dtype=bool)
-    if infeasible.any():
-        for ax in (ax_len, ax_speed, ax_force):
-            ax.fill_between(t, 0, 1, where=infeasible, transform=ax.get_xaxis_transform(), color="#ffd700",
-                            alpha=0.3, label=None)  # fmt: skip
-    verdict = "every sample valid" if not infeasible.any() else f"{int(infeasible.sum())} samples INVALID (yellow)"
-    fig.suptitle(f"{title}: {traj.duration:.1f} s, peak max|F| {np.nanmax(traj.max_abs_force):.1f} N, {verdict}")
-    return fig
 
 
 def save(fig: Figure, path: str | Path, dpi: int = 150) -> Path:

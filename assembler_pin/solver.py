@@ -17,10 +17,11 @@ import numpy as np
 import pinocchio as pin
 
 from .constraints import leg_limit_margins
-from .exceptions import OptionsError
+from .exceptions import ArgumentError, OptionsError
 from .kinematics import PlateArrays, leg_state, se3_to_taa, to_se3
-from .model import AssemblerModel
+from .model import AssemblerModel, checked_model
 from .optimize import OptimizeOptions, OptimizeResult, optimize_internal_poses
+from .options import checked_options
 from .state import StackState
 from .threads import one_blas_thread
 
@@ -160,11 +161,16 @@ def solve(
         PoseError: the goal is not a valid SE(3) pose.
         OptionsError: ``starts`` is not one of :data:`START_MODES`.
     """
-    from .helper_arm import initial_condition
+    from .helper_arm import HelperArmOptions, initial_condition
 
+    checked_model(am)
     if starts not in START_MODES:
         raise OptionsError(f"starts must be one of {', '.join(START_MODES)}, got {starts!r}")
     goal = to_se3(goal, "goal")
+    options = checked_options(options, OptimizeOptions, "options")
+    helper_options = checked_options(helper_options, HelperArmOptions, "helper_options")
+    if not isinstance(optimize, bool):
+        raise ArgumentError(f"optimize must be True or False, got {type(optimize).__name__}")
     t0 = time.perf_counter()
     init = initial_condition(am, goal, helper_options)
     timing = {"initial": time.perf_counter() - t0}
@@ -174,7 +180,7 @@ def solve(
     if init.attempts == 0 and not init.success:  # out of reach: nothing to start from
         timing["optimize"] = 0.0
         return SolveResult(goal, False, f"no valid initial condition: {init.message}", init, None, timing)
-    opts = options or OptimizeOptions()
+    opts = options
     t1 = time.perf_counter()
     runs = _run_starts(am, goal, init, opts, starts)
     timing["optimize"] = time.perf_counter() - t1

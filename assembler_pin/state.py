@@ -15,8 +15,9 @@ import numpy as np
 import pinocchio as pin
 
 from .constraints import DEFAULT_GOAL_TOLERANCE, GoalTolerance, Violation, evaluate_constraints
-from .kinematics import LegState, PlateArrays, leg_state, plate_arrays
-from .model import AssemblerModel
+from .exceptions import OptionsError
+from .kinematics import LegState, PlateArrays, checked_goal, leg_state, plate_arrays
+from .model import AssemblerModel, checked_model
 from .statics import StaticsResult, solve_statics
 
 __all__ = ["StackState", "evaluate_state"]
@@ -104,6 +105,11 @@ def evaluate_state(
         goal: optional EE goal to check plate n against.
         tolerance: EE goal tolerance.
     """
+    checked_model(am)
+    if goal is not None:
+        goal = checked_goal(goal, "goal")
+    if not isinstance(tolerance, GoalTolerance):
+        raise OptionsError(f"tolerance must be a GoalTolerance, got {type(tolerance).__name__}")
     pa = plate_arrays(am, plates)
     legs = leg_state(am, pa)
     statics = solve_statics(am, pa, legs=legs)

@@ -29,7 +29,7 @@ import numpy as np
 import numpy.typing as npt
 import pinocchio as pin
 
-from .exceptions import PoseError, SingularConfigurationError
+from .exceptions import ArgumentError, PoseError, SingularConfigurationError
 from .kinematics import (
     LegState,
     PlateArrays,
@@ -40,7 +40,7 @@ from .kinematics import (
     q_from_arrays,
 )
 from .linalg import inverse_or_nan, skew
-from .model import AssemblerModel
+from .model import AssemblerModel, checked_model
 from .platform_model import PlatformStatics, stack_gravity_terms
 from .validation import as_float_array
 
@@ -192,6 +192,11 @@ def solve_statics(
         legs: the leg state of these plates when the caller has it already (saves
             recomputing the joint centres).
     """
+    checked_model(am)
+    if not isinstance(raise_on_singular, bool):
+        raise ArgumentError(f"raise_on_singular must be True or False, got {type(raise_on_singular).__name__}")
+    if legs is not None and not (isinstance(legs, LegState) and legs.lengths.shape == (am.n, 6)):
+        raise ArgumentError(f"legs must be the LegState of these plates ({am.n} x 6 legs) or None")
     pa = plate_arrays(am, plates)
     if legs is None:
         _, top, vec, lengths = leg_vectors(am, pa)

@@ -14,11 +14,12 @@ from __future__ import annotations
 
 import functools
 from collections.abc import Callable
-from typing import Any, TypeVar
+from typing import Any, ParamSpec, TypeVar
 
 __all__ = ["one_blas_thread", "single_blas_thread"]
 
-F = TypeVar("F", bound=Callable[..., Any])
+P = ParamSpec("P")
+R = TypeVar("R")
 
 _controller: Any = None
 
@@ -34,12 +35,12 @@ def single_blas_thread() -> Any:
     return _controller.limit(limits=1, user_api="blas")
 
 
-def one_blas_thread(func: F) -> F:
+def one_blas_thread(func: Callable[P, R]) -> Callable[P, R]:
     """Decorator: run ``func`` under :func:`single_blas_thread`."""
 
     @functools.wraps(func)
-    def wrapper(*args: Any, **kwargs: Any) -> Any:
+    def wrapper(*args: P.args, **kwargs: P.kwargs) -> R:
         with single_blas_thread():
             return func(*args, **kwargs)
 
-    return wrapper  # type: ignore[return-value]
+    return wrapper

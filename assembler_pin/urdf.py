@@ -127,7 +127,7 @@ def _shape(
         el = ET.SubElement(link, tag)
         _origin(el, xyz)
         geom = ET.SubElement(el, "geometry")
-        ET.SubElement(geom, geometry[0], **geometry[1])
+        ET.SubElement(geom, geometry[0], geometry[1])
         if tag == "visual" and material is not None:
             ET.SubElement(el, "material", name=material)
 
@@ -197,8 +197,7 @@ def assembler_urdf(cfg: AssemblerConfig) -> str:
     for j in range(cfg.platforms):
         for i in range(LEGS_PER_PLATFORM):
             n_ = functools.partial(names.leg, j, i)
-            ET.SubElement(robot, "link", name=n_("cross"))
-            _inertial(robot.find(f"link[@name='{n_('cross')}']"), 0.0, zero, zero)
+            _inertial(ET.SubElement(robot, "link", name=n_("cross")), 0.0, zero, zero)
             _joint(
                 robot,
                 n_("ux"),

@@ -11,7 +11,7 @@ from typing import Any
 
 import numpy as np
 
-from .exceptions import PoseError
+from .exceptions import PoseError, short_repr
 from .options import is_number
 
 __all__ = ["MAX_NESTING", "as_float_array", "is_number"]
@@ -21,9 +21,9 @@ MAX_NESTING = 6
 
 
 def _has_bool_or_deep(value: Any, depth: int) -> str:
-    """Why a nested list cannot be an array of numbers ("" when it can, as far as this checks)."""
-    if isinstance(value, (bool, np.bool_)):
-        return "true/false is not a number"
+    """Why a nested list cannot be an array of real numbers ("" when it can, as far as this
+    checks): a boolean, a string, a complex number or any other non-real leaf, or nesting
+    deeper than :data:`MAX_NESTING`."""
     if isinstance(value, (list, tuple)):
         if depth >= MAX_NESTING:
             return f"nested deeper than {MAX_NESTING} levels"
@@ -31,6 +31,13 @@ def _has_bool_or_deep(value: Any, depth: int) -> str:
             why = _has_bool_or_deep(item, depth + 1)
             if why:
                 return why
+        return ""
+    if isinstance(value, np.ndarray):
+        return "" if value.dtype.kind in "iuf" else f"an array of {value.dtype} is not numbers"
+    if isinstance(value, (bool, np.bool_)):
+        return "true/false is not a number"
+    if not is_number(value):
+        return f"{short_repr(value, 30)} is not a real number"
     return ""
 
 
@@ -47,13 +54,13 @@ def as_float_array(value: Any, what: str, shape: tuple[int, ...] | None = None, 
     """
     expected = f" of shape {shape}" if shape is not None else ""
     if isinstance(value, np.ndarray):
-        if value.dtype == bool or not (np.issubdtype(value.dtype, np.number)):
-            raise error(f"{what} must be numbers{expected}, got an array of {value.dtype}")
+        if value.dtype.kind not in "iuf":  # not booleans, complex numbers, strings or objects
+            raise error(f"{what} must be real numbers{expected}, got an array of {value.dtype}")
         arr = value.astype(float, copy=False)
     else:
         why = _has_bool_or_deep(value, 0)
         if why:
-            raise error(f"{what} must be numbers{expected}: {why}")
+            raise error(f"{what} must be real numbers{expected}: {why}")
         try:
             arr = np.asarray(value, dtype=float)
         except (TypeError, ValueError, OverflowError, RecursionError):

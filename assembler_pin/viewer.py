@@ -7,10 +7,11 @@ plate discs and node spheres, motor and shaft cylinders, payload cube). It adds:
 * leg colors by actuator force — blue (compression) ↔ gray (zero) ↔ red (tension),
   saturating at the configured limits (:func:`force_color`);
 * markers on legs that violate a constraint;
-* the helper arm of the initial-condition algorithm (gray links, blue joint clusters,
-  as in the paper's Fig. 2) from ``(n+2, 3)`` world points;
+* the helper arm of the initial-condition algorithm (violet links, dark violet joint
+  clusters) from ``(n+2, 3)`` world points;
 * a translucent green "ghost" of a second pose (e.g. the initial condition next to the
   optimized pose), drawn by a second visualizer under another meshcat path;
+* every colour from the package's one colour language (:mod:`~assembler_pin.palette`);
 * animations of a sequence of states (:func:`interpolate_states`), stored as meshcat
   animation tracks so that they play in a standalone HTML page too.
 
@@ -46,6 +47,7 @@ import numpy.typing as npt
 import pinocchio as pin
 from pinocchio.visualize import MeshcatVisualizer
 
+from . import palette
 from .choices import FORCE_SCALES
 from .exceptions import AssemblerError, ConvergenceError, ViewerError
 from .geometry import DIMENSIONS
@@ -70,26 +72,31 @@ __all__ = [
 
 logger = logging.getLogger(__name__)
 
-COMPRESSION_RGB = np.array([0.12, 0.30, 0.95])
+COMPRESSION_RGB = np.array(palette.COMPRESSION)
 """Leg color at (or beyond) the compression limit."""
-NEUTRAL_RGB = np.array([0.62, 0.62, 0.62])
+NEUTRAL_RGB = np.array(palette.NEUTRAL)
 """Leg color at zero force."""
-TENSION_RGB = np.array([0.95, 0.12, 0.10])
+TENSION_RGB = np.array(palette.TENSION)
 """Leg color at (or beyond) the tension limit."""
-GHOST_RGBA = np.array([0.15, 0.75, 0.25, 0.3])
+GHOST_RGBA = np.array(palette.rgba(palette.INITIAL, palette.GHOST_OPACITY))
 """Color of the translucent ghost pose (the paper draws the initial condition green)."""
-ARM_LINK_RGBA = np.array([0.60, 0.25, 0.80, 1.0])
+ARM_LINK_RGBA = np.array(palette.rgba(palette.ARM))
 """Violet: the helper arm's links — a color no leg can take (legs run blue ↔ gray ↔ red)."""
-ARM_CLUSTER_RGBA = np.array([0.40, 0.10, 0.55, 1.0])
+ARM_CLUSTER_RGBA = np.array(palette.rgba(palette.ARM_JOINT))
 """Dark violet: the helper arm's joint clusters."""
-PAYLOAD_ROD_RGBA = np.array([0.85, 0.55, 0.10, 1.0])
+PAYLOAD_RGBA = np.array(palette.rgba(palette.PAYLOAD))
+"""Orange: the payload cube (solid in the shown pose, an orange wireframe in a ghost, so the
+ghost's translucent green never tints it) and the rod joining it to the EE plate."""
+PAYLOAD_ROD_RGBA = PAYLOAD_RGBA
 """The rod joining the payload to the EE plate (the payload's orange)."""
+CARRIER_RGBA = np.array(palette.rgba(palette.CARRIER))
+"""Slate: a carrier arm's meshes (a grey darker and bluer than a leg at zero force)."""
 BACKGROUND_RGB = (np.array([0.97, 0.97, 0.96]), np.array([0.86, 0.87, 0.88]))
 """Neutral background, top and bottom."""
 """Leg color scales: ``limit`` saturates at the force limits, ``max`` at the state's max|F|,
 ``auto`` (default) at the larger of max|F| and :data:`FORCE_SCALE_FLOOR` × the smaller limit."""
 FORCE_SCALE_FLOOR = 0.1
-VIOLATION_RGBA = np.array([1.0, 0.85, 0.0, 0.9])
+VIOLATION_RGBA = np.array(palette.rgba(palette.VIOLATION, 0.9))
 FORCE_BAND_LEVELS = np.linspace(-1.0, 1.0, 11)
 """Force levels (fraction of the compression / tension limit) of an animation's leg sleeves."""
 FORCE_BAND_LENGTH = 0.08
@@ -571,9 +578,9 @@ class StackViewer:
             items.append((_hex(VIOLATION_RGBA[:3]),
                           "yellow ball: leg violating a limit"))  # fmt: skip
         if getattr(self, "_carrier_name", None):
-            items.append(("#b0b0b0", f"carrier arm: {self._carrier_name}"))
+            items.append((_hex(CARRIER_RGBA[:3]), f"carrier arm: {self._carrier_name}"))
         if self.am.config.payload.mass > 0:
-            items.append((_hex(PAYLOAD_ROD_RGBA[:3]),
+            items.append((_hex(PAYLOAD_RGBA[:3]),
                           f"payload {self.am.config.payload.mass:g} kg"))  # fmt: skip
         legend = "".join(
             f'<div><span style="display:inline-block;width:12px;height:12px;background:{c};margin-right:6px;'
@@ -627,17 +634,30 @@ class StackViewer:
     ) -> None:
         """Draw a second pose as a translucent ghost (default: green, 30 % opacity).
 
-        It is a second ``MeshcatVisualizer`` under the meshcat path ``{prefix}_{name}``.
+        It is a second ``MeshcatVisualizer`` under the meshcat path ``{prefix}_{name}``. Its
+        payload is an orange wireframe, not a translucent cube: the two payloads overlap
+        (same goal), and a translucent one in front would tint the solid payload olive.
         """
         plates = _as_plates(self.am, pose)
         if name not in self._ghosts:
             self._ghosts[name] = self._make_visualizer(f"{self.prefix}_{name}", rgba)
             self._roots.append(f"{self.prefix}_{name}")
+            self._wireframe_payload(self._ghosts[name])
         self._place(self._ghosts[name], plates)
         self._extra_points[f"ghost_{name}"] = self._stack_points(plates)
 
+    def _wireframe_payload(self, viz: MeshcatVisualizer) -> None:
+        """Redraw the payload cube of ``viz`` as an opaque orange wireframe (placements are kept:
+        meshcat keeps a node's transform when its object is replaced)."""
+        for g in self.visual_model.geometryObjects:
+            if self.am.model.frames[g.parentFrame].name != names.payload:
+                continue
+            material = _material(PAYLOAD_RGBA)
+            material.wireframe = True
+            self.meshcat[viz.getViewerNodeName(g, pin.GeometryType.VISUAL)].set_object(viz.loadPrimitive(g), material)
+
     def show_helper_arm(self, points: npt.ArrayLike, name: str = "helper_arm") -> None:
-        """Draw the helper arm: gray links between consecutive points, blue joint clusters.
+        """Draw the helper arm: violet links between consecutive points, dark violet joint clusters.
 
         Args:
             points: (n+2, 3) world points [m]: base, the n joint clusters, tip.
@@ -687,6 +707,7 @@ class StackViewer:
         viz = MeshcatVisualizer(carrier.model, None, carrier.visual_model)
         viz.initViewer(viewer=self.meshcat)
         viz.loadViewerModel(rootNodeName=name)
+        _paint_meshes(viz, CARRIER_RGBA)
         viz.display(q)
         self._carrier_viz = viz
         if name not in self._roots:
@@ -878,6 +899,18 @@ class StackViewer:
         return self.meshcat.render_static(height=height)
 
 
+def _paint_meshes(viz: MeshcatVisualizer, rgba: npt.ArrayLike) -> None:
+    """Redraw every mesh-file visual of ``viz`` in one colour (a mesh file's own materials,
+    e.g. a carrier's Collada colours, would otherwise be drawn; unscaled meshes only)."""
+    loaders = {"dae": mg.DaeMeshGeometry, "stl": mg.StlMeshGeometry, "obj": mg.ObjMeshGeometry}
+    for g in viz.visual_model.geometryObjects:
+        loader = loaders.get(str(g.meshPath).rsplit(".", 1)[-1].lower())
+        if loader is None or not np.allclose(g.meshScale, 1.0):
+            continue
+        node = viz.viewer[viz.getViewerNodeName(g, pin.GeometryType.VISUAL)]
+        node.set_object(loader.from_file(g.meshPath), _material(rgba))
+
+
 def _frame_along(z: np.ndarray, origin: np.ndarray) -> np.ndarray:
     """A 4×4 frame at ``origin`` whose z axis is the unit vector ``z``."""
     helper = np.array([1.0, 0.0, 0.0]) if abs(z[0]) < 0.9 else np.array([0.0, 1.0, 0.0])
@@ -890,10 +923,8 @@ def _frame_along(z: np.ndarray, origin: np.ndarray) -> np.ndarray:
 
 
 def _hex(rgb: npt.ArrayLike) -> str:
-    """CSS color of an RGB(A) triple in [0, 1]."""
-    from matplotlib.colors import to_hex
-
-    return to_hex(np.asarray(rgb, dtype=float)[:3])
+    """CSS color of an RGB(A) triple in [0, 1] (:func:`~assembler_pin.palette.hex_color`)."""
+    return palette.hex_color(tuple(np.asarray(rgb, dtype=float)[:3]))
 
 
 def _translation(p: npt.ArrayLike) -> np.ndarray:

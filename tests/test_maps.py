@@ -21,6 +21,7 @@ from assembler_pin.capacity import PayloadModels, payload_capacity
 from assembler_pin.cli import main
 from assembler_pin.maps import GridError, parse_grid, read_map, run_map
 from assembler_pin.maps.pictures import map_heatmaps
+from assembler_pin.solver import solve
 
 SMALL = "x=0.2:0.45:2,y=0.05,z=0.75:0.9:2"  # four reachable cells away from the symmetric axis
 
@@ -50,9 +51,7 @@ def test_capacity_matches_a_bisection_with_the_ordinary_solve(am):
     while hi - lo > 0.002 * lo:
         mid = 0.5 * (lo + hi)
         lo, hi = (
-            (mid, hi)
-            if ap.solve(ap.AssemblerModel.from_config({"payload": {"mass": mid}}), goal).success
-            else (lo, mid)
+            (mid, hi) if solve(ap.AssemblerModel.from_config({"payload": {"mass": mid}}), goal).success else (lo, mid)
         )
     assert result.capacity_kg == pytest.approx(0.5 * (lo + hi), rel=0.01)
     assert "array(" not in repr(result)
@@ -94,7 +93,7 @@ def test_map_is_resumable_and_loses_no_finished_cell(tmp_path):
     # every reachable cell's max|F| is that of the ordinary solve of its goal
     am = ap.AssemblerModel.from_config(cfg)
     row = whole.slice(0, 1).to_pylist()[0]
-    direct = ap.solve(am, pin.SE3(np.eye(3), np.array([row["x"], row["y"], row["z"]])))
+    direct = solve(am, pin.SE3(np.eye(3), np.array([row["x"], row["y"], row["z"]])))
     assert row["reachable"] and row["max_abs_force"] == pytest.approx(direct.optimized.max_abs_force, rel=1e-9)
     fig = map_heatmaps(whole, am)
     assert len([ax for ax in fig.axes if ax.images]) == 3

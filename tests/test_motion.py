@@ -197,7 +197,7 @@ def test_trajectory_states_rebuild_the_file_by_fk(am, tmp_path, planned):
     leg = am.config.leg
     assert {leg.min_length, leg.max_length, leg.max_speed, -leg.max_speed, leg.max_tension,
             -leg.max_compression} <= lines  # fmt: skip
-    assert len(fig.axes) == 3 and fig.get_suptitle().startswith("test")
+    assert len(fig.axes) == 4 * am.n and fig.get_suptitle().startswith("test")  # a row per platform
 
 
 def test_compare_against_simple_plans(am):

@@ -131,14 +131,15 @@ def test_figures_say_what_they_show(am):
     assert len(frames) == 2 and fig.get_suptitle() == "my scenario"
     bars = plots.force_bars(state, limits=(leg.max_tension, leg.max_compression), leg=leg, title="my scenario")
     labels = [t.get_text() for t in bars.axes[0].get_legend().get_texts()]
-    assert "initial: at a stroke end" in labels and "limits" in labels
+    assert "initial: at a stroke end" in labels and {"tension limit", "compression limit"} <= set(labels)
 
     goal = pin.SE3(state.plates.R[-1], state.plates.p[-1])
     arm = np.linspace([0, 0, 0], state.plates.p[-1], am.n + 2)
     views = plots.pose_views(state, state, arm_points=arm, title="my scenario", goal=goal, floor_z=0.0)
     assert views.get_suptitle().startswith("my scenario") and f"{state.max_abs_force:.1f} N" in views.get_suptitle()
     assert [ax.get_title() for ax in views.axes] == ["side view (x–z)", "front view (y–z)", "top view (x–y)"]
-    labels = {t.get_text() for t in views.axes[0].get_legend().get_texts()}
+    assert views.axes[0].get_legend() is None  # one legend, below the views
+    labels = {t.get_text() for t in views.legends[0].get_texts()}
     assert {"initial", "optimized legs", "optimized plates", "plate centres", "helper arm", "helper arm joints",
             "EE goal", "floor"} <= labels  # fmt: skip
     star = next(ln for ln in views.axes[0].lines if ln.get_label() == "EE goal")

@@ -4,18 +4,13 @@ from __future__ import annotations
 
 import argparse
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 from ..exceptions import CLIError
+from .common import config_from_args, dumps, finite_range, progress_for, writable_parent
 
 if TYPE_CHECKING:
-    pass
-from .common import (
-    config_from_args,
-    dumps,
-    finite_range,
-    writable_parent,
-)
+    from ..config import AssemblerConfig
 
 
 def add_parser(add) -> None:
@@ -34,62 +29,101 @@ def add_parser(add) -> None:
     p.add_argument("--batch-size", type=int, default=None, metavar="N", help="cells per task (default automatic)")
     p.add_argument("--png", metavar="FILE", help="heatmap slices: reachability, max|F|, capacity")
     p.add_argument("--html", metavar="FILE", help="the cells as a point cloud colored by capacity, in the viewer")
-    p.add_argument("--no-progress", action="store_true", help="no progress bar")
+    p.add_argument("--no-progress", action="store_true", help="no progress line (as the global --quiet)")
     p.add_argument("--json", action="store_true", help="print one JSON object")
     p.set_defaults(func=run)
 
 
-def run(args: argparse.Namespace) -> int:
-    """A capability map: per cell reachability, optimized max|F|, payload capacity, binding."""
-    import numpy as np
-
-    from ..config import load_config
-    from ..maps import parse_grid, read_map, run_map
-    from ..model import AssemblerModel
+def _check_options(args: argparse.Namespace):
+    """The grid of ``--grid``/``--orientations``, every other option checked before any work."""
+    from ..bounds import check_bound
+    from ..maps import parse_grid
+    from ..maps.cluster import check_scheduler
 
     for option, value in (("--png file", args.png), ("--html file", args.html)):
         if value:
             writable_parent(value, option)
-    grid = parse_grid(args.grid, args.orientations)
-    if args.workers is not None and args.workers < 0:
-        raise CLIError(f"--workers must be >= 0, got {args.workers}")
-    if args.batch_size is not None and args.batch_size < 1:
-        raise CLIError(f"--batch-size must be >= 1, got {args.batch_size}")
-    if args.sweep:
-        names = [Path(c).stem for c in args.sweep]
-        if len(set(names)) != len(names):
-            raise CLIError("--sweep files must have different names (the map's config column)")
-        configs = [(name, load_config(c)) for name, c in zip(names, args.sweep, strict=True)]
-    else:
-        configs = [(Path(args.config).stem if args.config else "default", config_from_args(args))]
-    run = run_map(grid, configs, args.out, workers=args.workers, scheduler=args.scheduler,
-                  batch_size=args.batch_size, progress=not args.no_progress)  # fmt: skip
+    if args.workers is not None:
+        check_bound("map.workers", args.workers, "--workers", CLIError)
+    if args.batch_size is not None:
+        check_bound("map.batch_size", args.batch_size, "--batch-size", CLIError)
+    if args.scheduler is not None:
+        check_scheduler(args.scheduler, "--scheduler")
+    grid = parse_grid(args.grid, args.orientations, configs=len(args.sweep) if args.sweep else 1)
+    if args.png and len(grid.varying_axes()) != 2:
+        raise CLIError(f"--png draws a map varying along two position axes; --grid varies along {grid.varying_axes()}")
+    return grid
+
+
+def _configs(args: argparse.Namespace) -> list[tuple[str, AssemblerConfig]]:
+    from ..config import load_config
+
+    if not args.sweep:
+        return [(Path(args.config).stem if args.config else "default", config_from_args(args))]
+    names = [Path(c).stem for c in args.sweep]
+    if len(set(names)) != len(names):
+        raise CLIError("--sweep files must have different names (the map's config column)")
+    return [(name, load_config(c)) for name, c in zip(names, args.sweep, strict=True)]
+
+
+def _pictures(args: argparse.Namespace, table, configs: list, doc: dict) -> None:
+    """The ``--png`` heatmaps and the ``--html`` point cloud of the first configuration."""
+    from ..model import AssemblerModel
+
+    am = AssemblerModel.from_config(configs[0][1])
+    if args.png:
+        from ..maps.pictures import map_heatmaps
+        from ..plots import save
+
+        doc["png"] = str(save(map_heatmaps(table, am, configs[0][0]), args.png))
+    if args.html:
+        from ..maps.pictures import show_map_points
+        from ..viewer import StackViewer
+
+        with StackViewer(am) as viewer:
+            viewer.display(am.home)
+            lo, hi = show_map_points(viewer, table, config=configs[0][0])
+            viewer.set_title(f"Capability map: payload capacity {lo:.1f} (light) – {hi:.1f} kg (dark); "
+                             "gray: not reachable")  # fmt: skip
+            doc["html"] = str(Path(args.html).resolve())
+            viewer.static_html(doc["html"])
+
+
+def run(args: argparse.Namespace) -> int:
+    """A capability map: per cell reachability, optimized max|F|, payload capacity, binding.
+
+    Exit status 0 once every cell is computed, unreachable cells included (they are answers).
+    """
+    import numpy as np
+
+    from ..maps import read_map, run_map
+
+    grid = _check_options(args)
+    configs = _configs(args)
+    prog = None if args.no_progress else progress_for(args, "map")
+    try:
+        run = run_map(
+            grid,
+            configs,
+            args.out,
+            workers=args.workers,
+            scheduler=args.scheduler,
+            batch_size=args.batch_size,
+            progress=prog,
+        )
+    finally:
+        if prog is not None:
+            prog.close()
     table = read_map(args.out)
     reach = np.asarray(table.column("reachable").to_pylist(), dtype=bool)
     cap = np.asarray(table.column("capacity_kg").to_pylist(), dtype=float)
     force = np.asarray(table.column("max_abs_force").to_pylist(), dtype=float)
-    doc = {"out": str(Path(args.out)), "cells": len(grid) * len(configs), "computed": run.computed,
+    doc: dict[str, Any] = {"out": str(Path(args.out)), "cells": len(grid) * len(configs), "computed": run.computed,
            "already_done": run.skipped, "workers": run.workers, "time_s": run.time_s,
            "cells_per_s": run.cells_per_second, "reachable": int(reach.sum()),
            "max_abs_force_range": finite_range(force), "capacity_kg_range": finite_range(cap)}  # fmt: skip
     if args.png or args.html:
-        am = AssemblerModel.from_config(configs[0][1])
-        if args.png:
-            from ..maps.pictures import map_heatmaps
-            from ..plots import save
-
-            doc["png"] = str(save(map_heatmaps(table, am, configs[0][0]), args.png))
-        if args.html:
-            from ..maps.pictures import show_map_points
-            from ..viewer import StackViewer
-
-            with StackViewer(am) as viewer:
-                viewer.display(am.home)
-                lo, hi = show_map_points(viewer, table, config=configs[0][0])
-                viewer.set_title(f"Capability map: payload capacity {lo:.1f} (light) – {hi:.1f} kg (dark); "
-                                 "gray: not reachable")  # fmt: skip
-                doc["html"] = str(Path(args.html).resolve())
-                viewer.static_html(doc["html"])
+        _pictures(args, table, configs, doc)
     if args.json:
         print(dumps(doc))
         return 0

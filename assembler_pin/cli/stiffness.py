@@ -9,6 +9,7 @@ from .common import add_goal_arguments, config_from_args, dumps, goal_from_args,
 
 if TYPE_CHECKING:
     from ..ee_stiffness import StiffnessResult
+    from ..kinematics import PlateArrays
 
 
 def add_parser(add) -> None:
@@ -33,6 +34,7 @@ def run(args: argparse.Namespace) -> int:
     from ..model import AssemblerModel
 
     am = AssemblerModel.from_config(config_from_args(args))
+    plates: PlateArrays | list
     if args.goal is not None or args.goal_deg is not None:
         from ..solver import solve
 
@@ -41,6 +43,7 @@ def run(args: argparse.Namespace) -> int:
             doc = {"success": False, "message": f"no pose for the goal: {solved.message}"}
             print(dumps(doc) if args.json else f"stiffness: {doc['message']}")
             return 1
+        assert solved.optimized is not None  # a successful solve optimizes (the default)
         plates = solved.optimized.plates
     else:
         plates = plates_from_args(args, am, "give --plates FILE (or - for stdin), --home or --goal X Y Z RX RY RZ")

@@ -19,6 +19,7 @@ from ..constraints import GoalTolerance, evaluate_constraints
 from ..geometry import reach_bound
 from ..kinematics import PlateArrays, leg_state, to_se3
 from ..model import AssemblerModel
+from ..options import checked_options
 from ..state import StackState, evaluate_state
 from ..threads import one_blas_thread
 from .arm import ArmCache
@@ -208,7 +209,7 @@ def initial_condition(
     """
     t0 = time.perf_counter()
     goal_se3 = to_se3(goal, "goal")
-    opts = options or HelperArmOptions()
+    opts = checked_options(options, HelperArmOptions, "options")
     arms = arm_cache(am) if arms is None else arms
     distance = math.hypot(*(goal_se3.translation - am.home[0].translation))  # no overflow for huge goals
     reach = reach_bound(am.config)

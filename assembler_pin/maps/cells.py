@@ -6,10 +6,13 @@ process (:func:`models_for`) and every batch of cells reuses them.
 
 from __future__ import annotations
 
+import dataclasses
+import hashlib
 import json
 import math
 import time
 from collections.abc import Sequence
+from typing import TypedDict
 
 import numpy as np
 
@@ -17,18 +20,41 @@ from ..capacity import PayloadModels, payload_capacity
 from ..config import AssemblerConfig, config_from_dict
 from ..constraints import leg_limit_margins
 from ..exceptions import AssemblerError
+from ..helper_arm import HelperArmOptions
 from ..labels import leg_label
 from ..model import AssemblerModel
+from ..optimize import OptimizeOptions
 from ..solver import solve
 from ..state import StackState
 from .grid import Cell
 
-__all__ = ["COLUMNS", "compute_batch", "compute_cell", "config_key", "models_for"]
+__all__ = [
+    "COLUMNS",
+    "cell_key",
+    "compute_batch",
+    "compute_cell",
+    "config_hash",
+    "config_key",
+    "models_for",
+    "solver_hash",
+]
 
 COLUMNS = ("config", "cell", "ix", "iy", "iz", "io", "x", "y", "z", "rx", "ry", "rz", "reachable", "reason",
            "max_abs_force", "capacity_kg", "capacity_binding", "binding", "solve_time_s",
-           "capacity_time_s")  # fmt: skip
-"""The columns of a map file, in order. Positions [m], rotation vector [rad], forces [N]."""
+           "capacity_time_s", "key")  # fmt: skip
+"""The columns of a map file, in order. Positions [m], rotation vector [rad], forces [N];
+``key``: what the row was computed from (:func:`cell_key`)."""
+
+
+class _CapacitySettings(TypedDict):
+    """Arguments of :func:`~assembler_pin.capacity.payload_capacity`: ``rtol`` and ``max_iterations``."""
+
+    rtol: float
+    max_iterations: int
+
+
+CAPACITY_OPTIONS: _CapacitySettings = {"rtol": 1e-3, "max_iterations": 12}
+"""The payload-capacity search settings of every cell (:func:`~assembler_pin.capacity.payload_capacity`)."""
 
 _MODELS: dict[str, PayloadModels] = {}
 
@@ -36,6 +62,34 @@ _MODELS: dict[str, PayloadModels] = {}
 def config_key(cfg: AssemblerConfig) -> str:
     """A configuration as canonical JSON text: what a worker builds its models from."""
     return json.dumps(cfg.to_dict(), sort_keys=True)
+
+
+def _sha(text: str) -> str:
+    return hashlib.sha256(text.encode()).hexdigest()
+
+
+def config_hash(cfg: AssemblerConfig) -> str:
+    """A stable hash of a configuration's full content (SHA-256 of :func:`config_key`)."""
+    return _sha(config_key(cfg))
+
+
+def solver_hash() -> str:
+    """A stable hash of every solver setting a cell is computed with: the optimizer's and the
+    helper arm's options, the capacity search's settings and the row layout."""
+    settings = {
+        "optimize": dataclasses.asdict(OptimizeOptions()),
+        "helper": dataclasses.asdict(HelperArmOptions()),
+        "capacity": CAPACITY_OPTIONS,
+        "columns": COLUMNS,
+    }
+    return _sha(json.dumps(settings, sort_keys=True, default=repr))
+
+
+def cell_key(config_sha: str, solver_sha: str, cell: Cell) -> str:
+    """What a row was computed from: the configuration's and the solver's hashes and the cell's
+    goal (position [m] and rotation vector [rad], exactly). A row is reused only under its key."""
+    goal = ",".join(float(v).hex() for v in (*cell.position, *cell.rotation))
+    return _sha(f"{config_sha}|{solver_sha}|{goal}")[:32]
 
 
 def models_for(key: str) -> PayloadModels:
@@ -69,7 +123,7 @@ def compute_cell(models: PayloadModels, cell: Cell, config_name: str = "") -> di
            "io": cell.index[3], "x": cell.position[0], "y": cell.position[1], "z": cell.position[2],
            "rx": cell.rotation[0], "ry": cell.rotation[1], "rz": cell.rotation[2], "reachable": False, "reason": "",
            "max_abs_force": math.nan, "capacity_kg": math.nan, "capacity_binding": "", "binding": "",
-           "solve_time_s": 0.0, "capacity_time_s": 0.0}  # fmt: skip
+           "solve_time_s": 0.0, "capacity_time_s": 0.0, "key": ""}  # fmt: skip
     goal = cell.goal()
     t0 = time.perf_counter()
     result = solve(am, goal)
@@ -85,7 +139,8 @@ def compute_cell(models: PayloadModels, cell: Cell, config_name: str = "") -> di
         return row  # no pose at all: kinematically out of reach, whatever the payload
     arm = result.initial_result.plates_if_valid()
     start = None if state is None else state.plates
-    cap = payload_capacity(am, goal, models, start=start, configured_failed=state is None, arm_start=arm)
+    opts = CAPACITY_OPTIONS
+    cap = payload_capacity(am, goal, models, opts["rtol"], opts["max_iterations"], start, state is None, arm)
     row["capacity_time_s"] = cap.time_s
     if cap.success:
         row["reachable"] = True  # some payload (possibly lighter than configured) is held there

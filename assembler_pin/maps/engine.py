@@ -7,31 +7,41 @@
 
 Each worker process builds the models of a configuration once (:func:`~.cells.models_for`)
 and reuses them for every batch. Batches are a few cells each, so scheduling costs little
-against solves of tens to hundreds of milliseconds. Every finished batch is written at once
-as its own Parquet file in the output directory; a rerun reads the finished cells there and
-computes only the others, so a crash, a Ctrl-C or a lost worker loses no finished cell (Dask
-also retries a batch whose worker died).
+against solves of tens to hundreds of milliseconds; a bounded number of batches is in flight
+at a time. Every finished batch is written at once, atomically, as its own Parquet part in
+the output directory (:mod:`.store`). A rerun into the same directory reuses a finished cell
+only when its goal, its configuration's content and the solver settings are those of the
+run (a directory holding another map is refused), and computes only the others, so a crash,
+a Ctrl-C or a lost worker loses no finished cell (Dask also retries a batch whose worker
+died). On Ctrl-C the cluster is stopped, no partial part is left, and ``KeyboardInterrupt``
+propagates to the caller.
 """
 
 from __future__ import annotations
 
-import hashlib
 import logging
 import math
 import os
 import time
-from collections.abc import Sequence
+from collections.abc import Iterator, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
+from ..bounds import check_bound
 from ..config import AssemblerConfig
-from ..exceptions import AssemblerError
-from .cells import COLUMNS, compute_batch, config_key
+from ..exceptions import AssemblerError, MapError
+from ..progress import ProgressCallback
+from .cells import COLUMNS, cell_key, compute_batch, config_hash, config_key, solver_hash
+from .cluster import check_scheduler, client_for, stop
 from .grid import Cell, Grid
+from .store import check_manifest, manifest_for, need_pyarrow, read_parts, remove_stale_temporaries, write_part
 
 __all__ = ["MapRun", "done_cells", "read_map", "run_map"]
 
 logger = logging.getLogger(__name__)
+
+Batch = tuple[str, str, list[Cell]]
+"""(config name, config key, cells) of one task."""
 
 
 @dataclass
@@ -61,23 +71,22 @@ class MapRun:
                 f"{self.cells_per_second:.2f} cells/s)")  # fmt: skip
 
 
-def _need_pyarrow():
-    try:
-        import pyarrow as pa
-        import pyarrow.parquet as pq
-    except ImportError:
-        raise AssemblerError("maps need pyarrow: pip install 'assembler_pin[maps]'") from None
-    return pa, pq
-
-
 def read_map(out: str | Path):
     """Every row written in a map directory, as a ``pyarrow.Table`` sorted by config and cell
-    (an empty table when nothing was written)."""
-    pa, pq = _need_pyarrow()
-    parts = sorted(Path(out).glob("part-*.parquet"))
+    (an empty table when nothing was written).
+
+    Raises:
+        MapError: ``out`` is not a directory, or a part is unreadable, of another schema or
+            repeats a cell (named in one line).
+    """
+    pa, _ = need_pyarrow()
+    path = _out_dir(out, create=False)
+    parts = read_parts(path) if path.is_dir() else []
     if not parts:
-        return pa.table({c: [] for c in COLUMNS})
-    table = pa.concat_tables([pq.read_table(p) for p in parts])
+        from .store import schema
+
+        return schema().empty_table()
+    table = pa.concat_tables([t for _, t in parts])
     return table.sort_by([("config", "ascending"), ("cell", "ascending")])
 
 
@@ -87,31 +96,157 @@ def done_cells(out: str | Path) -> set[tuple[str, int]]:
     return set(zip(table.column("config").to_pylist(), table.column("cell").to_pylist(), strict=True))
 
 
-def _write_part(out: Path, rows: list[dict]) -> None:
-    pa, pq = _need_pyarrow()
-    table = pa.table({c: [r[c] for r in rows] for c in COLUMNS})
-    tag = hashlib.sha1(rows[0]["config"].encode()).hexdigest()[:8]
-    path = out / f"part-{tag}-{rows[0]['cell']:09d}.parquet"
-    tmp = path.with_suffix(".tmp")
-    pq.write_table(table, tmp)
-    os.replace(tmp, path)  # a part is either whole or absent
-
-
-def _client(scheduler: str | None, workers: int):
-    try:
-        from distributed import Client, LocalCluster
-    except ImportError:
-        raise AssemblerError(
-            "parallel maps need Dask: pip install 'assembler_pin[maps]' (or run with --workers 0)"
-        ) from None
-    if scheduler:
+def _out_dir(out: object, create: bool) -> Path:
+    if not isinstance(out, (str, os.PathLike)) or not str(out):
+        raise MapError(f"out must be a directory path, got {type(out).__name__}")
+    path = Path(out)
+    if path.exists() and not path.is_dir():
+        raise MapError(f"out {str(path)!r} is a file, not a map directory")
+    if create:
         try:
-            return Client(scheduler, timeout="20s"), None
+            path.mkdir(parents=True, exist_ok=True)
         except OSError as exc:
-            raise AssemblerError(f"cannot reach the Dask scheduler at {scheduler}: {exc}") from None
-    cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True, dashboard_address=None,
-                           silence_logs=logging.ERROR)  # fmt: skip
-    return Client(cluster), cluster
+            raise MapError(f"out {str(path)!r}: cannot create the map directory: {exc.strerror or exc}") from None
+    return path
+
+
+def _check_configs(configs: object) -> list[tuple[str, AssemblerConfig]]:
+    if isinstance(configs, (str, bytes, AssemblerConfig)) or not isinstance(configs, Sequence) or not configs:
+        raise MapError("configs must be a non-empty list of (name, AssemblerConfig) pairs")
+    pairs = []
+    for item in configs:
+        if not (isinstance(item, tuple) and len(item) == 2 and isinstance(item[1], AssemblerConfig)):
+            raise MapError(f"configs must hold (name, AssemblerConfig) pairs, got {type(item).__name__}")
+        name = item[0]
+        if not isinstance(name, str) or not name.strip() or len(name) > 200 or not name.isprintable():
+            raise MapError(f"configs: a name must be a short printable text, got {name!r:.60}")
+        pairs.append((name, item[1]))
+    if len({n for n, _ in pairs}) != len(pairs):
+        raise MapError("configs: every configuration needs its own name")
+    return pairs
+
+
+def _check_args(grid, configs, workers, scheduler, batch_size, progress) -> list[tuple[str, AssemblerConfig]]:
+    """The checked configurations; every other argument checked (MapError naming it)."""
+    if not isinstance(grid, Grid):
+        raise MapError(f"grid must be a Grid (see parse_grid), got {type(grid).__name__}")
+    pairs = _check_configs(configs)
+    if workers is not None:
+        check_bound("map.workers", workers, "workers", MapError)
+    if batch_size is not None:
+        check_bound("map.batch_size", batch_size, "batch_size", MapError)
+    if scheduler is not None:
+        check_scheduler(scheduler)
+    if progress is not None and not callable(progress):
+        raise MapError(f"progress must be None or a callable (done, total, note), got {type(progress).__name__}")
+    check_bound("map.cells", len(grid) * len(pairs), "the map's number of cells (grid x configs)", MapError)
+    return pairs
+
+
+def _done_rows(parts, grid: Grid, shas: dict[str, str], solver: str) -> set[tuple[str, int]]:
+    """(config, cell) of every finished row, each checked to be of this map."""
+    done: set[tuple[str, int]] = set()
+    for path, table in parts:
+        rows = zip(*(table.column(c).to_pylist() for c in ("config", "cell", "key")), strict=True)
+        for name, cell, key in rows:
+            ok = name in shas and 0 <= cell < len(grid) and key == cell_key(shas[name], solver, grid.cell(cell))
+            if not ok:
+                where = f"map part {path} holds a row of another map (config {name!r}, cell {cell})"
+                raise MapError(f"{where}: delete it (its cells are recomputed on the next run)")
+            done.add((name, cell))
+    return done
+
+
+def _batches(grid: Grid, pairs, done: set[tuple[str, int]], size: int) -> Iterator[Batch]:
+    for name, cfg in pairs:
+        key, batch = config_key(cfg), []
+        for cell in grid.iter_cells():
+            if (name, cell.id) not in done:
+                batch.append(cell)
+                if len(batch) == size:
+                    yield name, key, batch
+                    batch = []
+        if batch:
+            yield name, key, batch
+
+
+class _Writer:
+    """Writes each finished batch as a part with its rows' keys, and reports progress."""
+
+    def __init__(self, out: Path, shas: dict[str, str], solver: str, total: int, progress) -> None:
+        self.out, self.shas, self.solver, self.total, self.progress = out, shas, solver, total, progress
+        self.done = 0
+        self.tags = {name: sha[:8] for name, sha in shas.items()}
+        if progress is not None:
+            progress(0, total, "cells")
+
+    def __call__(self, batch: Batch, rows: list[dict]) -> None:
+        name, _, cells = batch
+        if [r.get("cell") for r in rows] != [c.id for c in cells] or any(set(r) != set(COLUMNS) for r in rows):
+            raise MapError(f"a batch of config {name!r} returned rows that are not those of its cells")
+        for row, cell in zip(rows, cells, strict=True):
+            row["key"] = cell_key(self.shas[name], self.solver, cell)
+        write_part(self.out, rows, self.tags[name])
+        self.done += len(rows)
+        if self.progress is not None:
+            self.progress(self.done, self.total, "cells")
+
+
+def _run_serial(batches: Iterator[Batch], write: _Writer) -> int:
+    count = 0
+    for batch in batches:
+        name, key, cells = batch
+        write(batch, compute_batch(key, cells, name))
+        count += 1
+    return count
+
+
+def _result(future, batch: Batch) -> list[dict]:
+    try:
+        return future.result()
+    except AssemblerError:
+        raise
+    except Exception as exc:  # a task's failure on a worker, reported in one line
+        why = " ".join(str(exc).split())[:160]
+        raise MapError(
+            f"a batch of config {batch[0]!r} failed on the Dask cluster: {type(exc).__name__}: {why}"
+        ) from None
+
+
+def _run_dask(batches: Iterator[Batch], write: _Writer, scheduler: str | None, n_workers: int) -> tuple[int, int]:
+    """(batches sent, workers) of a run on Dask; at most two batches per worker in flight."""
+    from distributed import as_completed
+
+    client, cluster = client_for(scheduler, n_workers)
+    sent = 0
+    try:
+        if scheduler:
+            n_workers = len(client.scheduler_info()["workers"])
+        pending: dict[str, Batch] = {}
+        queue = as_completed()
+
+        def submit() -> None:
+            nonlocal sent
+            batch = next(batches, None)
+            if batch is not None:
+                name, key, cells = batch
+                future = client.submit(compute_batch, key, cells, name, pure=False, retries=2)
+                pending[future.key] = batch
+                queue.add(future)
+                sent += 1
+
+        for _ in range(2 * max(n_workers, 1)):
+            submit()
+        for future in queue:
+            batch = pending.pop(future.key)
+            write(batch, _result(future, batch))
+            future.release()
+            submit()
+    except BaseException:  # Ctrl-C included: pending tasks cancelled, local workers stopped at once
+        stop(client, cluster, abort=True)
+        raise
+    stop(client, cluster)
+    return sent, n_workers
 
 
 def run_map(
@@ -121,67 +256,46 @@ def run_map(
     workers: int | None = None,
     scheduler: str | None = None,
     batch_size: int | None = None,
-    progress: bool = False,
+    progress: ProgressCallback | None = None,
 ) -> MapRun:
     """Compute every cell of ``grid`` for each configuration not yet in ``out``.
 
     Args:
+        grid: the EE goals (:func:`~.grid.parse_grid`).
         configs: (name, configuration) pairs; a design sweep gives several.
-        out: the map directory (created; one Parquet file per finished batch).
-        workers: local worker processes (default: the machine's cores; 0: serial, no Dask).
+        out: the map directory (created; a manifest and one Parquet part per finished batch).
+            A rerun reuses the cells finished there; a directory holding another map (another
+            grid, configuration content or solver settings) is refused.
+        workers: local worker processes (default: the machine's cores; 0: serial, no Dask;
+            bounds key ``map.workers``).
         scheduler: address of an existing Dask scheduler (then ``workers`` is ignored).
-        batch_size: cells per task (default: about four tasks per worker, at most 16 cells).
-        progress: show a progress bar (tqdm) on stderr.
+        batch_size: cells per task (default: about four tasks per worker, at most 16 cells;
+            bounds key ``map.batch_size``).
+        progress: called as ``progress(done, total, "cells")`` as parts are written.
+
+    Raises:
+        MapError: an argument (named), the directory, one of its parts, or the cluster.
+        KeyboardInterrupt: on Ctrl-C, after the cluster is stopped; finished parts stay.
     """
-    out = Path(out)
-    out.mkdir(parents=True, exist_ok=True)
-    done = done_cells(out)
-    todo: list[tuple[str, str, list[Cell]]] = []
-    skipped = 0
-    for name, cfg in configs:
-        cells = [c for c in grid.cells() if (name, c.id) not in done]
-        skipped += len(grid) - len(cells)
-        todo.append((name, config_key(cfg), cells))
-    remaining = sum(len(c) for _, _, c in todo)
-    n_workers = 0 if scheduler is None and workers == 0 else (workers or os.cpu_count() or 1)
-    size = batch_size or max(1, min(16, math.ceil(remaining / (4 * max(n_workers, 1)))))
-    batches = [(name, key, cells[k : k + size]) for name, key, cells in todo for k in range(0, len(cells), size)]
+    pairs = _check_args(grid, configs, workers, scheduler, batch_size, progress or None)
+    out = _out_dir(out, create=True)
+    shas = {name: config_hash(cfg) for name, cfg in pairs}
+    solver = solver_hash()
+    check_manifest(out, manifest_for(grid, shas, solver))
+    remove_stale_temporaries(out)
+    done = _done_rows(read_parts(out), grid, shas, solver)
+    remaining = len(grid) * len(pairs) - len(done)
+    n_workers = 0 if scheduler is None and workers == 0 else int(workers or os.cpu_count() or 1)
+    size = int(batch_size or max(1, min(16, math.ceil(remaining / (4 * max(n_workers, 1))))))
+    batches = _batches(grid, pairs, done, size)
+    write = _Writer(out, shas, solver, remaining, progress or None)
     t0 = time.perf_counter()
-    bar = None
-    if progress:
-        from tqdm import tqdm
-
-        bar = tqdm(total=remaining, unit="cell", desc="map")
-    try:
-        if n_workers == 0 and scheduler is None:
-            for name, key, cells in batches:
-                rows = compute_batch(key, cells, name)
-                _write_part(out, rows)
-                if bar is not None:
-                    bar.update(len(rows))
-        elif batches:
-            from distributed import as_completed
-
-            for name in ("distributed", "distributed.batched", "distributed.comm"):
-                logging.getLogger(name).setLevel(logging.ERROR)  # a closing cluster logs benign errors
-            client, cluster = _client(scheduler, n_workers)
-            try:
-                if scheduler:
-                    n_workers = len(client.scheduler_info()["workers"])
-                futures = [client.submit(compute_batch, key, cells, name, pure=False, retries=2)
-                           for name, key, cells in batches]  # fmt: skip
-                for future in as_completed(futures):
-                    rows = future.result()
-                    _write_part(out, rows)
-                    if bar is not None:
-                        bar.update(len(rows))
-            finally:
-                client.close()
-                if cluster is not None:
-                    cluster.close()
-    finally:
-        if bar is not None:
-            bar.close()
-    run = MapRun(remaining, skipped, len(batches), n_workers, time.perf_counter() - t0, out)
+    if n_workers == 0 and scheduler is None:
+        sent = _run_serial(batches, write)
+    elif remaining:
+        sent, n_workers = _run_dask(batches, write, scheduler, n_workers)
+    else:
+        sent = 0
+    run = MapRun(write.done, len(done), sent, n_workers, time.perf_counter() - t0, out)
     logger.info("map: %s", run)
     return run

@@ -22,6 +22,7 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
+import numpy.typing as npt
 
 from ..helper_arm import initial_condition
 from ..kinematics import stack_forward_kinematics
@@ -109,7 +110,7 @@ def _figures(method: str, traj: Trajectory, travel: float, tolerance: float, mis
     )
 
 
-def _timed(am: AssemblerModel, like: PlanResult, parameters: np.ndarray, states: list, rate: float) -> Trajectory:
+def _timed(am: AssemblerModel, like: PlanResult, parameters: npt.ArrayLike, states: list, rate: float) -> Trajectory:
     """The time law and checks of the same path through other states."""
     plan = dataclasses.replace(like, parameters=np.asarray(parameters, dtype=float), states=states)
     return time_parametrize(am, plan, rate=rate, strict=False)

@@ -12,17 +12,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..kinematics import PlateArrays
+from ..kinematics import PlateArrays, nearest_rotations
 
 __all__ = ["nearest_rotations", "on_se3"]
-
-
-def nearest_rotations(R: np.ndarray) -> np.ndarray:
-    """(m, 3, 3) matrices → the nearest rotations (Frobenius norm), by SVD with det +1."""
-    u, _, vt = np.linalg.svd(R)
-    d = np.sign(np.linalg.det(np.matmul(u, vt)))
-    u[:, :, 2] *= d[:, None]
-    return np.matmul(u, vt)
 
 
 def on_se3(plates: PlateArrays) -> PlateArrays:

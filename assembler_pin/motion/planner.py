@@ -29,6 +29,7 @@ from ..exceptions import OptionsError
 from ..kinematics import PlateArrays, plate_arrays, stack_forward_kinematics
 from ..model import AssemblerModel
 from ..optimize import MotionTerm, OptimizeOptions, optimize_internal_poses
+from ..options import checked_options
 from ..progress import ProgressCallback
 from ..state import StackState, evaluate_state
 from ..validation import is_number
@@ -218,7 +219,7 @@ def plan_path(
         options: see :class:`PlanOptions`.
         progress: called as ``(permille of the path done, 1000, note)`` after each sample.
     """
-    opts = options or PlanOptions()
+    opts = checked_options(options, PlanOptions, "options")
     t_start = time.perf_counter()
     targets = list(path.parameters(opts.position_step, opts.rotation_step)[1:])  # bounded before planning
     start_state, why = _start_state(am, path, start, opts)

@@ -31,6 +31,7 @@ import numpy as np
 from ..bounds import BOUNDS, check_bound
 from ..exceptions import TrajectoryError
 from ..model import AssemblerModel
+from ..options import checked_options
 from ..progress import ProgressCallback
 from ..threads import one_blas_thread
 from .planner import PlanResult
@@ -298,7 +299,7 @@ def plan_trajectory(
 
     check_bound("plan.rate", rate, "rate", TrajectoryError)
     t0 = time.perf_counter()
-    opts = options or PlanOptions()
+    opts = checked_options(options, PlanOptions, "options")
     for attempt in range(refinements + 1):
         plan = plan_path(am, path, start, opts, progress=progress)
         if len(plan.states) < 2:

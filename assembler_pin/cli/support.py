@@ -1,0 +1,73 @@
+"""``assembler-pin support``: the stack held at both ends (plate 0 and the EE plate): the
+elastic distribution of leg forces for the pose's own lengths and the chosen one (min max|F|)."""
+
+from __future__ import annotations
+
+import argparse
+
+from .common import config_from_args, dumps, plates_from_args
+
+
+def add_parser(add) -> None:
+    """Register the ``support`` subcommand (``add`` makes a subparser with ``--config``)."""
+    p = add("support", "leg forces with both ends held: the elastic distribution and the chosen (min max|F|) one")
+    src = p.add_mutually_exclusive_group()
+    src.add_argument("--plates", metavar="FILE", help='JSON {"plates": [n+1 4x4]} file, or - for stdin')
+    src.add_argument("--home", action="store_true", help="use the home pose")
+    p.add_argument("--json", action="store_true", help="print one JSON object")
+    p.set_defaults(func=run)
+
+
+def support_document(am, plates) -> dict:
+    """The JSON answer: ``forces`` the elastic distribution of the pose's own lengths, ``chosen``
+    the distribution minimizing max|F| with its ``length_offsets``; success when both are."""
+    from ..support_choice import chosen_distribution
+    from ..supports import two_point_statics
+
+    elastic = two_point_statics(am, plates)
+    chosen = chosen_distribution(am, plates)
+    message = elastic.message if not elastic.success else chosen.message if not chosen.success else "ok"
+    return {
+        "success": elastic.success and chosen.success,
+        "message": message,
+        "support": "both",
+        "forces": elastic.forces.tolist(),
+        "max_abs_force": elastic.max_abs_force,
+        "elastic": elastic.to_dict(),
+        "chosen": chosen.to_dict(),
+    }
+
+
+def run(args: argparse.Namespace) -> int:
+    """Exit 0 with both distributions; 1 when there is none (singular pose, no convergence)."""
+    from ..model import AssemblerModel
+
+    am = AssemblerModel.from_config(config_from_args(args))
+    plates = plates_from_args(args, am, "give --plates FILE (or - for stdin) or --home")
+    doc = support_document(am, plates)
+    print(dumps(doc) if args.json else format_support(doc))
+    return 0 if doc["success"] else 1
+
+
+def format_support(doc: dict) -> str:
+    """A compact text report (lines ≤ 100 characters)."""
+    import numpy as np
+
+    from ..labels import platform_label
+
+    if not doc["success"]:
+        return f"support both: {doc['message']}"
+    el, ch = doc["elastic"], doc["chosen"]
+    lines = [
+        "held at plate 0 and at the EE plate (welded): leg forces [N], tension positive",
+        f"elastic (the pose's own lengths): max|F| {el['max_abs_force']:.3f} N, residual {el['residual']:.2g} N",
+        f"chosen (min max|F|):              max|F| {ch['max_abs_force']:.3f} N, "
+        f"largest offset {1e6 * np.abs(ch['length_offsets']).max():.2f} µm",
+    ]
+    for name, wrench in el["support_wrenches"].items():
+        lines.append(f"  {name} support force (elastic) {np.round(wrench[:3], 3).tolist()} N")
+    for j, (fe, fc, off) in enumerate(zip(el["forces"], ch["forces"], ch["length_offsets"], strict=True)):
+        lines.append(f"  {platform_label(j)} elastic " + " ".join(f"{x:7.2f}" for x in fe))
+        lines.append(f"  {platform_label(j)} chosen  " + " ".join(f"{x:7.2f}" for x in fc))
+        lines.append(f"  {platform_label(j)} offset  " + " ".join(f"{1e6 * x:7.2f}" for x in off) + " µm")
+    return "\n".join(lines)

@@ -1,0 +1,311 @@
+"""The chosen distribution of leg forces of a held stack, and the length offsets that realize it.
+
+Equilibrium at a pose. With the leg forces ``T`` (tension positive) the potential's gradient
+at plate m (:mod:`assembler_pin.elastic`, world axes) is ``ĝ_m + Ŵ_{m−1} − Ŵ_m``: ``ĝ_m`` the
+weights on it (its gradient with slack legs), ``Ŵ_j = Σ_i T_ji [u, r × u]`` platform j's legs'
+wrench, every moment taken about one point (the EE's origin). A free plate needs it zero, a
+held plate's is its support's wrench. So:
+
+* held at the base: ``Ŵ_j = −Σ_{m>j} ĝ_m`` (unique); at the EE: ``Ŵ_j = Σ_{m≤j} ĝ_m`` (unique);
+* held at both: ``Ŵ_j = −Σ_{m>j} ĝ_m + w`` for any wrench ``w``, which is the EE support's:
+  the six internal forces of the two-point support (the equilibrium matrix's null space,
+  ``T_j = J_j⁻ᵀ w`` moved to plate j+1, ``J_j`` the platform's leg lines);
+* held nowhere: ``Σ ĝ = 0`` is needed, which gravity denies: a mechanism.
+
+:func:`chosen_distribution` picks ``w`` minimizing ``max|T|`` subject to the force limits
+(``−max_compression ≤ T ≤ max_tension``) and the stroke (each commanded ``L − T / k`` within
+``[min_length, max_length]``: a leg at a stroke end can only pull it further in): a linear
+program in ``(w, t)`` solved by HiGHS. The
+legs realize it when commanded ``L0 = L − T / k``: the pose is then an exact elastic equilibrium
+with these forces (``k (L − L0) = T``), so the offsets are ``−T / k`` [m]; they are applied
+through :func:`~assembler_pin.supports.two_point_statics` (or the base-held
+:func:`~assembler_pin.compliance.loaded_pose`) to check that the forces come back.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.optimize import linprog
+
+from .compliance import LoadedPose, loaded_pose
+from .elastic import elastic_terms, line_conditions
+from .kinematics import PlateArrays, leg_vectors, plate_arrays
+from .labels import leg_label
+from .model import AssemblerModel
+from .statics import CONDITION_LIMIT
+from .supports import TwoPointStatics, held_plates, mechanism_message, residual_tolerance, two_point_statics
+
+__all__ = [
+    "CHECK_TOLERANCE",
+    "ChosenDistribution",
+    "HeldEquilibrium",
+    "chosen_distribution",
+    "force_bounds",
+    "held_equilibrium",
+]
+
+#: Largest difference [N] between the chosen forces and those its offsets produce when applied.
+CHECK_TOLERANCE = 1e-6
+
+
+@dataclass(frozen=True)
+class HeldEquilibrium:
+    """The leg forces in equilibrium at a pose for a support, as ``F = particular + null @ w``.
+
+    Attributes:
+        particular: (n, 6) forces with the EE's support wrench zero (the base-held statics, or
+            the EE-held ones for ``ee``) [N].
+        null: (n, 6, k) the internal force patterns: k = 6 with both ends held, else 0 [N per
+            unit of the EE support's wrench about the EE origin].
+        total: (6,) the weights' wrench about the EE origin (what the supports carry together).
+        ee_origin: (3,) the EE plate's origin [m], the moments' point.
+    """
+
+    particular: np.ndarray
+    null: np.ndarray
+    total: np.ndarray
+    ee_origin: np.ndarray
+
+
+def _moved(W: np.ndarray, c: np.ndarray, P: np.ndarray) -> np.ndarray:
+    """Wrenches (..., 6) with moments about ``c`` moved to points ``P`` (..., 3)."""
+    out = W.copy()
+    out[..., 3:] += np.cross(c - P, W[..., :3])
+    return out
+
+
+def held_equilibrium(am: AssemblerModel, pa: PlateArrays, support: str) -> HeldEquilibrium | str:
+    """The equilibrium forces of the module docstring, or why there are none (a mechanism, a
+    singular platform) as a string."""
+    held = held_plates(am, support)
+    why = mechanism_message(support)
+    if why is not None:
+        return why
+    slack = elastic_terms(am, pa.R, pa.p, None, float(am.config.leg.stiffness), hessian=False)
+    J_inv, cond = line_conditions(slack.lines)
+    if not cond.max() <= CONDITION_LIMIT:
+        j = int(np.argmax(cond))
+        return f"platform {j} is at a singular configuration (condition number {cond[j]:.3g} > {CONDITION_LIMIT:.0g})"
+    c = pa.p[-1]
+    g_hat = _moved(np.vstack([slack.base_gradient, slack.gradient]), pa.p, c)  # about the EE origin
+    if held == (am.n,):
+        W = np.cumsum(g_hat[:-1], axis=0)
+    else:
+        W = -np.cumsum(g_hat[::-1], axis=0)[::-1][1:]  # -Σ_{m>j}
+    to_legs = np.swapaxes(J_inv, 1, 2)  # T = J⁻ᵀ W at the top plate's origin
+    particular = np.einsum("jab,jb->ja", to_legs, _moved(W, c, pa.p[1:]))
+    k = 6 if len(held) == 2 else 0
+    unit = np.broadcast_to(np.eye(6)[:k], (am.n, k, 6))
+    null = np.einsum("jab,jkb->jak", to_legs, _moved(unit, c, pa.p[1:, None, :]))
+    return HeldEquilibrium(particular, null, g_hat.sum(axis=0), c)
+
+
+def force_bounds(am: AssemblerModel, lengths: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Per-leg bounds (n, 6) on a chosen force [N]: the force limits, and the stroke (the
+    commanded ``L − F / k`` within ``[min_length, max_length]``)."""
+    leg = am.config.leg
+    k = float(leg.stiffness)
+    lo = np.maximum(-leg.max_compression, k * (lengths - leg.max_length))
+    hi = np.minimum(leg.max_tension, k * (lengths - leg.min_length))
+    return lo, hi
+
+
+def _minmax(eq: HeldEquilibrium, lo: np.ndarray, hi: np.ndarray) -> tuple[np.ndarray | None, str]:
+    """``w`` minimizing max|F| with ``lo ≤ F ≤ hi`` (HiGHS), or None and why not."""
+    Fp = eq.particular.ravel()
+    N = eq.null.reshape(Fp.size, -1)
+    k = N.shape[1]
+    if k == 0:
+        return np.zeros(0), "the support is statically determinate: the forces are unique"
+    ones = np.ones((Fp.size, 1))
+    zeros = np.zeros((Fp.size, 1))
+    A = np.block([[N, -ones], [-N, -ones], [N, zeros], [-N, zeros]])
+    b = np.concatenate([-Fp, Fp, hi.ravel() - Fp, Fp - lo.ravel()])
+    cost = np.zeros(k + 1)
+    cost[-1] = 1.0
+    res = linprog(cost, A_ub=A, b_ub=b, bounds=[(None, None)] * k + [(0, None)], method="highs")
+    if res.status != 0 or res.x is None:
+        return None, f"no distribution within the force limits and the stroke (HiGHS: {res.message})"
+    return res.x[:k], "minimal max|F| within the force limits and the stroke (HiGHS)"
+
+
+@dataclass(frozen=True)
+class ChosenDistribution:
+    """The forces chosen by commanding length offsets (:func:`chosen_distribution`).
+
+    Attributes:
+        support: ``base``, ``ee`` or ``both``.
+        plates: where the forces are chosen (the elastic distribution's loaded plates, or the
+            pose itself: see :func:`chosen_distribution`); the pose when it failed.
+        forces: (n, 6) leg forces [N], tension positive, at ``plates`` (NaN on failure).
+        length_offsets: (n, 6) commanded minus the pose's own lengths, ``−F / k`` [m].
+        commanded: (n, 6) the lengths to command [m].
+        base_wrench, ee_wrench: (6,) what the supports apply to plates 0 and n [N, N·m], world
+            axes, moments about those plates' origins (zero for a plate not held).
+        residual: largest unbalanced force or moment at a free plate, from the potential's
+            gradient at the pose with the commanded lengths [N, N·m].
+        check_error: largest difference [N] between ``forces`` and those of the elastic solve of
+            the commanded lengths (NaN when not checked: the EE-only support).
+        within_stroke: every commanded length lies within the legs' stroke.
+        success: a distribution within the force limits, in equilibrium, reproduced by its
+            offsets and commandable; message: what was done, or why not.
+    """
+
+    support: str
+    plates: PlateArrays
+    forces: np.ndarray
+    length_offsets: np.ndarray
+    commanded: np.ndarray
+    base_wrench: np.ndarray
+    ee_wrench: np.ndarray
+    residual: float
+    check_error: float
+    within_stroke: bool
+    success: bool
+    message: str
+
+    @property
+    def max_abs_force(self) -> float:
+        """max |F| [N] (NaN on failure)."""
+        return float(np.abs(self.forces).max())
+
+    def __repr__(self) -> str:
+        return (
+            f"ChosenDistribution(support={self.support!r}, success={self.success}, max|F| "
+            f"{self.max_abs_force:.3f} N, largest offset {1e6 * float(np.abs(self.length_offsets).max()):.2f} µm, "
+            f"check {self.check_error:.2g} N, message={self.message!r})"
+        )
+
+    def to_dict(self) -> dict:
+        """JSON-ready lists (NaN for a failed one: write it with ``cli.common.dumps``)."""
+        return {
+            "success": self.success,
+            "message": self.message,
+            "support": self.support,
+            "forces": self.forces.tolist(),
+            "length_offsets": self.length_offsets.tolist(),
+            "commanded": self.commanded.tolist(),
+            "max_abs_force": self.max_abs_force,
+            "support_wrenches": {"base": self.base_wrench.tolist(), "ee": self.ee_wrench.tolist()},
+            "residual": self.residual,
+            "check_error": self.check_error,
+            "within_stroke": self.within_stroke,
+            "plates": self.plates.as_matrices().tolist(),
+        }
+
+
+def _failed(support: str, pa: PlateArrays, message: str) -> ChosenDistribution:
+    nan, nan6 = np.full((len(pa) - 1, 6), np.nan), np.full(6, np.nan)
+    return ChosenDistribution(support, pa, nan, nan, nan, nan6, nan6, math.inf, math.nan, False, False, message)
+
+
+def _check(
+    am: AssemblerModel, pa: PlateArrays, support: str, commanded: np.ndarray, F: np.ndarray
+) -> tuple[float, str]:
+    """Apply the commanded lengths through the elastic solve of the support: the largest force
+    difference [N] and a note (NaN when the support has no elastic solve yet)."""
+    if support == "ee":
+        return math.nan, "offsets not checked by an elastic solve (none yet for the EE-only support)"
+    got: TwoPointStatics | LoadedPose
+    if support == "both":
+        got = two_point_statics(am, pa, commanded)
+    else:
+        got = loaded_pose(am, commanded, base=pa.se3(0))
+    if not got.success:
+        return math.inf, f"the elastic solve of the commanded lengths failed: {got.message}"
+    return float(np.abs(got.forces - F).max()), "offsets checked by the elastic solve"
+
+
+def _stroke_note(am: AssemblerModel, commanded: np.ndarray) -> str | None:
+    leg = am.config.leg
+    over = np.maximum(leg.min_length - commanded, commanded - leg.max_length)
+    if over.max() <= 0:
+        return None
+    j, i = np.unravel_index(int(np.argmax(over)), over.shape)
+    return (
+        f"{int((over > 0).sum())} commanded length(s) outside the stroke [{leg.min_length:g}, {leg.max_length:g}] m, "
+        f"the worst {leg_label(int(j), int(i))} at {commanded[j, i]:.6f} m"
+    )
+
+
+def _where(am: AssemblerModel, pa: PlateArrays, support: str, loaded: bool) -> PlateArrays | str:
+    """The plates the distribution is chosen at: where the elastic solve of the pose's own
+    lengths puts them (``loaded``, supports ``base`` and ``both``), else the pose itself."""
+    if not loaded or support not in ("base", "both"):
+        return pa
+    el: TwoPointStatics | LoadedPose
+    if support == "both":
+        el = two_point_statics(am, pa)
+    else:
+        el = loaded_pose(am, leg_vectors(am, pa)[3], base=pa.se3(0))
+    return el.plates if el.success else f"no elastic equilibrium of the pose's own lengths: {el.message}"
+
+
+def _verdict(residual: float, tolerance: float, error: float, checked: str) -> str | None:
+    if not residual <= tolerance:
+        return f"the chosen forces leave {residual:.3g} N unbalanced at a free plate (> {tolerance:.3g})"
+    if not (math.isnan(error) or error <= CHECK_TOLERANCE):
+        return f"{checked}: the offsets give forces {error:.3g} N from the chosen ones (> {CHECK_TOLERANCE:g} N)"
+    return None
+
+
+def chosen_distribution(
+    am: AssemblerModel,
+    plates: PlateArrays | Sequence | np.ndarray,
+    support: str = "both",
+    loaded: bool = True,
+    verify: bool = True,
+) -> ChosenDistribution:
+    """The leg forces minimizing max|F| within the force limits and the stroke for the stack
+    held by ``support`` at ``plates``, and the length offsets that realize them (module doc).
+
+    ``loaded`` (default): chosen where the elastic distribution of the pose's own lengths puts
+    the plates (:func:`~assembler_pin.supports.two_point_statics`; the base-held
+    :func:`~assembler_pin.compliance.loaded_pose`), so the elastic forces are one of the
+    candidates and ``max|F|`` is never above theirs; else at ``plates`` exactly. The offsets are
+    the commanded lengths minus the pose's own. Held at one end the forces are unique; held at
+    both, HiGHS picks the six internal forces. With ``verify`` the commanded lengths are applied
+    through the elastic solve and must give the forces back within :data:`CHECK_TOLERANCE`
+    (not possible yet for ``ee``: its ``check_error`` is NaN).
+
+    Returns:
+        A :class:`ChosenDistribution`; ``success`` false (NaN forces) for a support that leaves
+        a mechanism, a singular pose, no distribution within the limits, or a failed check.
+
+    Raises:
+        SupportError: an unknown support. PoseError: malformed plates.
+    """
+    pa = plate_arrays(am, plates)
+    held = held_plates(am, support)
+    at = _where(am, pa, support, loaded) if mechanism_message(support) is None else pa
+    if isinstance(at, str):
+        return _failed(support, pa, at)
+    eq = held_equilibrium(am, at, support)
+    if isinstance(eq, str):
+        return _failed(support, pa, eq)
+    lengths = leg_vectors(am, at)[3]
+    lo, hi = force_bounds(am, lengths)
+    w, note = _minmax(eq, lo, hi)
+    if w is None:
+        return _failed(support, pa, note)
+    F = eq.particular + eq.null @ w
+    if eq.null.shape[2] == 0 and not np.all((lo <= F) & (F <= hi)):
+        return _failed(support, pa, "the forces of this support exceed the force limits (or the stroke)")
+    k = float(am.config.leg.stiffness)
+    commanded = lengths - F / k
+    terms = elastic_terms(am, at.R, at.p, commanded, k, hessian=False)
+    grad = np.vstack([terms.base_gradient, terms.gradient])
+    free = [m for m in range(am.n + 1) if m not in held]
+    residual = float(np.abs(grad[free]).max()) if free else 0.0
+    error, checked = _check(am, pa, support, commanded, F) if verify else (math.nan, "offsets not checked")
+    why = _verdict(residual, residual_tolerance(am, at), error, checked) or _stroke_note(am, commanded)
+    walls = (grad[0] if 0 in held else np.zeros(6), grad[-1] if am.n in held else np.zeros(6))
+    offsets = commanded - leg_vectors(am, pa)[3]
+    within = _stroke_note(am, commanded) is None
+    return ChosenDistribution(
+        support, at, F, offsets, commanded, *walls, residual, error, within, why is None, why or f"{note}; {checked}"
+    )

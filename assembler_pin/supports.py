@@ -1,0 +1,264 @@
+"""Supports of the stack: which plates are held, and the statics of the stack held at both ends.
+
+A support welds plates to the world: ``base`` (plate 0, the package's usual model), ``ee`` (the
+EE plate n) or ``both`` (plate 0 and plate n: the inchworm's two feet); ``none`` leaves the
+stack a free body, a mechanism. Held at both ends, the 6n leg forces meet only the 6(n−1)
+equilibrium equations of the free plates 1..n−1: six internal forces are redundant whatever n
+is (one wrench passed from foot to foot through every platform). Two answers:
+
+* :func:`two_point_statics` — the **elastic distribution**: the nonlinear elastic equilibrium
+  of the free plates for commanded lengths ``L0`` (default: the pose's own lengths), plates 0
+  and n fixed at their poses, the legs springs of ``leg.stiffness`` (:mod:`assembler_pin.elastic`,
+  its Newton solve with the EE held): leg forces ``k (L − L0)`` (tension positive) and the two
+  support wrenches.
+* :func:`~assembler_pin.support_choice.chosen_distribution` — the **chosen distribution**: the
+  legs are actuated, so small length offsets set the six internal forces; the one minimizing
+  max|F| within the force limits, with the offsets that realize it.
+
+Wrenches are ``[f, m]`` the support applies to its plate [N, N·m], world axes, the moment
+about that plate's origin.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+import numpy.typing as npt
+
+from .elastic import elastic_terms, line_conditions, solve_equilibrium
+from .exceptions import PoseError, SupportError
+from .kinematics import PlateArrays, leg_vectors, plate_arrays
+from .model import AssemblerModel
+from .statics import CONDITION_LIMIT
+from .validation import as_float_array
+
+__all__ = [
+    "FAST_STEP",
+    "RESIDUAL_TOLERANCE",
+    "SUPPORTS",
+    "TwoPointStatics",
+    "benchmark_supports",
+    "held_plates",
+    "two_point_statics",
+]
+
+#: The support names: the plates each holds (``n`` the EE plate).
+SUPPORTS = ("base", "ee", "both", "none")
+
+#: Largest force or moment left unbalanced at a free plate of an accepted equilibrium [N, N·m]
+#: (raised for tall stacks to the floor of double precision: :func:`residual_tolerance`).
+RESIDUAL_TOLERANCE = 1e-9
+
+#: Newton step [m] at which the fast solve stops (the residual check decides, see
+#: :func:`two_point_statics`).
+FAST_STEP = 1e-9
+
+
+def residual_tolerance(am: AssemblerModel, pa: PlateArrays) -> float:
+    """The largest residual accepted at a free plate [N, N·m]: :data:`RESIDUAL_TOLERANCE`, or for
+    tall stacks the rounding of the plate positions times the legs' stiffness (16 ε k max|p|),
+    the floor no solve in double precision can go below."""
+    reach = float(np.abs(pa.p).max())
+    return max(RESIDUAL_TOLERANCE, 16.0 * np.finfo(float).eps * float(am.config.leg.stiffness) * reach)
+
+
+def _residual(terms) -> float:
+    """Largest unbalanced force or moment at plates 1..n−1 [N, N·m] (0 with no free plate)."""
+    return float(np.abs(terms.gradient[:-1]).max()) if terms.gradient.shape[0] > 1 else 0.0
+
+
+def held_plates(am: AssemblerModel, support: str) -> tuple[int, ...]:
+    """The plates a support holds: ``base`` (0,), ``ee`` (n,), ``both`` (0, n), ``none`` ().
+
+    Raises:
+        SupportError: an unknown support name.
+    """
+    table = {"base": (0,), "ee": (am.n,), "both": (0, am.n), "none": ()}
+    if not isinstance(support, str) or support not in table:
+        raise SupportError(f"support must be one of {', '.join(SUPPORTS)}; got {support!r}")
+    return table[support]
+
+
+def mechanism_message(support: str) -> str | None:
+    """Why a support leaves the stack a mechanism (None when it does not)."""
+    if support == "none":
+        return "no plate is held: the stack is a free body (six rigid-body motions), a mechanism"
+    return None
+
+
+@dataclass(frozen=True)
+class TwoPointStatics:
+    """The elastic equilibrium of the stack held at plate 0 and plate n (:func:`two_point_statics`).
+
+    Attributes:
+        plates: the loaded plate poses (plates 0 and n as given; the last iterate on failure).
+        forces: (n, 6) leg forces ``k (L − L0)`` [N], tension positive (NaN on failure).
+        lengths: (n, 6) loaded pin-to-pin lengths [m]; commanded: (n, 6) ``L0`` [m].
+        base_wrench, ee_wrench: (6,) what the two supports apply to plates 0 and n [N, N·m],
+            world axes, moments about those plates' origins.
+        residual: largest unbalanced force or moment at a free plate [N, N·m]
+            (:func:`residual_tolerance`: 1e-9 up to tall stacks).
+        iterations: Newton steps; stable: the free plates' tangent stiffness is positive definite.
+        success: converged, stable, residual ≤ :func:`residual_tolerance`, no platform singular;
+            message: "converged" or why not.
+    """
+
+    plates: PlateArrays
+    forces: np.ndarray
+    lengths: np.ndarray
+    commanded: np.ndarray
+    base_wrench: np.ndarray
+    ee_wrench: np.ndarray
+    residual: float
+    iterations: int
+    stable: bool
+    success: bool
+    message: str
+
+    @property
+    def max_abs_force(self) -> float:
+        """max |F| [N] (NaN on failure)."""
+        return float(np.abs(self.forces).max())
+
+    def __repr__(self) -> str:
+        return (
+            f"TwoPointStatics(success={self.success}, max|F| {self.max_abs_force:.3f} N, base force "
+            f"{np.round(self.base_wrench[:3], 3).tolist()} N, EE force {np.round(self.ee_wrench[:3], 3).tolist()} N, "
+            f"residual {self.residual:.2g}, {self.iterations} steps, message={self.message!r})"
+        )
+
+    def to_dict(self) -> dict:
+        """JSON-ready lists (NaN for a failed one: write it with ``cli.common.dumps``)."""
+        return {
+            "success": self.success,
+            "message": self.message,
+            "support": "both",
+            "forces": self.forces.tolist(),
+            "max_abs_force": self.max_abs_force,
+            "lengths": self.lengths.tolist(),
+            "commanded": self.commanded.tolist(),
+            "support_wrenches": {"base": self.base_wrench.tolist(), "ee": self.ee_wrench.tolist()},
+            "plates": self.plates.as_matrices().tolist(),
+            "residual": self.residual,
+            "iterations": self.iterations,
+            "stable": self.stable,
+            "units": "N (tension positive), m; wrenches [f, m] on the held plate, world axes, N and N m",
+        }
+
+
+def checked_lengths(am: AssemblerModel, lengths: npt.ArrayLike, what: str = "commanded leg lengths") -> np.ndarray:
+    """(n, 6) lengths [m], finite and > 0.
+
+    Raises:
+        PoseError: malformed, not finite or not positive.
+    """
+    arr = as_float_array(lengths, what, (am.n, 6))
+    if not np.all(np.isfinite(arr)) or not arr.min() > 0:
+        raise PoseError(f"{what} must be finite and > 0 [m]")
+    return arr
+
+
+def _failed(pa: PlateArrays, rest: np.ndarray, its: int, residual: float, message: str) -> TwoPointStatics:
+    nan, nan6 = np.full(rest.shape, np.nan), np.full(6, np.nan)
+    return TwoPointStatics(pa, nan, nan, rest, nan6, nan6, residual, its, False, False, message)
+
+
+def two_point_statics(
+    am: AssemblerModel,
+    plates: PlateArrays | Sequence | np.ndarray,
+    lengths: npt.ArrayLike | None = None,
+    max_iterations: int = 30,
+) -> TwoPointStatics:
+    """The elastic distribution: plates 0 and n welded at their poses in ``plates``, the legs
+    commanded to ``lengths`` (n, 6) [m] (default: the pose's own), gravity and the payload on.
+
+    Newton's method on plates 1..n−1 (:func:`~assembler_pin.elastic.solve_equilibrium` with the
+    EE held) from ``plates``, stopped at a step of :data:`FAST_STEP` (Newton converges
+    quadratically: the error left is far below it); the forces, support wrenches and residual
+    are evaluated at its end, and a residual above the tolerance is polished by more steps to
+    ``1e-12`` m before it is reported.
+
+    Returns:
+        A :class:`TwoPointStatics`; ``success`` false (NaN forces) for a singular pose (leg-line
+        condition number above :data:`~assembler_pin.statics.CONDITION_LIMIT`), no convergence,
+        an unstable equilibrium or a residual above :func:`residual_tolerance`.
+
+    Raises:
+        PoseError: malformed plates or lengths.
+    """
+    pa = plate_arrays(am, plates)
+    rest = leg_vectors(am, pa)[3] if lengths is None else checked_lengths(am, lengths)
+    k = float(am.config.leg.stiffness)
+    tolerance = residual_tolerance(am, pa)
+    eq = solve_equilibrium(
+        am,
+        pa.R,
+        pa.p,
+        rest,
+        k,
+        tol=FAST_STEP,
+        max_iterations=max_iterations,
+        condition_limit=CONDITION_LIMIT,
+        hold_ee=True,
+    )
+    its = eq.iterations
+    end = None if eq.message else elastic_terms(am, eq.R, eq.p, rest, k, hessian=False)
+    if end is not None and not _residual(end) <= tolerance:  # polish: Newton to the last digits
+        eq = solve_equilibrium(am, eq.R, eq.p, rest, k, max_iterations=max_iterations, hold_ee=True)
+        its += eq.iterations
+        end = None if eq.message else elastic_terms(am, eq.R, eq.p, rest, k, hessian=False)
+    loaded = PlateArrays(eq.R, eq.p)
+    if end is None:
+        assert eq.message is not None  # no terms are computed after a failed solve
+        return _failed(loaded, rest, its, math.inf, eq.message)
+    residual = _residual(end)
+    cond = line_conditions(end.lines)[1]
+    message = None
+    if not cond.max() <= CONDITION_LIMIT:
+        message = f"the loaded pose puts platform {int(np.argmax(cond))} at a singular configuration"
+    elif not eq.stable:
+        message = "the equilibrium held at both ends is not stable (the free plates buckle)"
+    elif not residual <= tolerance:
+        message = f"the equilibrium leaves {residual:.3g} N unbalanced at a free plate (> {tolerance:.3g})"
+    if message is not None:
+        return _failed(loaded, rest, its, residual, message)
+    return TwoPointStatics(
+        loaded,
+        end.tension,
+        end.lengths,
+        rest,
+        end.base_gradient.copy(),
+        end.gradient[-1].copy(),
+        residual,
+        its,
+        True,
+        True,
+        "converged",
+    )
+
+
+def benchmark_supports(am: AssemblerModel, repeat: int = 50) -> dict[str, float]:
+    """Median wall time [s] per call at the home pose of :func:`two_point_statics` and of
+    :func:`~assembler_pin.support_choice.chosen_distribution` (with and without its check)."""
+    from .support_choice import chosen_distribution
+
+    pa = plate_arrays(am, am.home)
+    calls = {
+        "two_point_statics": lambda: two_point_statics(am, pa),
+        "chosen_distribution": lambda: chosen_distribution(am, pa),
+        "chosen_distribution_unchecked": lambda: chosen_distribution(am, pa, verify=False),
+    }
+    out = {}
+    for name, call in calls.items():
+        call()
+        times = []
+        for _ in range(repeat):
+            t0 = time.perf_counter()
+            call()
+            times.append(time.perf_counter() - t0)
+        out[name] = float(np.median(times))
+    return out

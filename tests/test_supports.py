@@ -1,0 +1,344 @@
+"""The stack held at both ends: the elastic and the chosen distributions of leg forces, each held
+to an independent computation.
+
+The reference is written here from the design alone: the total potential of the free plates
+1..n−1 (legs as springs ½k(L−L0)², the weight of plates, motors, shafts and payload placed from
+the plate poses and the design anchors of ``checks.py``, as ``conftest.potential_energy`` does),
+plates 0 and n fixed, its gradient by complex-step differentiation, minimized by
+``scipy.optimize.minimize``. MuJoCo holds the exported MJCF with the EE welded to the world.
+"""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pinocchio as pin
+import pytest
+from checks import design_anchors
+from scipy.optimize import linprog, minimize
+
+import assembler_pin as ap
+from assembler_pin.support_choice import chosen_distribution
+from assembler_pin.supports import benchmark_supports, held_plates, two_point_statics
+
+STEP = 1e-20  # complex step
+
+
+def _cayley_minus_identity(a: np.ndarray) -> np.ndarray:
+    """``cayley(a) − I`` (..., 3, 3) of Cayley parameters a (..., 3), real or complex: the
+    rotation ``(I − A)⁻¹(I + A)`` (exactly orthogonal), written without cancelling digits."""
+    K = np.zeros((*a.shape, 3), dtype=a.dtype)
+    K[..., 0, 1], K[..., 0, 2], K[..., 1, 2] = -a[..., 2], a[..., 1], -a[..., 0]
+    K[..., 1, 0], K[..., 2, 0], K[..., 2, 1] = a[..., 2], -a[..., 1], a[..., 0]
+    s = 2.0 / (1.0 + (a * a).sum(-1))
+    return s[..., None, None] * (K + K @ K)
+
+
+class HeldStack:
+    """The potential of the stack with plates 0 and n fixed, over x (6(n−1)): per free plate a
+    translation and Cayley parameters, ``p = p_ref + δp``, ``R = cayley(a) R_ref``; the springs'
+    stretch is measured from the reference pose so that no digits cancel near the minimum."""
+
+    def __init__(self, cfg, R, p, rest):
+        self.cfg, self.n, self.k = cfg, cfg.platforms, cfg.leg.stiffness
+        self.R, self.p = np.array(R, float), np.array(p, float)
+        anchors = [design_anchors(cfg, j) for j in range(self.n)]
+        self.bottom = np.array([np.asarray(b) @ self.R[j].T for j, (b, _) in enumerate(anchors)])  # world arms
+        self.top = np.array([np.asarray(t) @ self.R[j + 1].T for j, (_, t) in enumerate(anchors)])
+        self.d_ref = self.top + self.p[1:, None] - self.bottom - self.p[:-1, None]
+        self.L_ref = np.sqrt((self.d_ref**2).sum(-1))
+        self.offset = self.L_ref - np.asarray(rest, float)  # the springs' stretch at the reference
+
+    def _moves(self, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Plate translations (B, n+1, 3) and ``R R_ref⁻¹ − I`` (B, n+1, 3, 3); plates 0, n stay."""
+        B = x.shape[0]
+        xs = x.reshape(B, self.n - 1, 6)
+        dp = np.zeros((B, self.n + 1, 3), dtype=x.dtype)
+        dR = np.zeros((B, self.n + 1, 3, 3), dtype=x.dtype)
+        dp[:, 1:-1] = xs[..., :3]
+        dR[:, 1:-1] = _cayley_minus_identity(xs[..., 3:])
+        return dp, dR
+
+    def energy(self, x: np.ndarray) -> np.ndarray:
+        """V(x) − V(0) [J] for a batch x (B, 6(n−1)), real or complex."""
+        cfg, leg, g, n = self.cfg, self.cfg.leg, self.cfg.gravity, self.n
+        dp, dR = self._moves(x)
+        move_b = dp[:, :-1, None] + np.einsum("bjkl,jil->bjik", dR[:, :-1], self.bottom)
+        move_t = dp[:, 1:, None] + np.einsum("bjkl,jil->bjik", dR[:, 1:], self.top)
+        dd = move_t - move_b
+        d = self.d_ref + dd
+        dL = (dd * (d + self.d_ref)).sum(-1) / (np.sqrt((d * d).sum(-1)) + self.L_ref)  # L − L_ref
+        springs = 0.5 * self.k * (dL * (dL + 2 * self.offset)).sum((1, 2))
+        du = d / (self.L_ref + dL)[..., None] - self.d_ref / self.L_ref[..., None]
+        motors = leg.motor_mass * g * (move_b[..., 2] + leg.motor_com * du[..., 2]).sum((1, 2))
+        shafts = leg.shaft_mass * g * (move_t[..., 2] - leg.shaft_com * du[..., 2]).sum((1, 2))
+        plates = cfg.plate.mass * g * dp[..., 2].sum(1)
+        lever = self.R[n] @ np.array([0.0, 0.0, cfg.payload.offset])
+        payload = cfg.payload.mass * g * (dp[:, -1, 2] + (dR[:, -1] @ lever)[:, 2])
+        return springs + motors + shafts + plates + payload
+
+    def gradient(self, x: np.ndarray) -> np.ndarray:
+        return self.energy(x[None] + 1j * STEP * np.eye(x.size)).imag / STEP
+
+    def minimum(self) -> np.ndarray:
+        """scipy's trust-region minimum, polished by Newton steps on the exact gradient (the energy
+        values cannot resolve the last digits near the minimum)."""
+        m = 6 * (self.n - 1)
+        h = 1e-7
+        H = np.array([(self.gradient(h * e) - self.gradient(-h * e)) / (2 * h) for e in np.eye(m)])
+        H = 0.5 * (H + H.T)
+        res = minimize(
+            lambda x: float(self.energy(x[None])[0].real),
+            np.zeros(m),
+            jac=self.gradient,
+            hess=lambda x: H,
+            method="trust-exact",
+            options={"gtol": 1e-10},
+        )
+        x = res.x
+        for _ in range(20):
+            grad = self.gradient(x)
+            if np.abs(grad).max() < 1e-12:
+                break
+            x = x - np.linalg.solve(H, grad)
+        assert np.abs(self.gradient(x)).max() < 1e-11, res.message
+        return x
+
+    def forces(self, x: np.ndarray) -> np.ndarray:
+        """Leg forces k (L − L0) [N] at x."""
+        dp, dR = self._moves(x[None])
+        move_b = dp[:, :-1, None] + np.einsum("bjkl,jil->bjik", dR[:, :-1], self.bottom)
+        move_t = dp[:, 1:, None] + np.einsum("bjkl,jil->bjik", dR[:, 1:], self.top)
+        dd = (move_t - move_b)[0]
+        d = self.d_ref + dd
+        dL = (dd * (d + self.d_ref)).sum(-1) / (np.sqrt((d * d).sum(-1)) + self.L_ref)
+        return self.k * (dL + self.offset)
+
+
+_MODELS: dict = {}
+
+
+def _model(n: int) -> ap.AssemblerModel:
+    if n not in _MODELS:
+        _MODELS[n] = ap.AssemblerModel.from_config({"platforms": n})
+    return _MODELS[n]
+
+
+def _pose(am, kind: str) -> ap.PlateArrays:
+    if kind == "home":
+        return ap.plate_arrays(am, am.home)
+    rng = np.random.default_rng(11 + am.n)
+    leg = am.config.leg
+    while True:
+        fk = ap.stack_forward_kinematics(am, rng.uniform(leg.min_length + 0.02, leg.max_length - 0.02, (am.n, 6)))
+        if fk.success:
+            return fk.plates
+
+
+@pytest.fixture(scope="module")
+def optimized(am) -> dict:
+    """The paper's inchworm and vertical-lift poses, force-optimized by ap.solve."""
+    out = {}
+    for name in ("inchworm", "vertical_lift"):
+        result = ap.solve(am, ap.scenario(name).goal)
+        assert result.success, result.message
+        out[name] = ap.plate_arrays(am, result.optimized.plates)
+    return out
+
+
+# ---------------------------------------------------------------------- (a) the elastic distribution
+@pytest.mark.parametrize("n", [2, 4, 8])
+@pytest.mark.parametrize("kind", ["home", "random"])
+def test_elastic_forces_are_the_independent_minimum_with_both_ends_fixed(n, kind):
+    am = _model(n)
+    pa = _pose(am, kind)
+    rng = np.random.default_rng(n)
+    rest = ap.leg_state(am, pa).lengths + rng.uniform(-2e-5, 2e-5, (n, 6))  # commanded off the pose
+    ours = two_point_statics(am, pa, rest)
+    assert ours.success, ours.message
+    ref = HeldStack(am.config, pa.R, pa.p, rest)
+    x = ref.minimum()
+    F = ref.forces(x)
+    assert np.abs(ours.forces - F).max() <= 1e-6 * np.abs(F).max(), np.abs(ours.forces - F).max()
+    assert ours.residual <= 1e-9
+    # the reference potential is stationary at our plates too: ≤ 1e-9 N (its a-gradient is 2× the moment)
+    at_ours = HeldStack(am.config, ours.plates.R, ours.plates.p, rest)
+    grad = at_ours.gradient(np.zeros(6 * (n - 1))).reshape(n - 1, 6)
+    assert np.abs(grad[:, :3]).max() <= 1e-9 and np.abs(grad[:, 3:]).max() <= 2e-9
+    # the two supports carry the whole weight together
+    cfg = am.config
+    weight = cfg.gravity * (
+        (n + 1) * cfg.plate.mass + 6 * n * (cfg.leg.motor_mass + cfg.leg.shaft_mass) + cfg.payload.mass
+    )
+    np.testing.assert_allclose(ours.base_wrench[:3] + ours.ee_wrench[:3], [0, 0, weight], atol=1e-9)
+
+
+def test_one_platform_held_at_both_ends_carries_nothing_in_its_legs():
+    am = _model(1)
+    result = two_point_statics(am, am.home)
+    assert result.success and result.max_abs_force == 0.0 and result.iterations == 0
+
+
+# ---------------------------------------------------------------------- (b) the chosen distribution
+def _reference_minmax(am, pa, rest_at: np.ndarray) -> float:
+    """min max|F| over every 6n force vector the reference potential balances at ``pa`` (plates
+    1..n−1 free), within the force limits and the stroke: an LP over the forces themselves, its
+    equilibrium matrix from the reference gradient's dependence on the commanded lengths."""
+    n, k, leg = am.n, am.config.leg.stiffness, am.config.leg
+    L = ap.leg_state(am, pa).lengths
+    g0 = HeldStack(am.config, pa.R, pa.p, L).gradient(np.zeros(6 * (n - 1)))  # slack legs
+    cols = []
+    for e in np.eye(6 * n):  # ∂grad/∂F: commanded L − F/k for a unit force
+        cols.append(HeldStack(am.config, pa.R, pa.p, L - e.reshape(n, 6) / k).gradient(np.zeros(6 * (n - 1))) - g0)
+    A = np.array(cols).T
+    m = 6 * n
+    c = np.r_[np.zeros(m), 1.0]
+    eye, ones = np.eye(m), np.ones((m, 1))
+    lo = np.maximum(-leg.max_compression, k * (L - leg.max_length)).ravel()
+    hi = np.minimum(leg.max_tension, k * (L - leg.min_length)).ravel()
+    res = linprog(
+        c,
+        A_ub=np.block([[eye, -ones], [-eye, -ones]]),
+        b_ub=np.zeros(2 * m),
+        A_eq=np.hstack([A, np.zeros((A.shape[0], 1))]),
+        b_eq=-g0,
+        bounds=[*zip(lo, hi, strict=True), (0, None)],
+        method="highs",
+    )
+    assert res.status == 0, res.message
+    return float(res.fun)
+
+
+def _check_chosen(am, pa) -> None:
+    elastic = two_point_statics(am, pa)
+    chosen = chosen_distribution(am, pa)
+    assert elastic.success and chosen.success, (elastic.message, chosen.message)
+    assert chosen.max_abs_force <= elastic.max_abs_force + 1e-6  # HiGHS's feasibility tolerance
+    # equilibrium of the chosen forces at every free plate, from the reference potential
+    grad = HeldStack(am.config, chosen.plates.R, chosen.plates.p, chosen.commanded).gradient(np.zeros(6 * (am.n - 1)))
+    assert np.abs(grad.reshape(-1, 6)[:, :3]).max() <= 1e-9 and np.abs(grad.reshape(-1, 6)[:, 3:]).max() <= 2e-9
+    # the offsets, applied through the elastic solve from the pose, give the chosen forces back
+    applied = two_point_statics(am, pa, ap.leg_state(am, pa).lengths + chosen.length_offsets)
+    assert applied.success and np.abs(applied.forces - chosen.forces).max() <= 1e-6
+    # and no balanced distribution does better (an LP over the forces, not the null space)
+    assert chosen.max_abs_force == pytest.approx(_reference_minmax(am, chosen.plates, chosen.commanded), abs=1e-6)
+
+
+def test_chosen_distribution_at_home_and_the_optimized_inchworm_and_vertical_lift(am, optimized):
+    for pa in (ap.plate_arrays(am, am.home), *optimized.values()):
+        _check_chosen(am, pa)
+    # the optimized poses have legs at their stroke ends: the chosen one stays commandable
+    for pa in optimized.values():
+        chosen = chosen_distribution(am, pa)
+        assert chosen.within_stroke
+        assert chosen.max_abs_force < two_point_statics(am, pa).max_abs_force - 0.3
+
+
+def test_chosen_distribution_on_every_scenario(am):
+    for name in ap.SCENARIOS:
+        result = ap.solve(am, ap.scenario(name).goal)
+        assert result.success, result.message
+        for plates in (result.initial.plates, result.optimized.plates):
+            _check_chosen(am, ap.plate_arrays(am, plates))
+
+
+def test_one_end_held_the_forces_are_the_statics_of_that_end(am):
+    """Held at the base alone, the forces are unique: Pinocchio's statics, offsets none."""
+    pa = _pose(am, "random")
+    base = chosen_distribution(am, pa, "base", loaded=False)
+    assert base.success
+    np.testing.assert_allclose(base.forces, ap.solve_statics(am, pa).forces, rtol=0, atol=1e-9)
+    ee = chosen_distribution(am, pa, "ee")
+    assert ee.success and np.isnan(ee.check_error) and ee.residual <= 1e-9
+    np.testing.assert_allclose(ee.ee_wrench[:3], base.base_wrench[:3], atol=1e-9)  # the same weight
+
+
+# ---------------------------------------------------------------------- MuJoCo, both ends welded
+def _welded_mujoco(am):
+    mujoco = pytest.importorskip("mujoco")
+    from assembler_pin.mjcf import assembler_mjcf
+    from assembler_pin.simulate import MujocoStack
+
+    stack = MujocoStack(am)
+    stack.model = mujoco.MjModel.from_xml_string(assembler_mjcf(am.config, weld_ee=True))
+    stack.data = mujoco.MjData(stack.model)
+    m = stack.model
+    m.opt.timestep = 2e-4
+    m.eq_solref[:] = (4e-4, 1.0)
+    m.eq_solimp[:, :3] = (0.999, 0.999, 1e-3)
+    m.opt.disableflags |= int(mujoco.mjtDisableBit.mjDSBL_LIMIT)
+    return stack
+
+
+def _settle_welded(stack, pa, ctrl, seconds: float = 0.3) -> np.ndarray:
+    """Both ends welded at ``pa``, the legs commanded to ``ctrl``: the settled actuator forces."""
+    stack.set_plates(pa)
+    ee = pa.se3(len(pa) - 1).inverse()  # the weld's relative pose: the world in the EE's frame
+    x, y, z, w = pin.Quaternion(ee.rotation).coeffs()
+    stack.model.eq_data[-1, 3:10] = [*ee.translation, w, x, y, z]
+    stack.data.ctrl[:] = np.asarray(ctrl).ravel()
+    for _ in range(round(seconds / stack.model.opt.timestep)):
+        stack.mujoco.mj_step(stack.model, stack.data)
+    assert np.abs(stack.data.qvel).max() < 1e-6
+    assert np.linalg.norm(stack.plates().p[-1] - pa.p[-1]) < 1e-5  # the weld held
+    return stack.actuator_forces()
+
+
+@pytest.mark.parametrize("pose", ["home", "inchworm", "vertical_lift"])
+def test_mujoco_welded_at_both_ends_settles_at_both_distributions(am, optimized, pose):
+    pa = ap.plate_arrays(am, am.home) if pose == "home" else optimized[pose]
+    stack = _welded_mujoco(am)
+    elastic = two_point_statics(am, pa)
+    chosen = chosen_distribution(am, pa)
+    for ours in (elastic, chosen):
+        got = _settle_welded(stack, pa, ours.commanded)
+        tol = max(0.01 * ours.max_abs_force, 0.5)
+        assert np.abs(got - ours.forces).max() <= tol, np.abs(got - ours.forces).max()  # measured: 0.29 N
+
+
+# ---------------------------------------------------------------------- bad input, CLI, speed
+def test_bad_supports_lengths_and_poses(am):
+    with pytest.raises(ap.SupportError):
+        held_plates(am, "middle")
+    with pytest.raises(ap.SupportError):
+        chosen_distribution(am, am.home, "plate 2")
+    free = chosen_distribution(am, am.home, "none")
+    assert not free.success and "mechanism" in free.message and np.all(np.isnan(free.forces))
+    with pytest.raises(ap.PoseError):
+        two_point_statics(am, am.home, np.full((am.n, 6), np.nan))
+    turned = [pin.SE3.Identity()]
+    for _ in range(am.n):
+        turned.append(turned[-1] * pin.SE3(pin.exp3(np.array([0, 0, np.pi / 2])), np.array([0, 0, 0.24])))
+    for result in (two_point_statics(am, turned), chosen_distribution(am, turned)):
+        assert not result.success and "singular" in result.message and np.all(np.isnan(result.forces))
+    assert "null" in __import__("assembler_pin.cli.common", fromlist=["dumps"]).dumps(result.to_dict())
+
+
+def test_cli_support_json_text_and_refusals(capsys, tmp_path, am):
+    from assembler_pin.cli import main
+
+    assert main(["support", "--home", "--json"]) == 0
+    doc = json.loads(capsys.readouterr().out)
+    np.testing.assert_allclose(doc["forces"], two_point_statics(am, am.home).forces)
+    assert set(doc["chosen"]) >= {"forces", "length_offsets", "max_abs_force"}
+    assert main(["support", "--home"]) == 0
+    text = capsys.readouterr().out
+    assert "chosen" in text and max(map(len, text.splitlines())) <= 100
+    turned = [pin.SE3.Identity()]
+    for _ in range(am.n):
+        turned.append(turned[-1] * pin.SE3(pin.exp3(np.array([0, 0, np.pi / 2])), np.array([0, 0, 0.24])))
+    plates = tmp_path / "p.json"
+    plates.write_text(json.dumps({"plates": [p.homogeneous.tolist() for p in turned]}))
+    assert main(["support", "--plates", str(plates), "--json"]) == 1
+    doc = json.loads(capsys.readouterr().out, parse_constant=lambda c: pytest.fail(f"non-strict JSON {c}"))
+    assert doc["success"] is False and doc["forces"][0][0] is None
+    for argv in (["support"], ["support", "--plates", str(tmp_path / "missing.json")]):
+        assert main(argv) == 2
+        assert len(capsys.readouterr().err.strip().splitlines()) == 1
+
+
+def test_benchmark_supports_reports_positive_times():
+    figures = benchmark_supports(_model(2), repeat=2)
+    assert set(figures) == {"two_point_statics", "chosen_distribution", "chosen_distribution_unchecked"}
+    assert all(0 < t < 1 for t in figures.values())
