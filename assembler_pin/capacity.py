@@ -18,33 +18,87 @@ bracket.
 
 from __future__ import annotations
 
+import copy
 import dataclasses
 import logging
 import math
 import time
+from collections import OrderedDict
 from dataclasses import dataclass, field
 
 import numpy as np
 import pinocchio as pin
 
 from .exceptions import OptionsError
+from .geometry import DIMENSIONS
 from .kinematics import PlateArrays, to_se3
 from .labels import leg_label
 from .model import AssemblerModel
-from .statics import solve_statics
+from .statics import WHOLE_STACK_STATICS_MAX_PLATFORMS, solve_statics
+from .threads import one_blas_thread
 
-__all__ = ["GLOBAL_PROBE", "CapacityResult", "PayloadModels", "payload_capacity", "pose_capacity"]
+__all__ = [
+    "GLOBAL_PROBE",
+    "KEPT_PAYLOAD_MODELS",
+    "CapacityResult",
+    "PayloadModels",
+    "payload_capacity",
+    "pose_capacity",
+    "with_payload",
+]
 
 GLOBAL_PROBE = 0.01
 """At a fixed point of the iteration, the solver's starts are optimized for this much more
 payload (relative); only when none holds it is the capacity final, so it is within this of
 what a bisection on the payload with the ordinary solve finds."""
 
+KEPT_PAYLOAD_MODELS = 4
+"""How many payload variants :class:`PayloadModels` keeps besides 0 kg and 1 kg."""
+
 logger = logging.getLogger(__name__)
 
 
+def _payload_inertia(mass: float, offset: float) -> pin.Inertia:
+    """The payload's inertia in the EE plate's frame, as the URDF writes it: a box of
+    :data:`~assembler_pin.geometry.DIMENSIONS` ``payload_size`` and ``mass`` [kg] centred
+    ``offset`` [m] above the plate's origin."""
+    own = np.full(3, mass * DIMENSIONS.payload_size**2 / 6.0)
+    return pin.SE3(np.eye(3), np.array([0.0, 0.0, offset])).act(pin.Inertia(mass, np.zeros(3), np.diag(own)))
+
+
+def with_payload(am: AssemblerModel, mass: float) -> AssemblerModel:
+    """``am`` with a payload of ``mass`` [kg]: a shallow copy sharing the geometry, the index
+    maps, the helper arms and the whole-stack ``Data`` (its contents are recomputed by every
+    call), with its own configuration, its own copy of the Pinocchio model whose EE plate
+    body has the other payload's inertia, and its own last-platform model. No URDF of the
+    whole stack is generated and no ``Data`` of the whole stack is created."""
+    from .helper_arm import arm_cache
+    from .platform_model import PlatformModel, StackPlan
+
+    cfg = am.config
+    payload = dataclasses.replace(cfg.payload, mass=float(mass))
+    variant = copy.copy(am)
+    variant.config = dataclasses.replace(cfg, payload=payload)
+    variant.model = pin.Model(am.model)
+    ee_joint = int(am.plate_joint_ids[-1])
+    # the dynamic parameters (m, m·c, I) are linear in the payload mass
+    params = am.model.inertias[ee_joint].toDynamicParameters()
+    params += (payload.mass - cfg.payload.mass) * _payload_inertia(1.0, payload.offset).toDynamicParameters()
+    variant.model.inertias[ee_joint] = pin.Inertia.FromDynamicParameters(params)
+    # same structure: one Data serves both models (the statics use it up to this size)
+    variant._data = am.data if am.n <= WHOLE_STACK_STATICS_MAX_PLATFORMS else am._data
+    variant.platform_models = (am.platform_models[0], PlatformModel(variant.config, payload))
+    variant.stack_plan = StackPlan(*variant.platform_models, am.n)
+    variant.helper_arms = arm_cache(am)
+    return variant
+
+
 class PayloadModels:
-    """The stack's model with other payload masses (same geometry), each built once.
+    """The stack's model with other payload masses (same geometry).
+
+    The models are cheap variants of the configured one (:func:`with_payload`); the most
+    recent :data:`KEPT_PAYLOAD_MODELS` are kept (and the ones without payload and with
+    1 kg, used by every capacity), so the memory stays flat however many masses are tried.
 
     Attributes:
         base: the model as configured.
@@ -52,17 +106,27 @@ class PayloadModels:
 
     def __init__(self, am: AssemblerModel) -> None:
         self.base = am
-        self._models: dict[float, AssemblerModel] = {round(float(am.config.payload.mass), 9): am}
+        self._models: OrderedDict[float, AssemblerModel] = OrderedDict()
+        self._fixed: dict[float, AssemblerModel] = {round(float(am.config.payload.mass), 9): am}
 
     def at(self, mass: float) -> AssemblerModel:
-        """The model with a payload of ``mass`` [kg] (cached)."""
+        """The model with a payload of ``mass`` [kg]."""
         key = round(float(mass), 9)
-        if key not in self._models:
-            cfg = self.base.config
-            self._models[key] = AssemblerModel.from_config(
-                dataclasses.replace(cfg, payload=dataclasses.replace(cfg.payload, mass=key))
-            )
+        if key in self._fixed:
+            return self._fixed[key]
+        if key in (0.0, 1.0):
+            self._fixed[key] = with_payload(self.base, key)
+            return self._fixed[key]
+        if key in self._models:
+            self._models.move_to_end(key)
+        else:
+            self._models[key] = with_payload(self.base, key)
+            while len(self._models) > KEPT_PAYLOAD_MODELS:
+                self._models.popitem(last=False)
         return self._models[key]
+
+    def __len__(self) -> int:
+        return len(self._fixed) + len(self._models)
 
 
 def force_per_kg(models: PayloadModels, plates: PlateArrays) -> tuple[np.ndarray, np.ndarray]:
@@ -141,6 +205,7 @@ def _probe(model: AssemblerModel, goal: pin.SE3, arm: PlateArrays | None) -> Pla
     return None
 
 
+@one_blas_thread
 def payload_capacity(
     am: AssemblerModel,
     goal: pin.SE3 | np.ndarray,

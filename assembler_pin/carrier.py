@@ -37,6 +37,7 @@ from .model import AssemblerModel
 from .options import DEFAULT_GOAL_TOLERANCE, GoalTolerance, HelperArmOptions, OptimizeOptions
 from .progress import ProgressCallback
 from .state import StackState, evaluate_state
+from .threads import one_blas_thread
 
 __all__ = [
     "CARRIERS",
@@ -459,6 +460,7 @@ def _checked_settings(
     return opts, int(limit)
 
 
+@one_blas_thread
 def solve_on_carrier(
     am: AssemblerModel,
     carrier: Carrier,

@@ -33,7 +33,7 @@ from .kinematics import PlateArrays, plate_deviation
 from .linalg import cross, inverse_or_nan, skew
 from .model import AssemblerModel
 
-__all__ = ["Equilibrium", "PoseDerivatives", "equilibrium", "pose_derivatives"]
+__all__ = ["Equilibrium", "LegDerivatives", "PoseDerivatives", "equilibrium", "leg_derivatives", "pose_derivatives"]
 
 _I3 = np.eye(3)
 
@@ -83,6 +83,78 @@ def _point_jacobian(points: np.ndarray, first_plate: int, n: int) -> np.ndarray:
     out[(*sel, slice(0, 3))] = _I3
     out[(*sel, slice(3, 6))] = -skew(points[rows])
     return out.reshape(*out.shape[:-2], 6 * n)
+
+
+def _leg_jacobians(
+    b: np.ndarray, t: np.ndarray, L: np.ndarray, u: np.ndarray
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """d(bottom joint), d(top joint), d(leg vector), d(length), d(unit direction) of the legs
+    (n, 6, ...) w.r.t. the world twists of plates 1..n: (n, 6, 3, 6n) and (n, 6, 6n)."""
+    n = b.shape[0]
+    db = _point_jacobian(b, 0, n)  # bottom joints of SP j lie on plate j
+    dt = _point_jacobian(t, 1, n)  # top joints on plate j+1
+    dd = dt - db
+    dL = np.einsum("jik,jikc->jic", u, dd)
+    du = (dd - u[..., None] * dL[:, :, None, :]) / L[..., None, None]
+    return db, dt, dd, dL, du
+
+
+def _deflection_and_rise(
+    home: np.ndarray, R: np.ndarray, d: np.ndarray, u: np.ndarray, dd: np.ndarray, du: np.ndarray
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Cosines of the bottom / top joint deflections (n, 6) and the rise (n, 6) [m], with
+    their derivatives (n, 6, 6n), from the legs' vectors ``d``, directions ``u`` and their
+    derivatives; ``home`` (6, 3) is each leg's rest direction in its plates' frames."""
+    n = d.shape[0]
+    h_bottom = np.matmul(home, R[:-1].transpose(0, 2, 1))  # home direction in world, bottom plate
+    h_top = np.matmul(home, R[1:].transpose(0, 2, 1))
+    cos_b = np.einsum("jik,jik->ji", u, h_bottom)
+    cos_t = np.einsum("jik,jik->ji", u, h_top)
+    d_cos_b = np.einsum("jik,jikc->jic", h_bottom, du)
+    d_cos_t = np.einsum("jik,jikc->jic", h_top, du)
+    # rotating plate k by ω turns h into h + ω × h: d(u·h) += u·(ω × h) = (h × u)·ω
+    hb_x_u = cross(h_bottom, u)
+    ht_x_u = cross(h_top, u)
+    for j in range(n):
+        if j >= 1:
+            d_cos_b[j, :, 6 * (j - 1) + 3 : 6 * j] += hb_x_u[j]
+        d_cos_t[j, :, 6 * j + 3 : 6 * j + 6] += ht_x_u[j]
+    z_bottom = R[:-1, :, 2]  # (n, 3)
+    rise = np.einsum("jk,jik->ji", z_bottom, d)
+    d_rise = np.einsum("jk,jikc->jic", z_bottom, dd)
+    z_x_d = cross(z_bottom[:, None, :], d)
+    for j in range(1, n):
+        d_rise[j, :, 6 * (j - 1) + 3 : 6 * j] += z_x_d[j]
+    return cos_b, cos_t, d_cos_b, d_cos_t, rise, d_rise
+
+
+@dataclass(frozen=True)
+class LegDerivatives:
+    """Leg lengths, deflection cosines and rise of a stack pose with their derivatives
+    (last axis: the 6n world-twist columns of plates 1..n; see :class:`PoseDerivatives`)."""
+
+    lengths: np.ndarray
+    d_lengths: np.ndarray
+    cos_deflection: np.ndarray
+    d_cos_deflection: np.ndarray
+    rise: np.ndarray
+    d_rise: np.ndarray
+
+
+def leg_derivatives(am: AssemblerModel, pa: PlateArrays) -> LegDerivatives:
+    """The kinematic part of :func:`pose_derivatives` alone (no statics): lengths [m],
+    deflection cosines (n, 6, 2), rise [m] and their derivatives w.r.t. the world twists
+    of plates 1..n."""
+    geo = am.geometry
+    R, p = pa.R, pa.p
+    b = np.matmul(geo.bottom_in_plate, np.swapaxes(R[:-1], -1, -2)) + p[:-1, None, :]
+    t = np.matmul(geo.top_in_plate, np.swapaxes(R[1:], -1, -2)) + p[1:, None, :]
+    d = t - b
+    L = np.sqrt(np.einsum("...k,...k->...", d, d))
+    u = d / L[..., None]
+    _, _, dd, dL, du = _leg_jacobians(b, t, L, u)
+    cos_b, cos_t, d_cos_b, d_cos_t, rise, d_rise = _deflection_and_rise(geo.home_direction, R, d, u, dd, du)
+    return LegDerivatives(L, dL, np.stack([cos_b, cos_t], axis=-1), np.stack([d_cos_b, d_cos_t], axis=2), rise, d_rise)
 
 
 @dataclass(frozen=True)
@@ -196,11 +268,7 @@ def pose_derivatives(am: AssemblerModel, pa: PlateArrays) -> PoseDerivatives:
     b, t, d, L, u, gu, g_perp, s = eq.b, eq.t, eq.d, eq.L, eq.u, eq.gu, eq.g_perp, eq.s
     f_perp, K, a = eq.f_perp, eq.K, eq.a
     # --- leg geometry derivatives ------------------------------------------------------
-    db = _point_jacobian(b, 0, n)  # bottom joints of SP j lie on plate j
-    dt = _point_jacobian(t, 1, n)  # top joints on plate j+1
-    dd = dt - db
-    dL = np.einsum("jik,jikc->jic", u, dd)
-    du = (dd - u[..., None] * dL[:, :, None, :]) / L[..., None, None]
+    db, dt, dd, dL, du = _leg_jacobians(b, t, L, u)
     # --- per-leg transverse ball force from the leg's own weight ----------------------
     dgu = np.einsum("k,jikc->jic", g, du)
     dg_perp = -(dgu[:, :, None, :] * u[..., None] + gu[..., None, None] * du)
@@ -228,27 +296,7 @@ def pose_derivatives(am: AssemblerModel, pa: PlateArrays) -> PoseDerivatives:
     da = np.linalg.solve(K, d_rhs - dK_a)  # (n, 6, C)
     forces = eq.forces
     d_forces = da + leg.shaft_mass * dgu
-    # --- deflection cosines and rise -----------------------------------------------------
-    home = geo.home_direction
-    h_bottom = np.matmul(home, R[:-1].transpose(0, 2, 1))  # home direction in world, bottom plate
-    h_top = np.matmul(home, R[1:].transpose(0, 2, 1))
-    cos_b = np.einsum("jik,jik->ji", u, h_bottom)
-    cos_t = np.einsum("jik,jik->ji", u, h_top)
-    d_cos_b = np.einsum("jik,jikc->jic", h_bottom, du)
-    d_cos_t = np.einsum("jik,jikc->jic", h_top, du)
-    # rotating plate k by ω turns h into h + ω × h: d(u·h) += u·(ω × h) = (h × u)·ω
-    hb_x_u = cross(h_bottom, u)
-    ht_x_u = cross(h_top, u)
-    for j in range(n):
-        if j >= 1:
-            d_cos_b[j, :, 6 * (j - 1) + 3 : 6 * j] += hb_x_u[j]
-        d_cos_t[j, :, 6 * j + 3 : 6 * j + 6] += ht_x_u[j]
-    z_bottom = R[:-1, :, 2]  # (n, 3)
-    rise = np.einsum("jk,jik->ji", z_bottom, d)
-    d_rise = np.einsum("jk,jikc->jic", z_bottom, dd)
-    z_x_d = cross(z_bottom[:, None, :], d)
-    for j in range(1, n):
-        d_rise[j, :, 6 * (j - 1) + 3 : 6 * j] += z_x_d[j]
+    cos_b, cos_t, d_cos_b, d_cos_t, rise, d_rise = _deflection_and_rise(geo.home_direction, R, d, u, dd, du)
     # --- plate angular deviation λ_k (paper eq. 9) --------------------------------------
     dev = plate_deviation(am, pa)
     lam, step_dir, step_len, rest_dir, sin_l, cos_l = (

@@ -53,6 +53,7 @@ from .model import AssemblerModel, checked_model
 from .options import METHODS, OptimizeOptions, checked_options
 from .state import StackState, evaluate_state
 from .statics import solve_statics
+from .threads import one_blas_thread
 from .validation import is_number
 
 __all__ = [
@@ -375,6 +376,7 @@ class _Problem:
         return np.concatenate([self._force_rows(v.forces), self._geometric(v), self._ee(v.plates, x)])
 
 
+@one_blas_thread
 def optimize_internal_poses(
     am: AssemblerModel,
     initial: StackState | PlateArrays | list,

@@ -16,22 +16,29 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 import pinocchio as pin
 
-from .exceptions import ArgumentError
-from .kinematics import PlateArrays, se3_to_taa, to_se3
+from .constraints import leg_limit_margins
+from .exceptions import ArgumentError, OptionsError
+from .kinematics import PlateArrays, leg_state, se3_to_taa, to_se3
 from .model import AssemblerModel, checked_model
 from .optimize import OptimizeOptions, OptimizeResult, optimize_internal_poses
 from .options import checked_options
 from .state import StackState
+from .threads import one_blas_thread
 
 if TYPE_CHECKING:
     from .helper_arm import HelperArmOptions, InitialConditionResult
 
-__all__ = ["STARTS", "SolveResult", "optimizer_starts", "solve"]
+__all__ = ["AT_LIMIT", "STARTS", "START_MODES", "SolveResult", "needs_other_starts", "optimizer_starts", "solve"]
 
 #: The starts the optimizer runs from, in order: the helper arm's valid initial condition,
 #: the home pose's internal plates, and the even screw pose (every platform the same
 #: relative transform). Each converges in a few tens of ms; the best feasible optimum wins.
 STARTS = ("helper_arm", "home", "screw")
+
+#: The values of ``solve(starts=...)``: ``first`` runs the helper arm's start, then the
+#: screw start only when the helper arm's optimum needs it (:func:`needs_other_starts`) and
+#: every start when the helper arm's run failed; ``all`` runs every start.
+START_MODES = ("first", "all")
 
 #: Extra starts tried only when every start in :data:`STARTS` failed: the helper arm's pose
 #: (or the screw pose) with its internal plates perturbed and repaired onto the leg limits
@@ -126,31 +133,39 @@ class SolveResult:
         return out
 
 
+@one_blas_thread
 def solve(
     am: AssemblerModel,
     goal: pin.SE3 | np.ndarray,
     optimize: bool = True,
     options: OptimizeOptions | None = None,
     helper_options: HelperArmOptions | None = None,
+    starts: str = "first",
 ) -> SolveResult:
     """Internal poses of the stack for an EE goal pose.
 
-    The helper arm gives a valid initial condition; the optimizer then runs from it and from
-    the cheap starts of :data:`STARTS` (and, when every one fails, from perturbed screw
-    starts), and the best feasible optimum is returned with the name of its start. A goal the
-    helper arm cannot reach may still be solved from another start.
+    The helper arm gives a valid initial condition; the optimizer then runs from it and,
+    with ``starts="all"`` or when that run needs them (:func:`needs_other_starts`), from the
+    cheap starts of :data:`STARTS` (and, when every one fails, from perturbed screw starts);
+    the best feasible optimum is returned with the name of its start. A goal the helper arm
+    cannot reach may still be solved from another start.
 
     Args:
         goal: EE pose in the base (world) frame, ``pin.SE3`` or 4×4.
         optimize: run the force optimization after the initial condition.
         options: optimizer settings; helper_options: helper-arm settings.
+        starts: ``"first"`` (default): the helper arm's start alone when its optimum is
+            final by :func:`needs_other_starts`, else every start; ``"all"``: every start.
 
     Raises:
         PoseError: the goal is not a valid SE(3) pose.
+        OptionsError: ``starts`` is not one of :data:`START_MODES`.
     """
     from .helper_arm import HelperArmOptions, initial_condition
 
     checked_model(am)
+    if starts not in START_MODES:
+        raise OptionsError(f"starts must be one of {', '.join(START_MODES)}, got {starts!r}")
     goal = to_se3(goal, "goal")
     options = checked_options(options, OptimizeOptions, "options")
     helper_options = checked_options(helper_options, HelperArmOptions, "helper_options")
@@ -167,14 +182,7 @@ def solve(
         return SolveResult(goal, False, f"no valid initial condition: {init.message}", init, None, timing)
     opts = options
     t1 = time.perf_counter()
-    starts = optimizer_starts(am, goal, init.plates_if_valid())
-    runs = {name: optimize_internal_poses(am, start, goal, opts) for name, start in starts.items()}
-    if not any(r.success for r in runs.values()):
-        around = init.state.plates if init.success else starts["screw"]
-        for name, start in _fallback_starts(am, goal, around):
-            runs[name] = optimize_internal_poses(am, start, goal, opts)
-            if runs[name].success:
-                break
+    runs = _run_starts(am, goal, init, opts, starts)
     timing["optimize"] = time.perf_counter() - t1
     name, best = _best_run(runs)
     if best is None:
@@ -186,6 +194,49 @@ def solve(
     if not init.success:
         message += f"; the helper arm found no valid initial condition: {init.message}"
     return SolveResult(goal, best.success, message, init, best, timing, name, runs)
+
+
+def _run_starts(
+    am: AssemblerModel, goal: pin.SE3, init: InitialConditionResult, opts: OptimizeOptions, starts: str
+) -> dict[str, OptimizeResult]:
+    """The optimizer's runs, lazily with ``starts="first"``: the helper arm's start; when it
+    succeeds, the screw start too only when :func:`needs_other_starts` says so; when it
+    fails, every start of :data:`STARTS`. With ``"all"`` every start. Then the fallback
+    starts when every run failed."""
+    helper_plates = init.plates_if_valid()
+    runs: dict[str, OptimizeResult] = {}
+    cheap = optimizer_starts(am, goal, None)
+    order = list(cheap)
+    if helper_plates is not None:
+        runs["helper_arm"] = optimize_internal_poses(am, helper_plates, goal, opts)
+        if starts == "first" and runs["helper_arm"].success:
+            order = ["screw"] if needs_other_starts(am, runs["helper_arm"], opts) else []
+    for name in order:
+        runs[name] = optimize_internal_poses(am, cheap[name], goal, opts)
+    if not any(r.success for r in runs.values()):
+        around = init.state.plates if init.success else cheap["screw"]
+        for name, start in _fallback_starts(am, goal, around):
+            runs[name] = optimize_internal_poses(am, start, goal, opts)
+            if runs[name].success:
+                break
+    return runs
+
+
+#: A leg within this much [m or cos] of the optimizer's own margin counts as at its limit.
+AT_LIMIT = 1e-6
+
+
+def needs_other_starts(am: AssemblerModel, run: OptimizeResult, opts: OptimizeOptions) -> bool:
+    """Whether the helper arm's optimum calls for the screw start: it failed, or some leg is at
+    its stroke or deflection limit (the optimum is on the boundary of the kinematically
+    valid poses, where the starts on both sides of it end in different local optima: every
+    goal of the bench's grid where another start gave a > 1 % better optimum is of this
+    kind). An optimum with every leg inside its limits is kept alone."""
+    if not run.success:
+        return True
+    legs = leg_state(am, run.optimized.plates)
+    margins = leg_limit_margins(am.config.leg, legs.lengths, np.cos(legs.deflection), legs.rise, opts.limit_margin)
+    return bool(margins[:4].min() <= AT_LIMIT)
 
 
 def optimizer_starts(am: AssemblerModel, goal: pin.SE3, helper_plates: PlateArrays | None) -> dict[str, PlateArrays]:

@@ -39,7 +39,7 @@ from .kinematics import (
     platform_configurations,
     q_from_arrays,
 )
-from .linalg import cross, inverse_or_nan, skew
+from .linalg import inverse_or_nan, skew
 from .model import AssemblerModel, checked_model
 from .platform_model import PlatformStatics, stack_gravity_terms
 from .validation import as_float_array
@@ -244,7 +244,7 @@ def solve_statics(
     return StaticsResult(-tau, ball, base, condition, singular)
 
 
-def solve_statics_batch(am: AssemblerModel, plates: npt.ArrayLike) -> np.ndarray:
+def solve_statics_batch(am: AssemblerModel, plates: npt.ArrayLike, backend: str | None = None) -> np.ndarray:
     """Actuator forces of B stacks at once, for maps and sweeps.
 
     Vectorized over the stacks and platforms with the closed-form equilibrium of
@@ -254,6 +254,8 @@ def solve_statics_batch(am: AssemblerModel, plates: npt.ArrayLike) -> np.ndarray
 
     Args:
         plates: (B, n+1, 4, 4) world poses of the plates of each stack (validated all at once).
+        backend: ``auto`` (default), ``numba`` (the compiled kernel) or ``numpy`` (the
+            reference path); see :func:`~assembler_pin.statics_kernel.resolve_backend`.
 
     Returns:
         (B, n, 6) forces [N], tension positive; NaN rows for a stack whose statics are
@@ -268,13 +270,8 @@ def solve_statics_batch(am: AssemblerModel, plates: npt.ArrayLike) -> np.ndarray
     B = matrices.shape[0]
     R, p = checked_rotations(matrices.reshape(-1, 4, 4), "pose")
     R, p = R.reshape(B, am.n + 1, 3, 3), p.reshape(B, am.n + 1, 3)
-    from .gradients import equilibrium
+    from .statics_kernel import closed_form_forces
 
-    eq, _ = equilibrium(am, R, p)
-    # the same condition number as solve_statics: the legs' lines in each top plate's frame
-    u_local = np.einsum("bjka,bjik->bjia", R[:, 1:], eq.u)
-    lines_t = np.concatenate([u_local, cross(am.geometry.top_in_plate, u_local)], axis=-1)  # (B, n, legs, 6)
-    inverse_t = inverse_or_nan(lines_t)
-    condition = np.abs(lines_t).sum(axis=-1).max(axis=-1) * np.abs(inverse_t).sum(axis=-1).max(axis=-1)
+    forces, condition = closed_form_forces(am, R, p, backend)
     singular = ~(condition.max(axis=1) <= CONDITION_LIMIT)  # NaN counts as singular
-    return np.where(singular[:, None, None], np.nan, eq.forces)
+    return np.where(singular[:, None, None], np.nan, forces)

@@ -21,6 +21,7 @@ from ..kinematics import PlateArrays, leg_state, to_se3
 from ..model import AssemblerModel
 from ..options import checked_options
 from ..state import StackState, evaluate_state
+from ..threads import one_blas_thread
 from .arm import ArmCache
 from .limits import cluster_limits, height_range
 from .options import HelperArmOptions
@@ -29,6 +30,10 @@ from .repair import perturbed_plates, repair_stack
 __all__ = ["KINEMATIC_VIOLATIONS", "Candidate", "InitialConditionResult", "arm_cache", "initial_condition"]
 
 logger = logging.getLogger(__name__)
+
+#: Arm solves of the d scan before a first, cheap repair (closest arm pose, even screw pose)
+#: is tried; the rest of the scan and the full repair follow only when it fails.
+CHEAP_SCAN = 2
 
 #: Violation kinds that make an initial condition invalid (force limits are reported only).
 KINEMATIC_VIOLATIONS = frozenset(
@@ -176,6 +181,7 @@ def arm_cache(am: AssemblerModel) -> ArmCache:
     return am.helper_arms
 
 
+@one_blas_thread
 def initial_condition(
     am: AssemblerModel,
     goal: pin.SE3 | npt.ArrayLike,
@@ -213,31 +219,37 @@ def initial_condition(
         )
         return _failure(am, goal_se3, opts, why, _Scan(), t0)
     scan = _Scan()
-    found = _scan_link_lengths(am, goal_se3, opts, arms, distance, scan)
-    if found is not None:
-        return _success(found[0], goal_se3, found[1], scan.attempts, t0, repaired=False)
-    repairs = _repair_starts(am, goal_se3, opts, scan)
-    for cand in repairs:
-        pa, viol = repair_stack(am, cand.plates)
-        if viol > 0.0:
-            logger.debug("repair from the pose at d=%s: %.3g left", cand.link_length, viol)
-            continue
-        state, why = _kinematic_problems(am, pa, goal_se3, opts.tolerance)
-        if state is not None:
-            return _success(state, goal_se3, cand, scan.attempts, t0, repaired=True)
-        logger.debug("repair from the pose at d=%s: %s", cand.link_length, why)
+    d_values = _d_scan(am.config.home_height, distance, am.n, opts.d_step, height_range(am.config))
+    tried: set[tuple] = set()
+    for limit in (min(CHEAP_SCAN, opts.max_attempts), opts.max_attempts):
+        found = _scan_link_lengths(am, goal_se3, opts, arms, d_values, scan, limit)
+        if found is not None:
+            return _success(found[0], goal_se3, found[1], scan.attempts, t0, repaired=False)
+        # cheap first: the closest arm pose so far and the even screw pose, before the rest of the scan
+        repairs = _repair_starts(am, goal_se3, opts, scan, cheap=limit < opts.max_attempts)
+        done = _try_repairs(am, goal_se3, opts, repairs, tried, scan.attempts, t0)
+        if done is not None:
+            return done
     return _failure(am, goal_se3, opts, _why_not(scan, repairs, opts), scan, t0, distance)
 
 
 def _scan_link_lengths(
-    am: AssemblerModel, goal: pin.SE3, opts: HelperArmOptions, arms: ArmCache, distance: float, scan: _Scan
+    am: AssemblerModel,
+    goal: pin.SE3,
+    opts: HelperArmOptions,
+    arms: ArmCache,
+    d_values: Iterator[float],
+    scan: _Scan,
+    limit: int,
 ) -> tuple[StackState, Candidate] | None:
-    """The paper's recursion over d: solve the arm from each scan value until its plates are a
-    valid stack pose (returned with the arm pose), recording what failed in ``scan``."""
+    """The paper's recursion over d: solve the arm from each next scan value of ``d_values``
+    until its plates are a valid stack pose (returned with the arm pose) or ``scan`` counts
+    ``limit`` attempts, recording what failed in ``scan``."""
     cfg, base, n = am.config, am.home[0], am.n
     d_range = height_range(cfg)
-    for d_start in _d_scan(cfg.home_height, distance, n, opts.d_step, d_range):
-        if scan.attempts >= opts.max_attempts:
+    while scan.attempts < limit:
+        d_start = next(d_values, None)
+        if d_start is None:
             break
         tilt, twist = cluster_limits(cfg, d_start)
         if tilt <= 0.0 or twist <= 0.0:  # a level SP (nearly) cannot stand at this height
@@ -269,19 +281,53 @@ def _scan_link_lengths(
     return None
 
 
-def _repair_starts(am: AssemblerModel, goal: pin.SE3, opts: HelperArmOptions, scan: _Scan) -> list[Candidate]:
+def _repair_starts(
+    am: AssemblerModel, goal: pin.SE3, opts: HelperArmOptions, scan: _Scan, cheap: bool = False
+) -> list[Candidate]:
     """The poses the repair starts from: the arm's ``repair_starts`` closest poses, the even
     screw pose, and ``perturbed_starts`` seeded perturbations of it (the even pose is often a
-    saddle of the leg limits: every platform alike)."""
+    saddle of the leg limits: every platform alike); with ``cheap``, the closest arm pose
+    and the even screw pose only."""
     if opts.repair_starts == 0 or scan.last_q is None:
         return []
-    starts = sorted(scan.candidates, key=lambda c: c.score)[: opts.repair_starts]
+    starts = sorted(scan.candidates, key=lambda c: c.score)[: 1 if cheap else opts.repair_starts]
+    starts.append(Candidate(math.inf, _even_screw(am, goal)))
+    if not cheap:
+        starts += [Candidate(math.inf, plates) for plates in perturbed_plates(starts[-1].plates, opts.perturbed_starts)]
+    return starts
+
+
+def _even_screw(am: AssemblerModel, goal: pin.SE3) -> list[pin.SE3]:
+    """Plate k at ``base·exp6(k/n · log6(base⁻¹·goal))``, plate n at the goal."""
     base, n = am.home[0], am.n
     screw = pin.log6(base.actInv(goal))
-    even = [base * pin.exp6(screw * (k / n)) for k in range(n)] + [goal.copy()]
-    starts.append(Candidate(math.inf, even))
-    starts += [Candidate(math.inf, plates) for plates in perturbed_plates(even, opts.perturbed_starts)]
-    return starts
+    return [base * pin.exp6(screw * (k / n)) for k in range(n)] + [goal.copy()]
+
+
+def _start_key(cand: Candidate) -> tuple:
+    """Repair starts already tried are not tried again: the same plate positions [m]."""
+    return tuple(np.round(np.concatenate([m.translation for m in cand.plates]), 12))
+
+
+def _try_repairs(
+    am: AssemblerModel, goal: pin.SE3, opts: HelperArmOptions, repairs: list[Candidate], tried: set[tuple],
+    attempts: int, t0: float,
+) -> InitialConditionResult | None:  # fmt: skip
+    """The first valid repair of the ``repairs`` not yet ``tried`` (recorded there), or None."""
+    for cand in repairs:
+        key = _start_key(cand)
+        if key in tried:
+            continue
+        tried.add(key)
+        pa, viol = repair_stack(am, cand.plates)
+        if viol > 0.0:
+            logger.debug("repair from the pose at d=%s: %.3g left", cand.link_length, viol)
+            continue
+        state, why = _kinematic_problems(am, pa, goal, opts.tolerance)
+        if state is not None:
+            return _success(state, goal, cand, attempts, t0, repaired=True)
+        logger.debug("repair from the pose at d=%s: %s", cand.link_length, why)
+    return None
 
 
 def _success(

@@ -10,6 +10,7 @@ import numpy as np
 import pinocchio as pin
 
 from ..constraints import leg_limit_margins
+from ..gradients import leg_derivatives
 from ..kinematics import PlateArrays, leg_state
 from ..model import AssemblerModel
 
@@ -26,15 +27,32 @@ def _leg_hinge(am: AssemblerModel, pa: PlateArrays, margin: float) -> np.ndarray
     ).ravel()
 
 
+def _hinge_jacobian(am: AssemblerModel, pa: PlateArrays, x: np.ndarray, margin: float) -> np.ndarray:
+    """Analytic Jacobian of :func:`_leg_hinge` w.r.t. the local twists ``x`` of plates
+    1..n-1 (plate k = ``start_k·exp6(x_k)``): the world-twist derivatives of
+    :func:`~assembler_pin.gradients.leg_derivatives`, times ``Ad(T_k)·Jexp6(x_k)`` per plate
+    (a local change δ of x_k moves plate k by the world twist ``Ad(T_k)·Jexp6(x_k)·δ``).
+    Rows past their bound have the bound's derivative, the others zero."""
+    n = am.n
+    ld = leg_derivatives(am, pa)
+    rows = np.stack(
+        [ld.d_lengths, -ld.d_lengths, ld.d_cos_deflection[:, :, 0], ld.d_cos_deflection[:, :, 1], ld.d_rise]
+    )  # (5, n, 6, 6n): derivatives of the margins
+    margins = leg_limit_margins(am.config.leg, ld.lengths, ld.cos_deflection, ld.rise, margin)
+    d_hinge = np.where((margins < 0)[..., None], -rows, 0.0).reshape(30 * n, n, 6)[:, : n - 1]
+    chain = np.array([pa.se3(k).action @ pin.Jexp6(x[6 * (k - 1) : 6 * k]) for k in range(1, n)])  # (n-1, 6, 6)
+    return np.einsum("rka,kab->rkb", d_hinge, chain).reshape(30 * n, 6 * (n - 1))
+
+
 def repair_stack(
     am: AssemblerModel, start: list[pin.SE3], margin: float = 1e-6, max_nfev: int = 100
 ) -> tuple[PlateArrays, float]:
     """Move plates 1..n-1 from ``start`` until every leg of the stack is valid.
 
     Plates 0 and n stay where ``start`` has them (the base and the goal). Plate k becomes
-    ``start_k·exp6(x_k)``; ``scipy.optimize.least_squares`` (``trf``, forward-difference
-    Jacobian) drives the leg constraints' violation (:func:`_leg_hinge`, ``margin`` [m or
-    rad] inside every bound) to zero from x = 0, so the plates move little.
+    ``start_k·exp6(x_k)``; ``scipy.optimize.least_squares`` (``trf``, analytic Jacobian
+    :func:`_hinge_jacobian`) drives the leg constraints' violation (:func:`_leg_hinge`,
+    ``margin`` [m or rad] inside every bound) to zero from x = 0, so the plates move little.
 
     Returns:
         (the plates reached, the largest remaining violation [m or rad]; 0 means valid).
@@ -42,6 +60,9 @@ def repair_stack(
     n = len(start) - 1
     rot0 = np.array([m.rotation for m in start])
     pos0 = np.array([m.translation for m in start])
+    if n < 2:  # nothing to move
+        pa = PlateArrays(rot0, pos0)
+        return pa, float(_leg_hinge(am, pa, 0.0).max())
 
     def plates(x: np.ndarray) -> PlateArrays:
         rot, pos = rot0.copy(), pos0.copy()
@@ -53,7 +74,8 @@ def repair_stack(
     from scipy.optimize import least_squares  # on first use: fast start-up
 
     res = least_squares(
-        lambda x: _leg_hinge(am, plates(x), margin), np.zeros(6 * (n - 1)), method="trf",
+        lambda x: _leg_hinge(am, plates(x), margin), np.zeros(6 * (n - 1)),
+        jac=lambda x: _hinge_jacobian(am, plates(x), x, margin), method="trf",
         ftol=1e-15, xtol=1e-15, gtol=1e-15, max_nfev=max_nfev,
     )  # fmt: skip
     pa = plates(res.x)

@@ -33,6 +33,7 @@ from ..exceptions import TrajectoryError
 from ..model import AssemblerModel
 from ..options import checked_options
 from ..progress import ProgressCallback
+from ..threads import one_blas_thread
 from .planner import PlanResult
 from .result import MotionResult, first_bad_row, verify_trajectory
 from .rows import check_trajectory, trajectory_states
@@ -263,6 +264,7 @@ def _valid_prefix(
     return _rows_prefix(traj, bad), f"the trajectory stops, in motion, at t = {traj.times[bad - 1]:.3f} s"
 
 
+@one_blas_thread
 def plan_trajectory(
     am: AssemblerModel,
     path,

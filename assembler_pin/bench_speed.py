@@ -1,0 +1,166 @@
+"""Figures of the speed work: thread settings, the lazy start portfolio, the helper arm's
+tail, the statics kernel, capacity memory. Library functions (no printing); each returns a
+dict of plain numbers, times in seconds unless the key says otherwise.
+
+They measure on the machine they run on, in this process: on a loaded machine the absolute
+figures move, the comparisons made in one call (1 vs 2 threads, ``first`` vs ``all``, numba
+vs numpy) much less.
+"""
+
+from __future__ import annotations
+
+import time
+import tracemalloc
+from typing import Any
+
+import numpy as np
+
+from .bench import LEVEL_GRID, median_time_us, random_reachable_plates
+from .model import AssemblerModel
+
+__all__ = [
+    "THREAD_GOALS",
+    "benchmark_capacity_memory",
+    "benchmark_solve_starts",
+    "benchmark_statics_kernel",
+    "benchmark_threads",
+    "rss_mb",
+]
+
+#: Goals of the thread comparison (level EE, world [m]).
+THREAD_GOALS = ((0.1, 0.0, 0.8), (-0.2, 0.1, 0.7), (0.3, 0.0, 0.6), (0.0, 0.2, 0.9), (0.4, 0.0, 0.7))
+
+
+def rss_mb() -> float:
+    """Resident memory of this process [MB] (Linux ``/proc``; NaN elsewhere)."""
+    try:
+        with open("/proc/self/status") as f:
+            for line in f:
+                if line.startswith("VmRSS:"):
+                    return int(line.split()[1]) / 1024.0
+    except OSError:
+        pass
+    return float("nan")
+
+
+def _goal(xyz: tuple[float, float, float]) -> Any:
+    import pinocchio as pin
+
+    return pin.SE3(np.eye(3), np.array(xyz, dtype=float))
+
+
+def benchmark_threads(am: AssemblerModel, goals: tuple = THREAD_GOALS, limits: tuple[int, ...] = (1, 2)) -> dict:
+    """``solve`` on ``goals`` under each caller's BLAS thread limit: total time [s] per limit
+    and whether every answer (the optimized plates) is bit-identical across the limits."""
+    from threadpoolctl import threadpool_limits
+
+    from .solver import solve
+
+    out: dict[str, Any] = {}
+    answers = []
+    for limit in limits:
+        with threadpool_limits(limits=limit):
+            t0 = time.perf_counter()
+            got = [solve(am, _goal(xyz)) for xyz in goals]
+            out[f"threads_{limit}_solve_s"] = time.perf_counter() - t0
+        answers.append([r.best.plates.p.tobytes() + r.best.plates.R.tobytes() for r in got if r.best is not None])
+    out["threads_identical"] = all(a == answers[0] for a in answers)
+    return out
+
+
+def benchmark_solve_starts(
+    am: AssemblerModel, goals: tuple = LEVEL_GRID, modes: tuple[str, ...] = ("first", "all")
+) -> dict:
+    """``solve`` over ``goals`` with each ``starts`` mode, interleaved goal by goal (so that a
+    machine's changing load hits every mode alike): p50, p95 and max [s], goals solved,
+    optimizer runs, the optimizer's total time [s], and, for ``first`` against ``all``, the
+    largest relative loss of Ω and how many goals lose more than 1e-6.
+
+    The default goals are the bench's 120-goal grid (a few minutes per mode).
+    """
+    from .solver import solve
+
+    times: dict[str, list[float]] = {m: [] for m in modes}
+    objectives: dict[str, list[float]] = {m: [] for m in modes}
+    counts = {m: {"runs": 0, "solved": 0, "optimize_s": 0.0} for m in modes}
+    for xyz in goals:
+        for mode in modes:
+            t0 = time.perf_counter()
+            result = solve(am, _goal(xyz), starts=mode)
+            times[mode].append(time.perf_counter() - t0)
+            counts[mode]["runs"] += len(result.runs)
+            counts[mode]["solved"] += bool(result.success)
+            counts[mode]["optimize_s"] += result.timing_s.get("optimize", 0.0)
+            objectives[mode].append(result.optimization.objective_optimized if result.success else np.inf)
+    out: dict[str, Any] = {"goals": len(goals)}
+    for mode in modes:
+        t = np.array(times[mode])
+        out.update({f"{mode}_p50_s": float(np.percentile(t, 50)), f"{mode}_p95_s": float(np.percentile(t, 95)),
+                    f"{mode}_max_s": float(t.max())})  # fmt: skip
+        out.update({f"{mode}_{k}": v for k, v in counts[mode].items()})
+    if "first" in objectives and "all" in objectives:
+        lazy, every = np.array(objectives["first"]), np.array(objectives["all"])
+        both = np.isfinite(lazy) & np.isfinite(every)
+        loss = (lazy[both] - every[both]) / every[both]
+        out["first_worst_loss"] = float(loss.max()) if loss.size else 0.0
+        out["first_goals_worse"] = int((loss > 1e-6).sum())
+    return out
+
+
+def benchmark_statics_kernel(
+    am: AssemblerModel, batch_sizes: tuple[int, ...] = (1_000, 10_000, 100_000), repeat: int = 200, seed: int = 0
+) -> dict:
+    """The closed-form statics on both backends: the kernel's first call in this process
+    (numba import + compile or cache load) [s], one stack from arrays [µs] and stacks per
+    second at each batch size (one thread) and the peak of the memory allocated per stack
+    [KB] (tracemalloc, a second call); and Pinocchio's single statics [µs] for comparison."""
+    from .statics import solve_statics
+    from .statics_kernel import closed_form_forces, kernel_available
+
+    rng = np.random.default_rng(seed)
+    samples = [random_reachable_plates(am, rng)[1] for _ in range(20)]
+    R1, p1 = samples[0].R[None], samples[0].p[None]
+    out: dict[str, Any] = {}
+    t0 = time.perf_counter()
+    has_kernel = kernel_available()
+    if has_kernel:
+        closed_form_forces(am, R1, p1, "numba")
+    out["kernel_first_call_s"] = time.perf_counter() - t0 if has_kernel else float("nan")
+    out["pinocchio_single_us"] = median_time_us(lambda: solve_statics(am, samples[0]), repeat)
+    R = np.array([s.R for s in samples])
+    p = np.array([s.p for s in samples])
+    for backend in ("numpy", "numba") if has_kernel else ("numpy",):
+        out[f"{backend}_single_us"] = median_time_us(lambda b=backend: closed_form_forces(am, R1, p1, b), repeat)
+        for size in batch_sizes:
+            reps = max(1, size // len(samples))
+            Rb, pb = np.tile(R, (reps, 1, 1, 1)), np.tile(p, (reps, 1, 1))
+            t1 = time.perf_counter()
+            closed_form_forces(am, Rb, pb, backend)
+            out[f"{backend}_{size}_stacks_per_s"] = len(Rb) / (time.perf_counter() - t1)
+            tracemalloc.start()
+            closed_form_forces(am, Rb, pb, backend)
+            out[f"{backend}_{size}_peak_kb_per_stack"] = tracemalloc.get_traced_memory()[1] / 1024 / len(Rb)
+            tracemalloc.stop()
+    return out
+
+
+#: Goals of the capacity memory figure (level EE, world [m]).
+CAPACITY_GOALS = ((0.1, 0.05, 0.75), (0.1, 0.05, 0.9), (0.25, 0.05, 0.75), (0.25, 0.05, 0.9))
+
+
+def benchmark_capacity_memory(am: AssemblerModel, goals: tuple = CAPACITY_GOALS) -> dict:
+    """``payload_capacity`` over ``goals`` with one shared :class:`PayloadModels` (as a map's
+    worker keeps it): resident memory after each call [MB], payload models kept, time [s]."""
+    from .capacity import PayloadModels, payload_capacity
+
+    models = PayloadModels(am)
+    out: dict[str, Any] = {"rss_start_mb": rss_mb(), "rss_mb": [], "capacity_kg": [], "models_kept": []}
+    t0 = time.perf_counter()
+    for xyz in goals:
+        result = payload_capacity(am, _goal(xyz), models)
+        out["rss_mb"].append(rss_mb())
+        out["capacity_kg"].append(result.capacity_kg)
+        out["models_kept"].append(len(models))
+    out["time_s"] = time.perf_counter() - t0
+    out["rss_growth_per_call_mb"] = (out["rss_mb"][-1] - out["rss_mb"][0]) / max(1, len(goals) - 1)
+    return out

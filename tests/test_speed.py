@@ -1,0 +1,222 @@
+"""Speed work that must not change answers: one BLAS thread in the hot paths, the lazy start
+portfolio, payload models without a model per mass, the compiled statics kernel.
+
+No timing is asserted here (the figures come from :mod:`assembler_pin.bench_speed`); each
+test holds an answer to an independent computation or to the answer of the slower path.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import importlib.util
+
+import numpy as np
+import pinocchio as pin
+import pytest
+from threadpoolctl import threadpool_info, threadpool_limits
+
+from assembler_pin import statics_kernel
+from assembler_pin.capacity import KEPT_PAYLOAD_MODELS, PayloadModels, payload_capacity, with_payload
+from assembler_pin.exceptions import OptionsError
+from assembler_pin.model import AssemblerModel
+from assembler_pin.motion import EEPath
+from assembler_pin.solver import solve
+from assembler_pin.statics import solve_statics, solve_statics_batch
+
+HAS_NUMBA = importlib.util.find_spec("numba") is not None
+
+#: Goals of the bench's grid where, before the lazy portfolio, a start other than the helper
+#: arm's gave a > 1 % better optimum (the screw start, each time).
+STARTS_MATTERED = ((-0.3, 0.0, 0.7), (-0.3, 0.2, 0.5), (-0.1, 0.2, 0.6), (0.3, 0.0, 0.7))
+
+
+def _goal(xyz) -> pin.SE3:
+    return pin.SE3(np.eye(3), np.array(xyz, dtype=float))
+
+
+# ------------------------------------------------------------------ one BLAS thread
+def test_entry_points_run_under_one_blas_thread():
+    """Every entry point that runs the optimizer or the helper arm carries the limit."""
+    from assembler_pin.capacity import payload_capacity as capacity
+    from assembler_pin.carrier import solve_on_carrier
+    from assembler_pin.helper_arm import initial_condition
+    from assembler_pin.motion.timing import plan_trajectory
+    from assembler_pin.optimize import optimize_internal_poses
+
+    for fn in (solve, optimize_internal_poses, initial_condition, capacity, plan_trajectory, solve_on_carrier):
+        assert getattr(fn, "__wrapped__", None) is not None, fn.__name__
+
+
+def test_optimizer_sees_one_blas_thread_whatever_the_caller_sets(am, monkeypatch):
+    """Inside the optimizer BLAS runs one thread, under a caller's limit of 2."""
+    import assembler_pin.optimize as optimize
+
+    seen: list[int] = []
+    real = optimize.pose_derivatives
+
+    def recording(*args, **kwargs):
+        seen.extend(lib["num_threads"] for lib in threadpool_info() if lib["user_api"] == "blas")
+        return real(*args, **kwargs)
+
+    monkeypatch.setattr(optimize, "pose_derivatives", recording)
+    with threadpool_limits(limits=2, user_api="blas"):
+        solve(am, _goal((0.0, 0.0, 0.8)))
+    assert seen and set(seen) == {1}
+
+
+def _answers(am) -> list[np.ndarray]:
+    out = []
+    for xyz in ((0.1, 0.0, 0.8), (-0.2, 0.1, 0.7), (0.3, 0.0, 0.6)):
+        result = solve(am, _goal(xyz))
+        assert result.success, result.message
+        out.append(np.concatenate([result.optimized.plates.R.ravel(), result.optimized.plates.p.ravel()]))
+    goal = pin.SE3(np.eye(3), am.home[-1].translation + np.array([0.02, 0.0, -0.01]))
+    from assembler_pin.motion.timing import plan_trajectory
+
+    motion = plan_trajectory(am, EEPath((am.home[-1], goal)), am.home, rate=10.0)
+    assert motion.success, motion.reason
+    out.append(np.asarray(motion.trajectory.lengths))
+    return out
+
+
+@pytest.mark.slow
+def test_solve_and_plan_are_bit_identical_under_1_and_2_threads(am):
+    """The same bits whatever thread limit the caller sets (scipy's OpenBLAS with 2 threads
+    used to move SLSQP to another optimum on some goals)."""
+    with threadpool_limits(limits=1):
+        one = _answers(am)
+    with threadpool_limits(limits=2):
+        two = _answers(am)
+    for a, b in zip(one, two, strict=True):
+        assert np.array_equal(a, b)
+
+
+# ------------------------------------------------------------------ lazy starts
+def test_starts_option_is_checked(am):
+    with pytest.raises(OptionsError, match="starts must be one of first, all"):
+        solve(am, _goal((0.0, 0.0, 0.8)), starts="some")
+
+
+def test_all_starts_run_every_start(am):
+    result = solve(am, _goal((0.0, 0.0, 0.8)), starts="all")
+    assert {"helper_arm", "home", "screw"} <= set(result.runs)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("xyz", STARTS_MATTERED)
+def test_lazy_starts_never_lose_to_every_start(am, xyz):
+    """On the goals where the other starts mattered, the lazy default finds the optimum of
+    running every start (Ω within 1e-6 relative); it skips the home start unless the helper
+    arm's run failed."""
+    lazy = solve(am, _goal(xyz))
+    every = solve(am, _goal(xyz), starts="all")
+    assert lazy.success and every.success
+    assert lazy.optimization.objective_optimized <= every.optimization.objective_optimized * (1 + 1e-6)
+    assert ("home" in lazy.runs) == (not lazy.runs["helper_arm"].success)
+
+
+# ------------------------------------------------------------------ payload models
+def test_payload_variant_statics_equal_a_model_built_with_that_payload(am):
+    """A variant (one copy of the Pinocchio model with the EE body's inertia changed, the
+    whole-stack Data shared) gives the statics of a model built from its own URDF."""
+    rng = np.random.default_rng(5)
+    for mass in (0.0, 1.0, 12.5):
+        variant = with_payload(am, mass)
+        built = AssemblerModel.from_config(
+            dataclasses.replace(am.config, payload=dataclasses.replace(am.config.payload, mass=mass))
+        )
+        assert variant._data is am._data and variant.helper_arms is am.helper_arms
+        for _ in range(3):
+            plates = [m * pin.exp6(np.concatenate([rng.uniform(-0.01, 0.01, 3), rng.uniform(-0.05, 0.05, 3)]))
+                      for m in am.home]  # fmt: skip
+            mine, ref = solve_statics(variant, plates), solve_statics(built, plates)
+            np.testing.assert_allclose(mine.forces, ref.forces, atol=1e-10, rtol=0)
+            np.testing.assert_allclose(mine.base_wrench, ref.base_wrench, atol=1e-10, rtol=0)
+
+
+def test_payload_models_stay_bounded(am):
+    """However many masses are tried, only the last KEPT_PAYLOAD_MODELS (and 0 kg, 1 kg and
+    the configured model) are kept."""
+    models = PayloadModels(am)
+    for mass in np.linspace(2.0, 30.0, 12):
+        assert models.at(float(mass)).config.payload.mass == pytest.approx(mass)
+    models.at(0.0), models.at(1.0)
+    assert len(models) <= KEPT_PAYLOAD_MODELS + 3
+
+
+@pytest.mark.slow
+def test_capacity_with_variants_is_held_by_its_pose(am):
+    """The capacity's pose holds the capacity on a model built from the URDF with that
+    payload (forces at the limit of the binding leg, every force within the limits)."""
+    result = payload_capacity(am, _goal((0.1, 0.05, 0.9)))
+    assert result.success
+    leg = am.config.leg
+    built = AssemblerModel.from_config(
+        dataclasses.replace(am.config, payload=dataclasses.replace(am.config.payload, mass=result.capacity_kg))
+    )
+    forces = solve_statics(built, result.plates).forces
+    assert forces.max() <= leg.max_tension + 1e-6 and forces.min() >= -leg.max_compression - 1e-6
+    assert max(forces.max() - leg.max_tension, -leg.max_compression - forces.min()) > -1e-3 * leg.max_tension
+
+
+# ------------------------------------------------------------------ statics kernel
+def _random_stacks(am: AssemblerModel, count: int, seed: int) -> np.ndarray:
+    """(count, n+1, 4, 4): each plate the home pose moved by a random twist (±1 cm, ±0.05 rad)."""
+    rng = np.random.default_rng(seed)
+    out = np.empty((count, am.n + 1, 4, 4))
+    for b in range(count):
+        for k, m in enumerate(am.home):
+            move = pin.exp6(np.concatenate([rng.uniform(-0.01, 0.01, 3), rng.uniform(-0.05, 0.05, 3)]))
+            out[b, k] = (m * move).homogeneous if k else m.homogeneous
+    return out
+
+
+@pytest.mark.parametrize("n", [1, 2, 5, 9, pytest.param(64, marks=pytest.mark.slow)])
+@pytest.mark.parametrize(
+    "backend", ["numpy", pytest.param("numba", marks=pytest.mark.skipif(not HAS_NUMBA, reason="no numba"))]
+)
+def test_statics_kernel_equals_pinocchio(n, backend):
+    """Both paths of the closed-form statics against Pinocchio's statics, to 1e-10 N, on
+    random stacks; the condition numbers too (relative 1e-9)."""
+    am = AssemblerModel.from_config({"platforms": n})
+    stacks = _random_stacks(am, 4, seed=n)
+    forces = solve_statics_batch(am, stacks, backend=backend)
+    R, p = stacks[:, :, :3, :3], stacks[:, :, :3, 3]
+    _, condition = statics_kernel.closed_form_forces(am, R, p, backend)
+    for b in range(len(stacks)):
+        ref = solve_statics(am, stacks[b])
+        np.testing.assert_allclose(forces[b], ref.forces, atol=1e-10, rtol=0)
+        np.testing.assert_allclose(condition[b], ref.condition, rtol=1e-9)
+
+
+@pytest.mark.skipif(not HAS_NUMBA, reason="no numba")
+def test_statics_kernel_flags_a_singular_stack_as_the_numpy_path():
+    """The octahedral singularity (a 3-3 platform turned 90° about its axis) gives NaN rows
+    on both paths, the other stacks their forces."""
+    am = AssemblerModel.from_config({"platforms": 2})
+    stacks = _random_stacks(am, 3, seed=1)
+    turn = pin.SE3(pin.exp3(np.array([0, 0, np.pi / 2])), np.array([0, 0, am.config.home_height]))
+    stacks[1, 1] = turn.homogeneous
+    stacks[1, 2] = (turn * turn).homogeneous
+    assert solve_statics(am, stacks[1]).singular
+    for backend in ("numpy", "numba"):
+        forces = solve_statics_batch(am, stacks, backend=backend)
+        assert np.isnan(forces[1]).all() and np.isfinite(forces[[0, 2]]).all()
+
+
+def test_statics_backend_choice(monkeypatch):
+    """auto keeps small one-off calls on numpy; the variable forces numpy; a missing numba
+    falls back to numpy and refuses an explicit numba."""
+    monkeypatch.setattr(statics_kernel, "_kernel", None)
+    assert statics_kernel.resolve_backend("auto", 1) == "numpy"
+    assert statics_kernel._kernel is None  # not even imported
+    monkeypatch.setenv(statics_kernel.ENV_VAR, "numpy")
+    assert statics_kernel.resolve_backend(None, 10**6) == "numpy"
+    monkeypatch.setenv(statics_kernel.ENV_VAR, "fast")
+    with pytest.raises(OptionsError, match="statics backend must be one of"):
+        statics_kernel.resolve_backend(None, 1)
+    monkeypatch.delenv(statics_kernel.ENV_VAR)
+    monkeypatch.setattr(statics_kernel, "_kernel", False)  # numba absent
+    assert statics_kernel.resolve_backend("auto", 10**6) == "numpy"
+    with pytest.raises(OptionsError, match="needs numba"):
+        statics_kernel.resolve_backend("numba", 1)
