@@ -9,6 +9,7 @@ vs numpy) much less.
 
 from __future__ import annotations
 
+import functools
 import time
 import tracemalloc
 from typing import Any
@@ -91,7 +92,8 @@ def benchmark_solve_starts(
             counts[mode]["runs"] += len(result.runs)
             counts[mode]["solved"] += bool(result.success)
             counts[mode]["optimize_s"] += result.timing_s.get("optimize", 0.0)
-            objectives[mode].append(result.optimization.objective_optimized if result.success else np.inf)
+            opt = result.optimization
+            objectives[mode].append(opt.objective_optimized if result.success and opt is not None else np.inf)
     out: dict[str, Any] = {"goals": len(goals)}
     for mode in modes:
         t = np.array(times[mode])
@@ -130,7 +132,7 @@ def benchmark_statics_kernel(
     R = np.array([s.R for s in samples])
     p = np.array([s.p for s in samples])
     for backend in ("numpy", "numba") if has_kernel else ("numpy",):
-        out[f"{backend}_single_us"] = median_time_us(lambda b=backend: closed_form_forces(am, R1, p1, b), repeat)
+        out[f"{backend}_single_us"] = median_time_us(functools.partial(closed_form_forces, am, R1, p1, backend), repeat)
         for size in batch_sizes:
             reps = max(1, size // len(samples))
             Rb, pb = np.tile(R, (reps, 1, 1, 1)), np.tile(p, (reps, 1, 1))

@@ -257,7 +257,7 @@ def payload_capacity(
 
     def solved(mass: float) -> PlateArrays | None:
         result = solve(models.at(mass), goal)
-        return result.optimized.plates if result.success else None
+        return result.optimized.plates if result.success and result.optimized is not None else None
 
     plates = start if start is not None or configured_failed else solved(float(am.config.payload.mass))
     if plates is None and am.config.payload.mass > 0:
@@ -291,7 +291,7 @@ def payload_capacity(
         if iterations >= max_iterations:
             message = f"stopped after {max_iterations} optimizations (still gaining)"
     label = f"{leg_label(*binding)} {kind}" if binding is not None else ""
-    result = CapacityResult(True, max(cap, 0.0), label, plates, message, iterations, history,
+    answer = CapacityResult(True, max(cap, 0.0), label, plates, message, iterations, history,
                             time.perf_counter() - t0)  # fmt: skip
-    logger.info("capacity: %s", result)
-    return result
+    logger.info("capacity: %s", answer)
+    return answer

@@ -26,6 +26,7 @@ k = 1..n (``T_k ← exp6(η_k) · T_k``), columns ``6(k-1) .. 6k-1``; plate 0 is
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -79,7 +80,7 @@ def _point_jacobian(points: np.ndarray, first_plate: int, n: int) -> np.ndarray:
     rows = np.arange(m)
     cols = rows + first_plate - 1
     rows, cols = rows[cols >= 0], cols[cols >= 0]
-    sel = (rows, *([slice(None)] * len(inner)), slice(None), cols)
+    sel: tuple[Any, ...] = (rows, *([slice(None)] * len(inner)), slice(None), cols)
     out[(*sel, slice(0, 3))] = _I3
     out[(*sel, slice(3, 6))] = -skew(points[rows])
     return out.reshape(*out.shape[:-2], 6 * n)

@@ -159,7 +159,7 @@ class HelperArm:
         once (3 evaluations, one more for d)."""
         n = self.config.platforms
         flat = base_value.reshape(5, n, 6)
-        jac = np.zeros((5, n, 6, n, 3))
+        jac: np.ndarray = np.zeros((5, n, 6, n, 3))
         for k in range(3):
             dq = q.copy()
             dq[k::3] += step
