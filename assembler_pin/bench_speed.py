@@ -23,6 +23,7 @@ __all__ = [
     "THREAD_GOALS",
     "benchmark_capacity_memory",
     "benchmark_solve_starts",
+    "benchmark_startup",
     "benchmark_statics_kernel",
     "benchmark_threads",
     "rss_mb",
@@ -165,4 +166,25 @@ def benchmark_capacity_memory(am: AssemblerModel, goals: tuple = CAPACITY_GOALS)
         out["models_kept"].append(len(models))
     out["time_s"] = time.perf_counter() - t0
     out["rss_growth_per_call_mb"] = (out["rss_mb"][-1] - out["rss_mb"][0]) / max(1, len(goals) - 1)
+    return out
+
+
+def benchmark_startup(repeat: int = 5) -> dict[str, float]:
+    """Wall time [s] of fresh ``assembler-pin`` processes (medians of ``repeat``):
+    ``--help`` and ``statics --home --json``, run as ``python -m assembler_pin.cli``."""
+    import subprocess
+    import sys
+
+    out: dict[str, float] = {}
+    for key, argv in (("cli_help_s", ["--help"]), ("cli_statics_home_json_s", ["statics", "--home", "--json"])):
+        times = []
+        for _ in range(repeat):
+            t0 = time.perf_counter()
+            subprocess.run([sys.executable, "-m", "assembler_pin.cli", *argv], capture_output=True, check=True)
+            times.append(time.perf_counter() - t0)
+        out[key] = float(np.median(times))
+    t0 = time.perf_counter()
+    for _ in range(repeat):
+        subprocess.run([sys.executable, "-c", "pass"], check=True)
+    out["bare_python_s"] = (time.perf_counter() - t0) / repeat
     return out

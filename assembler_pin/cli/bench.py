@@ -31,6 +31,16 @@ def add_parser(add) -> None:
                    help="only the capability map's cells/s on 1 and 2 local Dask workers (~1 min)")  # fmt: skip
     p.add_argument("--mujoco", action="store_true",
                    help="only MuJoCo against our statics: inverse statics and held poses (~15 s)")  # fmt: skip
+    p.add_argument(
+        "--truss",
+        action="store_true",
+        help="only the compliant truss: stiffness, loaded pose, compensated lengths, two-point support",
+    )
+    p.add_argument(
+        "--speed",
+        action="store_true",
+        help="only BLAS threads, lazy starts, the statics kernel, capacity memory, CLI start-up (~3 min)",
+    )
     p.set_defaults(func=run)
 
 
@@ -55,6 +65,8 @@ def run(args: argparse.Namespace) -> int:
         print(dumps(result) if args.json else format_maps(result))
         return 0
     am = AssemblerModel.from_config(config_from_args(args))
+    if args.truss or args.speed:
+        return _extra_figures(args, am)
     if args.mujoco:
         from ..bench import benchmark_mujoco, format_mujoco
 
@@ -82,4 +94,38 @@ def run(args: argparse.Namespace) -> int:
         for name, v in scenarios.items():
             print(f"{name:<24}{v['slsqp_s']:9.3f}{v['paper_s']:9.3f}{v['speedup']:9.1f}"
                   f"{v['initial_objective']:11.2f}{v['slsqp_objective']:9.2f}{v['paper_objective']:9.2f}")  # fmt: skip
+    return 0
+
+
+def _extra_figures(args: argparse.Namespace, am) -> int:
+    """``bench --truss`` and ``bench --speed``: one figure per line, or one JSON object."""
+    doc: dict = {}
+    if args.truss:
+        from ..compliance import benchmark_stiffness
+        from ..supports import benchmark_supports
+
+        doc["stiffness"] = benchmark_stiffness(am)
+        doc["supports"] = benchmark_supports(am)
+    if args.speed:
+        from ..bench import LEVEL_GRID
+        from ..bench_speed import (
+            benchmark_capacity_memory,
+            benchmark_solve_starts,
+            benchmark_startup,
+            benchmark_statics_kernel,
+            benchmark_threads,
+        )
+
+        doc["threads"] = benchmark_threads(am)
+        doc["starts"] = benchmark_solve_starts(am, LEVEL_GRID[::12])
+        doc["statics_kernel"] = benchmark_statics_kernel(am)
+        doc["capacity_memory"] = benchmark_capacity_memory(am)
+        doc["startup"] = benchmark_startup()
+    if args.json:
+        print(dumps(doc))
+        return 0
+    for group, figures in doc.items():
+        print(f"{group}:")
+        for key, value in figures.items() if isinstance(figures, dict) else [("", figures)]:
+            print(f"  {key:>34}: {value:.4g}" if isinstance(value, float) else f"  {key:>34}: {value}")
     return 0
