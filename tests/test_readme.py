@@ -174,7 +174,7 @@ COMMANDS: list[tuple[str, str, str]] = [
     (r"assembler-pin export --mjcf --out urdf$", RUN, ""),
     (r"wc -c README\.md$", RUN, ""),
     (r"assembler-pin stiffness --home( --compensated --json)?$", RUN, ""),
-    (r"assembler-pin support --home --json$", RUN, ""),
+    (r"assembler-pin support --home( --json)?$", RUN, ""),
     (r"grep -rc # fmt: skip assembler_pin", RUN, ""),
     (r"assembler-pin view (--home|--scenario \w+|--goal [-\d. ]+)( --force-scale \w+)? --html \S+$", SLOW, ""),
     (r"assembler-pin solve --goal [-\d. ]+ --capacity$", SLOW, ""),
