@@ -325,8 +325,10 @@ def format_sweep(rows: list[dict]) -> str:
     lines = [head, "-" * len(head)]
     for r in rows:
         opt = f"{r['optimize_s']:11.2f}" if "optimize_s" in r else f"{'skipped':>11}"
-        lines.append(f"{r['platforms']:>3} {r['build_s']:8.3f} {r['resident_mb']:7.0f} {r['statics_us']:11.0f} "
-                     f"{r['stack_fk_us']:12.0f} {r['initial_s']:10.2f} {opt}")  # fmt: skip
+        lines.append(
+            f"{r['platforms']:>3} {r['build_s']:8.3f} {r['resident_mb']:7.0f} {r['statics_us']:11.0f} "
+            f"{r['stack_fk_us']:12.0f} {r['initial_s']:10.2f} {opt}"
+        )
     notes = [f"n = {r['platforms']}: {r['optimize_note']}" for r in rows if "optimize_note" in r]
     return "\n".join(lines + notes)
 
@@ -358,17 +360,19 @@ def benchmark_mujoco(am: AssemblerModel, n_random: int = 8, seed: int = 42, seco
         held = hold_pose(am, plates, seconds=seconds, samples=10, joint_limits=False, stack=stack)
         wall = time.perf_counter() - t0
         settled = solve_statics(am, held.plates).forces
-        rows.append({
-            "pose": name,
-            "max_abs_force_n": float(np.abs(ours).max()),
-            "inverse_gap_n": float(np.abs(inverse.forces - ours).max()),
-            "held": held.held,
-            "held_gap_of_tolerance": float(np.abs(held.final_forces - ours).max() / tol),
-            "settled_gap_of_tolerance": float(np.abs(held.final_forces - settled).max() / tol),
-            "ee_sag_m": float(held.ee_drift[-1]),
-            "ball_gap_m": float(held.closure_residual.max()),
-            "wall_s": wall,
-        })  # fmt: skip
+        rows.append(
+            {
+                "pose": name,
+                "max_abs_force_n": float(np.abs(ours).max()),
+                "inverse_gap_n": float(np.abs(inverse.forces - ours).max()),
+                "held": held.held,
+                "held_gap_of_tolerance": float(np.abs(held.final_forces - ours).max() / tol),
+                "settled_gap_of_tolerance": float(np.abs(held.final_forces - settled).max() / tol),
+                "ee_sag_m": float(held.ee_drift[-1]),
+                "ball_gap_m": float(held.closure_residual.max()),
+                "wall_s": wall,
+            }
+        )
     return rows
 
 
@@ -429,6 +433,8 @@ def format_maps(result: dict[str, Any]) -> str:
     for w, rate in result["cells_per_s"].items():
         lines.append(f"  {w} worker(s): {rate:6.2f} cells/s")
     lines.append(f"  scaling efficiency {max(result['cells_per_s'])} workers: {100 * result['efficiency']:.0f} %")
-    lines.append(f"  {result['core_seconds_per_cell']:.2f} core-seconds per cell; a 64-core cluster at this "
-                 f"efficiency: ~{result['estimate_64_cores_cells_per_s']:.0f} cells/s")  # fmt: skip
+    lines.append(
+        f"  {result['core_seconds_per_cell']:.2f} core-seconds per cell; a 64-core cluster at this "
+        f"efficiency: ~{result['estimate_64_cores_cells_per_s']:.0f} cells/s"
+    )
     return "\n".join(lines)

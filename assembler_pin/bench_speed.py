@@ -98,8 +98,13 @@ def benchmark_solve_starts(
     out: dict[str, Any] = {"goals": len(goals)}
     for mode in modes:
         t = np.array(times[mode])
-        out.update({f"{mode}_p50_s": float(np.percentile(t, 50)), f"{mode}_p95_s": float(np.percentile(t, 95)),
-                    f"{mode}_max_s": float(t.max())})  # fmt: skip
+        out.update(
+            {
+                f"{mode}_p50_s": float(np.percentile(t, 50)),
+                f"{mode}_p95_s": float(np.percentile(t, 95)),
+                f"{mode}_max_s": float(t.max()),
+            }
+        )
         out.update({f"{mode}_{k}": v for k, v in counts[mode].items()})
     if "first" in objectives and "all" in objectives:
         lazy, every = np.array(objectives["first"]), np.array(objectives["all"])

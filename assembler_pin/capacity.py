@@ -183,14 +183,22 @@ class CapacityResult:
     time_s: float = 0.0
 
     def to_dict(self) -> dict:
-        return {"success": self.success, "capacity_kg": self.capacity_kg, "binding": self.binding,
-                "message": self.message, "iterations": self.iterations, "history": self.history,
-                "time_s": self.time_s}  # fmt: skip
+        return {
+            "success": self.success,
+            "capacity_kg": self.capacity_kg,
+            "binding": self.binding,
+            "message": self.message,
+            "iterations": self.iterations,
+            "history": self.history,
+            "time_s": self.time_s,
+        }
 
     def __repr__(self) -> str:
-        return (f"CapacityResult(success={self.success}, capacity {self.capacity_kg:.3f} kg, binding "
-                f"{self.binding or '-'}, {self.iterations} optimizations, {self.time_s:.2f} s, "
-                f"message={self.message!r})")  # fmt: skip
+        return (
+            f"CapacityResult(success={self.success}, capacity {self.capacity_kg:.3f} kg, binding "
+            f"{self.binding or '-'}, {self.iterations} optimizations, {self.time_s:.2f} s, "
+            f"message={self.message!r})"
+        )
 
 
 def _probe(model: AssemblerModel, goal: pin.SE3, arm: PlateArrays | None) -> PlateArrays | None:
@@ -263,8 +271,16 @@ def payload_capacity(
     if plates is None and am.config.payload.mass > 0:
         plates = solved(0.0)
     if plates is None:
-        return CapacityResult(False, math.nan, "", None, "no valid pose for the goal even without payload", 1,
-                              [], time.perf_counter() - t0)  # fmt: skip
+        return CapacityResult(
+            False,
+            math.nan,
+            "",
+            None,
+            "no valid pose for the goal even without payload",
+            1,
+            [],
+            time.perf_counter() - t0,
+        )
     cap, binding, kind = pose_capacity(models, plates)
     history = [(float(am.config.payload.mass), cap)]
     iterations, message = 1, "converged"
@@ -291,7 +307,6 @@ def payload_capacity(
         if iterations >= max_iterations:
             message = f"stopped after {max_iterations} optimizations (still gaining)"
     label = f"{leg_label(*binding)} {kind}" if binding is not None else ""
-    answer = CapacityResult(True, max(cap, 0.0), label, plates, message, iterations, history,
-                            time.perf_counter() - t0)  # fmt: skip
+    answer = CapacityResult(True, max(cap, 0.0), label, plates, message, iterations, history, time.perf_counter() - t0)
     logger.info("capacity: %s", answer)
     return answer

@@ -77,17 +77,35 @@ class CarrierSpec:
 
 
 CARRIERS: dict[str, CarrierSpec] = {
-    "ur3": CarrierSpec("ur_description/urdf/ur3_robot.urdf", "tool0", (), (-0.041, -0.693, 1.127, 1.138, -1.571, 1.612),
-                       "Universal Robots UR3, 6 joints (rated payload 3 kg)"),
-    "ur5": CarrierSpec("ur_description/urdf/ur5_robot.urdf", "tool0", (), (-0.02, -1.127, 1.535, 1.164, -1.571, 1.591),
-                       "Universal Robots UR5, 6 joints (rated payload 5 kg)"),
-    "ur10": CarrierSpec("ur_description/urdf/ur10_robot.urdf", "tool0", (),
-                        (-0.023, -1.205, 1.738, 1.038, -1.571, 1.594),
-                        "Universal Robots UR10, 6 joints (rated payload 10 kg)"),
-    "panda": CarrierSpec("panda_description/urdf/panda.urdf", "panda_link8", ("panda_finger_joint1",
-                         "panda_finger_joint2"), (-1.003, -0.35, 1.067, -2.689, -2.649, 0.688, 0.356),
-                         "Franka Emika Panda, 7 joints, fingers locked (rated payload 3 kg)"),
-}  # fmt: skip
+    "ur3": CarrierSpec(
+        "ur_description/urdf/ur3_robot.urdf",
+        "tool0",
+        (),
+        (-0.041, -0.693, 1.127, 1.138, -1.571, 1.612),
+        "Universal Robots UR3, 6 joints (rated payload 3 kg)",
+    ),
+    "ur5": CarrierSpec(
+        "ur_description/urdf/ur5_robot.urdf",
+        "tool0",
+        (),
+        (-0.02, -1.127, 1.535, 1.164, -1.571, 1.591),
+        "Universal Robots UR5, 6 joints (rated payload 5 kg)",
+    ),
+    "ur10": CarrierSpec(
+        "ur_description/urdf/ur10_robot.urdf",
+        "tool0",
+        (),
+        (-0.023, -1.205, 1.738, 1.038, -1.571, 1.594),
+        "Universal Robots UR10, 6 joints (rated payload 10 kg)",
+    ),
+    "panda": CarrierSpec(
+        "panda_description/urdf/panda.urdf",
+        "panda_link8",
+        ("panda_finger_joint1", "panda_finger_joint2"),
+        (-1.003, -0.35, 1.067, -2.689, -2.649, 0.688, 0.356),
+        "Franka Emika Panda, 7 joints, fingers locked (rated payload 3 kg)",
+    ),
+}
 """The supported carriers by name (see :class:`CarrierSpec`)."""
 check_names(CARRIERS, CARRIER_NAMES, "carriers")
 
@@ -178,8 +196,10 @@ class Carrier:
         self.upper = np.asarray(self.model.upperPositionLimit, dtype=float).copy()
 
     def __repr__(self) -> str:
-        return (f"Carrier({self.name!r}, {self.model.nv} joints, tool frame {self.spec.tool_frame!r}, effort limits "
-                f"{np.round(self.effort_limit, 1).tolist()} N·m)")  # fmt: skip
+        return (
+            f"Carrier({self.name!r}, {self.model.nv} joints, tool frame {self.spec.tool_frame!r}, effort limits "
+            f"{np.round(self.effort_limit, 1).tolist()} N·m)"
+        )
 
     @property
     def upright_q(self) -> np.ndarray:
@@ -194,8 +214,9 @@ class Carrier:
         outside = np.flatnonzero((arr < self.lower - 1e-9) | (arr > self.upper + 1e-9))
         if outside.size:
             k = int(outside[0])
-            raise PoseError(f"{what}: joint {k} = {arr[k]:.4f} rad is outside [{self.lower[k]:.4f}, "
-                            f"{self.upper[k]:.4f}]")  # fmt: skip
+            raise PoseError(
+                f"{what}: joint {k} = {arr[k]:.4f} rad is outside [{self.lower[k]:.4f}, {self.upper[k]:.4f}]"
+            )
         return arr
 
     def base_pose(self, q: npt.ArrayLike) -> pin.SE3:
@@ -275,9 +296,11 @@ class CarrierStatics:
         }
 
     def __repr__(self) -> str:
-        return (f"CarrierStatics(max|F| {self.state.max_abs_force:.2f} N ({100 * self.stack_ratio:.0f} % of its "
-                f"limit), carrier torque up to {100 * self.carrier_ratio:.0f} % of its effort limit, binding "
-                f"{self.binding}, within limits: {self.within_limits})")  # fmt: skip
+        return (
+            f"CarrierStatics(max|F| {self.state.max_abs_force:.2f} N ({100 * self.stack_ratio:.0f} % of its "
+            f"limit), carrier torque up to {100 * self.carrier_ratio:.0f} % of its effort limit, binding "
+            f"{self.binding}, within limits: {self.within_limits})"
+        )
 
 
 def _stack_ratio(am: AssemblerModel, state: StackState) -> float:
@@ -380,8 +403,10 @@ class CarrierSolveResult:
 
     def __repr__(self) -> str:
         detail = repr(self.statics) if self.statics is not None else "no pose"
-        return (f"CarrierSolveResult(success={self.success}, moved_carrier={self.moved_carrier}, {detail}, "
-                f"{self.time_s:.2f} s, message={self.message!r})")  # fmt: skip
+        return (
+            f"CarrierSolveResult(success={self.success}, moved_carrier={self.moved_carrier}, {detail}, "
+            f"{self.time_s:.2f} s, message={self.message!r})"
+        )
 
 
 @dataclass(frozen=True)

@@ -182,8 +182,15 @@ LIMITS = {
     "force": 1e9,  # [N], force limits
     "stiffness": 1e10,  # [N/m], leg stiffness
 }
-_UNIT_OF = {"gravity": "gravity", "mass": "mass", "motor_mass": "mass", "shaft_mass": "mass",
-            "max_tension": "force", "max_compression": "force", "stiffness": "stiffness"}  # fmt: skip
+_UNIT_OF = {
+    "gravity": "gravity",
+    "mass": "mass",
+    "motor_mass": "mass",
+    "shaft_mass": "mass",
+    "max_tension": "force",
+    "max_compression": "force",
+    "stiffness": "stiffness",
+}
 
 
 def _is_number(value: Any) -> bool:

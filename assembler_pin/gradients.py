@@ -245,8 +245,9 @@ def equilibrium(
             K_inv = inverse_or_nan(K)
             a = np.einsum("...ab,...b->...a", K_inv, rhs)
     forces = a + leg.shaft_mass * gu
-    eq = Equilibrium(b, t, d, L, u, gu, g_perp, s, f_perp, motor_c, shaft_c, payload_point, up_force, up_moment, K, a,
-                     forces)  # fmt: skip
+    eq = Equilibrium(
+        b, t, d, L, u, gu, g_perp, s, f_perp, motor_c, shaft_c, payload_point, up_force, up_moment, K, a, forces
+    )
     return eq, K_inv
 
 

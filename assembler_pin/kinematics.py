@@ -395,8 +395,10 @@ def rotations_to_quaternions(R: np.ndarray) -> np.ndarray:
         r = R[sel]
         if case == 0:
             s = 2.0 * np.sqrt(1.0 + trace[sel])
-            out[sel] = np.stack([(r[:, 2, 1] - r[:, 1, 2]) / s, (r[:, 0, 2] - r[:, 2, 0]) / s,
-                                 (r[:, 1, 0] - r[:, 0, 1]) / s, 0.25 * s], axis=1)  # fmt: skip
+            out[sel] = np.stack(
+                [(r[:, 2, 1] - r[:, 1, 2]) / s, (r[:, 0, 2] - r[:, 2, 0]) / s, (r[:, 1, 0] - r[:, 0, 1]) / s, 0.25 * s],
+                axis=1,
+            )
         else:
             a, b, c = case - 1, case % 3, (case + 1) % 3
             s = 2.0 * np.sqrt(1.0 + r[:, a, a] - r[:, b, b] - r[:, c, c])
@@ -471,8 +473,10 @@ class FKResult:
     message: str
 
     def __repr__(self) -> str:
-        return (f"FKResult(success={self.success}, {self.iterations} iterations, residual {self.residual:.2e} m, "
-                f"top at {np.round(self.pose.translation, 4).tolist()} m, message={self.message!r})")  # fmt: skip
+        return (
+            f"FKResult(success={self.success}, {self.iterations} iterations, residual {self.residual:.2e} m, "
+            f"top at {np.round(self.pose.translation, 4).tolist()} m, message={self.message!r})"
+        )
 
     def raise_if_failed(self) -> pin.SE3:
         """Return ``pose``, or raise :class:`ConvergenceError` when not successful."""
@@ -571,8 +575,10 @@ def _platform_fk(
     residual = float(np.abs(np.sqrt(length_sq) - target).max())
     message = failure
     if message is None and not residual <= tol:
-        message = (f"platform {j}: FK did not converge in {max_iterations} iterations "
-                   f"(length residual {residual:.3g} m > {tol:.1g} m)")  # fmt: skip
+        message = (
+            f"platform {j}: FK did not converge in {max_iterations} iterations "
+            f"(length residual {residual:.3g} m > {tol:.1g} m)"
+        )
     elif message is None:
         message = _foreign_mode(am, j, pose, vec)
     return FKResult(pose, message is None, iterations, residual, message or "converged")
@@ -641,8 +647,10 @@ class StackFKResult:
 
     def __repr__(self) -> str:
         res = f"{self.residual:.2e} m" if self.platforms else "-"
-        return (f"StackFKResult(success={self.success}, {len(self.plates) - 1} platforms, EE at "
-                f"{np.round(self.plates.p[-1], 4).tolist()} m, residual {res}, message={self.message!r})")  # fmt: skip
+        return (
+            f"StackFKResult(success={self.success}, {len(self.plates) - 1} platforms, EE at "
+            f"{np.round(self.plates.p[-1], 4).tolist()} m, residual {res}, message={self.message!r})"
+        )
 
     @property
     def residual(self) -> float:

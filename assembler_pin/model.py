@@ -231,8 +231,10 @@ class AssemblerModel:
         block = 7 + 25 * np.arange(self.n)
         expected_legs = block[:, None, None] + 3 * np.arange(6)[None, :, None] + np.arange(3)[None, None, :]
         if not (np.array_equal(self.leg_idx_q, expected_legs) and np.array_equal(self.plate_idx_q[1:], block + 18)):
-            raise ModelFileError("joint order: each platform's legs 0..5 (ux, uy, actuator) must be followed by the "
-                                 "next plate's floating joint, depth-first from plate 0")  # fmt: skip
+            raise ModelFileError(
+                "joint order: each platform's legs 0..5 (ux, uy, actuator) must be followed by the "
+                "next plate's floating joint, depth-first from plate 0"
+            )
         if not np.allclose(self.plate_placement_R, np.eye(3), atol=1e-12):
             raise ModelFileError("the plates' floating joints must have a pure translation as origin (home pose)")
 

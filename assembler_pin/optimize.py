@@ -133,11 +133,13 @@ class OptimizeResult:
     method: str
 
     def __repr__(self) -> str:
-        return (f"OptimizeResult(success={self.success}, method={self.method!r}, max|F| "
-                f"{self.initial.max_abs_force:.3f} → {self.optimized.max_abs_force:.3f} N, "
-                f"Ω {self.objective_initial:.3f} → {self.objective_optimized:.3f}, {self.iterations} iterations, "
-                f"{1e3 * self.time_s:.1f} ms, "
-                f"message={self.message!r})")  # fmt: skip
+        return (
+            f"OptimizeResult(success={self.success}, method={self.method!r}, max|F| "
+            f"{self.initial.max_abs_force:.3f} → {self.optimized.max_abs_force:.3f} N, "
+            f"Ω {self.objective_initial:.3f} → {self.objective_optimized:.3f}, {self.iterations} iterations, "
+            f"{1e3 * self.time_s:.1f} ms, "
+            f"message={self.message!r})"
+        )
 
 
 def objective_value(am: AssemblerModel, state: StackState, w1: float = 1.0, w2: float = 1.0) -> float:
@@ -226,8 +228,14 @@ class _Problem:
             return self._values[1]
         pa = self.plates_taa(x_pose) if self.opts.method == "paper" else self.plates_local(x_pose)
         legs = leg_state(self.am, pa)
-        v = _Values(pa, self._forces(pa, legs), legs.lengths, np.cos(legs.deflection), legs.rise,
-                    plate_deviation(self.am, pa).angles)  # fmt: skip
+        v = _Values(
+            pa,
+            self._forces(pa, legs),
+            legs.lengths,
+            np.cos(legs.deflection),
+            legs.rise,
+            plate_deviation(self.am, pa).angles,
+        )
         self._values = (key, v)
         self.evaluations += 1
         omega = self.opts.w1 * np.abs(v.forces).max() + self.opts.w2 * np.sqrt(np.sum(v.plate_angles**2))
@@ -274,8 +282,14 @@ class _Problem:
     # ----------------------------------------------------------- constraint rows (>= 0)
     def _geometric(self, v: _Values) -> np.ndarray:
         """Stroke, deflection and rise rows (:func:`leg_limit_margins`, ``limit_margin`` inside)."""
-        margins = leg_limit_margins(self.am.config.leg, v.lengths, v.cos_deflection, v.rise,
-                                    self.opts.limit_margin, rise_margin=self.opts.rise_margin)  # fmt: skip
+        margins = leg_limit_margins(
+            self.am.config.leg,
+            v.lengths,
+            v.cos_deflection,
+            v.rise,
+            self.opts.limit_margin,
+            rise_margin=self.opts.rise_margin,
+        )
         return margins.ravel()
 
     def _geometric_jac(self, d: PoseDerivatives, B: np.ndarray) -> np.ndarray:
@@ -456,8 +470,15 @@ def optimize_internal_poses(
     if motion is not None and converged and final_state.feasible and not acceptable(final_state):
         converged, singular = False, "the converged point moves a leg more than the motion step allows"
     success, message = _verdict(res, singular, converged, final_state, chosen, initial_state)
-    logger.info("optimize[%s]: %s, Ω %.4g -> %.4g in %.3f s, %d iterations",
-                opts.method, message, omega0, omega_chosen, elapsed, res.nit)  # fmt: skip
+    logger.info(
+        "optimize[%s]: %s, Ω %.4g -> %.4g in %.3f s, %d iterations",
+        opts.method,
+        message,
+        omega0,
+        omega_chosen,
+        elapsed,
+        res.nit,
+    )
     return OptimizeResult(
         success=success,
         message=message,
@@ -497,8 +518,14 @@ def _run_solver(
     from scipy.optimize import minimize  # on first use: fast start-up
 
     try:
-        res = minimize(fun, x0, jac=jac, method="SLSQP", constraints=[{"type": "ineq", **cons}],
-                       options={"maxiter": opts.max_iterations, "ftol": opts.ftol})  # fmt: skip
+        res = minimize(
+            fun,
+            x0,
+            jac=jac,
+            method="SLSQP",
+            constraints=[{"type": "ineq", **cons}],
+            options={"maxiter": opts.max_iterations, "ftol": opts.ftol},
+        )
         singular = ""
     except _SingularIterateError as exc:
         singular = f"stopped at a singular iterate: {exc}"
@@ -557,7 +584,17 @@ def _nothing_to_optimize(initial_state: StackState, omega0: float, method: str) 
             str(v) for v in initial_state.violations[:3]
         )
     return OptimizeResult(
-        success=initial_state.feasible, message=message, status=0, solver_message="", iterations=0,
-        evaluations=0, gradient_evaluations=0, time_s=0.0, initial=initial_state, optimized=initial_state,
-        objective_initial=omega0, objective_optimized=omega0, method=method,
-    )  # fmt: skip
+        success=initial_state.feasible,
+        message=message,
+        status=0,
+        solver_message="",
+        iterations=0,
+        evaluations=0,
+        gradient_evaluations=0,
+        time_s=0.0,
+        initial=initial_state,
+        optimized=initial_state,
+        objective_initial=omega0,
+        objective_optimized=omega0,
+        method=method,
+    )

@@ -189,12 +189,21 @@ def force_bars(
         if leg is not None:
             f = state.forces.ravel()
             pad = 0.04 * max(float(np.abs(s.forces).max()) for _, s in states)
-            for mask, marker, what in zip(leg_flags(state, leg), ("^", "D"), ("stroke end", "force bound"),
-                                          strict=True):  # fmt: skip
+            for mask, marker, what in zip(
+                leg_flags(state, leg), ("^", "D"), ("stroke end", "force bound"), strict=True
+            ):
                 hit = mask.ravel()
                 if hit.any():
-                    ax.plot(x[hit] + offset, f[hit] + np.sign(f[hit]) * pad, marker, color=colors.get(name, "k"),
-                            mec="k", ms=5, ls="none", label=f"{name}: at a {what}")  # fmt: skip
+                    ax.plot(
+                        x[hit] + offset,
+                        f[hit] + np.sign(f[hit]) * pad,
+                        marker,
+                        color=colors.get(name, "k"),
+                        mec="k",
+                        ms=5,
+                        ls="none",
+                        label=f"{name}: at a {what}",
+                    )
     ax.axhline(0.0, color="black", lw=0.8)
     if limits is not None:
         ax.axhline(limits[0], color=tension, ls="--", lw=0.8, label="tension limit")

@@ -168,8 +168,10 @@ def _paper_reduction(scn: Scenario) -> float:
 def figure_title(s: Scenario) -> str:
     """A scenario's figure title: its name and goal (position [m], rotation vector [deg])."""
     taa = s.goal_taa
-    return (f"{s.name}: goal ({', '.join(f'{x:.2f}' for x in taa[:3])}) m, "
-            f"rotation ({', '.join(f'{np.rad2deg(x):.0f}' for x in taa[3:])})°")  # fmt: skip
+    return (
+        f"{s.name}: goal ({', '.join(f'{x:.2f}' for x in taa[:3])}) m, "
+        f"rotation ({', '.join(f'{np.rad2deg(x):.0f}' for x in taa[3:])})°"
+    )
 
 
 def summary_table(outcomes: Sequence[ScenarioOutcome], markdown: bool = False) -> str:
@@ -255,8 +257,10 @@ def force_tables(outcome: ScenarioOutcome, markdown: bool = False) -> str:
     def half(values: Sequence) -> str:
         return "".join(f"{v:>9}" if isinstance(v, str) else f"{v:9.2f}" for v in values)
 
-    lines = [f"{outcome.scenario.title}: initial and optimized forces [N] (tension +)",
-             "leg " + half(sps) + "   |" + half(sps)]  # fmt: skip
+    lines = [
+        f"{outcome.scenario.title}: initial and optimized forces [N] (tension +)",
+        "leg " + half(sps) + "   |" + half(sps),
+    ]
     lines += [f"{i:>3} " + half(row[:n]) + "   |" + half(row[n:]) for i, row in enumerate(rows)]
     return "\n".join(lines)
 

@@ -386,17 +386,25 @@ class FollowResult:
 
     def to_dict(self) -> dict:
         """JSON of ``assembler-pin simulate --trajectory --json``."""
-        return {"followed": self.followed, "message": self.message, "seconds": float(self.times[-1]),
-                "max_ee_error_m": float(self.ee_error.max()),
-                "max_ee_rotation_error_rad": float(self.ee_rotation_error.max()),
-                "times": self.times.tolist(), "ee_error_m": self.ee_error.tolist(),
-                "max_abs_force": self.max_abs_force.tolist(),
-                "planned_max_abs_force": self.planned_max_abs_force.tolist(),
-                "saturated_actuators": self.saturated.tolist(), "final_forces": self.final_forces.tolist()}  # fmt: skip
+        return {
+            "followed": self.followed,
+            "message": self.message,
+            "seconds": float(self.times[-1]),
+            "max_ee_error_m": float(self.ee_error.max()),
+            "max_ee_rotation_error_rad": float(self.ee_rotation_error.max()),
+            "times": self.times.tolist(),
+            "ee_error_m": self.ee_error.tolist(),
+            "max_abs_force": self.max_abs_force.tolist(),
+            "planned_max_abs_force": self.planned_max_abs_force.tolist(),
+            "saturated_actuators": self.saturated.tolist(),
+            "final_forces": self.final_forces.tolist(),
+        }
 
     def __repr__(self) -> str:
-        return (f"FollowResult(followed={self.followed}, {self.times[-1]:.2f} s, EE off the plan by at most "
-                f"{1e3 * self.ee_error.max():.2f} mm, message={self.message!r})")  # fmt: skip
+        return (
+            f"FollowResult(followed={self.followed}, {self.times[-1]:.2f} s, EE off the plan by at most "
+            f"{1e3 * self.ee_error.max():.2f} mm, message={self.message!r})"
+        )
 
 
 def follow_trajectory(
@@ -456,11 +464,21 @@ def follow_trajectory(
     reasons = []
     if err_a.max() > tolerance:
         k = int(err_a.argmax())
-        reasons.append(f"EE {1e3 * err_a[k]:.2f} mm off the plan at t = {sample_times[k]:.2f} s "
-                       f"(> {1e3 * tolerance:g} mm)")  # fmt: skip
+        reasons.append(
+            f"EE {1e3 * err_a[k]:.2f} mm off the plan at t = {sample_times[k]:.2f} s (> {1e3 * tolerance:g} mm)"
+        )
     if sat_a.any():
         reasons.append(f"actuators at their force limit at {int((sat_a > 0).sum())} samples")
-    result = FollowResult(sample_times, err_a, np.array(rot), np.array(peak), planned, sat_a,
-                          stack.actuator_forces(), not reasons, "; ".join(reasons) or "followed")  # fmt: skip
+    result = FollowResult(
+        sample_times,
+        err_a,
+        np.array(rot),
+        np.array(peak),
+        planned,
+        sat_a,
+        stack.actuator_forces(),
+        not reasons,
+        "; ".join(reasons) or "followed",
+    )
     logger.info("follow: %s", result)
     return result

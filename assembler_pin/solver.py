@@ -92,9 +92,11 @@ class SolveResult:
         init = f"{self.initial.max_abs_force:.3f} N" if self.initial is not None else "-"
         opt = f"{self.optimized.max_abs_force:.3f} N" if self.optimized is not None else "-"
         times = ", ".join(f"{k} {1e3 * v:.0f} ms" for k, v in self.timing_s.items())
-        return (f"SolveResult(success={self.success}, goal {np.round(self.goal.translation, 4).tolist()} m, max|F| "
-                f"initial {init} → optimized {opt} (start {self.start}), {times}, "
-                f"message={self.message!r})")  # fmt: skip
+        return (
+            f"SolveResult(success={self.success}, goal {np.round(self.goal.translation, 4).tolist()} m, max|F| "
+            f"initial {init} → optimized {opt} (start {self.start}), {times}, "
+            f"message={self.message!r})"
+        )
 
     def to_dict(self) -> dict[str, Any]:
         """JSON of ``assembler-pin solve --json``."""
@@ -188,8 +190,9 @@ def solve(
     if best is None:
         why = "; ".join(f"{k}: {r.message}" for k, r in list(runs.items())[:3])
         prefix = "" if init.success else f"no valid initial condition ({init.message}); "
-        return SolveResult(goal, False, f"{prefix}no start reached a feasible pose ({why})", init, None, timing,
-                           None, runs)  # fmt: skip
+        return SolveResult(
+            goal, False, f"{prefix}no start reached a feasible pose ({why})", init, None, timing, None, runs
+        )
     message = f"{best.message} (from the {name} start)"
     if not init.success:
         message += f"; the helper arm found no valid initial condition: {init.message}"

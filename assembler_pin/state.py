@@ -68,9 +68,11 @@ class StackState:
         ee = self.plates.p[-1]
         kinds = sorted({v.kind for v in self.violations})
         verdict = "feasible" if self.feasible else f"{len(self.violations)} violations ({', '.join(kinds)})"
-        return (f"StackState({len(self.plates) - 1} platforms, EE at {np.round(ee, 4).tolist()} m, max|F| "
-                f"{self.max_abs_force:.3f} N, legs {self.leg_lengths.min():.4f}–{self.leg_lengths.max():.4f} m, "
-                f"{verdict})")  # fmt: skip
+        return (
+            f"StackState({len(self.plates) - 1} platforms, EE at {np.round(ee, 4).tolist()} m, max|F| "
+            f"{self.max_abs_force:.3f} N, legs {self.leg_lengths.min():.4f}–{self.leg_lengths.max():.4f} m, "
+            f"{verdict})"
+        )
 
     def to_dict(self) -> dict:
         """The JSON contract: plates, leg_lengths, forces, bottom_points, top_points,

@@ -89,9 +89,11 @@ class StaticsResult:
 
     def __repr__(self) -> str:
         n = self.forces.shape[0]
-        return (f"StaticsResult({n} platforms, max|F| {self.max_abs_force:.3f} N, mean|F| {self.mean_abs_force:.3f} N, "
-                f"base force {np.round(self.base_wrench[:3], 3).tolist()} N, worst condition "
-                f"{float(np.max(self.condition)):.3g}{', SINGULAR' if self.singular else ''})")  # fmt: skip
+        return (
+            f"StaticsResult({n} platforms, max|F| {self.max_abs_force:.3f} N, mean|F| {self.mean_abs_force:.3f} N, "
+            f"base force {np.round(self.base_wrench[:3], 3).tolist()} N, worst condition "
+            f"{float(np.max(self.condition)):.3g}{', SINGULAR' if self.singular else ''})"
+        )
 
 
 def _leg_jacobians_t(columns: np.ndarray, top_points: np.ndarray) -> np.ndarray:

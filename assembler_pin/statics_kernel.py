@@ -234,9 +234,17 @@ def resolve_backend(backend: str | None = None, stacks: int = 1) -> str:
 def _constants(am: AssemblerModel) -> np.ndarray:
     cfg, leg = am.config, am.config.leg
     return np.array(
-        [cfg.gravity, leg.motor_mass, leg.shaft_mass, leg.motor_com, leg.shaft_com, cfg.plate.mass,
-         cfg.payload.mass, cfg.payload.offset],
-    )  # fmt: skip
+        [
+            cfg.gravity,
+            leg.motor_mass,
+            leg.shaft_mass,
+            leg.motor_com,
+            leg.shaft_com,
+            cfg.plate.mass,
+            cfg.payload.mass,
+            cfg.payload.offset,
+        ],
+    )
 
 
 def _numpy_forces(am: AssemblerModel, R: np.ndarray, p: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -274,6 +282,13 @@ def closed_form_forces(
     forces = np.empty((B, n, 6))
     condition = np.empty((B, n))
     geo = am.geometry
-    _kernel(R, p, np.ascontiguousarray(geo.bottom_in_plate), np.ascontiguousarray(geo.top_in_plate),
-            _constants(am), forces, condition)  # fmt: skip
+    _kernel(
+        R,
+        p,
+        np.ascontiguousarray(geo.bottom_in_plate),
+        np.ascontiguousarray(geo.top_in_plate),
+        _constants(am),
+        forces,
+        condition,
+    )
     return forces, condition

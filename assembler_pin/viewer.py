@@ -527,31 +527,33 @@ class StackViewer:
         import html as html_lib
 
         tension, compression = self.force_range
-        items = [(_hex(TENSION_RGB), "leg in tension (+)"),
-                 (_hex(COMPRESSION_RGB), "leg in compression (−)"),
-                 (_hex(NEUTRAL_RGB), "leg at 0 N")]  # fmt: skip
+        items = [
+            (_hex(TENSION_RGB), "leg in tension (+)"),
+            (_hex(COMPRESSION_RGB), "leg in compression (−)"),
+            (_hex(NEUTRAL_RGB), "leg at 0 N"),
+        ]
         if self._ghosts:
             items.append((_hex(GHOST_RGBA[:3]), "initial pose (ghost)"))
         if any(r == "helper_arm" for r in self._roots):
             items.append((_hex(ARM_LINK_RGBA[:3]), "helper arm"))
         if self.state is not None and self.violating_legs(self.state):
-            items.append((_hex(VIOLATION_RGBA[:3]),
-                          "yellow ball: leg violating a limit"))  # fmt: skip
+            items.append((_hex(VIOLATION_RGBA[:3]), "yellow ball: leg violating a limit"))
         if getattr(self, "_carrier_name", None):
             items.append((_hex(CARRIER_RGBA[:3]), f"carrier arm: {self._carrier_name}"))
         if self.am.config.payload.mass > 0:
-            items.append((_hex(PAYLOAD_RGBA[:3]),
-                          f"payload {self.am.config.payload.mass:g} kg"))  # fmt: skip
+            items.append((_hex(PAYLOAD_RGBA[:3]), f"payload {self.am.config.payload.mass:g} kg"))
         legend = "".join(
             f'<div><span style="display:inline-block;width:12px;height:12px;background:{c};margin-right:6px;'
             f'border:1px solid #555"></span>{html_lib.escape(t)}</div>'
             for c, t in items
         )
         blue, gray, red = (_hex(rgb) for rgb in (COMPRESSION_RGB, NEUTRAL_RGB, TENSION_RGB))
-        bar = (f'<div id="assembler-colorbar" style="margin-top:8px">leg force [N]'
-               f'<div style="height:12px;width:220px;background:linear-gradient(to right,{blue},{gray},{red});'
-               f'border:1px solid #555"></div><div style="display:flex;justify-content:space-between;width:222px">'
-               f"<span>−{compression:.0f}</span><span>0</span><span>+{tension:.0f}</span></div></div>")  # fmt: skip
+        bar = (
+            f'<div id="assembler-colorbar" style="margin-top:8px">leg force [N]'
+            f'<div style="height:12px;width:220px;background:linear-gradient(to right,{blue},{gray},{red});'
+            f'border:1px solid #555"></div><div style="display:flex;justify-content:space-between;width:222px">'
+            f"<span>−{compression:.0f}</span><span>0</span><span>+{tension:.0f}</span></div></div>"
+        )
         title = html_lib.escape(self.title or "Assembler")
         return (
             '<div id="assembler-overlay" style="position:absolute;top:8px;left:8px;z-index:10;'

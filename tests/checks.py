@@ -89,9 +89,17 @@ def assert_feasible(am, state, goal: pin.SE3 | None = None, tol: float = 1e-9) -
     forces = solve_statics(am, state.plates).forces
     assert np.all(np.isfinite(forces))
     assert np.all(forces <= cfg.leg.max_tension) and np.all(forces >= -cfg.leg.max_compression)
-    lengths = np.array([[np.linalg.norm(
-        state.plates.R[j + 1] @ t + state.plates.p[j + 1] - state.plates.R[j] @ b - state.plates.p[j])
-        for b, t in zip(*design_anchors(cfg, j), strict=True)] for j in range(cfg.platforms)])  # fmt: skip
+    lengths = np.array(
+        [
+            [
+                np.linalg.norm(
+                    state.plates.R[j + 1] @ t + state.plates.p[j + 1] - state.plates.R[j] @ b - state.plates.p[j]
+                )
+                for b, t in zip(*design_anchors(cfg, j), strict=True)
+            ]
+            for j in range(cfg.platforms)
+        ]
+    )
     fk = stack_forward_kinematics(am, lengths).raise_if_failed()
     np.testing.assert_allclose(fk.as_matrices(), state.plates.as_matrices(), atol=1e-8)
 

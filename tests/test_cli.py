@@ -133,6 +133,10 @@ def test_cli_defaults_come_from_the_options_dataclasses():
     args = build_parser().parse_args(["solve", "--goal", "0", "0", "0.9", "0", "0", "0"])
     d, h = OptimizeOptions(), HelperArmOptions()
     assert (args.method, args.w1, args.w2, args.max_iterations, args.ftol) == (
-        d.method, d.w1, d.w2, d.max_iterations, d.ftol,
-    )  # fmt: skip
+        d.method,
+        d.w1,
+        d.w2,
+        d.max_iterations,
+        d.ftol,
+    )
     assert (args.d_step, args.max_attempts) == (h.d_step, h.max_attempts)

@@ -37,10 +37,19 @@ bad_scalars = st.one_of(
 )
 sections = {
     "plate": ["node_radius", "node_spacing_deg", "mass"],
-    "leg": ["min_length", "max_length", "motor_mass", "shaft_mass", "motor_com", "shaft_com",
-            "max_deflection_deg", "max_tension", "max_compression"],
+    "leg": [
+        "min_length",
+        "max_length",
+        "motor_mass",
+        "shaft_mass",
+        "motor_com",
+        "shaft_com",
+        "max_deflection_deg",
+        "max_tension",
+        "max_compression",
+    ],
     "payload": ["mass", "offset"],
-}  # fmt: skip
+}
 
 
 @st.composite
@@ -107,8 +116,13 @@ def test_config_mappings_raise_only_config_errors(doc):
         assert isinstance(exc, ap.ConfigError) and str(exc)
 
 
-matrix_entries = st.one_of(st.floats(allow_nan=True, allow_infinity=True), st.booleans(), st.text(max_size=3),
-                           st.just(None), st.sampled_from([1e308, -1e308]))  # fmt: skip
+matrix_entries = st.one_of(
+    st.floats(allow_nan=True, allow_infinity=True),
+    st.booleans(),
+    st.text(max_size=3),
+    st.just(None),
+    st.sampled_from([1e308, -1e308]),
+)
 plate_docs = st.one_of(
     bad_scalars,
     st.fixed_dictionaries({"plates": bad_scalars}),

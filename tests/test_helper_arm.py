@@ -313,9 +313,11 @@ def test_repair_jacobian_is_the_derivative_of_the_hinge(am):
     assert active.sum() >= 3
     h = 1e-6
     numeric = np.array(
-        [(_leg_hinge(am, plates(x + h * e), margin) - _leg_hinge(am, plates(x - h * e), margin)) / (2 * h)
-         for e in np.eye(x.size)]
-    ).T  # fmt: skip
+        [
+            (_leg_hinge(am, plates(x + h * e), margin) - _leg_hinge(am, plates(x - h * e), margin)) / (2 * h)
+            for e in np.eye(x.size)
+        ]
+    ).T
     analytic = _hinge_jacobian(am, plates(x), x, margin)
     np.testing.assert_allclose(analytic[active], numeric[active], atol=1e-7)
     assert np.all(analytic[value == 0.0] == 0.0)

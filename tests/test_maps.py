@@ -29,8 +29,10 @@ SMALL = "x=0.2:0.45:2,y=0.05,z=0.75:0.9:2"  # four reachable cells away from the
 def test_forces_are_affine_in_the_payload_mass(am):
     _, plates = random_reachable_plates(am, np.random.default_rng(3))
     models = PayloadModels(am)
-    f = {m: ap.solve_statics(ap.AssemblerModel.from_config({"payload": {"mass": m}}), plates).forces
-         for m in (0.0, 1.0, 7.3)}  # fmt: skip
+    f = {
+        m: ap.solve_statics(ap.AssemblerModel.from_config({"payload": {"mass": m}}), plates).forces
+        for m in (0.0, 1.0, 7.3)
+    }
     np.testing.assert_allclose(f[7.3], f[0.0] + 7.3 * (f[1.0] - f[0.0]), atol=1e-9)
     np.testing.assert_allclose(ap.solve_statics(models.at(7.3), plates).forces, f[7.3], atol=1e-12)
 
@@ -41,8 +43,12 @@ def test_capacity_matches_a_bisection_with_the_ordinary_solve(am):
     assert result.success and result.capacity_kg > am.config.payload.mass
     # independent: the statics of a model carrying exactly that payload, at the returned pose
     leg = am.config.leg
-    at_cap = ap.evaluate_state(ap.AssemblerModel.from_config({"payload": {"mass": result.capacity_kg}}),
-                               result.plates, goal=goal, tolerance=ap.GoalTolerance(1e-6, 1e-6))  # fmt: skip
+    at_cap = ap.evaluate_state(
+        ap.AssemblerModel.from_config({"payload": {"mass": result.capacity_kg}}),
+        result.plates,
+        goal=goal,
+        tolerance=ap.GoalTolerance(1e-6, 1e-6),
+    )
     assert at_cap.feasible or all(v.kind in ("tension", "compression") for v in at_cap.violations)
     peak = max(at_cap.forces.max() / leg.max_tension, -at_cap.forces.min() / leg.max_compression)
     assert peak == pytest.approx(1.0, abs=1e-6)  # one leg exactly at its limit
@@ -69,8 +75,13 @@ def test_grid_specs():
     assert [c.id for c in cells] == list(range(8)) and cells[3].index == (1, 0, 0, 1)
     assert cells[3].rotation == pytest.approx((0.0, np.deg2rad(30.0), 0.0))
     assert cells[3].goal().translation == pytest.approx([0.1, 0.0, 0.8])
-    for bad, match in (("w=1", "AXIS"), ("x=0:1", "START:STOP:COUNT"), ("x=0:1:0", "COUNT"), ("x=1,x=2", "twice"),
-                       ("", "empty")):  # fmt: skip
+    for bad, match in (
+        ("w=1", "AXIS"),
+        ("x=0:1", "START:STOP:COUNT"),
+        ("x=0:1:0", "COUNT"),
+        ("x=1,x=2", "twice"),
+        ("", "empty"),
+    ):
         with pytest.raises(GridError, match=match):
             parse_grid(bad)
     with pytest.raises(GridError, match="three numbers"):
@@ -114,12 +125,22 @@ def test_map_on_a_dask_cluster_of_separate_processes_equals_the_serial_run(tmp_p
     address = f"tcp://127.0.0.1:{port}"
     dask = DASK
     logs = open(tmp_path / "cluster.log", "w")  # closed in finally
-    procs = [subprocess.Popen([dask, "scheduler", "--host", "127.0.0.1", "--port", str(port), "--no-dashboard"],
-                              stdout=logs, stderr=subprocess.STDOUT)]  # fmt: skip
+    procs = [
+        subprocess.Popen(
+            [dask, "scheduler", "--host", "127.0.0.1", "--port", str(port), "--no-dashboard"],
+            stdout=logs,
+            stderr=subprocess.STDOUT,
+        )
+    ]
     try:
         for _ in range(2):
-            procs.append(subprocess.Popen([dask, "worker", address, "--nthreads", "1", "--nworkers", "1",
-                                           "--no-dashboard"], stdout=logs, stderr=subprocess.STDOUT))  # fmt: skip
+            procs.append(
+                subprocess.Popen(
+                    [dask, "worker", address, "--nthreads", "1", "--nworkers", "1", "--no-dashboard"],
+                    stdout=logs,
+                    stderr=subprocess.STDOUT,
+                )
+            )
         from distributed import Client
 
         with Client(address, timeout="60s") as client:
@@ -147,8 +168,22 @@ def test_map_on_a_dask_cluster_of_separate_processes_equals_the_serial_run(tmp_p
 
 
 def test_cli_map_and_its_errors(tmp_path, capsys):
-    assert main(["map", "--grid", "x=0.3,y=0.05,z=0.8:0.85:2", "--workers", "0", "--out", str(tmp_path / "m"),
-                 "--no-progress", "--json"]) == 0  # fmt: skip
+    assert (
+        main(
+            [
+                "map",
+                "--grid",
+                "x=0.3,y=0.05,z=0.8:0.85:2",
+                "--workers",
+                "0",
+                "--out",
+                str(tmp_path / "m"),
+                "--no-progress",
+                "--json",
+            ]
+        )
+        == 0
+    )
     out = capsys.readouterr().out
     assert '"computed": 2' in out and '"reachable": 2' in out
     assert main(["map", "--grid", "q=1", "--out", str(tmp_path / "m")]) == 2

@@ -71,8 +71,9 @@ def test_waypoint_files(tmp_path):
     (tmp_path / "w.csv").write_text("x,y,z,rx,ry,rz,t\n0,0,0.9,0,0,0,0\n0.1,0,0.9,0,0,0,2\n")
     path = read_waypoints(tmp_path / "w.csv")
     assert path.times == (0.0, 2.0) and np.allclose(path.waypoints[1].translation, [0.1, 0, 0.9])
-    (tmp_path / "w.json").write_text(json.dumps({"waypoints": [[0, 0, 0.9, 0, 0, 0], [0, 0, 0.9, 0, 0, 90]],
-                                                 "degrees": True}))  # fmt: skip
+    (tmp_path / "w.json").write_text(
+        json.dumps({"waypoints": [[0, 0, 0.9, 0, 0, 0], [0, 0, 0.9, 0, 0, 90]], "degrees": True})
+    )
     path = read_waypoints(tmp_path / "w.json", kind="linear")
     assert np.linalg.norm(pin.log3(path.waypoints[1].rotation)) == pytest.approx(np.pi / 2)
     (tmp_path / "bad.csv").write_text("0,0,0.9,0,0\n")
@@ -136,8 +137,9 @@ def test_trajectory_files_round_trip(tmp_path, planned):
 
 def test_time_law_scales_with_the_limits(am, planned):
     plan, traj = planned.plan, planned.trajectory
-    slow = time_parametrize(am, plan, rate=20.0, max_speed=am.config.leg.max_speed / 2,
-                            max_acceleration=am.config.leg.max_acceleration / 4)  # fmt: skip
+    slow = time_parametrize(
+        am, plan, rate=20.0, max_speed=am.config.leg.max_speed / 2, max_acceleration=am.config.leg.max_acceleration / 4
+    )
     assert slow.duration == pytest.approx(2 * traj.duration, rel=1e-6)
     assert verify_trajectory(am, slow) == []
 
@@ -195,8 +197,14 @@ def test_trajectory_states_rebuild_the_file_by_fk(am, tmp_path, planned):
     fig = trajectory_plot(am, back, states, times, "test")
     lines = {round(float(line.get_ydata()[0]), 6) for ax in fig.axes for line in ax.lines if len(line.get_ydata()) == 2}
     leg = am.config.leg
-    assert {leg.min_length, leg.max_length, leg.max_speed, -leg.max_speed, leg.max_tension,
-            -leg.max_compression} <= lines  # fmt: skip
+    assert {
+        leg.min_length,
+        leg.max_length,
+        leg.max_speed,
+        -leg.max_speed,
+        leg.max_tension,
+        -leg.max_compression,
+    } <= lines
     assert len(fig.axes) == 4 * am.n and fig.get_suptitle().startswith("test")  # a row per platform
 
 
@@ -211,8 +219,7 @@ def test_compare_against_simple_plans(am):
     first, last = c.motion.plan.states[0], c.motion.plan.states[-1]
     assert linear.total_leg_travel == pytest.approx(np.abs(last.leg_lengths - first.leg_lengths).sum(), rel=1e-9)
     # ... and the EE is not steered: independent FK of the mid lengths puts it off the path
-    fk = stack_forward_kinematics(am, 0.5 * (first.leg_lengths + last.leg_lengths), base=am.home[0],
-                                  guess=first.plates)  # fmt: skip
+    fk = stack_forward_kinematics(am, 0.5 * (first.leg_lengths + last.leg_lengths), base=am.home[0], guess=first.plates)
     mid_off = min(np.linalg.norm(fk.plates.p[-1] - path.at(u).translation) for u in np.linspace(0, 1, 201))
     assert linear.max_path_deviation >= mid_off - 1e-6 > 2e-3 and linear.valid_fraction < 1.0
     for f in c.figures.values():

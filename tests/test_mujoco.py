@@ -177,8 +177,9 @@ def test_hold_pose_refuses_bad_arguments(am, stack):
 
 
 def _cli(*args: str, stdin: str | None = None) -> subprocess.CompletedProcess:
-    return subprocess.run([sys.executable, "-m", "assembler_pin.cli", *args], capture_output=True, text=True,
-                          input=stdin, timeout=300)  # fmt: skip
+    return subprocess.run(
+        [sys.executable, "-m", "assembler_pin.cli", *args], capture_output=True, text=True, input=stdin, timeout=300
+    )
 
 
 def test_cli_export_mjcf_and_simulate(tmp_path, am):
@@ -208,8 +209,12 @@ def test_servos_follow_a_planned_trajectory(am, tmp_path):
     assert result.followed, result.message
     assert result.ee_error.max() < 5e-3 and not result.saturated.any()
     # after settling, MuJoCo's servos carry what our statics say the final pose needs
-    final = ap.evaluate_state(am, ap.stack_forward_kinematics(am, motion.trajectory.lengths[-1], base=am.home[0],
-                                                              guess=motion.plan.states[-1].plates).plates)  # fmt: skip
+    final = ap.evaluate_state(
+        am,
+        ap.stack_forward_kinematics(
+            am, motion.trajectory.lengths[-1], base=am.home[0], guess=motion.plan.states[-1].plates
+        ).plates,
+    )
     gap = np.abs(result.final_forces - final.forces).max()
     assert gap <= max(0.01 * final.max_abs_force, 0.5), gap
     path = motion.trajectory.write(tmp_path / "t.csv")

@@ -140,7 +140,15 @@ def test_figures_say_what_they_show(am):
     assert [ax.get_title() for ax in views.axes] == ["side view (x–z)", "front view (y–z)", "top view (x–y)"]
     assert views.axes[0].get_legend() is None  # one legend, below the views
     labels = {t.get_text() for t in views.legends[0].get_texts()}
-    assert {"initial", "optimized legs", "optimized plates", "plate centres", "helper arm", "helper arm joints",
-            "EE goal", "floor"} <= labels  # fmt: skip
+    assert {
+        "initial",
+        "optimized legs",
+        "optimized plates",
+        "plate centres",
+        "helper arm",
+        "helper arm joints",
+        "EE goal",
+        "floor",
+    } <= labels
     star = next(ln for ln in views.axes[0].lines if ln.get_label() == "EE goal")
     assert np.allclose([star.get_xdata()[0], star.get_ydata()[0]], goal.translation[[0, 2]])

@@ -55,8 +55,9 @@ def test_a_non_finite_force_is_never_feasible(am):
     for bad in (np.nan, np.inf):
         forces = state.forces.copy()
         forces[1, 2] = bad
-        statics = StaticsResult(forces, state.statics.ball_forces, state.statics.base_wrench,
-                                state.statics.condition, False)  # fmt: skip
+        statics = StaticsResult(
+            forces, state.statics.ball_forces, state.statics.base_wrench, state.statics.condition, False
+        )
         kinds = {v.kind for v in evaluate_constraints(am.config, state.legs, statics)}
         assert "non_finite_force" in kinds
 

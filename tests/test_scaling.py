@@ -61,8 +61,10 @@ def test_a_64_platform_stack_builds_and_holds_its_weight():
     # at home each platform's six legs share the weight above their top plate equally
     cfg = am.config
     axial_z = home_directions(cfg, 0)[0, 2]
-    above = [cfg.payload.mass + (64 - j) * cfg.plate.mass + 6 * (63 - j) * (cfg.leg.motor_mass + cfg.leg.shaft_mass)
-             for j in range(64)]  # fmt: skip
+    above = [
+        cfg.payload.mass + (64 - j) * cfg.plate.mass + 6 * (63 - j) * (cfg.leg.motor_mass + cfg.leg.shaft_mass)
+        for j in range(64)
+    ]
     # legs' own weight adds to the compression; bounds: without and with the whole leg weight
     low = -np.array(above) * cfg.gravity / (6 * axial_z)
     legs = (cfg.leg.motor_mass + cfg.leg.shaft_mass) * cfg.gravity / axial_z

@@ -15,8 +15,17 @@ from assembler_pin.optimize import OptimizeOptions
 from assembler_pin.scenarios import SCENARIOS
 from assembler_pin.solver import solve
 
-STATE_KEYS = ["plates", "leg_lengths", "forces", "bottom_points", "top_points", "max_abs_force",
-              "mean_abs_force", "feasible", "violations"]  # fmt: skip
+STATE_KEYS = [
+    "plates",
+    "leg_lengths",
+    "forces",
+    "bottom_points",
+    "top_points",
+    "max_abs_force",
+    "mean_abs_force",
+    "feasible",
+    "violations",
+]
 
 
 def test_solve_round_trip_and_improvement(am):
@@ -53,8 +62,7 @@ def test_cli_solve_optimizes_by_default(capsys):
     goal = SCENARIOS["ninety_degrees"].goal_taa
     assert main(["solve", "--goal", *map(str, goal), "--json"]) == 0
     doc = json.loads(capsys.readouterr().out)
-    assert list(doc)[:8] == ["goal", "success", "message", "initial", "optimized", "objective", "timing_s",
-                             "optimizer"]  # fmt: skip
+    assert list(doc)[:8] == ["goal", "success", "message", "initial", "optimized", "objective", "timing_s", "optimizer"]
     assert doc["success"] is True
     assert list(doc["optimized"])[: len(STATE_KEYS)] == STATE_KEYS
     assert doc["objective"]["optimized"] <= doc["objective"]["initial"]

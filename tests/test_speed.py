@@ -127,8 +127,10 @@ def test_payload_variant_statics_equal_a_model_built_with_that_payload(am):
         )
         assert variant._data is am._data and variant.helper_arms is am.helper_arms
         for _ in range(3):
-            plates = [m * pin.exp6(np.concatenate([rng.uniform(-0.01, 0.01, 3), rng.uniform(-0.05, 0.05, 3)]))
-                      for m in am.home]  # fmt: skip
+            plates = [
+                m * pin.exp6(np.concatenate([rng.uniform(-0.01, 0.01, 3), rng.uniform(-0.05, 0.05, 3)]))
+                for m in am.home
+            ]
             mine, ref = solve_statics(variant, plates), solve_statics(built, plates)
             np.testing.assert_allclose(mine.forces, ref.forces, atol=1e-10, rtol=0)
             np.testing.assert_allclose(mine.base_wrench, ref.base_wrench, atol=1e-10, rtol=0)

@@ -27,8 +27,10 @@ def test_closure_jacobian_equals_pinocchio_constraint_jacobian(am, random_poses)
     reference = pin.getConstraintsJacobian(model, data, am.constraint_models, am.constraint_datas)
     blocks = closure_jacobian_blocks(am, plates)
     for j in range(am.n):
-        rows = [-data.oMi[int(am.shaft_joint_ids[j, i])].rotation @ reference[3 * (6 * j + i) : 3 * (6 * j + i) + 3]
-                for i in range(6)]  # fmt: skip
+        rows = [
+            -data.oMi[int(am.shaft_joint_ids[j, i])].rotation @ reference[3 * (6 * j + i) : 3 * (6 * j + i) + 3]
+            for i in range(6)
+        ]
         ref = np.vstack(rows)[:, am.platform_rows_v[j]]  # Pinocchio: anchor minus shaft, in the shaft's frame
         ours = blocks[j]
         np.testing.assert_allclose(ours[:, 18:], ref[:, 18:], atol=1e-13)  # top plate's free-flyer

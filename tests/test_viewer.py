@@ -578,17 +578,27 @@ def test_page_overlay_names_what_is_drawn_and_the_color_scale_follows_the_option
         end = TENSION_RGB if state.forces[j, i] > 0 else COMPRESSION_RGB
         assert np.allclose(force_color(state.forces[j, i], *v.force_range), end)
         v.display(am.home, force_scale="auto")  # max|F| but at least 10 % of the smaller limit
-        assert v.force_range[0] == pytest.approx(max(evaluate_state(am, am.home).max_abs_force,
-                                                     0.1 * min(leg.max_tension, leg.max_compression)))  # fmt: skip
+        assert v.force_range[0] == pytest.approx(
+            max(evaluate_state(am, am.home).max_abs_force, 0.1 * min(leg.max_tension, leg.max_compression))
+        )
         v.show_ghost(bent)
         v.show_helper_arm(np.array([[0, 0, 0], [0.1, 0, 0.3], [0.2, 0, 0.6]]))
         v.set_title("Scenario test — max|F| initial 1 → optimized 2 N")
         html = v.static_html(tmp_path / "page.html")
         with pytest.raises(ViewerError, match="force_scale"):
             v.display(am.home, force_scale="huge")
-    for element in ('id="assembler-overlay"', 'id="assembler-title"', 'id="assembler-legend"',
-                    'id="assembler-colorbar"', "Scenario test", "initial pose (ghost)", "helper arm",
-                    "leg in tension", "leg in compression", "payload 5 kg"):  # fmt: skip
+    for element in (
+        'id="assembler-overlay"',
+        'id="assembler-title"',
+        'id="assembler-legend"',
+        'id="assembler-colorbar"',
+        "Scenario test",
+        "initial pose (ghost)",
+        "helper arm",
+        "leg in tension",
+        "leg in compression",
+        "payload 5 kg",
+    ):
         assert element in html, element
     low, high = v.force_range
     assert f"−{low:.0f}" in html and f"+{high:.0f}" in html

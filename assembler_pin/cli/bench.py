@@ -24,13 +24,18 @@ def add_parser(add) -> None:
     p.add_argument("--no-optimize", action="store_true", help="skip the optimization comparison (slow: ~10 s)")
     p.add_argument("--quick", action="store_true", help="minimal goal sets: a smoke test, not figures")
     p.add_argument("--grid", action="store_true", help="also solve the 120-goal level-EE grid (~2 min)")
-    p.add_argument("--platforms-sweep", action="store_true",
-                   help="only the cost of each stack size n = 1..64: build, memory, statics, FK, "
-                        "initial condition, optimization (~5 min)")  # fmt: skip
-    p.add_argument("--maps", action="store_true",
-                   help="only the capability map's cells/s on 1 and 2 local Dask workers (~1 min)")  # fmt: skip
-    p.add_argument("--mujoco", action="store_true",
-                   help="only MuJoCo against our statics: inverse statics and held poses (~15 s)")  # fmt: skip
+    p.add_argument(
+        "--platforms-sweep",
+        action="store_true",
+        help="only the cost of each stack size n = 1..64: build, memory, statics, FK, "
+        "initial condition, optimization (~5 min)",
+    )
+    p.add_argument(
+        "--maps", action="store_true", help="only the capability map's cells/s on 1 and 2 local Dask workers (~1 min)"
+    )
+    p.add_argument(
+        "--mujoco", action="store_true", help="only MuJoCo against our statics: inverse statics and held poses (~15 s)"
+    )
     p.add_argument(
         "--truss",
         action="store_true",
@@ -92,8 +97,10 @@ def run(args: argparse.Namespace) -> int:
             f"{'scenario':<24}{'slsqp s':>9}{'paper s':>9}{'speedup':>9}{'Ω initial':>11}{'Ω slsqp':>9}{'Ω paper':>9}"
         )
         for name, v in scenarios.items():
-            print(f"{name:<24}{v['slsqp_s']:9.3f}{v['paper_s']:9.3f}{v['speedup']:9.1f}"
-                  f"{v['initial_objective']:11.2f}{v['slsqp_objective']:9.2f}{v['paper_objective']:9.2f}")  # fmt: skip
+            print(
+                f"{name:<24}{v['slsqp_s']:9.3f}{v['paper_s']:9.3f}{v['speedup']:9.1f}"
+                f"{v['initial_objective']:11.2f}{v['slsqp_objective']:9.2f}{v['paper_objective']:9.2f}"
+            )
     return 0
 
 

@@ -241,8 +241,14 @@ def optimize_options(args: argparse.Namespace):
             raise CLIError("--ee-tolerance POSITION ROTATION (ee_tolerance) must be finite numbers > 0 (m, rad)")
         ee = GoalTolerance(position=pos, rotation=rot)
     try:
-        return OptimizeOptions(method=args.method, w1=args.w1, w2=args.w2, ee_tolerance=ee,
-                               max_iterations=args.max_iterations, ftol=args.ftol)  # fmt: skip
+        return OptimizeOptions(
+            method=args.method,
+            w1=args.w1,
+            w2=args.w2,
+            ee_tolerance=ee,
+            max_iterations=args.max_iterations,
+            ftol=args.ftol,
+        )
     except ValueError as exc:
         raise CLIError(str(exc)) from None
 
@@ -251,13 +257,25 @@ def add_carrier_arguments(p: argparse.ArgumentParser, note: str = "") -> None:
     """``--carrier NAME``, ``--carrier-q`` and ``--mount``, read by :func:`carrier_from_args`."""
     from ..choices import CARRIER_NAMES
 
-    p.add_argument("--carrier", metavar="NAME",
-                   help="mount the stack on a carrier arm from example-robot-data: "
-                        f"{', '.join(CARRIER_NAMES)}{note}")  # fmt: skip
-    p.add_argument("--carrier-q", nargs="+", type=float, metavar="Q",
-                   help="the carrier's joint angles [rad] (default: its upright configuration)")  # fmt: skip
-    p.add_argument("--mount", nargs=6, type=float, metavar=("X", "Y", "Z", "RX", "RY", "RZ"),
-                   help="base plate pose in the carrier's tool frame [m, rad] (default identity)")  # fmt: skip
+    p.add_argument(
+        "--carrier",
+        metavar="NAME",
+        help=f"mount the stack on a carrier arm from example-robot-data: {', '.join(CARRIER_NAMES)}{note}",
+    )
+    p.add_argument(
+        "--carrier-q",
+        nargs="+",
+        type=float,
+        metavar="Q",
+        help="the carrier's joint angles [rad] (default: its upright configuration)",
+    )
+    p.add_argument(
+        "--mount",
+        nargs=6,
+        type=float,
+        metavar=("X", "Y", "Z", "RX", "RY", "RZ"),
+        help="base plate pose in the carrier's tool frame [m, rad] (default identity)",
+    )
 
 
 def carrier_from_args(args: argparse.Namespace):
@@ -277,22 +295,31 @@ def carrier_from_args(args: argparse.Namespace):
 def format_carrier(carrier, statics) -> str:
     """The carrier's joint torques against their effort limits, and what binds."""
     lines = [f"carrier {carrier.name}: joint torques [N·m] (effort limit, use)"]
-    for k, (tau, limit, ratio) in enumerate(zip(statics.torques, carrier.effort_limit, statics.torque_ratio,
-                                                strict=True)):  # fmt: skip
+    for k, (tau, limit, ratio) in enumerate(
+        zip(statics.torques, carrier.effort_limit, statics.torque_ratio, strict=True)
+    ):
         lines.append(f"  joint {k}: {tau:9.3f}  ({limit:g}, {100 * ratio:5.1f} %)")
-    lines.append(f"stack at {100 * statics.stack_ratio:.1f} % of its force limit, carrier at "
-                 f"{100 * statics.carrier_ratio:.1f} % of its effort limit: {statics.binding} binds; "
-                 f"within every limit: {'yes' if statics.within_limits else 'NO'}")  # fmt: skip
+    lines.append(
+        f"stack at {100 * statics.stack_ratio:.1f} % of its force limit, carrier at "
+        f"{100 * statics.carrier_ratio:.1f} % of its effort limit: {statics.binding} binds; "
+        f"within every limit: {'yes' if statics.within_limits else 'NO'}"
+    )
     return "\n".join(lines)
 
 
 def add_goal_arguments(group: argparse._MutuallyExclusiveGroup, note: str = "") -> None:
     """``--goal`` (rotation vector in rad) and ``--goal-deg``, read by :func:`goal_from_args`."""
     taa = ("X", "Y", "Z", "RX", "RY", "RZ")
-    group.add_argument("--goal", nargs=6, type=float, metavar=taa,
-                       help="EE goal: position [m] and rotation vector [rad], world frame" + note)  # fmt: skip
-    group.add_argument("--goal-deg", nargs=6, type=float, metavar=taa,
-                       help="as --goal with the rotation vector in degrees")  # fmt: skip
+    group.add_argument(
+        "--goal",
+        nargs=6,
+        type=float,
+        metavar=taa,
+        help="EE goal: position [m] and rotation vector [rad], world frame" + note,
+    )
+    group.add_argument(
+        "--goal-deg", nargs=6, type=float, metavar=taa, help="as --goal with the rotation vector in degrees"
+    )
 
 
 def add_optimize_arguments(p: argparse.ArgumentParser) -> None:
@@ -300,16 +327,30 @@ def add_optimize_arguments(p: argparse.ArgumentParser) -> None:
     from ..options import METHODS, OptimizeOptions
 
     d = OptimizeOptions()
-    p.add_argument("--method", choices=METHODS, default=d.method,
-                   help=f"slsqp: smooth epigraph form, analytic gradients; paper: the paper's non-smooth objective "
-                        f"with finite differences (default {d.method})")  # fmt: skip
+    p.add_argument(
+        "--method",
+        choices=METHODS,
+        default=d.method,
+        help=f"slsqp: smooth epigraph form, analytic gradients; paper: the paper's non-smooth objective "
+        f"with finite differences (default {d.method})",
+    )
     p.add_argument("--w1", type=float, default=d.w1, help=f"weight of max|F| [1/N] (default {d.w1:g})")
-    p.add_argument("--w2", type=float, default=d.w2,
-                   help=f"weight of the plate deviation term [1/rad] (default {d.w2:g})")  # fmt: skip
-    p.add_argument("--ee-tolerance", type=float, nargs=2, metavar=("POSITION", "ROTATION"),
-                   help="let the EE move this far from the goal [m, rad] (default: fixed at the goal)")  # fmt: skip
-    p.add_argument("--max-iterations", type=int, default=d.max_iterations,
-                   help=f"solver iteration limit (default {d.max_iterations})")  # fmt: skip
+    p.add_argument(
+        "--w2", type=float, default=d.w2, help=f"weight of the plate deviation term [1/rad] (default {d.w2:g})"
+    )
+    p.add_argument(
+        "--ee-tolerance",
+        type=float,
+        nargs=2,
+        metavar=("POSITION", "ROTATION"),
+        help="let the EE move this far from the goal [m, rad] (default: fixed at the goal)",
+    )
+    p.add_argument(
+        "--max-iterations",
+        type=int,
+        default=d.max_iterations,
+        help=f"solver iteration limit (default {d.max_iterations})",
+    )
     p.add_argument("--ftol", type=float, default=d.ftol, help=f"solver tolerance on the objective (default {d.ftol:g})")
 
 
@@ -318,10 +359,20 @@ def add_helper_arm_arguments(p: argparse.ArgumentParser) -> None:
     from ..options import HelperArmOptions
 
     d = HelperArmOptions()
-    p.add_argument("--d-step", type=float, default=d.d_step, metavar="M",
-                   help=f"helper-arm link-length scan step [m] (default {d.d_step:g})")  # fmt: skip
-    p.add_argument("--max-attempts", type=int, default=d.max_attempts, metavar="N",
-                   help=f"helper-arm recursion limit: link lengths tried (default {d.max_attempts})")  # fmt: skip
+    p.add_argument(
+        "--d-step",
+        type=float,
+        default=d.d_step,
+        metavar="M",
+        help=f"helper-arm link-length scan step [m] (default {d.d_step:g})",
+    )
+    p.add_argument(
+        "--max-attempts",
+        type=int,
+        default=d.max_attempts,
+        metavar="N",
+        help=f"helper-arm recursion limit: link lengths tried (default {d.max_attempts})",
+    )
 
 
 def finite_range(values: np.ndarray) -> list[float] | None:

@@ -16,15 +16,28 @@ if TYPE_CHECKING:
 def add_parser(add) -> None:
     """Register the ``map`` subcommand (``add`` makes a subparser with ``--config``)."""
     p = add("map", "capability map: reachability, optimized max|F|, payload capacity per cell (Dask, resumable)")
-    p.add_argument("--grid", required=True, metavar="SPEC",
-                   help="EE positions [m]: AXIS=VALUE or START:STOP:COUNT, e.g. x=0:0.6:10,y=0,z=0.5:1:10")  # fmt: skip
-    p.add_argument("--orientations", metavar="SPEC",
-                   help='EE rotation vectors in degrees, e.g. "0 0 0; 0 30 0" (default level)')  # fmt: skip
-    p.add_argument("--sweep", nargs="+", metavar="FILE",
-                   help="design sweep: the map of each configuration file (config column: its name)")  # fmt: skip
+    p.add_argument(
+        "--grid",
+        required=True,
+        metavar="SPEC",
+        help="EE positions [m]: AXIS=VALUE or START:STOP:COUNT, e.g. x=0:0.6:10,y=0,z=0.5:1:10",
+    )
+    p.add_argument(
+        "--orientations", metavar="SPEC", help='EE rotation vectors in degrees, e.g. "0 0 0; 0 30 0" (default level)'
+    )
+    p.add_argument(
+        "--sweep",
+        nargs="+",
+        metavar="FILE",
+        help="design sweep: the map of each configuration file (config column: its name)",
+    )
     p.add_argument("--out", required=True, metavar="DIR", help="map directory (Parquet parts; a rerun extends it)")
-    p.add_argument("--workers", type=int, default=None,
-                   help="local worker processes (default: the machine's cores; 0: here, no Dask)")  # fmt: skip
+    p.add_argument(
+        "--workers",
+        type=int,
+        default=None,
+        help="local worker processes (default: the machine's cores; 0: here, no Dask)",
+    )
     p.add_argument("--scheduler", metavar="ADDRESS", help="an existing Dask scheduler, e.g. tcp://10.0.0.5:8786")
     p.add_argument("--batch-size", type=int, default=None, metavar="N", help="cells per task (default automatic)")
     p.add_argument("--png", metavar="FILE", help="heatmap slices: reachability, max|F|, capacity")
@@ -83,8 +96,9 @@ def _pictures(args: argparse.Namespace, table, configs: list, doc: dict) -> None
         with StackViewer(am) as viewer:
             viewer.display(am.home)
             lo, hi = show_map_points(viewer, table, config=configs[0][0])
-            viewer.set_title(f"Capability map: payload capacity {lo:.1f} (light) – {hi:.1f} kg (dark); "
-                             "gray: not reachable")  # fmt: skip
+            viewer.set_title(
+                f"Capability map: payload capacity {lo:.1f} (light) – {hi:.1f} kg (dark); gray: not reachable"
+            )
             doc["html"] = str(Path(args.html).resolve())
             viewer.static_html(doc["html"])
 
@@ -118,17 +132,27 @@ def run(args: argparse.Namespace) -> int:
     reach = np.asarray(table.column("reachable").to_pylist(), dtype=bool)
     cap = np.asarray(table.column("capacity_kg").to_pylist(), dtype=float)
     force = np.asarray(table.column("max_abs_force").to_pylist(), dtype=float)
-    doc: dict[str, Any] = {"out": str(Path(args.out)), "cells": len(grid) * len(configs), "computed": run.computed,
-           "already_done": run.skipped, "workers": run.workers, "time_s": run.time_s,
-           "cells_per_s": run.cells_per_second, "reachable": int(reach.sum()),
-           "max_abs_force_range": finite_range(force), "capacity_kg_range": finite_range(cap)}  # fmt: skip
+    doc: dict[str, Any] = {
+        "out": str(Path(args.out)),
+        "cells": len(grid) * len(configs),
+        "computed": run.computed,
+        "already_done": run.skipped,
+        "workers": run.workers,
+        "time_s": run.time_s,
+        "cells_per_s": run.cells_per_second,
+        "reachable": int(reach.sum()),
+        "max_abs_force_range": finite_range(force),
+        "capacity_kg_range": finite_range(cap),
+    }
     if args.png or args.html:
         _pictures(args, table, configs, doc)
     if args.json:
         print(dumps(doc))
         return 0
-    print(f"map: {doc['computed']} cells computed, {doc['already_done']} already in {doc['out']}; "
-          f"{run.workers or 'no'} workers, {run.time_s:.1f} s ({run.cells_per_second:.2f} cells/s)")  # fmt: skip
+    print(
+        f"map: {doc['computed']} cells computed, {doc['already_done']} already in {doc['out']}; "
+        f"{run.workers or 'no'} workers, {run.time_s:.1f} s ({run.cells_per_second:.2f} cells/s)"
+    )
     print(f"reachable: {doc['reachable']} of {len(reach)} cells")
     if doc["max_abs_force_range"]:
         lo, hi = doc["max_abs_force_range"]

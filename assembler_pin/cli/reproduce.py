@@ -49,8 +49,10 @@ def run(args: argparse.Namespace) -> int:
     am = AssemblerModel.from_config(config_from_args(args))
     with progress_for(args, "reproduce") as prog:
         outcomes = run_scenarios(am, names, options, progress=prog)
-    print(f"The paper's scenarios on {am.n} platforms, payload {am.config.payload.mass:g} kg "
-          f"at {am.config.payload.offset:g} m (forces in N, tension positive)\n")  # fmt: skip
+    print(
+        f"The paper's scenarios on {am.n} platforms, payload {am.config.payload.mass:g} kg "
+        f"at {am.config.payload.offset:g} m (forces in N, tension positive)\n"
+    )
     print(summary_table(outcomes))
     for outcome in outcomes:
         print()

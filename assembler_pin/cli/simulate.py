@@ -27,8 +27,13 @@ def add_parser(add) -> None:
     src.add_argument("--trajectory", metavar="FILE", help="run a trajectory written by 'plan --out' on the servos")
     p.add_argument("--seconds", type=float, default=2.0, help="simulated time [s] (default 2)")
     p.add_argument("--samples", type=int, default=50, help="stored samples (default 50)")
-    p.add_argument("--drift-tolerance", type=float, default=5.0, metavar="MM",
-                   help="largest EE displacement of a held pose [mm] (default 5)")  # fmt: skip
+    p.add_argument(
+        "--drift-tolerance",
+        type=float,
+        default=5.0,
+        metavar="MM",
+        help="largest EE displacement of a held pose [mm] (default 5)",
+    )
     p.add_argument("--json", action="store_true", help="print one JSON object")
     p.add_argument("--html", metavar="FILE", help="also write the simulated motion as a standalone viewer page")
     p.set_defaults(func=run)
@@ -57,8 +62,9 @@ def run(args: argparse.Namespace) -> int:
             raise CLIError("--html shows a held pose; with --trajectory use 'view --trajectory FILE --html'")
         return _simulate_trajectory(args, am)
     ours = evaluate_state(am, plates_from_args(args, am, "give --plates FILE (or - for stdin) or --home"))
-    result = hold_pose(am, ours.plates, seconds=args.seconds, samples=args.samples,
-                       drift_tolerance=1e-3 * args.drift_tolerance)  # fmt: skip
+    result = hold_pose(
+        am, ours.plates, seconds=args.seconds, samples=args.samples, drift_tolerance=1e-3 * args.drift_tolerance
+    )
     gap = np.abs(result.final_forces - ours.forces)
     if args.json:
         doc = result.to_dict()
@@ -70,11 +76,15 @@ def run(args: argparse.Namespace) -> int:
         print(f"{'t [s]':>7} {'EE drift [mm]':>14} {'EE turn [deg]':>14} {'max|F| [N]':>11} {'at limit':>9}")
         for k in np.unique(np.linspace(0, len(result.times) - 1, 11).round().astype(int)):
             turn_deg = np.rad2deg(result.ee_rotation_drift[k])
-            print(f"{result.times[k]:7.3f} {1e3 * result.ee_drift[k]:14.3f} {turn_deg:14.3f} "
-                  f"{np.abs(result.forces[k]).max():11.3f} {int(result.saturated[k].sum()):9d}")  # fmt: skip
+            print(
+                f"{result.times[k]:7.3f} {1e3 * result.ee_drift[k]:14.3f} {turn_deg:14.3f} "
+                f"{np.abs(result.forces[k]).max():11.3f} {int(result.saturated[k].sum()):9d}"
+            )
         j, i = np.unravel_index(gap.argmax(), gap.shape)
-        print(f"final forces vs statics: max difference {gap.max():.3f} N ({leg_label(j, i)}), "
-              f"statics max|F| = {ours.max_abs_force:.3f} N")  # fmt: skip
+        print(
+            f"final forces vs statics: max difference {gap.max():.3f} N ({leg_label(j, i)}), "
+            f"statics max|F| = {ours.max_abs_force:.3f} N"
+        )
         print(f"held: {'yes' if result.held else 'NO'} — {result.message}")
     if args.html:
         from ..viewer import StackViewer
@@ -103,7 +113,9 @@ def _simulate_trajectory(args: argparse.Namespace, am: AssemblerModel) -> int:
     print(f"MuJoCo running {Path(args.trajectory).name}: {traj.duration:.2f} s, then 0.5 s settling")
     print(f"{'t [s]':>7} {'EE off plan [mm]':>17} {'max|F| MuJoCo':>14} {'max|F| plan':>12} {'at limit':>9}")
     for k in np.unique(np.linspace(0, len(result.times) - 1, 11).round().astype(int)):
-        print(f"{result.times[k]:7.2f} {1e3 * result.ee_error[k]:17.3f} {result.max_abs_force[k]:14.2f} "
-              f"{result.planned_max_abs_force[k]:12.2f} {int(result.saturated[k]):9d}")  # fmt: skip
+        print(
+            f"{result.times[k]:7.2f} {1e3 * result.ee_error[k]:17.3f} {result.max_abs_force[k]:14.2f} "
+            f"{result.planned_max_abs_force[k]:12.2f} {int(result.saturated[k]):9d}"
+        )
     print(f"followed: {'yes' if result.followed else 'NO'} — {result.message}")
     return 0 if result.followed else 1

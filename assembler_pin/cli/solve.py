@@ -34,8 +34,11 @@ def add_parser(add) -> None:
     add_optimize_arguments(p)
     add_carrier_arguments(p, " (the goal is then in the world; the carrier's joints join the search)")
     p.add_argument("--fixed-carrier", action="store_true", help="with --carrier: hold it at --carrier-q")
-    p.add_argument("--capacity", action="store_true",
-                   help="also the largest payload [kg] some valid internal pose holds at the goal")  # fmt: skip
+    p.add_argument(
+        "--capacity",
+        action="store_true",
+        help="also the largest payload [kg] some valid internal pose holds at the goal",
+    )
     p.add_argument("--json", action="store_true", help="print one JSON object")
     p.set_defaults(func=run)
 
@@ -130,20 +133,28 @@ def _print_result(args: argparse.Namespace, result, capacity) -> None:
     opt = result.optimization
     if opt is not None:
         print()
-        print(f"optimization ({opt.method}): {'success' if result.success else 'FAILED'} — {result.message}; "
-              f"{opt.iterations} iterations, {opt.evaluations} evaluations, {opt.time_s:.3f} s")  # fmt: skip
-        starts = ", ".join(f"{name} {r.optimized.max_abs_force:.1f} N{'' if r.success else ' (failed)'}"
-                           for name, r in result.runs.items())  # fmt: skip
+        print(
+            f"optimization ({opt.method}): {'success' if result.success else 'FAILED'} — {result.message}; "
+            f"{opt.iterations} iterations, {opt.evaluations} evaluations, {opt.time_s:.3f} s"
+        )
+        starts = ", ".join(
+            f"{name} {r.optimized.max_abs_force:.1f} N{'' if r.success else ' (failed)'}"
+            for name, r in result.runs.items()
+        )
         print(f"starts (max|F| reached): {starts}; kept: {result.start}")
-        print(f"objective Ω = w1·max|F| + w2·sqrt(Σλ²): {opt.objective_initial:.3f} (start) -> "
-              f"{opt.objective_optimized:.3f}")  # fmt: skip
+        print(
+            f"objective Ω = w1·max|F| + w2·sqrt(Σλ²): {opt.objective_initial:.3f} (start) -> "
+            f"{opt.objective_optimized:.3f}"
+        )
         print(format_state_table(opt.optimized, "Optimized"))
     elif not args.no_optimize:
         print(f"\nno optimization: {result.message}")
     if capacity is not None:
         if capacity.success:
-            print(f"\npayload capacity: {capacity.capacity_kg:.3f} kg ({capacity.binding} at its limit; "
-                  f"{capacity.iterations} optimizations, {capacity.time_s:.2f} s)")  # fmt: skip
+            print(
+                f"\npayload capacity: {capacity.capacity_kg:.3f} kg ({capacity.binding} at its limit; "
+                f"{capacity.iterations} optimizations, {capacity.time_s:.2f} s)"
+            )
         else:
             print(f"\npayload capacity: none — {capacity.message}")
 
@@ -173,8 +184,10 @@ def _solve_on_carrier(args: argparse.Namespace, am: AssemblerModel, carrier, q, 
     if args.json:
         print(dumps(result.to_dict()))
         return 0 if result.success else 1
-    print(f"solve on {carrier.name} ({'carrier held' if args.fixed_carrier else 'carrier moving'}): "
-          f"{'success' if result.success else 'FAILED'} — {result.message} [{result.time_s:.2f} s]")  # fmt: skip
+    print(
+        f"solve on {carrier.name} ({'carrier held' if args.fixed_carrier else 'carrier moving'}): "
+        f"{'success' if result.success else 'FAILED'} — {result.message} [{result.time_s:.2f} s]"
+    )
     for t, cq, _score, note in result.candidates:
         where = "joint optimization (carrier joints and plates together)" if np.isnan(t) else f"placement t = {t:.2f}"
         print(f"  {where}: q = {np.round(cq, 3).tolist()}: {note}")

@@ -32,14 +32,19 @@ def add_parser(add) -> None:
     src.add_argument("--home", action="store_true", help="show the home pose")
     from ..choices import FORCE_SCALES, SCENARIO_NAMES
 
-    src.add_argument("--scenario", choices=SCENARIO_NAMES,
-                     help="solve a scenario's goal and show its initial and optimized poses")  # fmt: skip
-    src.add_argument("--trajectory", metavar="FILE",
-                     help="animate a trajectory written by 'plan --out' (legs colored by force)")  # fmt: skip
+    src.add_argument(
+        "--scenario", choices=SCENARIO_NAMES, help="solve a scenario's goal and show its initial and optimized poses"
+    )
+    src.add_argument(
+        "--trajectory", metavar="FILE", help="animate a trajectory written by 'plan --out' (legs colored by force)"
+    )
     add_carrier_arguments(p, " (--home/--plates relative to its base plate, --goal in the world)")
-    p.add_argument("--force-scale", choices=FORCE_SCALES, default="auto",
-                   help="where leg colors saturate: auto (default: max|F|, at least 10%% of the limit), "
-                        "limit, max")  # fmt: skip
+    p.add_argument(
+        "--force-scale",
+        choices=FORCE_SCALES,
+        default="auto",
+        help="where leg colors saturate: auto (default: max|F|, at least 10%% of the limit), limit, max",
+    )
     p.add_argument("--frames", type=int, default=150, help="with --trajectory: frames of the animation (default 150)")
     p.add_argument("--html", metavar="FILE", help="write a standalone HTML page instead of serving")
     p.add_argument("--open", action="store_true", help="open the page / viewer URL in a web browser")
@@ -51,9 +56,11 @@ def add_parser(add) -> None:
         help="with --goal: animate initial -> optimized in STEPS leg-length steps",
     )
     p.add_argument("--no-arm", action="store_true", help="with --goal: do not draw the helper arm")
-    p.add_argument("--host", default="127.0.0.1",
-                   help="interface the live page listens on (default 127.0.0.1: this machine only; "
-                        "0.0.0.0: every interface)")  # fmt: skip
+    p.add_argument(
+        "--host",
+        default="127.0.0.1",
+        help="interface the live page listens on (default 127.0.0.1: this machine only; 0.0.0.0: every interface)",
+    )
     p.set_defaults(func=run)
 
 
@@ -70,14 +77,17 @@ def _view_on_carrier(args: argparse.Namespace, am: AssemblerModel, viewer, carri
         if result.statics is None:
             raise CLIError(f"no pose to show: {result.message}")
         statics = result.statics
-        print(f"solve on {carrier.name}: {'success' if result.success else 'FAILED'} — {result.message}",
-              file=sys.stderr)  # fmt: skip
+        print(
+            f"solve on {carrier.name}: {'success' if result.success else 'FAILED'} — {result.message}", file=sys.stderr
+        )
     else:
         statics = carrier_statics(am, carrier, q, plates_from_args(args, am, "give --goal, --plates FILE or --home"))
     shown = viewer.display(statics.state)
     viewer.show_carrier(carrier, statics.q)
-    viewer.set_title(f"On {carrier.name}: max|F| {shown.max_abs_force:.1f} N, carrier torque up to "
-                     f"{100 * statics.carrier_ratio:.0f} % of its effort limit ({statics.binding} binds)")  # fmt: skip
+    viewer.set_title(
+        f"On {carrier.name}: max|F| {shown.max_abs_force:.1f} N, carrier torque up to "
+        f"{100 * statics.carrier_ratio:.0f} % of its effort limit ({statics.binding} binds)"
+    )
     viewer.frame()
     return shown
 
@@ -109,8 +119,10 @@ def _animate_trajectory(viewer, am: AssemblerModel, path: str, frames: int) -> S
     _, states = trajectory_states(am, traj, frames)  # every row held to stack FK of its lengths
     viewer.animate(states, fps=max(1.0, (len(states) - 1) / max(traj.duration, 1e-9)), color_forces=True)
     peak = max(st.max_abs_force for st in states)
-    viewer.set_title(f"Trajectory {Path(path).name}: {traj.duration:.1f} s, peak max|F| {peak:.1f} N "
-                     "(legs: sleeve colored by force, frame by frame)")  # fmt: skip
+    viewer.set_title(
+        f"Trajectory {Path(path).name}: {traj.duration:.1f} s, peak max|F| {peak:.1f} N "
+        "(legs: sleeve colored by force, frame by frame)"
+    )
     print(f"trajectory: {traj.duration:.2f} s, {len(states)} frames", file=sys.stderr)
     return max(states, key=lambda st: st.max_abs_force)
 

@@ -322,10 +322,17 @@ class ArmIKProblem:
 
         tol = 1e-6 if loose else 1e-15
         res = least_squares(
-            self.residual, np.clip(start, self.lower, self.upper), jac=self.jacobian, args=(w,),
-            bounds=(self.lower, self.upper), method="trf", ftol=tol, xtol=tol, gtol=tol,
+            self.residual,
+            np.clip(start, self.lower, self.upper),
+            jac=self.jacobian,
+            args=(w,),
+            bounds=(self.lower, self.upper),
+            method="trf",
+            ftol=tol,
+            xtol=tol,
+            gtol=tol,
             max_nfev=60 if loose else 100,
-        )  # fmt: skip
+        )
         self.statuses.append(int(res.status))
         return res.x
 

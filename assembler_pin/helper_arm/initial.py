@@ -89,9 +89,11 @@ class InitialConditionResult:
 
     def __repr__(self) -> str:
         d = f"{self.link_length:.4f} m" if self.link_length is not None else "-"
-        return (f"InitialConditionResult(success={self.success}, max|F| {self.state.max_abs_force:.3f} N, d {d}, "
-                f"{self.attempts} attempts, {1e3 * self.time_s:.1f} ms{', repaired' if self.repaired else ''}, "
-                f"message={self.message!r})")  # fmt: skip
+        return (
+            f"InitialConditionResult(success={self.success}, max|F| {self.state.max_abs_force:.3f} N, d {d}, "
+            f"{self.attempts} attempts, {1e3 * self.time_s:.1f} ms{', repaired' if self.repaired else ''}, "
+            f"message={self.message!r})"
+        )
 
     def plates_if_valid(self) -> PlateArrays | None:
         """The valid state's plate poses, None when no valid initial condition was found."""
@@ -310,9 +312,14 @@ def _start_key(cand: Candidate) -> tuple:
 
 
 def _try_repairs(
-    am: AssemblerModel, goal: pin.SE3, opts: HelperArmOptions, repairs: list[Candidate], tried: set[tuple],
-    attempts: int, t0: float,
-) -> InitialConditionResult | None:  # fmt: skip
+    am: AssemblerModel,
+    goal: pin.SE3,
+    opts: HelperArmOptions,
+    repairs: list[Candidate],
+    tried: set[tuple],
+    attempts: int,
+    t0: float,
+) -> InitialConditionResult | None:
     """The first valid repair of the ``repairs`` not yet ``tried`` (recorded there), or None."""
     for cand in repairs:
         key = _start_key(cand)
@@ -344,9 +351,18 @@ def _success(
     logger.info("initial condition found (%s) after %d attempt(s) in %.1f ms", how, attempts, 1e3 * dt)
     forces = "" if state.feasible else f" (force limits exceeded: {len(state.violations)} violation(s))"
     return InitialConditionResult(
-        True, f"valid initial condition {how} after {attempts} attempt(s){forces}", goal, state,
-        state.leg_lengths.copy(), None if cand.q is None else cand.q.copy(), d, attempts, dt, cand.points, repaired,
-    )  # fmt: skip
+        True,
+        f"valid initial condition {how} after {attempts} attempt(s){forces}",
+        goal,
+        state,
+        state.leg_lengths.copy(),
+        None if cand.q is None else cand.q.copy(),
+        d,
+        attempts,
+        dt,
+        cand.points,
+        repaired,
+    )
 
 
 def _why_not(scan: _Scan, repairs: list[Candidate], opts: HelperArmOptions) -> str:
@@ -367,9 +383,14 @@ def _why_not(scan: _Scan, repairs: list[Candidate], opts: HelperArmOptions) -> s
 
 
 def _failure(
-    am: AssemblerModel, goal: pin.SE3, opts: HelperArmOptions, why: str, scan: _Scan, t0: float,
+    am: AssemblerModel,
+    goal: pin.SE3,
+    opts: HelperArmOptions,
+    why: str,
+    scan: _Scan,
+    t0: float,
     distance: float | None = None,
-) -> InitialConditionResult:  # fmt: skip
+) -> InitialConditionResult:
     """The home pose, checked against the goal, with the reason."""
     state = evaluate_state(am, am.home, goal=goal, tolerance=opts.tolerance)
     if distance is None:  # answered before the scan
@@ -382,6 +403,14 @@ def _failure(
         )
     logger.info("initial condition failed: %s", message)
     return InitialConditionResult(
-        False, message, goal, state, state.leg_lengths.copy(), scan.last_q, None, scan.attempts,
-        time.perf_counter() - t0, scan.last_points,
-    )  # fmt: skip
+        False,
+        message,
+        goal,
+        state,
+        state.leg_lengths.copy(),
+        scan.last_q,
+        None,
+        scan.attempts,
+        time.perf_counter() - t0,
+        scan.last_points,
+    )

@@ -74,10 +74,15 @@ def repair_stack(
     from scipy.optimize import least_squares  # on first use: fast start-up
 
     res = least_squares(
-        lambda x: _leg_hinge(am, plates(x), margin), np.zeros(6 * (n - 1)),
-        jac=lambda x: _hinge_jacobian(am, plates(x), x, margin), method="trf",
-        ftol=1e-15, xtol=1e-15, gtol=1e-15, max_nfev=max_nfev,
-    )  # fmt: skip
+        lambda x: _leg_hinge(am, plates(x), margin),
+        np.zeros(6 * (n - 1)),
+        jac=lambda x: _hinge_jacobian(am, plates(x), x, margin),
+        method="trf",
+        ftol=1e-15,
+        xtol=1e-15,
+        gtol=1e-15,
+        max_nfev=max_nfev,
+    )
     pa = plates(res.x)
     return pa, float(_leg_hinge(am, pa, 0.0).max())
 

@@ -39,9 +39,29 @@ __all__ = [
     "solver_hash",
 ]
 
-COLUMNS = ("config", "cell", "ix", "iy", "iz", "io", "x", "y", "z", "rx", "ry", "rz", "reachable", "reason",
-           "max_abs_force", "capacity_kg", "capacity_binding", "binding", "solve_time_s",
-           "capacity_time_s", "key")  # fmt: skip
+COLUMNS = (
+    "config",
+    "cell",
+    "ix",
+    "iy",
+    "iz",
+    "io",
+    "x",
+    "y",
+    "z",
+    "rx",
+    "ry",
+    "rz",
+    "reachable",
+    "reason",
+    "max_abs_force",
+    "capacity_kg",
+    "capacity_binding",
+    "binding",
+    "solve_time_s",
+    "capacity_time_s",
+    "key",
+)
 """The columns of a map file, in order. Positions [m], rotation vector [rad], forces [N];
 ``key``: what the row was computed from (:func:`cell_key`)."""
 
@@ -119,11 +139,29 @@ def geometric_binding(am: AssemblerModel, state: StackState) -> str:
 def compute_cell(models: PayloadModels, cell: Cell, config_name: str = "") -> dict:
     """The row of one cell (see :data:`COLUMNS`)."""
     am = models.base
-    row = {"config": config_name, "cell": cell.id, "ix": cell.index[0], "iy": cell.index[1], "iz": cell.index[2],
-           "io": cell.index[3], "x": cell.position[0], "y": cell.position[1], "z": cell.position[2],
-           "rx": cell.rotation[0], "ry": cell.rotation[1], "rz": cell.rotation[2], "reachable": False, "reason": "",
-           "max_abs_force": math.nan, "capacity_kg": math.nan, "capacity_binding": "", "binding": "",
-           "solve_time_s": 0.0, "capacity_time_s": 0.0, "key": ""}  # fmt: skip
+    row = {
+        "config": config_name,
+        "cell": cell.id,
+        "ix": cell.index[0],
+        "iy": cell.index[1],
+        "iz": cell.index[2],
+        "io": cell.index[3],
+        "x": cell.position[0],
+        "y": cell.position[1],
+        "z": cell.position[2],
+        "rx": cell.rotation[0],
+        "ry": cell.rotation[1],
+        "rz": cell.rotation[2],
+        "reachable": False,
+        "reason": "",
+        "max_abs_force": math.nan,
+        "capacity_kg": math.nan,
+        "capacity_binding": "",
+        "binding": "",
+        "solve_time_s": 0.0,
+        "capacity_time_s": 0.0,
+        "key": "",
+    }
     goal = cell.goal()
     t0 = time.perf_counter()
     result = solve(am, goal)

@@ -66,9 +66,11 @@ class MapRun:
         return self.computed / self.time_s if self.time_s > 0 else math.nan
 
     def __repr__(self) -> str:
-        return (f"MapRun({self.computed} cells computed, {self.skipped} already done, {self.batches} batches on "
-                f"{self.workers or 'no'} workers, {self.time_s:.1f} s, "
-                f"{self.cells_per_second:.2f} cells/s)")  # fmt: skip
+        return (
+            f"MapRun({self.computed} cells computed, {self.skipped} already done, {self.batches} batches on "
+            f"{self.workers or 'no'} workers, {self.time_s:.1f} s, "
+            f"{self.cells_per_second:.2f} cells/s)"
+        )
 
 
 def read_map(out: str | Path):

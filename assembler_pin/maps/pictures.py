@@ -61,8 +61,15 @@ def map_heatmaps(table, am: AssemblerModel, config: str | None = None, orientati
     )
     for ax, (key, name, cmap, unit) in zip(axes, panels, strict=True):
         data = np.ma.masked_invalid(s[key])
-        image = ax.imshow(data, origin="lower", extent=extent, cmap=cmap, aspect="equal",
-                          vmin=0 if key == "reachable" else None, vmax=1 if key == "reachable" else None)  # fmt: skip
+        image = ax.imshow(
+            data,
+            origin="lower",
+            extent=extent,
+            cmap=cmap,
+            aspect="equal",
+            vmin=0 if key == "reachable" else None,
+            vmax=1 if key == "reachable" else None,
+        )
         ax.set_facecolor("#eeeeee")
         draw_state(ax, home, (_AXIS[u_axis], _AXIS[v_axis]), "#444444", "#222222", "home pose (scale)", alpha=0.5)
         ax.set_xlabel(f"{u_axis} [m]")
@@ -70,9 +77,15 @@ def map_heatmaps(table, am: AssemblerModel, config: str | None = None, orientati
         ax.set_title(name, fontsize=10)
         if key != "reachable":
             fig.colorbar(image, ax=ax, shrink=0.8, label=unit)
-    axes[0].legend(handles=[
-        _patch("#2ca02c", "reachable"), _patch("#d9d9d9", "not reachable"),
-        _line("#444444", "home pose, for scale")], fontsize=8, loc="upper right")  # fmt: skip
+    axes[0].legend(
+        handles=[
+            _patch("#2ca02c", "reachable"),
+            _patch("#d9d9d9", "not reachable"),
+            _line("#444444", "home pose, for scale"),
+        ],
+        fontsize=8,
+        loc="upper right",
+    )
     reached = np.nan_to_num(s["reachable"]).astype(bool)
     fig.suptitle(title or f"Capability map: {int(reached.sum())} of {reached.size} cells reachable")
     return fig

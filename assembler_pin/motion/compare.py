@@ -86,8 +86,10 @@ class MotionComparison:
     figures: dict[str, PlanFigures]
 
     def __repr__(self) -> str:
-        inner = ", ".join(f"{m}: peak {f.peak_max_abs_force:.1f} N, {100 * f.valid_fraction:.0f}% valid"
-                          for m, f in self.figures.items())  # fmt: skip
+        inner = ", ".join(
+            f"{m}: peak {f.peak_max_abs_force:.1f} N, {100 * f.valid_fraction:.0f}% valid"
+            for m, f in self.figures.items()
+        )
         return f"MotionComparison({self.name!r}: {inner})"
 
 
@@ -159,20 +161,23 @@ def compare_motion(
         else:
             missing += 1
     if len(states) >= 2:
-        figures["helper_arm"] = _figures("helper_arm", _timed(am, plan, params, states, rate), _travel(states), tol,
-                                         missing)  # fmt: skip
+        figures["helper_arm"] = _figures(
+            "helper_arm", _timed(am, plan, params, states, rate), _travel(states), tol, missing
+        )
 
     # (b) leg lengths linear between the two end poses
     first, last = plan.states[0], plan.states[-1]
     guess, linear = first.plates, [first]
     for t in plan.parameters[1:] / plan.parameters[-1]:
-        fk = stack_forward_kinematics(am, (1 - t) * first.leg_lengths + t * last.leg_lengths,
-                                      base=first.plates.se3(0), guess=on_se3(guess))  # fmt: skip
+        fk = stack_forward_kinematics(
+            am, (1 - t) * first.leg_lengths + t * last.leg_lengths, base=first.plates.se3(0), guess=on_se3(guess)
+        )
         if not fk.success:
             break
         guess = fk.plates
         linear.append(evaluate_state(am, fk.plates))
     if len(linear) == len(plan.states):
-        figures["linear_lengths"] = _figures("linear_lengths", _timed(am, plan, plan.parameters, linear, rate),
-                                             _travel(linear), tol)  # fmt: skip
+        figures["linear_lengths"] = _figures(
+            "linear_lengths", _timed(am, plan, plan.parameters, linear, rate), _travel(linear), tol
+        )
     return MotionComparison(name, motion, figures)

@@ -33,7 +33,6 @@ from ..kinematics import taa_to_se3, to_se3
 __all__ = ["PATH_KINDS", "EEPath", "PathError", "interpolate_pose", "read_waypoints"]
 
 
-
 def interpolate_pose(a: pin.SE3, b: pin.SE3, t: float, kind: str = "screw") -> pin.SE3:
     """The pose at fraction ``t`` ∈ [0, 1] from ``a`` to ``b`` (see module docstring)."""
     if kind == "screw":

@@ -224,8 +224,18 @@ def plan_path(
     targets = list(path.parameters(opts.position_step, opts.rotation_step)[1:])  # bounded before planning
     start_state, why = _start_state(am, path, start, opts)
     if start_state is None:
-        return PlanResult(False, why, path, np.zeros(0), [], np.zeros(0), 0, (0.0, 0.0), time.perf_counter() - t_start,
-                          opts.path_tolerance)  # fmt: skip
+        return PlanResult(
+            False,
+            why,
+            path,
+            np.zeros(0),
+            [],
+            np.zeros(0),
+            0,
+            (0.0, 0.0),
+            time.perf_counter() - t_start,
+            opts.path_tolerance,
+        )
     params, states, times = [0.0], [start_state], [0.0]
     refinements, dev = 0, (0.0, 0.0)
     base_step = 1.0 / max(1, len(targets))
@@ -249,7 +259,17 @@ def plan_path(
         dev = (max(dev[0], d[0]), max(dev[1], d[1]))
         if progress is not None:
             progress(round(1000 * u1 / path.segments), 1000, f"planning: {len(states)} samples")
-    result = PlanResult(success, reason, path, np.array(params), states, np.array(times), refinements, dev,
-                        time.perf_counter() - t_start, opts.path_tolerance)  # fmt: skip
+    result = PlanResult(
+        success,
+        reason,
+        path,
+        np.array(params),
+        states,
+        np.array(times),
+        refinements,
+        dev,
+        time.perf_counter() - t_start,
+        opts.path_tolerance,
+    )
     logger.info("plan: %s", result)
     return result
