@@ -260,7 +260,7 @@ def _runnable():
 
 @pytest.mark.parametrize("line", list(_runnable()))
 def test_page_command_runs(line, tmp_path, monkeypatch):
-    for name in ("README.md", "assembler_pin"):  # what the measuring commands read
+    for name in ("README.md", "assembler_pin", "examples"):  # what the commands read
         (tmp_path / name).symlink_to(ROOT / name)
     monkeypatch.chdir(tmp_path)
     _run_line(line, tmp_path)
