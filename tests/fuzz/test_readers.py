@@ -88,9 +88,9 @@ def test_edited_trajectory_rows_are_refused(ws, tmp_path_factory, edit, fmt, whi
         _edit_rows(doc["columns"], doc["rows"], kind, frac, change, which)
         path.write_text(json.dumps(doc))
     else:
-        pre, table = _parse_csv(ws.traj_csv)
+        pre, table, post = _parse_csv(ws.traj_csv)  # the v2 comment lines kept as written
         _edit_rows(table[0], table[1:], kind, frac, change, which)
-        path.write_text(_csv_text(pre, table))
+        path.write_text(_csv_text(pre, table, post))
     call_api(lambda: ap.read_trajectory(path), "refuse", f"read_trajectory({fmt}, {kind} {change})")
 
 
