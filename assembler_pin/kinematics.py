@@ -19,6 +19,7 @@ import numpy as np
 import numpy.typing as npt
 import pinocchio as pin
 
+from .bounds import check_bound
 from .exceptions import ConvergenceError, PoseError
 from .geometry import LEGS_PER_PLATFORM
 from .linalg import cross
@@ -673,6 +674,8 @@ def stack_forward_kinematics(
         base: world pose of plate 0 (default identity).
         guess: plate poses to start each platform from (default: home).
     """
+    check_bound("fk.tol", tol, "tol", PoseError)
+    check_bound("fk.max_iterations", max_iterations, "max_iterations", PoseError)
     L = _check_lengths(lengths, (am.n, LEGS_PER_PLATFORM))
     base_pose = pin.SE3.Identity() if base is None else to_se3(base, "base pose")
     guesses: list[pin.SE3 | None] = [None] * am.n

@@ -298,6 +298,7 @@ def plan_trajectory(
     check_bound("plan.rate", rate, "rate", TrajectoryError)
     t0 = time.perf_counter()
     opts = checked_options(options, PlanOptions, "options")
+    check_bound("plan.refinements", refinements, "refinements", TrajectoryError)
     for attempt in range(refinements + 1):
         plan = plan_path(am, path, start, opts, progress=progress)
         if len(plan.states) < 2:

@@ -1,0 +1,54 @@
+"""Hostile arguments found by tests/fuzz that are now refused with a specific AssemblerError."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import assembler_pin as ap
+from assembler_pin.exceptions import ConfigError, PoseError, TrajectoryError
+
+
+@pytest.mark.parametrize(
+    "kwargs",
+    [{"tol": float("nan")}, {"tol": -1.0}, {"max_iterations": -1}, {"max_iterations": True}, {"max_iterations": 10**12}],
+)
+def test_stack_fk_refuses_bad_tolerance_and_iteration_counts(am, kwargs):
+    """A NaN or negative tolerance, a negative, boolean or astronomic iteration count is refused
+    before any Newton step (it used to fail with UnboundLocalError or report 'did not converge')."""
+    with pytest.raises(PoseError, match=next(iter(kwargs))):
+        ap.stack_forward_kinematics(am, np.full((am.n, 6), 0.27), **kwargs)
+
+
+def test_stack_fk_still_solves_with_defaults(am):
+    """Values inside the bounds pass: FK of the home leg lengths (from the design anchors,
+    independently of the package) gives back the home plates."""
+    from checks import sp_legs
+
+    home = np.asarray(am.home, dtype=float)
+    R, p = home[:, :3, :3], home[:, :3, 3]
+    lengths = np.array([sp_legs(am.config, j, R[j], p[j], R[j + 1], p[j + 1])[0] for j in range(am.n)])
+    fk = ap.stack_forward_kinematics(am, lengths, max_iterations=30, tol=1e-12)
+    assert fk.success
+    assert np.abs(np.asarray(fk.plates.p) - p).max() < 1e-9
+
+
+def test_plan_refuses_negative_refinements(am):
+    goal = am.home[-1].copy()
+    goal[2, 3] -= 0.01
+    path = ap.EEPath((am.home[-1], goal))
+    with pytest.raises(TrajectoryError, match="refinements"):
+        ap.plan_trajectory(am, path, am.home, refinements=-1)
+
+
+@pytest.mark.parametrize("key", ["max_speed", "max_acceleration"])
+def test_config_refuses_near_zero_leg_rate_limits(key):
+    """1e-12 m/s would plan a motion of millions of years: refused by the documented bound."""
+    with pytest.raises(ConfigError, match=f"leg.{key}"):
+        ap.load_config({"leg": {key: 1e-12}})
+
+
+@pytest.mark.parametrize("path", [5, None, 1.5])
+def test_read_trajectory_refuses_a_path_that_is_not_a_path(path):
+    with pytest.raises(TrajectoryError, match="str or path"):
+        ap.read_trajectory(path)
