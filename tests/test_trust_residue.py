@@ -11,7 +11,13 @@ from assembler_pin.exceptions import ConfigError, PoseError, TrajectoryError
 
 @pytest.mark.parametrize(
     "kwargs",
-    [{"tol": float("nan")}, {"tol": -1.0}, {"max_iterations": -1}, {"max_iterations": True}, {"max_iterations": 10**12}],
+    [
+        {"tol": float("nan")},
+        {"tol": -1.0},
+        {"max_iterations": -1},
+        {"max_iterations": True},
+        {"max_iterations": 10**12},
+    ],
 )
 def test_stack_fk_refuses_bad_tolerance_and_iteration_counts(am, kwargs):
     """A NaN or negative tolerance, a negative, boolean or astronomic iteration count is refused
@@ -25,7 +31,7 @@ def test_stack_fk_still_solves_with_defaults(am):
     independently of the package) gives back the home plates."""
     from checks import sp_legs
 
-    home = np.asarray(am.home, dtype=float)
+    home = np.array([m.homogeneous for m in am.home])  # world poses of the plates
     R, p = home[:, :3, :3], home[:, :3, 3]
     lengths = np.array([sp_legs(am.config, j, R[j], p[j], R[j + 1], p[j + 1])[0] for j in range(am.n)])
     fk = ap.stack_forward_kinematics(am, lengths, max_iterations=30, tol=1e-12)
@@ -34,8 +40,9 @@ def test_stack_fk_still_solves_with_defaults(am):
 
 
 def test_plan_refuses_negative_refinements(am):
-    goal = am.home[-1].copy()
-    goal[2, 3] -= 0.01
+    import pinocchio as pin
+
+    goal = am.home[-1] * pin.SE3(np.eye(3), np.array([0.0, 0.0, -0.01]))
     path = ap.EEPath((am.home[-1], goal))
     with pytest.raises(TrajectoryError, match="refinements"):
         ap.plan_trajectory(am, path, am.home, refinements=-1)
