@@ -59,3 +59,35 @@ def test_config_refuses_near_zero_leg_rate_limits(key):
 def test_read_trajectory_refuses_a_path_that_is_not_a_path(path):
     with pytest.raises(TrajectoryError, match="str or path"):
         ap.read_trajectory(path)
+
+
+def test_eepath_refuses_non_finite_or_non_se3_waypoints_and_boolean_times(am):
+    import pinocchio as pin
+
+    from assembler_pin.exceptions import AssemblerError
+
+    nan_goal = pin.SE3(np.eye(3), np.array([np.nan, 0.0, 0.9]))
+    with pytest.raises(AssemblerError, match="NaN"):
+        ap.EEPath((am.home[-1], nan_goal))
+    with pytest.raises(AssemblerError, match=r"pin\.SE3"):
+        ap.EEPath((np.eye(4), np.eye(4)))
+    with pytest.raises(AssemblerError, match="booleans"):
+        ap.EEPath((am.home[-1], am.home[-1]), times=(False, True))
+    assert ap.EEPath((am.home[-1], am.home[-1]), times=(0, 2.5)).times == (0, 2.5)
+
+
+def test_plan_refuses_a_path_that_is_not_an_eepath(am):
+    from assembler_pin.exceptions import PathError
+
+    with pytest.raises(PathError, match="EEPath"):
+        ap.plan_trajectory(am, [am.home[-1], am.home[-1]], am.home)
+
+
+def test_cli_plan_refuses_from_with_waypoints(tmp_path, capsys):
+    from assembler_pin.cli.app import main
+
+    wp = tmp_path / "wp.json"
+    wp.write_text('{"waypoints": [[0, 0, 0.95, 0, 0, 0], [0, 0, 0.94, 0, 0, 0]]}')
+    code = main(["plan", "--json", "--waypoints", str(wp), "--from", "0", "0", "0.9", "0", "0", "0"])
+    err = capsys.readouterr().err.strip().splitlines()
+    assert code == 2 and len(err) == 1 and "--waypoints" in err[0]
