@@ -91,3 +91,35 @@ def test_cli_plan_refuses_from_with_waypoints(tmp_path, capsys):
     code = main(["plan", "--json", "--waypoints", str(wp), "--from", "0", "0", "0.9", "0", "0", "0"])
     err = capsys.readouterr().err.strip().splitlines()
     assert code == 2 and len(err) == 1 and "--waypoints" in err[0]
+
+
+@pytest.fixture(scope="module")
+def ur5():
+    return ap.Carrier("ur5")
+
+
+def test_carrier_refuses_string_angles_and_negative_ik_iterations(ur5):
+    from assembler_pin.exceptions import OptionsError
+
+    with pytest.raises(PoseError, match="numbers"):
+        ur5.check_q(["0"] * 6)
+    with pytest.raises(OptionsError, match="max_iterations"):
+        ur5.ik(ur5.base_pose(ur5.upright_q), ur5.upright_q, max_iterations=-1)
+    assert ur5.ik(ur5.base_pose(ur5.upright_q), ur5.upright_q).success
+
+
+def test_carrier_statics_refuses_a_carrier_name(am):
+    from assembler_pin.exceptions import OptionsError
+
+    with pytest.raises(OptionsError, match="Carrier"):
+        ap.carrier_statics(am, "ur5", np.zeros(6), am.home)
+
+
+def test_solve_on_carrier_refuses_a_nan_carrier_weight(am, ur5):
+    import pinocchio as pin
+
+    from assembler_pin.exceptions import OptionsError
+
+    goal = pin.SE3(np.eye(3), np.array([0.3, 0.2, 1.4]))
+    with pytest.raises(OptionsError, match="w_carrier"):
+        ap.solve_on_carrier(am, ur5, goal, w_carrier=np.nan)
