@@ -123,3 +123,13 @@ def test_solve_on_carrier_refuses_a_nan_carrier_weight(am, ur5):
     goal = pin.SE3(np.eye(3), np.array([0.3, 0.2, 1.4]))
     with pytest.raises(OptionsError, match="w_carrier"):
         ap.solve_on_carrier(am, ur5, goal, w_carrier=np.nan)
+
+
+def test_stack_fk_refuses_astronomic_lengths_without_a_numpy_warning(am):
+    """1e300 m legs used to overflow inside the Newton solve (a RuntimeWarning escaped)."""
+    import warnings
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        with pytest.raises(PoseError, match="at most"):
+            ap.stack_forward_kinematics(am, np.full((am.n, 6), 1e300))
