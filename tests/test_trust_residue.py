@@ -133,3 +133,13 @@ def test_stack_fk_refuses_astronomic_lengths_without_a_numpy_warning(am):
         warnings.simplefilter("error")
         with pytest.raises(PoseError, match="at most"):
             ap.stack_forward_kinematics(am, np.full((am.n, 6), 1e300))
+
+
+def test_payload_capacity_refuses_an_astronomic_iteration_count(am):
+    import pinocchio as pin
+
+    from assembler_pin.exceptions import OptionsError
+
+    goal = pin.SE3(np.eye(3), np.array([0.02, 0.01, 0.85]))
+    with pytest.raises(OptionsError, match="max_iterations"):
+        ap.payload_capacity(am, goal, max_iterations=10**9)
