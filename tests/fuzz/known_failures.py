@@ -8,7 +8,8 @@ is not parametrized, its function name.
 
 KNOWN: set[str] = {
     # valid inputs refused
-    # --waypoints starts from the force-optimized pose of the first waypoint, which sits on a
-    # constraint; the planner's first step from there is infeasible (a planner defect, not local)
+    # planner: from the force-optimized start state (no start given: --waypoints or --from) at
+    # the home EE pose the first step is infeasible ("Inequality constraints incompatible");
+    # from am.home the same path plans. Not a local fix.
     "plan.waypoints_valid",
 }
