@@ -67,6 +67,11 @@ BOUNDS: dict[str, Bound] = {
     "leg.max_acceleration": Bound(1e-4, 1000.0, "m/s^2", False, "config leg.max_acceleration"),
     "leg.stiffness": Bound(1e3, 1e10, "N/m", False, "config leg.stiffness: a leg's axial stiffness"),
     "config.platforms": Bound(1, 64, "", True, "config platforms: Stewart platforms in the stack"),
+    "carrier.ik_iterations": Bound(1, 100_000, "", True, "Carrier.ik(max_iterations=...): IK steps"),
+    "capacity.max_iterations": Bound(1, 1000, "", True, "payload_capacity(max_iterations=...): optimizations"),
+    "fk.max_iterations": Bound(1, 10_000, "", True, "stack_forward_kinematics(max_iterations=...): Newton steps"),
+    "fk.tol": Bound(1e-15, 1e-3, "m", False, "stack_forward_kinematics(tol=...): leg-length residual"),
+    "plan.refinements": Bound(0, 10, "", True, "plan_trajectory(refinements=...): re-plans with half steps"),
     "batch.stacks": Bound(1, 10_000_000, "", True, "stacks in one batched statics call"),
 }
 

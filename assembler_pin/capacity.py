@@ -29,6 +29,7 @@ from dataclasses import dataclass, field
 import numpy as np
 import pinocchio as pin
 
+from .bounds import check_bound
 from .exceptions import OptionsError
 from .geometry import DIMENSIONS
 from .kinematics import PlateArrays, to_se3
@@ -249,6 +250,7 @@ def payload_capacity(
 
     if not (0 < rtol < 0.5 and isinstance(max_iterations, int) and max_iterations >= 1):
         raise OptionsError("rtol must be in (0, 0.5) and max_iterations an integer >= 1")
+    check_bound("capacity.max_iterations", max_iterations, "max_iterations", OptionsError)
     t0 = time.perf_counter()
     goal = to_se3(goal, "goal")
     models = models or PayloadModels(am)

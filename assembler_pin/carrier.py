@@ -30,6 +30,7 @@ import numpy as np
 import numpy.typing as npt
 import pinocchio as pin
 
+from .bounds import check_bound
 from .choices import CARRIER_NAMES, check_names
 from .exceptions import AssemblerError, OptionsError, PoseError, UnknownCarrierError
 from .kinematics import PlateArrays, plate_arrays, to_se3
@@ -208,7 +209,10 @@ class Carrier:
 
     def check_q(self, q: npt.ArrayLike, what: str = "carrier q") -> np.ndarray:
         """``q`` as an (nv,) array within the joint limits, or a :class:`PoseError`."""
-        arr = np.asarray(q, dtype=float).ravel()
+        raw = np.asarray(q)
+        if raw.dtype.kind not in "iuf":  # no strings, booleans or objects
+            raise PoseError(f"{what} must be {self.model.nq} joint angles [rad] (numbers), got {raw.dtype} values")
+        arr = raw.astype(float).ravel()
         if arr.shape != (self.model.nq,) or not np.all(np.isfinite(arr)):
             raise PoseError(f"{what} must be {self.model.nq} finite joint angles [rad] for {self.name}, got {arr}")
         outside = np.flatnonzero((arr < self.lower - 1e-9) | (arr > self.upper + 1e-9))
@@ -234,6 +238,7 @@ class Carrier:
         """Joint angles placing the base plate at ``target``, from ``q0``: damped least
         squares on the SE(3) log error (``Jlog6`` of the frame Jacobian), clipped to the
         joint limits at every step."""
+        check_bound("carrier.ik_iterations", max_iterations, "max_iterations", OptionsError)
         q = np.clip(self.check_q(q0, "q0"), self.lower, self.upper)
         damping = 1e-6
         err = math.inf
@@ -330,6 +335,8 @@ def carrier_statics(
     the joint torques of the external force on the tool joint — the stack's reaction, the
     negative of the base wrench the mount applies to plate 0.
     """
+    if not isinstance(carrier, Carrier):
+        raise OptionsError(f'carrier must be a Carrier (Carrier("ur5")), got {type(carrier).__name__}')
     q = carrier.check_q(q)
     rel = plate_arrays(am, plates)
     if not (np.allclose(rel.R[0], np.eye(3), atol=1e-9) and np.allclose(rel.p[0], 0.0, atol=1e-12)):
@@ -536,6 +543,8 @@ def solve_on_carrier(
     t0 = time.perf_counter()
     goal = to_se3(goal, "goal")
     opts, limit = _checked_settings(options, helper_options, blends, max_iterations)
+    if isinstance(w_carrier, bool) or not isinstance(w_carrier, (int, float)) or not 0 <= w_carrier < math.inf:
+        raise OptionsError(f"w_carrier must be a finite number >= 0 [N], got {w_carrier!r}")
     q0 = carrier.upright_q if q0 is None else carrier.check_q(q0, "q0")
     s = _Search(am, carrier, goal, opts, helper_options, bool(optimize), float(w_carrier))
     if not move_carrier:

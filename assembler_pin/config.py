@@ -43,6 +43,7 @@ from typing import Any, ClassVar
 
 import yaml
 
+from .bounds import check_bound
 from .exceptions import ConfigError, short_repr
 from .options import is_number
 
@@ -257,8 +258,8 @@ def _validate(cfg: AssemblerConfig) -> None:
     )
     for key in ("max_tension", "max_compression"):
         _check(getattr(leg, key) > 0, f"leg.{key}", getattr(leg, key), "must be > 0 [N]")
-    _check(leg.max_speed > 0, "leg.max_speed", leg.max_speed, "must be > 0 [m/s]")
-    _check(leg.max_acceleration > 0, "leg.max_acceleration", leg.max_acceleration, "must be > 0 [m/s^2]")
+    for key in ("max_speed", "max_acceleration"):  # a near-zero limit would plan a near-endless motion
+        check_bound(f"leg.{key}", getattr(leg, key), f"config key 'leg.{key}'", ConfigError)
     _check(leg.stiffness >= 1e3, "leg.stiffness", leg.stiffness, "must be in [1e3, 1e10] [N/m]")
     chord = cfg.leg_chord
     if leg.mid_length <= chord * (1.0 + 1e-9):

@@ -19,6 +19,7 @@ import numpy as np
 import numpy.typing as npt
 import pinocchio as pin
 
+from .bounds import check_bound
 from .exceptions import ConvergenceError, PoseError
 from .geometry import LEGS_PER_PLATFORM
 from .linalg import cross
@@ -495,10 +496,14 @@ def sp_inverse_jacobian(am: AssemblerModel, j: int, top_in_bottom: pin.SE3) -> n
     return np.hstack([u_top, np.cross(geo.top_in_plate[j], u_top)])
 
 
+#: Longest leg length FK accepts [m]: far beyond any stroke, short of float overflow in the solve.
+_MAX_LEG_LENGTH = 1e3
+
+
 def _check_lengths(lengths: npt.ArrayLike, shape: tuple[int, ...]) -> np.ndarray:
     arr = as_float_array(lengths, "leg lengths", shape)
-    if not all(0.0 < x < math.inf for x in arr.ravel().tolist()):  # NaN fails the test
-        raise PoseError("leg lengths must be finite and > 0 [m]")
+    if not all(0.0 < x <= _MAX_LEG_LENGTH for x in arr.ravel().tolist()):  # NaN fails the test
+        raise PoseError(f"leg lengths must be > 0 and at most {_MAX_LEG_LENGTH:g} m (finite)")
     return arr
 
 
@@ -681,6 +686,8 @@ def stack_forward_kinematics(
         base: world pose of plate 0 (default identity).
         guess: plate poses to start each platform from (default: home).
     """
+    check_bound("fk.tol", tol, "tol", PoseError)
+    check_bound("fk.max_iterations", max_iterations, "max_iterations", PoseError)
     L = _check_lengths(lengths, (am.n, LEGS_PER_PLATFORM))
     base_pose = pin.SE3.Identity() if base is None else to_se3(base, "base pose")
     guesses: list[pin.SE3 | None] = [None] * am.n

@@ -89,6 +89,8 @@ def run(args: argparse.Namespace) -> int:
         if value:
             writable_parent(value, option)
     check_bound("plan.rate", args.rate, "--rate", CLIError)
+    if args.waypoints and (args.from_ is not None or args.to is not None):
+        raise CLIError("--waypoints FILE gives the whole path: drop --from and --to")
     if args.to is None and not args.waypoints and not args.compare:
         raise CLIError("give --to X Y Z RX RY RZ (from the home pose, or --from ..) or --waypoints FILE")
     try:

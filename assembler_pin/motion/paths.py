@@ -63,7 +63,13 @@ class EEPath:
             raise PathError(f"path kind must be one of {', '.join(PATH_KINDS)}, got {self.kind!r}")
         if len(self.waypoints) < 2:
             raise PathError(f"a path needs at least 2 waypoints, got {len(self.waypoints)}")
+        for k, w in enumerate(self.waypoints):
+            if not isinstance(w, pin.SE3):
+                raise PathError(f"waypoint {k} must be a pin.SE3, got {type(w).__name__} (EEPath.between takes 4x4)")
+            to_se3(w, f"waypoint {k}")  # finite, a proper rotation
         if self.times is not None:
+            if any(isinstance(x, bool) or not isinstance(x, (int, float, np.number)) for x in self.times):
+                raise PathError("times must be numbers [s] (no booleans or strings)")
             t = np.asarray(self.times, dtype=float)
             if t.shape != (len(self.waypoints),) or not np.all(np.isfinite(t)) or t[0] != 0 or np.any(np.diff(t) <= 0):
                 raise PathError("times must give one finite time per waypoint, starting at 0 and increasing")

@@ -29,11 +29,15 @@ import time
 import numpy as np
 
 from ..bounds import BOUNDS, check_bound
-from ..exceptions import TrajectoryError
+from ..exceptions import PathError, TrajectoryError
 from ..model import AssemblerModel
 from ..options import checked_options
 from ..progress import ProgressCallback
+<<<<<<< HEAD
 from ..threads import one_blas_thread
+=======
+from .paths import EEPath
+>>>>>>> fuzz2
 from .planner import PlanResult
 from .result import MotionResult, first_bad_row, verify_trajectory
 from .rows import check_trajectory, trajectory_states
@@ -300,6 +304,9 @@ def plan_trajectory(
     check_bound("plan.rate", rate, "rate", TrajectoryError)
     t0 = time.perf_counter()
     opts = checked_options(options, PlanOptions, "options")
+    check_bound("plan.refinements", refinements, "refinements", TrajectoryError)
+    if not isinstance(path, EEPath):
+        raise PathError(f"path must be an EEPath (EEPath.between(start, goal)), got {type(path).__name__}")
     for attempt in range(refinements + 1):
         plan = plan_path(am, path, start, opts, progress=progress)
         if len(plan.states) < 2:

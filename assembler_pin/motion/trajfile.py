@@ -182,6 +182,8 @@ def read_trajectory(path: str | os.PathLike[str]) -> Trajectory:
     Raises:
         TrajectoryError: one line naming the file and what is wrong with it.
     """
+    if not isinstance(path, (str, os.PathLike)):
+        raise TrajectoryError(f"a trajectory path must be a str or path, got {type(path).__name__}")
     path = Path(path)
     try:
         size = path.stat().st_size

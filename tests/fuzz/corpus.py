@@ -568,17 +568,21 @@ TRAJECTORY_MUTATIONS: dict[str, tuple[str, tuple[str, ...]]] = {
 HANG_PRONE_TRAJECTORIES = {"time_huge", "time_inf", "time_offset"}
 
 
-def _parse_csv(text: str) -> tuple[list[str], list[list[str]]]:
-    """(the lines before the header, the table from the header on)."""
+def _parse_csv(text: str) -> tuple[list[str], list[list[str]], list[str]]:
+    """(the comment lines before the header, the table from the header on, the comment lines
+    after the rows): a v2 file's ``# assembler-pin trajectory v2`` and ``# meta:`` lines come
+    first and its ``# end: N rows`` line last; they are kept as they are, so a damaged row
+    must be refused by the checksum or the row checks."""
     lines = text.splitlines()
     head = next(k for k, line in enumerate(lines) if line.startswith("t,"))
-    return lines[:head], [r for r in csv.reader(lines[head:]) if r]
+    tail = next((k for k in range(head + 1, len(lines)) if lines[k].startswith("#")), len(lines))
+    return lines[:head], [r for r in csv.reader(lines[head:tail]) if r], lines[tail:]
 
 
-def _csv_text(pre: list[str], rows: list[list[str]]) -> str:
+def _csv_text(pre: list[str], rows: list[list[str]], post: list[str] = ()) -> str:
     buf = io.StringIO()
     csv.writer(buf, lineterminator="\n").writerows(rows)
-    return "".join(line + "\n" for line in pre) + buf.getvalue()
+    return "".join(line + "\n" for line in pre) + buf.getvalue() + "".join(line + "\n" for line in post)
 
 
 def mutate_trajectory(name: str, fmt: str, original: str) -> bytes:
@@ -591,12 +595,12 @@ def mutate_trajectory(name: str, fmt: str, original: str) -> bytes:
         return original.encode()[: len(original) // 2 + 7]
     if fmt == "json":
         return _mutate_json(name, original)
-    pre, table = _parse_csv(original)
+    pre, table, post = _parse_csv(original)
     header, rows = table[0], table[1:]
     _mutate_table(name, header, rows)
     if name == "header_only":
         rows = []
-    return _csv_text(pre, [header, *rows]).encode()
+    return _csv_text(pre, [header, *rows], post).encode()
 
 
 def _mutate_table(name: str, header: list[str], rows: list[list]) -> None:
@@ -664,7 +668,7 @@ def _mutate_json(name: str, original: str) -> bytes:
     if name == "rows_not_list":
         doc["rows"] = 5
     elif name == "platforms_mismatch":
-        doc["platforms"] = 3
+        doc["meta"]["platforms"] = 3  # v2: the platform count is in the meta
     elif name == "meta_base_bad":
         doc.setdefault("meta", {})["base"] = [[1.0, 0.0], [0.0, "x"]]
     elif name == "toplist":
