@@ -33,11 +33,8 @@ from ..exceptions import PathError, TrajectoryError
 from ..model import AssemblerModel
 from ..options import checked_options
 from ..progress import ProgressCallback
-<<<<<<< HEAD
 from ..threads import one_blas_thread
-=======
 from .paths import EEPath
->>>>>>> fuzz2
 from .planner import PlanResult
 from .result import MotionResult, first_bad_row, verify_trajectory
 from .rows import check_trajectory, trajectory_states
