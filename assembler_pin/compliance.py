@@ -14,7 +14,6 @@ gravity, the payload and any wrench on the EE stretch or compress every leg by `
 from __future__ import annotations
 
 import math
-import time
 from collections.abc import Sequence
 from dataclasses import dataclass
 
@@ -268,13 +267,6 @@ def benchmark_stiffness(am: AssemblerModel, repeat: int = 200) -> dict[str, floa
         "compensated_lengths": lambda: compensated_lengths(am, pa),
         "solve_statics": lambda: solve_statics(am, pa),
     }
-    out = {}
-    for name, call in calls.items():
-        call()
-        times = []
-        for _ in range(repeat):
-            t0 = time.perf_counter()
-            call()
-            times.append(time.perf_counter() - t0)
-        out[name] = float(np.median(times))
-    return out
+    from .bench import median_time_us
+
+    return {name: 1e-6 * median_time_us(call, repeat) for name, call in calls.items()}

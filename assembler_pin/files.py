@@ -13,7 +13,7 @@ import tempfile
 from collections.abc import Iterator
 from pathlib import Path
 
-__all__ = ["atomic_path", "write_atomic"]
+__all__ = ["atomic_path", "read_text_bounded", "write_atomic"]
 
 
 @contextlib.contextmanager
@@ -48,3 +48,21 @@ def write_atomic(path: str | os.PathLike[str], data: str | bytes, encoding: str 
             fh.flush()
             os.fsync(fh.fileno())
     return target
+
+
+def read_text_bounded(path: Path, bound_key: str, what: str, error: type[Exception]) -> str:
+    """The UTF-8 text of the input file ``path``, refused in one line (``error``) when it is
+    missing or unreadable, empty, larger than its row ``bound_key`` of the limits table, or not
+    UTF-8. ``what`` names the file in the message (``"trajectory"``, ``"waypoint file"``)."""
+    from .bounds import check_bound
+
+    try:
+        size = path.stat().st_size
+        if size == 0:
+            raise error(f"{what} '{path}' is empty")
+        check_bound(bound_key, size, f"the size of '{path}'", error)
+        return path.read_bytes().decode("utf-8")
+    except OSError as exc:
+        raise error(f"cannot read {what} '{path}': {exc.strerror or exc}") from None
+    except UnicodeDecodeError:
+        raise error(f"{what} '{path}' is not UTF-8 text") from None

@@ -22,7 +22,6 @@ about that plate's origin.
 from __future__ import annotations
 
 import math
-import time
 from collections.abc import Sequence
 from dataclasses import dataclass
 
@@ -252,13 +251,6 @@ def benchmark_supports(am: AssemblerModel, repeat: int = 50) -> dict[str, float]
         "chosen_distribution": lambda: chosen_distribution(am, pa),
         "chosen_distribution_unchecked": lambda: chosen_distribution(am, pa, verify=False),
     }
-    out = {}
-    for name, call in calls.items():
-        call()
-        times = []
-        for _ in range(repeat):
-            t0 = time.perf_counter()
-            call()
-            times.append(time.perf_counter() - t0)
-        out[name] = float(np.median(times))
-    return out
+    from .bench import median_time_us
+
+    return {name: 1e-6 * median_time_us(call, repeat) for name, call in calls.items()}

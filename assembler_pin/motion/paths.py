@@ -28,6 +28,7 @@ import pinocchio as pin
 from ..bounds import BOUNDS, check_bound
 from ..choices import PATH_KINDS
 from ..exceptions import AssemblerError, PathError
+from ..files import read_text_bounded
 from ..kinematics import taa_to_se3, to_se3
 
 __all__ = ["PATH_KINDS", "EEPath", "PathError", "interpolate_pose", "read_waypoints"]
@@ -122,16 +123,7 @@ def read_waypoints(path: str | Path, kind: str = "screw") -> EEPath:
         PathError: one line naming the file and what is wrong.
     """
     path = Path(path)
-    try:
-        size = path.stat().st_size
-        if size == 0:
-            raise PathError(f"waypoint file '{path}' is empty")
-        check_bound("waypoints.bytes", size, f"the size of '{path}'", PathError)
-        text = path.read_bytes().decode("utf-8")
-    except OSError as exc:
-        raise PathError(f"cannot read waypoint file '{path}': {exc.strerror or exc}") from None
-    except UnicodeDecodeError:
-        raise PathError(f"waypoint file '{path}' is not UTF-8 text") from None
+    text = read_text_bounded(path, "waypoints.bytes", "waypoint file", PathError)
     try:
         rows, times, degrees = _json_waypoints(text) if path.suffix.lower() == ".json" else _csv_waypoints(text)
         check_bound("waypoints.count", len(rows), "the number of waypoints", PathError)

@@ -35,7 +35,7 @@ import numpy as np
 
 from ..bounds import check_bound
 from ..exceptions import AssemblerError, TrajectoryError
-from ..files import write_atomic
+from ..files import read_text_bounded, write_atomic
 
 __all__ = ["FORMAT", "MARGIN_KINDS", "VERSION", "Trajectory", "read_trajectory", "strict_json", "trajectory_columns"]
 
@@ -185,16 +185,7 @@ def read_trajectory(path: str | os.PathLike[str]) -> Trajectory:
     if not isinstance(path, (str, os.PathLike)):
         raise TrajectoryError(f"a trajectory path must be a str or path, got {type(path).__name__}")
     path = Path(path)
-    try:
-        size = path.stat().st_size
-        if size == 0:
-            raise TrajectoryError(f"trajectory '{path}' is empty")
-        check_bound("trajectory.bytes", size, f"the size of '{path}'", TrajectoryError)
-        text = path.read_bytes().decode("utf-8")
-    except OSError as exc:
-        raise TrajectoryError(f"cannot read trajectory '{path}': {exc.strerror or exc}") from None
-    except UnicodeDecodeError:
-        raise TrajectoryError(f"trajectory '{path}' is not UTF-8 text") from None
+    text = read_text_bounded(path, "trajectory.bytes", "trajectory", TrajectoryError)
     try:
         meta, columns, rows = _parse_csv(text) if path.suffix.lower() == ".csv" else _parse_json(text)
         return _trajectory(meta, columns, rows)
