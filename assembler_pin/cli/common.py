@@ -160,10 +160,7 @@ def plates_from_file(source: str) -> list:
     Raises:
         CLIError: one line naming the plate index.
     """
-    doc = read_json(source)
-    if not isinstance(doc, dict) or "plates" not in doc:
-        raise CLIError('the input must be a JSON object {"plates": [n+1 4x4 world transforms]}')
-    plates = doc["plates"]
+    plates = _plates_of_document(read_json(source))
     if not isinstance(plates, list) or not plates:
         raise CLIError('"plates" must be a list of n+1 4x4 matrices, plate 0 first')
     if len(plates) > 65:
@@ -174,6 +171,21 @@ def plates_from_file(source: str) -> list:
         _check_plate_matrix(k, m)
         out.append(m)
     return out
+
+
+def _plates_of_document(doc: object) -> object:
+    """The plates of a plate file, or of a ``solve --json`` answer (its optimized pose, else the
+    helper arm's), which is accepted only when it says ``success: true``."""
+    if isinstance(doc, dict) and "plates" in doc:
+        return doc["plates"]
+    if isinstance(doc, dict) and "goal" in doc and ("optimized" in doc or "initial" in doc):
+        if doc.get("success") is not True:
+            raise CLIError("the solve answer holds no valid pose (its success is not true): solve a reachable goal")
+        for key in ("optimized", "initial"):
+            state = doc.get(key)
+            if isinstance(state, dict) and "plates" in state:
+                return state["plates"]
+    raise CLIError('the input must be a JSON object {"plates": [n+1 4x4 world transforms]} or a solve --json answer')
 
 
 def plates_from_args(args: argparse.Namespace, am: AssemblerModel, missing: str) -> list:

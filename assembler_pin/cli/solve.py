@@ -22,6 +22,7 @@ from .common import (
     goal_from_args,
     optimize_options,
     progress_for,
+    writable_parent,
 )
 
 
@@ -39,6 +40,11 @@ def add_parser(add) -> None:
         action="store_true",
         help="also the largest payload [kg] some valid internal pose holds at the goal",
     )
+    p.add_argument(
+        "--out",
+        metavar="FILE",
+        help='write the pose found as a plate file {"plates": [...]} for statics, view, simulate, stiffness',
+    )
     p.add_argument("--json", action="store_true", help="print one JSON object")
     p.set_defaults(func=run)
 
@@ -53,6 +59,8 @@ def run(args: argparse.Namespace) -> int:
 
     goal = goal_from_args(args)
     _refuse_carrier_options(args)
+    if args.out:
+        writable_parent(args.out, "--out file")
     check_bound("optimize.max_iterations", args.max_iterations, "--max-iterations", CLIError)
     helper = helper_options(args)
     options = None if args.no_optimize else optimize_options(args)
@@ -68,14 +76,31 @@ def run(args: argparse.Namespace) -> int:
 
         start = result.optimized.plates if result.success and result.optimized is not None else None
         capacity = payload_capacity(am, goal, start=start)
+    written = _write_plates(args.out, result) if args.out else None
     if args.json:
         doc = result.to_dict()
         if capacity is not None:
             doc["capacity"] = capacity.to_dict()
+        if args.out:
+            doc["out"] = written
         print(dumps(doc))
     else:
         _print_result(args, result, capacity)
+        if args.out:
+            print(f"wrote {written}" if written else f"no pose to write to {args.out}: the goal was not solved")
     return 0 if result.success and (capacity is None or capacity.success) else 1
+
+
+def _write_plates(path: str, result) -> str | None:
+    """Write the solved pose (optimized, else the helper arm's) as a plate file, atomically;
+    nothing when the goal was not solved (a file holds valid content only)."""
+    from ..files import write_atomic
+
+    state = result.optimized if result.optimized is not None else result.initial
+    if not result.success or state is None:
+        return None
+    write_atomic(path, dumps({"plates": state.to_dict()["plates"]}) + "\n")
+    return path
 
 
 def helper_options(args: argparse.Namespace):
@@ -107,6 +132,8 @@ def _refuse_carrier_options(args: argparse.Namespace) -> None:
     """One line for an option that cannot apply with (or without) ``--carrier``."""
     if args.fixed_carrier and not args.carrier:
         raise CLIError("--fixed-carrier needs --carrier NAME")
+    if args.carrier and args.out:
+        raise CLIError("--out writes a fixed-base plate file and is not available with --carrier")
     if args.carrier and args.capacity:
         raise CLIError(
             "--capacity is computed on a fixed base and is not available with --carrier; "
