@@ -212,15 +212,17 @@ def _plate_distance(am: AssemblerModel, a: PlateArrays, b: PlateArrays) -> float
     return max(float(np.abs(a.p - b.p).max()), am.config.plate.node_radius * float(angle.max()))
 
 
-def _stroke_problem(am: AssemblerModel, cmd: np.ndarray) -> str | None:
+def stroke_problem(am: AssemblerModel, commanded: np.ndarray) -> str | None:
+    """Why commanded leg lengths (n, 6) [m] cannot be commanded: the legs outside the stroke,
+    the worst named; None when every one is within it."""
     leg = am.config.leg
-    over = np.maximum(leg.min_length - cmd, cmd - leg.max_length)
+    over = np.maximum(leg.min_length - commanded, commanded - leg.max_length)
     if over.max() <= 0:
         return None
     j, i = np.unravel_index(int(np.argmax(over)), over.shape)
     return (
-        f"{int((over > 0).sum())} compensated length(s) outside the stroke [{leg.min_length:g}, "
-        f"{leg.max_length:g}] m, the worst {leg_label(int(j), int(i))} at {cmd[j, i]:.6f} m"
+        f"{int((over > 0).sum())} commanded length(s) outside the stroke [{leg.min_length:g}, {leg.max_length:g}] m, "
+        f"the worst {leg_label(int(j), int(i))} at {commanded[j, i]:.6f} m"
     )
 
 
@@ -245,7 +247,7 @@ def compensated_lengths(
     cmd = geometric - statics.forces / float(am.config.leg.stiffness)
     check = loaded_pose(am, cmd, base=pa.se3(0), tol=min(1e-12, 1e-3 * tolerance))
     error = _plate_distance(am, check.plates, pa) if check.success else math.inf
-    stroke = _stroke_problem(am, cmd)
+    stroke = stroke_problem(am, cmd)
     if not check.success:
         message = check.message
     elif error > tolerance:

@@ -31,10 +31,9 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.optimize import linprog
 
-from .compliance import LoadedPose, loaded_pose
+from .compliance import LoadedPose, loaded_pose, stroke_problem
 from .elastic import elastic_terms, line_conditions
 from .kinematics import PlateArrays, leg_vectors, plate_arrays
-from .labels import leg_label
 from .model import AssemblerModel
 from .statics import CONDITION_LIMIT
 from .supports import TwoPointStatics, held_plates, mechanism_message, residual_tolerance, two_point_statics
@@ -220,18 +219,6 @@ def _check(
     return float(np.abs(got.forces - F).max()), "offsets checked by the elastic solve"
 
 
-def _stroke_note(am: AssemblerModel, commanded: np.ndarray) -> str | None:
-    leg = am.config.leg
-    over = np.maximum(leg.min_length - commanded, commanded - leg.max_length)
-    if over.max() <= 0:
-        return None
-    j, i = np.unravel_index(int(np.argmax(over)), over.shape)
-    return (
-        f"{int((over > 0).sum())} commanded length(s) outside the stroke [{leg.min_length:g}, {leg.max_length:g}] m, "
-        f"the worst {leg_label(int(j), int(i))} at {commanded[j, i]:.6f} m"
-    )
-
-
 def _where(am: AssemblerModel, pa: PlateArrays, support: str, loaded: bool) -> PlateArrays | str:
     """The plates the distribution is chosen at: where the elastic solve of the pose's own
     lengths puts them (``loaded``, supports ``base`` and ``both``), else the pose itself."""
@@ -302,10 +289,10 @@ def chosen_distribution(
     free = [m for m in range(am.n + 1) if m not in held]
     residual = float(np.abs(grad[free]).max()) if free else 0.0
     error, checked = _check(am, pa, support, commanded, F) if verify else (math.nan, "offsets not checked")
-    why = _verdict(residual, residual_tolerance(am, at), error, checked) or _stroke_note(am, commanded)
+    why = _verdict(residual, residual_tolerance(am, at), error, checked) or stroke_problem(am, commanded)
     walls = (grad[0] if 0 in held else np.zeros(6), grad[-1] if am.n in held else np.zeros(6))
     offsets = commanded - leg_vectors(am, pa)[3]
-    within = _stroke_note(am, commanded) is None
+    within = stroke_problem(am, commanded) is None
     return ChosenDistribution(
         support, at, F, offsets, commanded, *walls, residual, error, within, why is None, why or f"{note}; {checked}"
     )
