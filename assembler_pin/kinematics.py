@@ -97,6 +97,18 @@ class PlateArrays:
         return out
 
 
+def _rotation_errors(R: np.ndarray) -> tuple[np.ndarray, tuple[int, float, float] | None]:
+    """For (m, 3, 3) matrices: |RᵀR − I| of each, and (index, |RᵀR − I|, det) of the first that
+    is not a rotation to :data:`ORTHONORMAL_TOL` (orthonormal, det +1), None when all are."""
+    err = np.abs(np.matmul(R.transpose(0, 2, 1), R) - np.eye(3)).max(axis=(1, 2))
+    det = np.linalg.det(R)
+    wrong = ~((err <= ORTHONORMAL_TOL) & (np.abs(det - 1.0) <= ORTHONORMAL_TOL))
+    if not wrong.any():
+        return err, None
+    k = int(np.argmax(wrong))
+    return err, (k, float(err[k]), float(det[k]))
+
+
 def to_se3(pose: pin.SE3 | npt.ArrayLike, what: str = "pose") -> pin.SE3:
     """Validate one pose (``pin.SE3`` or 4×4 homogeneous matrix) and return it as SE3.
 
@@ -112,13 +124,14 @@ def to_se3(pose: pin.SE3 | npt.ArrayLike, what: str = "pose") -> pin.SE3:
     if not np.abs(matrix[3] - [0.0, 0.0, 0.0, 1.0]).max() <= 1e-12:
         raise PoseError(f"{what}: the last row must be [0, 0, 0, 1], got {matrix[3].tolist()}")
     rot = matrix[:3, :3]
-    err = np.abs(rot.T @ rot - np.eye(3)).max()
-    if not (err <= ORTHONORMAL_TOL and abs(np.linalg.det(rot) - 1.0) <= ORTHONORMAL_TOL):
+    errors, wrong = _rotation_errors(rot[None])
+    if wrong is not None:
+        _, err, det = wrong
         raise PoseError(
             f"{what}: the 3x3 block is not a rotation (|RᵀR - I| = {err:.2g}, det = "
-            f"{np.linalg.det(rot):.3g}); it must be orthonormal to {ORTHONORMAL_TOL} with det +1"
+            f"{det:.3g}); it must be orthonormal to {ORTHONORMAL_TOL} with det +1"
         )
-    if err > 1e-14:
+    if errors[0] > 1e-14:
         rot = nearest_rotations(rot[None])[0]
     return pin.SE3(rot, matrix[:3, 3].copy())
 
@@ -200,13 +213,11 @@ def _check_plate_arrays(pa: PlateArrays, count: int) -> None:
     bad = ~(np.isfinite(R).all(axis=(1, 2)) & np.isfinite(p).all(axis=1))
     if bad.any():
         raise PoseError(f"PlateArrays: plate {int(np.argmax(bad))} contains NaN or infinite values")
-    err = np.abs(np.matmul(R.transpose(0, 2, 1), R) - np.eye(3)).max(axis=(1, 2))
-    det = np.linalg.det(R)
-    wrong = ~((err <= ORTHONORMAL_TOL) & (np.abs(det - 1.0) <= ORTHONORMAL_TOL))
-    if wrong.any():
-        k = int(np.argmax(wrong))
+    _, wrong = _rotation_errors(R)
+    if wrong is not None:
+        k, err, det = wrong
         raise PoseError(
-            f"PlateArrays: R[{k}] is not a rotation (|RᵀR - I| = {err[k]:.2g}, det = {det[k]:.3g}); "
+            f"PlateArrays: R[{k}] is not a rotation (|RᵀR - I| = {err:.2g}, det = {det:.3g}); "
             f"it must be orthonormal with det +1 to {ORTHONORMAL_TOL:g}"
         )
     object.__setattr__(pa, "_checked", True)
@@ -239,16 +250,14 @@ def checked_rotations(matrices: np.ndarray, what: str = "plate") -> tuple[np.nda
         k = int(np.argmax(last))
         raise PoseError(f"{what} {k}: the last row must be [0, 0, 0, 1], got {matrices[k, 3].tolist()}")
     R = matrices[:, :3, :3].copy()
-    err = np.abs(np.matmul(R.transpose(0, 2, 1), R) - np.eye(3)).max(axis=(1, 2))
-    det = np.linalg.det(R)
-    wrong = ~((err <= ORTHONORMAL_TOL) & (np.abs(det - 1.0) <= ORTHONORMAL_TOL))
-    if wrong.any():
-        k = int(np.argmax(wrong))
+    errors, wrong = _rotation_errors(R)
+    if wrong is not None:
+        k, err, det = wrong
         raise PoseError(
-            f"{what} {k}: the 3x3 block is not a rotation (|RᵀR - I| = {err[k]:.2g}, det = {det[k]:.3g}); "
+            f"{what} {k}: the 3x3 block is not a rotation (|RᵀR - I| = {err:.2g}, det = {det:.3g}); "
             f"it must be orthonormal to {ORTHONORMAL_TOL} with det +1"
         )
-    inexact = err > 1e-14
+    inexact = errors > 1e-14
     if inexact.any():
         R[inexact] = nearest_rotations(R[inexact])
     return R, matrices[:, :3, 3].copy()
