@@ -79,15 +79,19 @@ def render() -> str:
     return "\n".join(blocks)
 
 
-def main(argv: list[str]) -> int:
-    text = render()
+def write_or_check(page: Path, text: str, script: str, argv: list[str]) -> int:
+    """Write ``text`` to ``page``, or with ``--check`` exit 1 when the page differs from it."""
     if "--check" in argv:
-        if PAGE.exists() and PAGE.read_text(encoding="utf-8") == text:
+        if page.exists() and page.read_text(encoding="utf-8") == text:
             return 0
-        print(f"{PAGE} is stale: run python docs/gen_cli.py", file=sys.stderr)
+        print(f"{page} is stale: run python {script}", file=sys.stderr)
         return 1
-    PAGE.write_text(text, encoding="utf-8")
+    page.write_text(text, encoding="utf-8")
     return 0
+
+
+def main(argv: list[str]) -> int:
+    return write_or_check(PAGE, render(), "docs/gen_cli.py", argv)
 
 
 if __name__ == "__main__":

@@ -35,14 +35,10 @@ def render() -> str:
 
 
 def main(argv: list[str]) -> int:
-    text = render()
-    if "--check" in argv:
-        if PAGE.exists() and PAGE.read_text(encoding="utf-8") == text:
-            return 0
-        print(f"{PAGE} is stale: run python docs/gen_limits.py", file=sys.stderr)
-        return 1
-    PAGE.write_text(text, encoding="utf-8")
-    return 0
+    sys.path.insert(0, str(Path(__file__).resolve().parent))
+    from gen_cli import write_or_check
+
+    return write_or_check(PAGE, render(), "docs/gen_limits.py", argv)
 
 
 if __name__ == "__main__":
