@@ -47,7 +47,8 @@ import pinocchio as pin
 
 from .config import AssemblerConfig
 from .geometry import DIMENSIONS, LEGS_PER_PLATFORM, leg_geometry
-from .urdf import cylinder_inertia, names, node_points, xml_number, xml_vector
+from .naming import names
+from .urdf import cylinder_inertia, node_points, xml_number, xml_vector
 
 __all__ = [
     "ACTUATOR_ARMATURE",
@@ -105,12 +106,12 @@ class MjcfLayout:
 
     @classmethod
     def of(cls, platforms: int) -> MjcfLayout:
-        plate = [[f"{names.plate_joint(j)}_{a}" for a in "xyz"] + [names.plate_joint(j)] for j in range(platforms)]
+        plate = [[names.plate_slide(j, a) for a in "xyz"] + [names.plate_joint(j)] for j in range(platforms)]
         legs = [
             [[names.leg(j, i, part) for part in ("ux", "uy", "actuator")] for i in range(LEGS_PER_PLATFORM)]
             for j in range(platforms)
         ]
-        acts = [f"sp{j}_leg{i}" for j in range(platforms) for i in range(LEGS_PER_PLATFORM)]
+        acts = [names.leg(j, i) for j in range(platforms) for i in range(LEGS_PER_PLATFORM)]
         return cls(plate, legs, acts)
 
 
@@ -192,9 +193,7 @@ def assembler_mjcf(cfg: AssemblerConfig, weld_ee: bool = False) -> str:
             body = ET.SubElement(parent, "body", name=names.plate(k), pos=xml_vector(cfg.home_height * z_axis))
             j = k - 1
             for a, axis in zip("xyz", ("1 0 0", "0 1 0", "0 0 1"), strict=True):
-                ET.SubElement(
-                    body, "joint", name=f"{names.plate_joint(j)}_{a}", type="slide", axis=axis, limited="false"
-                )
+                ET.SubElement(body, "joint", name=names.plate_slide(j, a), type="slide", axis=axis, limited="false")
             ET.SubElement(body, "joint", name=names.plate_joint(j), type="ball", limited="false")
         _inertial(body, cfg.plate.mass, zero, plate_inertia)
         ET.SubElement(
@@ -249,7 +248,7 @@ def assembler_mjcf(cfg: AssemblerConfig, weld_ee: bool = False) -> str:
             ET.SubElement(
                 equality,
                 "connect",
-                name=f"sp{j}_leg{i}_ball",
+                name=names.leg(j, i, "ball"),
                 body1=names.leg(j, i, "shaft"),
                 body2=names.plate(j + 1),
                 anchor="0 0 0",
@@ -262,7 +261,7 @@ def assembler_mjcf(cfg: AssemblerConfig, weld_ee: bool = False) -> str:
             ET.SubElement(
                 actuator,
                 "position",
-                name=f"sp{j}_leg{i}",
+                name=names.leg(j, i),
                 joint=names.leg(j, i, "actuator"),
                 kp=xml_number(kp),
                 kv=xml_number(kv),

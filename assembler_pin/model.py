@@ -23,8 +23,9 @@ import pinocchio as pin
 from .config import AssemblerConfig, PayloadConfig, load_config, load_yaml
 from .exceptions import ArgumentError, ConfigError, ModelFileError, short_repr
 from .geometry import LEGS_PER_PLATFORM, LegGeometry, home_plates, leg_geometry
+from .naming import names
 from .platform_model import PlatformModel, StackPlan
-from .urdf import SIDECAR_FILENAME, URDF_FILENAME, assembler_urdf, closure_sidecar, names
+from .urdf import SIDECAR_FILENAME, URDF_FILENAME, assembler_urdf, closure_sidecar
 from .urdf_check import parse_urdf, urdf_disagreements
 
 __all__ = ["WHOLE_DATA_MAX_PLATFORMS", "AssemblerModel", "Closure", "checked_model"]

@@ -29,7 +29,8 @@ import pinocchio as pin
 
 from .config import AssemblerConfig, PayloadConfig
 from .geometry import LEGS_PER_PLATFORM, leg_geometry
-from .urdf import assembler_urdf, names
+from .naming import names
+from .urdf import assembler_urdf
 
 __all__ = ["PLATFORM_TURN", "PlatformModel", "PlatformStatics", "StackPlan", "platform_turns", "stack_gravity_terms"]
 

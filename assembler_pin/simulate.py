@@ -31,8 +31,8 @@ from .bounds import check_bound
 from .exceptions import SimulationError, SingularConfigurationError
 from .kinematics import PlateArrays, leg_vectors, plate_arrays, q_from_arrays
 from .model import AssemblerModel
+from .naming import names
 from .options import is_number
-from .urdf import names
 
 __all__ = [
     "HOLD_DRIFT_TOLERANCE",

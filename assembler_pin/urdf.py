@@ -37,6 +37,7 @@ import yaml
 
 from .config import AssemblerConfig
 from .geometry import DIMENSIONS, LEGS_PER_PLATFORM, leg_geometry
+from .naming import names
 
 __all__ = [
     "SIDECAR_FILENAME",
@@ -52,27 +53,6 @@ __all__ = [
 
 URDF_FILENAME = "assembler.urdf"
 SIDECAR_FILENAME = "assembler.yaml"
-
-
-class names:  # noqa: N801 - a namespace of name builders
-    """Names of links and joints in the generated URDF."""
-
-    @staticmethod
-    def plate(k: int) -> str:
-        return f"plate_{k}"
-
-    @staticmethod
-    def plate_joint(j: int) -> str:
-        """Floating joint of plate j+1 relative to plate j."""
-        return f"sp{j}_plate"
-
-    @staticmethod
-    def leg(j: int, i: int, part: str) -> str:
-        """``part`` in {ux, cross, uy, motor, actuator, shaft, top}."""
-        return f"sp{j}_leg{i}_{part}"
-
-    payload = "payload"
-    payload_joint = "payload_mount"
 
 
 def xml_number(x: float) -> str:

@@ -52,9 +52,9 @@ from .geometry import DIMENSIONS
 from .kinematics import PlateArrays, leg_state, plate_arrays, q_from_plates, stack_forward_kinematics
 from .meshcat_server import DEFAULT_HOST, ServerProcess, start_server
 from .model import WHOLE_DATA_MAX_PLATFORMS, AssemblerModel
+from .naming import names, parse_name
 from .signals import StopRequested, interrupt_on_signals
 from .state import StackState, evaluate_state
-from .urdf import names
 
 __all__ = [
     "COMPRESSION_RGB",
@@ -357,14 +357,8 @@ class StackViewer:
         for g in self.visual_model.geometryObjects:
             name = frames[g.parentFrame].name
             local = g.placement.homogeneous
-            if name.startswith("plate_"):
-                out.append(("plate", (int(name.split("_")[1]),), local))
-            elif name == "payload":
-                out.append(("payload", (), local))
-            else:
-                j, rest = name.removeprefix("sp").split("_leg")
-                i, part = rest.split("_")
-                out.append((part, (int(j), int(i)), local))
+            body = parse_name(name)
+            out.append((body.kind, body.indices, local))
         return out
 
     def placements(self, pose: StackState | PlateArrays) -> list[np.ndarray]:
@@ -472,7 +466,7 @@ class StackViewer:
         if mark_violations:
             for j, i in self.violating_legs(state):
                 mid = 0.5 * (state.legs.bottom_points[j, i] + state.legs.top_points[j, i])
-                node = marks[f"sp{j}_leg{i}"]
+                node = marks[names.leg(j, i)]
                 node.set_object(mg.Sphere(2.2 * DIMENSIONS.motor_radius), _material(VIOLATION_RGBA))
                 node.set_transform(_translation(mid))
         self._show_payload_rod(state.plates)
@@ -765,7 +759,7 @@ class StackViewer:
         for j in range(self.am.n):
             for i in range(6):
                 for k, rgb in enumerate(colors):
-                    node = root[f"sp{j}_leg{i}"][f"level{k}"]
+                    node = root[names.leg(j, i)][f"level{k}"]
                     node.set_object(shape, _material([*rgb, 1.0]))
                     node.set_property("visible", False)
 
@@ -779,7 +773,7 @@ class StackViewer:
             for i in range(6):
                 T = _cylinder_between(state.legs.bottom_points[j, i], state.legs.top_points[j, i])
                 for k in range(len(FORCE_BAND_LEVELS)):
-                    node = root[f"sp{j}_leg{i}"][f"level{k}"]
+                    node = root[names.leg(j, i)][f"level{k}"]
                     node.set_property("visible", "boolean", bool(k == level[j, i]))
                     if k == level[j, i]:
                         node.set_transform(T)

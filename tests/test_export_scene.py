@@ -15,7 +15,7 @@ import trimesh
 import yourdfpy
 
 from assembler_pin import export_model_files, q_from_plates, stack_forward_kinematics
-from assembler_pin.urdf import names
+from assembler_pin.naming import names
 
 
 @pytest.fixture(scope="module")

@@ -16,6 +16,7 @@ import pinocchio as pin
 from ..config import AssemblerConfig
 from ..constraints import leg_limit_margins
 from ..exceptions import OptionsError
+from ..naming import names
 from .limits import cached_leg_geometry, cluster_limits, relative_leg_measures
 from .options import HelperArmOptions
 from .urdf import helper_arm_urdf
@@ -77,9 +78,9 @@ class HelperArm:
         self.lower = self.model.lowerPositionLimit.copy()
         self.upper = self.model.upperPositionLimit.copy()
         n = config.platforms
-        self.plate_frames = [self.model.getFrameId(f"plate_{k}") for k in range(n + 1)]
+        self.plate_frames = [self.model.getFrameId(names.plate(k)) for k in range(n + 1)]
         self.tip_frame = self.plate_frames[-1]
-        self.cluster_joints = [self.model.getJointId(f"sp{j}_rx") for j in range(n)]
+        self.cluster_joints = [self.model.getJointId(names.helper_joint(j, "x")) for j in range(n)]
         self.geometry = cached_leg_geometry(config)
 
     @property

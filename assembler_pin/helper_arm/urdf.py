@@ -7,6 +7,7 @@ import xml.etree.ElementTree as ET
 
 from ..config import AssemblerConfig
 from ..exceptions import OptionsError
+from ..naming import names
 from ..urdf import xml_number
 from .limits import cluster_limits
 
@@ -67,18 +68,26 @@ def helper_arm_urdf(cfg: AssemblerConfig, link_length: float | None = None) -> s
             ET.SubElement(el, "axis", xyz=axis)
             ET.SubElement(el, "limit", lower=xml_number(-limit), upper=xml_number(limit), effort="0", velocity="0")
 
-    link("plate_0", False, True)
+    link(names.plate(0), False, True)
     for j in range(n):
-        parent = f"plate_{j}"
+        parent = names.plate(j)
         for axis_name, axis, lim in (("x", "1 0 0", tilt), ("y", "0 1 0", tilt), ("z", "0 0 1", twist)):
-            child = f"sp{j}_cluster" if axis_name == "z" else f"sp{j}_r{axis_name}_link"
+            child = names.helper_link(j, axis_name)
             if axis_name == "z":
                 link(child, True, True, sphere=True)
             else:
                 link(child, False, False)
-            joint(f"sp{j}_r{axis_name}", "revolute", parent, child, d / 2 if axis_name == "x" else 0.0, axis, lim)
+            joint(
+                names.helper_joint(j, axis_name),
+                "revolute",
+                parent,
+                child,
+                d / 2 if axis_name == "x" else 0.0,
+                axis,
+                lim,
+            )
             parent = child
-        link(f"plate_{j + 1}", True, j + 1 < n)
-        joint(f"plate_{j + 1}_mount", "fixed", parent, f"plate_{j + 1}", d / 2, None, 0.0)
+        link(names.plate(j + 1), True, j + 1 < n)
+        joint(names.plate_mount(j + 1), "fixed", parent, names.plate(j + 1), d / 2, None, 0.0)
     ET.indent(robot, space="  ")
     return '<?xml version="1.0"?>\n' + ET.tostring(robot, encoding="unicode") + "\n"

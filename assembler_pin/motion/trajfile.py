@@ -36,6 +36,7 @@ import numpy as np
 from ..bounds import check_bound
 from ..exceptions import AssemblerError, TrajectoryError
 from ..files import read_text_bounded, write_atomic
+from ..naming import names
 
 __all__ = ["FORMAT", "MARGIN_KINDS", "VERSION", "Trajectory", "read_trajectory", "strict_json", "trajectory_columns"]
 
@@ -60,7 +61,7 @@ _REPLAN = "plan it again with this version ('assembler-pin plan ... --out FILE')
 
 def trajectory_columns(platforms: int) -> list[str]:
     """Column names of a trajectory file for ``platforms`` Stewart platforms."""
-    legs = [f"L_sp{j}_leg{i}" for j in range(platforms) for i in range(6)]
+    legs = [names.length_column(j, i) for j in range(platforms) for i in range(6)]
     ee = ["ee_x", "ee_y", "ee_z", "ee_rx", "ee_ry", "ee_rz"]
     return ["t", *legs, *ee, "max_abs_force", *[f"margin_{k}" for k in MARGIN_KINDS], "feasible"]
 
