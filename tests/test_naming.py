@@ -30,7 +30,7 @@ def test_every_urdf_link_of_a_leg_or_plate_parses(tmp_path):
 
     root = ET.fromstring(assembler_urdf(load_config(None)))
     links = [e.get("name") for e in root.iter("link")]
-    parsed = [parse_name(n) for n in links if n.startswith(("plate_", "sp")) and "_leg" in n or n.startswith("plate_")]
+    parsed = [parse_name(n) for n in links if n.startswith("plate_") or "_leg" in n]
     legs = {p.indices for p in parsed if p.kind != "plate"}
     plates = {p.indices for p in parsed if p.kind == "plate"}
     assert legs == {(j, i) for j in range(4) for i in range(6)}
