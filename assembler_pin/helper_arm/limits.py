@@ -17,6 +17,7 @@ import numpy as np
 from ..config import AssemblerConfig
 from ..constraints import leg_limit_margins
 from ..geometry import LegGeometry, leg_geometry
+from ..kinematics.legs import relative_leg_measures
 
 __all__ = ["cached_leg_geometry", "cluster_limits", "height_range", "relative_leg_measures"]
 
@@ -41,30 +42,6 @@ def _rotations(rotvecs: np.ndarray) -> np.ndarray:
     kx -= kx.transpose(0, 2, 1)
     s, c = np.sin(theta)[:, None, None], (1.0 - np.cos(theta))[:, None, None]
     return np.eye(3) + s * kx + c * (kx @ kx)
-
-
-def relative_leg_measures(
-    geo: LegGeometry, rotations: np.ndarray, translations: np.ndarray
-) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Lengths, deflection cosines and rise of every leg, from relative plate poses.
-
-    Args:
-        geo: the stack's leg geometry (anchors in the plate frames, home directions).
-        rotations: (..., n or 1, 3, 3) top plate in the bottom plate's frame (one per
-            platform, or one for all); translations: (..., n or 1, 3) [m].
-
-    Returns:
-        lengths (..., n, 6) [m], cos_deflection (..., n, 6, 2) (bottom, top joint),
-        rise (..., n, 6): the top joint's height above the bottom joint, bottom frame [m].
-    """
-    R = rotations[..., None, :, :]
-    top_b = (R @ geo.top_in_plate[..., None])[..., 0] + translations[..., None, :]
-    vec = top_b - geo.bottom_in_plate
-    lengths = np.linalg.norm(vec, axis=-1)
-    u = vec / lengths[..., None]
-    u_top = (np.swapaxes(R, -1, -2) @ u[..., None])[..., 0]  # the leg direction in the top plate's frame
-    cos = np.stack([(u * geo.home_direction).sum(-1), (u_top * geo.home_direction).sum(-1)], axis=-1)
-    return lengths, cos, vec[..., 2]
 
 
 def _sp_valid(cfg: AssemblerConfig, rotations: np.ndarray, translations: np.ndarray) -> np.ndarray:

@@ -1,0 +1,48 @@
+"""Jacobians with respect to the leg lengths: of one platform's top plate, and of the EE.
+
+Twists ordered ``[v, ω]`` as in Pinocchio; lengths [m], angles [rad].
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import numpy as np
+import pinocchio as pin
+
+from ..model import AssemblerModel
+from .poses import PlateArrays, plate_arrays
+
+__all__ = ["ee_jacobian_wrt_lengths", "sp_inverse_jacobian"]
+
+
+def sp_inverse_jacobian(am: AssemblerModel, j: int, top_in_bottom: pin.SE3) -> np.ndarray:
+    """dL/dξ of platform j (6×6): leg-length rates for a local twist ξ = [v, ω] of the top
+    plate (pose perturbed as ``top_in_bottom * exp6(ξ)``), bottom plate fixed [m/m, m/rad]."""
+    geo = am.geometry
+    R, p = top_in_bottom.rotation, top_in_bottom.translation
+    vec = geo.top_in_plate[j] @ R.T + p - geo.bottom_in_plate[j]
+    u_top = (vec / np.linalg.norm(vec, axis=1, keepdims=True)) @ R
+    return np.hstack([u_top, np.cross(geo.top_in_plate[j], u_top)])
+
+
+def ee_jacobian_wrt_lengths(am: AssemblerModel, plates: PlateArrays | Sequence | np.ndarray) -> np.ndarray:
+    """Jacobian of the end-effector twist with respect to the 6n leg lengths.
+
+    Returns:
+        (6, 6n) matrix mapping leg-length rates (flattened ``[j, i]``) [m/s] to the EE
+        plate's twist ``[v, ω]`` expressed in world-aligned axes at the EE plate origin
+        (Pinocchio's LOCAL_WORLD_ALIGNED) [m/s, rad/s].
+    """
+    pa = plate_arrays(am, plates)
+    n = am.n
+    ee = pa.se3(n)
+    jac = np.zeros((6, 6 * n))
+    rot6 = np.zeros((6, 6))
+    rot6[:3, :3] = rot6[3:, 3:] = ee.rotation
+    for j in range(n):
+        rel = pa.se3(j).actInv(pa.se3(j + 1))
+        local_twist_per_length = np.linalg.inv(sp_inverse_jacobian(am, j, rel))
+        plate_to_ee = pa.se3(j + 1).actInv(ee)
+        jac[:, 6 * j : 6 * j + 6] = rot6 @ plate_to_ee.inverse().action @ local_twist_per_length
+    return jac
