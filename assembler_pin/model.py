@@ -4,7 +4,9 @@
 files a user gets from ``assembler-pin export`` — and holds everything that does not
 change with the pose: the Pinocchio ``model``, the point-anchor closure constraints and
 index maps. Per-pose computations live in :mod:`assembler_pin.kinematics` and
-:mod:`assembler_pin.statics`; they take an ``AssemblerModel`` and use its ``data``.
+:mod:`assembler_pin.statics`; they take an ``AssemblerModel`` and never write into a
+``Data`` it holds: the statics run on per-platform models that own their ``Data``, or on a
+whole-stack ``Data`` the caller creates (:meth:`AssemblerModel.create_data`) and passes.
 
 The base (plate 0) is mounted by a free-flyer root joint: its pose in the world is a
 coordinate of ``q`` and its generalized gravity is the wrench the mount must supply.
@@ -15,7 +17,6 @@ from __future__ import annotations
 import logging
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
 
 import numpy as np
 import pinocchio as pin
@@ -59,7 +60,8 @@ class AssemblerModel:
 
     * ``config``: the :class:`AssemblerConfig`; ``n``: number of platforms.
     * ``model``: the whole-stack Pinocchio model (free-flyer root), the exported format;
-      ``data``: its data, created on first use for stacks up to 8 platforms.
+      :meth:`create_data` makes a ``Data`` of it for a caller (stacks up to 8 platforms),
+      ``data`` is one kept for inspection (no computation uses it).
     * ``platform_models``: the per-platform models the statics run on
       (:mod:`~assembler_pin.platform_model`).
     * ``constraint_models`` / ``constraint_datas``: the 6n point-anchor closures as
@@ -83,9 +85,6 @@ class AssemblerModel:
     """The models every computation runs on: (inner platforms, last platform with the payload)."""
     stack_plan: StackPlan = field(init=False, repr=False)
     """Their constants for this stack (:class:`~assembler_pin.platform_model.StackPlan`)."""
-    helper_arms: Any = field(default=None, init=False, repr=False)
-    """The helper arms built for this configuration (an
-    :class:`~assembler_pin.helper_arm.ArmCache`, made by the first initial condition)."""
 
     def __repr__(self) -> str:
         return (
@@ -264,24 +263,35 @@ class AssemblerModel:
             self.constraint_datas.append(cm.createData())
 
     # ------------------------------------------------------------------ helpers
+    def create_data(self) -> pin.Data:
+        """A new Pinocchio ``Data`` of the whole-stack model, owned by the caller (pass it to
+        :func:`~assembler_pin.statics.solve_statics` as ``data``, or use it to inspect the
+        model). Refused above :data:`WHOLE_DATA_MAX_PLATFORMS` platforms, where it takes
+        gigabytes.
+
+        Raises:
+            ConfigError: the stack has more than :data:`WHOLE_DATA_MAX_PLATFORMS` platforms.
+        """
+        if self.n > WHOLE_DATA_MAX_PLATFORMS:
+            raise ConfigError(
+                f"the whole-stack Pinocchio data of {self.n} platforms (nv = {self.model.nv}) would take "
+                f"gigabytes; it is available up to {WHOLE_DATA_MAX_PLATFORMS} platforms"
+            )
+        return self.model.createData()
+
     @property
     def data(self) -> pin.Data:
-        """Pinocchio ``Data`` of the whole-stack model, created on first use.
+        """A Pinocchio ``Data`` of the whole-stack model for interactive inspection, created on
+        first use (:meth:`create_data`) and kept on the model.
 
-        No computation of the package needs it (they run on :attr:`platform_models`); it is
-        for inspecting the exported model, and is refused above
-        :data:`WHOLE_DATA_MAX_PLATFORMS` platforms, where it takes gigabytes.
+        No computation of the package reads or writes it: they run on :attr:`platform_models`
+        or on a ``Data`` their caller passes.
 
         Raises:
             ConfigError: the stack has more than :data:`WHOLE_DATA_MAX_PLATFORMS` platforms.
         """
         if self._data is None:
-            if self.n > WHOLE_DATA_MAX_PLATFORMS:
-                raise ConfigError(
-                    f"the whole-stack Pinocchio data of {self.n} platforms (nv = {self.model.nv}) would take "
-                    f"gigabytes; it is available up to {WHOLE_DATA_MAX_PLATFORMS} platforms"
-                )
-            self._data = self.model.createData()
+            self._data = self.create_data()
         return self._data
 
     @property

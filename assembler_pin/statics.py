@@ -48,6 +48,7 @@ __all__ = [
     "CONDITION_LIMIT",
     "WHOLE_STACK_STATICS_MAX_PLATFORMS",
     "StaticsResult",
+    "checked_data",
     "closure_jacobian_blocks",
     "gravity_terms",
     "solve_statics",
@@ -145,28 +146,48 @@ def closure_jacobian_blocks(am: AssemblerModel, plates: PlateArrays | Sequence |
     return out.reshape(n, 18, 24)
 
 
-#: Up to this many platforms the statics run on the whole-stack model (one Pinocchio call for
-#: all platforms, its ``Data`` a few MB); above, on one model per platform (linear in n).
+#: Up to this many platforms the whole-stack path (one Pinocchio call for all platforms on a
+#: ``Data`` the caller owns, a few MB) is faster than one model per platform; above, the
+#: per-platform path is the faster one (linear in n). Informative: the path is chosen by
+#: passing ``data`` or not.
 WHOLE_STACK_STATICS_MAX_PLATFORMS = 4
 
 
+def checked_data(am: AssemblerModel, data: object) -> pin.Data:
+    """``data`` when it is a Pinocchio ``Data`` of ``am.model`` (``am.create_data()`` or
+    ``am.model.createData()``).
+
+    Raises:
+        ArgumentError: not a ``pin.Data``, or one of another model (its sizes differ).
+    """
+    if not isinstance(data, pin.Data):
+        raise ArgumentError(
+            f"data must be the pinocchio.Data of the whole-stack model (am.create_data()), got {type(data).__name__}"
+        )
+    if len(data.oMi) != am.model.njoints or data.g.shape != (am.model.nv,):
+        raise ArgumentError(
+            f"data belongs to another model ({len(data.oMi)} joints, nv = {data.g.shape[0]}); this stack's "
+            f"model has {am.model.njoints} joints, nv = {am.model.nv}: create it with am.create_data()"
+        )
+    return data
+
+
 def gravity_terms(
-    am: AssemblerModel, pa: PlateArrays, vec: np.ndarray, lengths: np.ndarray, per_platform: bool | None = None
+    am: AssemblerModel, pa: PlateArrays, vec: np.ndarray, lengths: np.ndarray, data: pin.Data | None = None
 ) -> PlatformStatics:
     """The Pinocchio terms of the statics: generalized gravity and joint Jacobians.
 
     Args:
-        per_platform: True: one small model per platform, top down
-            (:func:`~assembler_pin.platform_model.stack_gravity_terms`); False: the whole-stack
-            model (``pin.computeGeneralizedGravity`` and ``pin.computeJointJacobians`` on
-            ``am.data``); None: the whole stack up to :data:`WHOLE_STACK_STATICS_MAX_PLATFORMS`
-            platforms. Both give the same terms (the tests hold them together).
+        pa, vec, lengths: validated plate poses, their leg vectors (n, 6, 3) and lengths (n, 6) [m].
+        data: None: one small model per platform, top down
+            (:func:`~assembler_pin.platform_model.stack_gravity_terms`, each owning its
+            ``Data``); a ``Data`` of the whole-stack model, owned by the caller:
+            ``pin.computeGeneralizedGravity`` and ``pin.computeJointJacobians`` on it (its
+            contents are overwritten). Both give the same terms (the tests hold them together).
     """
-    if per_platform is None:
-        per_platform = am.n > WHOLE_STACK_STATICS_MAX_PLATFORMS
-    if per_platform:
+    if data is None:
         return stack_gravity_terms(am.stack_plan, pa.R, platform_configurations(am, pa, vec, lengths))
-    model, data = am.model, am.data
+    model = am.model
     q = q_from_arrays(am, pa, vec, lengths)
     g = pin.computeGeneralizedGravity(model, data, q)
     J = pin.computeJointJacobians(model, data, q)
@@ -174,11 +195,68 @@ def gravity_terms(
     return PlatformStatics(g[am.leg_idx_v], g[am.plate_rows_ff], J.T[am.leg_idx_v], top_columns, g[:6])
 
 
+def _checked_inputs(
+    am: AssemblerModel,
+    plates: PlateArrays | Sequence | np.ndarray,
+    raise_on_singular: object,
+    legs: object,
+    data: object,
+) -> tuple[PlateArrays, np.ndarray, np.ndarray, np.ndarray, pin.Data | None]:
+    """The validated plates, top joint centres (n, 6, 3), leg vectors (n, 6, 3) and lengths
+    (n, 6) [m], and the caller's ``Data`` of :func:`solve_statics` (ArgumentError, PoseError)."""
+    checked_model(am)
+    if not isinstance(raise_on_singular, bool):
+        raise ArgumentError(f"raise_on_singular must be True or False, got {type(raise_on_singular).__name__}")
+    if legs is not None and not (isinstance(legs, LegState) and legs.lengths.shape == (am.n, 6)):
+        raise ArgumentError(f"legs must be the LegState of these plates ({am.n} x 6 legs) or None")
+    if data is not None:
+        data = checked_data(am, data)
+    pa = plate_arrays(am, plates)
+    if legs is None:
+        _, top, vec, lengths = leg_vectors(am, pa)
+    else:
+        top, lengths = legs.top_points, legs.lengths
+        vec = legs.top_points - legs.bottom_points
+    return pa, top, vec, lengths, data
+
+
+def _own_ball_forces(terms: PlatformStatics, top: np.ndarray) -> np.ndarray:
+    """Each leg's rows: ``J_legᵀ λ_i = g_leg - e_z τ_i``, with J_leg's columns the tip
+    velocities of (ux, uy, actuator). The actuator's column is the leg axis u and the other
+    two are orthogonal to it, so ``J_legᵀ⁻¹ e_z = u``: ``λ_i = own_i - τ_i u_i``. Returns
+    ``own`` (n, 6, 3), the ball forces of the legs' weight alone [N, world axes].
+
+    Raises:
+        SingularConfigurationError: a universal joint at gimbal lock.
+    """
+    try:
+        jac_t = _leg_jacobians_t(terms.leg_columns, top)
+        return np.linalg.solve(jac_t, terms.g_legs[..., None])[..., 0]
+    except np.linalg.LinAlgError:
+        raise SingularConfigurationError(
+            "a universal joint is at gimbal lock (a leg at 90° from its home direction); its forces are not defined",
+            float("inf"),
+            -1,
+        ) from None
+
+
+def _raise_singular(condition: np.ndarray) -> None:
+    """Raise :class:`SingularConfigurationError` naming the worst platform of ``condition`` (n,)."""
+    worst = int(np.argmax(np.where(np.isfinite(condition), condition, np.inf)))
+    raise SingularConfigurationError(
+        f"platform {worst} is near a singular configuration (condition number "
+        f"{condition[worst]:.3g} > {CONDITION_LIMIT:.0g}); its forces are not defined",
+        float(condition[worst]),
+        worst,
+    )
+
+
 def solve_statics(
     am: AssemblerModel,
     plates: PlateArrays | Sequence | np.ndarray,
     raise_on_singular: bool = False,
     legs: LegState | None = None,
+    data: pin.Data | None = None,
 ) -> StaticsResult:
     """Actuator and ball-joint forces holding the stack still at the given plate poses.
 
@@ -193,31 +271,14 @@ def solve_statics(
             a result flagged ``singular``.
         legs: the leg state of these plates when the caller has it already (saves
             recomputing the joint centres).
+        data: a Pinocchio ``Data`` of the whole-stack model that the caller owns
+            (``am.create_data()``): the Pinocchio terms are then computed on it in one call,
+            faster up to :data:`WHOLE_STACK_STATICS_MAX_PLATFORMS` platforms. Default: one
+            model per platform (no whole-stack ``Data`` is touched). Same forces either way.
     """
-    checked_model(am)
-    if not isinstance(raise_on_singular, bool):
-        raise ArgumentError(f"raise_on_singular must be True or False, got {type(raise_on_singular).__name__}")
-    if legs is not None and not (isinstance(legs, LegState) and legs.lengths.shape == (am.n, 6)):
-        raise ArgumentError(f"legs must be the LegState of these plates ({am.n} x 6 legs) or None")
-    pa = plate_arrays(am, plates)
-    if legs is None:
-        _, top, vec, lengths = leg_vectors(am, pa)
-    else:
-        top, lengths = legs.top_points, legs.lengths
-        vec = legs.top_points - legs.bottom_points
-    terms = gravity_terms(am, pa, vec, lengths)
-    # Each leg's rows: J_legᵀ λ_i = g_leg - e_z τ_i, with J_leg's columns the tip
-    # velocities of (ux, uy, actuator). The actuator's column is the leg axis u and the
-    # other two are orthogonal to it, so J_legᵀ⁻¹ e_z = u: λ_i = own_i - τ_i u_i.
-    try:
-        jac_t = _leg_jacobians_t(terms.leg_columns, top)
-        own = np.linalg.solve(jac_t, terms.g_legs[..., None])[..., 0]  # leg weight alone
-    except np.linalg.LinAlgError:
-        raise SingularConfigurationError(
-            "a universal joint is at gimbal lock (a leg at 90° from its home direction); its forces are not defined",
-            float("inf"),
-            -1,
-        ) from None
+    pa, top, vec, lengths, data = _checked_inputs(am, plates, raise_on_singular, legs, data)
+    terms = gravity_terms(am, pa, vec, lengths, data)
+    own = _own_ball_forces(terms, top)
     axis = vec / lengths[..., None]
     # Plate j+1's free-flyer rows (its local frame, moments about its origin): the shafts
     # push the plate with -λ_i at the anchors t_i, so g_ff = -Σ_i [λ_i; t_i × λ_i] (anchors
@@ -234,13 +295,7 @@ def solve_statics(
     condition = np.abs(lines_t).sum(axis=2).max(axis=1) * np.abs(inverse_t).sum(axis=2).max(axis=1)
     singular = not condition.max() <= CONDITION_LIMIT  # NaN counts as singular
     if singular and raise_on_singular:
-        worst = int(np.argmax(np.where(np.isfinite(condition), condition, np.inf)))
-        raise SingularConfigurationError(
-            f"platform {worst} is near a singular configuration (condition number "
-            f"{condition[worst]:.3g} > {CONDITION_LIMIT:.0g}); its forces are not defined",
-            float(condition[worst]),
-            worst,
-        )
+        _raise_singular(condition)
     ball = own - tau[..., None] * axis
     base = (terms.base_wrench_local.reshape(2, 3) @ pa.R[0].T).ravel()  # root free-flyer wrench, world axes
     return StaticsResult(-tau, ball, base, condition, singular)

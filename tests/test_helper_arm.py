@@ -17,6 +17,7 @@ import pytest
 from checks import design_anchors, kinematic_problems, sp_legs
 
 from assembler_pin import (
+    AssemblerModel,
     HelperArm,
     HelperArmOptions,
     PoseError,
@@ -428,3 +429,26 @@ def test_cli_solve_table(capsys):
     assert main(["solve", "--goal", "0", "0", "0.95", "0", "0", "0.1", "--no-optimize"]) == 0
     out = capsys.readouterr().out
     assert "valid" in out and "max |F|" in out and "SP3 F [N]" in out  # platforms SP0..SP3
+
+
+def test_the_helper_arms_belong_to_the_caller_not_to_the_model(am):
+    """The arms are kept off the stack model: a caller's cache is the one filled, the default
+    is one per thread and configuration content (payload aside), never the model's."""
+    import dataclasses
+    import threading
+
+    from assembler_pin.helper_arm import ArmCache, arm_cache
+
+    mine = ArmCache(am.config)
+    res = initial_condition(am, am.home[-1], arms=mine)
+    assert res.success and len(mine) >= 1
+    assert not hasattr(am, "helper_arms")
+    same = AssemblerModel.from_config(am.config)
+    heavier = dataclasses.replace(am.config, payload=dataclasses.replace(am.config.payload, mass=7.0))
+    assert arm_cache(same) is arm_cache(am) is arm_cache(heavier)
+    assert arm_cache(dataclasses.replace(am.config, platforms=am.n + 1)) is not arm_cache(am)
+    other: list[ArmCache] = []
+    worker = threading.Thread(target=lambda: other.append(arm_cache(am)))
+    worker.start()
+    worker.join()
+    assert other[0] is not arm_cache(am)

@@ -5,10 +5,11 @@ from __future__ import annotations
 import numpy as np
 import pinocchio as pin
 import pytest
-from checks import design_anchors
+from checks import design_anchors, design_forces
 from conftest import potential_energy, random_se3
 
-from assembler_pin import SingularConfigurationError, solve_statics, stack_forward_kinematics
+from assembler_pin import AssemblerModel, SingularConfigurationError, solve_statics, stack_forward_kinematics
+from assembler_pin.exceptions import ArgumentError
 from assembler_pin.kinematics import PlateArrays, q_from_plates
 from assembler_pin.statics import closure_jacobian_blocks
 
@@ -138,3 +139,39 @@ def test_singular_platform_is_reported_not_answered(am):
     with pytest.raises(SingularConfigurationError, match="singular"):
         solve_statics(am, plates, raise_on_singular=True)
     assert not solve_statics(am, am.home).singular
+
+
+def test_the_statics_never_write_into_a_data_of_the_model(am, random_poses):
+    """No computation writes a Data held by the model: after solving, the kept inspection
+    Data still holds what the caller put in it."""
+    _, plates = random_poses[2]
+    data = am.data
+    q_home = q_from_plates(am, am.home)
+    pin.computeGeneralizedGravity(am.model, data, q_home)
+    before = data.g.copy()
+    solve_statics(am, plates)
+    np.testing.assert_array_equal(data.g, before)
+
+
+def test_a_caller_data_gives_the_free_body_forces(am, random_poses):
+    """The whole-stack path on a Data the caller owns and the per-platform path both give the
+    free-body forces of the design (checks.py); the caller's Data holds the pose's gravity."""
+    data = am.create_data()
+    assert data is not am.create_data()
+    for _, plates in random_poses[:3]:
+        whole = solve_statics(am, plates, data=data)
+        alone = solve_statics(am, plates)
+        reference = design_forces(am.config, plates)
+        scale = np.abs(reference).max()
+        np.testing.assert_allclose(whole.forces, reference, rtol=0, atol=1e-9 * scale)
+        np.testing.assert_allclose(alone.forces, reference, rtol=0, atol=1e-9 * scale)
+        np.testing.assert_allclose(whole.base_wrench, alone.base_wrench, rtol=0, atol=1e-9 * scale)
+        g = pin.computeGeneralizedGravity(am.model, am.model.createData(), q_from_plates(am, plates))
+        np.testing.assert_allclose(data.g, g, rtol=0, atol=1e-12)
+
+
+def test_a_data_of_another_model_is_refused(am):
+    other = AssemblerModel.from_config({"platforms": am.n + 1})
+    for data, match in ((other.create_data(), "another model"), ("data", "pinocchio.Data")):
+        with pytest.raises(ArgumentError, match=match):
+            solve_statics(am, am.home, data=data)

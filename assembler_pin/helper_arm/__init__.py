@@ -71,13 +71,16 @@ Frames: the arm's base is plate 0's world pose (``am.home[0]``, identity by defa
 all poses returned are world poses. Units: metres and radians.
 
 Modules: :mod:`.limits` (what one platform can do), :mod:`.urdf` (the arm's URDF),
-:mod:`.arm` (model, FK, IK problem, arm cache), :mod:`.repair` (the stack repair),
+:mod:`.arm` (model, FK, IK problem), :mod:`.cache` (the arms by link length, owned by
+the caller: ``initial_condition(..., arms=ArmCache(cfg))``, or by default one per thread
+and configuration), :mod:`.repair` (the stack repair),
 :mod:`.options` and :mod:`.initial` (the d scan and its result). Measured success rates
 are in the README.
 """
 
-from .arm import ArmCache, ArmIKProblem, ArmIKResult, HelperArm
-from .initial import KINEMATIC_VIOLATIONS, Candidate, InitialConditionResult, arm_cache, initial_condition
+from .arm import ArmIKProblem, ArmIKResult, HelperArm
+from .cache import ArmCache, arm_cache
+from .initial import KINEMATIC_VIOLATIONS, Candidate, InitialConditionResult, initial_condition
 from .limits import cluster_limits, height_range, relative_leg_measures
 from .options import HelperArmOptions
 from .repair import perturbed_plates, repair_stack

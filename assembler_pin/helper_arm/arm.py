@@ -1,5 +1,5 @@
-"""The helper arm model: Pinocchio FK of a 3n-DOF arm, its IK as a least-squares problem,
-and a per-caller cache of arms by link length (see the package docstring for the method).
+"""The helper arm model: Pinocchio FK of a 3n-DOF arm and its IK as a least-squares problem
+(see the package docstring for the method; the arms are kept by :mod:`.cache`).
 
 Frames: the arm's base is plate 0's world pose; poses are world poses. Units: metres, radians.
 """
@@ -21,7 +21,7 @@ from .limits import cached_leg_geometry, cluster_limits, relative_leg_measures
 from .options import HelperArmOptions
 from .urdf import helper_arm_urdf
 
-__all__ = ["ArmCache", "ArmIKProblem", "ArmIKResult", "HelperArm"]
+__all__ = ["ArmIKProblem", "ArmIKResult", "HelperArm"]
 
 logger = logging.getLogger(__name__)
 
@@ -360,25 +360,3 @@ def _xyz_rotations(q: np.ndarray) -> np.ndarray:
     rot[:, 2, 1] = sa * cc + ca * sb * sc
     rot[:, 2, 2] = ca * cb
     return rot
-
-
-class ArmCache:
-    """Helper arms by link length, for one configuration; owned by its caller.
-
-    Building an arm costs ~15 ms, so :func:`~assembler_pin.helper_arm.initial_condition`
-    keeps the arms of the link lengths it tried in one of these (each arm holds its own
-    mutable ``pin.Data``: a cache must not be shared between threads).
-    """
-
-    def __init__(self, config: AssemblerConfig) -> None:
-        self.config = config
-        self._arms: dict[float, HelperArm] = {}
-
-    def get(self, link_length: float) -> HelperArm:
-        key = round(float(link_length), 12)
-        if key not in self._arms:
-            self._arms[key] = HelperArm(self.config, key)
-        return self._arms[key]
-
-    def __len__(self) -> int:
-        return len(self._arms)

@@ -22,7 +22,7 @@ from ..model import AssemblerModel
 from ..options import checked_options
 from ..state import StackState, evaluate_state
 from ..threads import one_blas_thread
-from .arm import ArmCache
+from .cache import ArmCache, arm_cache
 from .limits import cluster_limits, height_range
 from .options import HelperArmOptions
 from .repair import perturbed_plates, repair_stack
@@ -176,13 +176,6 @@ class _Scan:
     candidates: list[Candidate] = field(default_factory=list)
 
 
-def arm_cache(am: AssemblerModel) -> ArmCache:
-    """The helper arms of ``am``'s configuration, kept on the model (built on first use)."""
-    if am.helper_arms is None:
-        am.helper_arms = ArmCache(am.config)
-    return am.helper_arms
-
-
 @one_blas_thread
 def initial_condition(
     am: AssemblerModel,
@@ -200,7 +193,8 @@ def initial_condition(
         am: the stack model.
         goal: world pose of the EE (``pin.SE3`` or 4×4).
         options: scan step, recursion limit, tolerances.
-        arms: the helper arms to use and fill (default: the cache kept on ``am``).
+        arms: the helper arms to use and fill, owned by the caller (default: the
+            per-thread cache of this configuration, :func:`~assembler_pin.helper_arm.arm_cache`).
 
     Returns:
         An :class:`InitialConditionResult` (``success`` False with the reason when no valid
