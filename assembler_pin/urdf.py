@@ -36,7 +36,7 @@ import pinocchio as pin
 import yaml
 
 from .config import AssemblerConfig
-from .geometry import DIMENSIONS, LEGS_PER_PLATFORM, leg_geometry
+from .geometry import DIMENSIONS, LEGS_PER_PLATFORM, LegGeometry, leg_geometry
 from .naming import names
 
 __all__ = [
@@ -143,126 +143,106 @@ def node_points(cfg: AssemblerConfig, k: int) -> np.ndarray:
     return np.stack([r * np.cos(a), r * np.sin(a), np.zeros(3)], axis=1)
 
 
-def assembler_urdf(cfg: AssemblerConfig) -> str:
-    """The URDF text of the stack described by ``cfg`` (see module docstring)."""
-    # Long by design: it writes the URDF in document order, plate by plate and leg by leg.
-    geo = leg_geometry(cfg)
-    dim = DIMENSIONS
-    leg = cfg.leg
-    robot = ET.Element("robot", name="assembler")
-    materials = {
-        "plate": "0.55 0.6 0.7 1",
-        "motor": "0.2 0.25 0.3 1",
-        "shaft": "0.8 0.8 0.8 1",
-        "node": "0.15 0.35 0.8 1",
-        "payload": "0.85 0.55 0.1 1",
-    }
-    for name, rgba in materials.items():
-        ET.SubElement(ET.SubElement(robot, "material", name=name), "color", rgba=rgba)
-    zero = np.zeros(3)
-    r = cfg.plate.node_radius
-    plate_inertia = cylinder_inertia(cfg.plate.mass, r, dim.plate_thickness)
-    z_axis = np.array([0.0, 0.0, 1.0])
-    defl = leg.max_deflection
-    force_limit = max(leg.max_tension, leg.max_compression)
+#: Colours of the URDF's materials (RGBA).
+_MATERIALS = {
+    "plate": "0.55 0.6 0.7 1",
+    "motor": "0.2 0.25 0.3 1",
+    "shaft": "0.8 0.8 0.8 1",
+    "node": "0.15 0.35 0.8 1",
+    "payload": "0.85 0.55 0.1 1",
+}
+_ZERO = np.zeros(3)
+_Z_AXIS = np.array([0.0, 0.0, 1.0])
 
-    def add_plate(k: int) -> None:
-        link = ET.SubElement(robot, "link", name=names.plate(k))
-        _inertial(link, cfg.plate.mass, zero, plate_inertia)
-        _shape(link, zero, ("cylinder", {"radius": xml_number(r), "length": xml_number(dim.plate_thickness)}), "plate")
-        for p in node_points(cfg, k):
-            _shape(link, p, ("sphere", {"radius": xml_number(dim.node_sphere_radius)}), "node", collision=False)
 
-    add_plate(0)
-    for j in range(cfg.platforms):
-        for i in range(LEGS_PER_PLATFORM):
-            n_ = functools.partial(names.leg, j, i)
-            _inertial(ET.SubElement(robot, "link", name=n_("cross")), 0.0, zero, zero)
-            _joint(
-                robot,
-                n_("ux"),
-                "revolute",
-                names.plate(j),
-                n_("cross"),
-                geo.bottom_in_plate[j, i],
-                geo.leg_base_rotation[j, i],
-                "1 0 0",
-                (-defl, defl, 0.0),
-            )
-            motor = ET.SubElement(robot, "link", name=n_("motor"))
-            motor_len = 2.0 * leg.motor_com
-            _inertial(
-                motor,
-                leg.motor_mass,
-                leg.motor_com * z_axis,
-                cylinder_inertia(leg.motor_mass, dim.motor_radius, motor_len),
-            )
-            if motor_len > 0:
-                _shape(
-                    motor,
-                    leg.motor_com * z_axis,
-                    ("cylinder", {"radius": xml_number(dim.motor_radius), "length": xml_number(motor_len)}),
-                    "motor",
-                )
-            _joint(robot, n_("uy"), "revolute", n_("cross"), n_("motor"), zero, None, "0 1 0", (-defl, defl, 0.0))
-            shaft = ET.SubElement(robot, "link", name=n_("shaft"))
-            shaft_len = 2.0 * leg.shaft_com
-            _inertial(
-                shaft,
-                leg.shaft_mass,
-                -leg.shaft_com * z_axis,
-                cylinder_inertia(leg.shaft_mass, dim.shaft_radius, shaft_len),
-            )
-            if shaft_len > 0:
-                _shape(
-                    shaft,
-                    -leg.shaft_com * z_axis,
-                    ("cylinder", {"radius": xml_number(dim.shaft_radius), "length": xml_number(shaft_len)}),
-                    "shaft",
-                )
-            _joint(
-                robot,
-                n_("actuator"),
-                "prismatic",
-                n_("motor"),
-                n_("shaft"),
-                zero,
-                None,
-                "0 0 1",
-                (leg.min_length, leg.max_length, force_limit),
-            )
-        add_plate(j + 1)
-        _joint(
-            robot,
-            names.plate_joint(j),
-            "floating",
-            names.plate(j),
-            names.plate(j + 1),
-            np.array([0.0, 0.0, cfg.home_height]),
+def _add_plate(robot: ET.Element, cfg: AssemblerConfig, k: int) -> None:
+    """The link of plate k: a cylinder of the plate's mass with its three joint nodes."""
+    dim, r = DIMENSIONS, cfg.plate.node_radius
+    link = ET.SubElement(robot, "link", name=names.plate(k))
+    _inertial(link, cfg.plate.mass, _ZERO, cylinder_inertia(cfg.plate.mass, r, dim.plate_thickness))
+    _shape(link, _ZERO, ("cylinder", {"radius": xml_number(r), "length": xml_number(dim.plate_thickness)}), "plate")
+    for p in node_points(cfg, k):
+        _shape(link, p, ("sphere", {"radius": xml_number(dim.node_sphere_radius)}), "node", collision=False)
+
+
+def _add_leg_body(
+    robot: ET.Element, name: str, mass: float, com: float, length: float, radius: float, material: str
+) -> None:
+    """A leg's motor or shaft link: a cylinder of ``mass`` [kg], ``length`` and ``radius``
+    [m] centred ``com`` [m] along the leg axis (no shape unless its length is positive)."""
+    link = ET.SubElement(robot, "link", name=name)
+    _inertial(link, mass, com * _Z_AXIS, cylinder_inertia(mass, radius, length))
+    if length > 0:
+        _shape(
+            link,
+            com * _Z_AXIS,
+            ("cylinder", {"radius": xml_number(radius), "length": xml_number(length)}),
+            material,
         )
-        for i in range(LEGS_PER_PLATFORM):
-            top = ET.SubElement(robot, "link", name=names.leg(j, i, "top"))
-            _inertial(top, 0.0, zero, zero)
-            _joint(
-                robot,
-                names.leg(j, i, "top_mount"),
-                "fixed",
-                names.plate(j + 1),
-                names.leg(j, i, "top"),
-                geo.top_in_plate[j, i],
-            )
-    payload = ET.SubElement(robot, "link", name=names.payload)
-    m = cfg.payload.mass
-    _inertial(payload, m, zero, np.full(3, m * dim.payload_size**2 / 6.0))
-    _shape(payload, zero, ("box", {"size": xml_vector(np.full(3, dim.payload_size))}), "payload")
+
+
+def _add_leg(robot: ET.Element, cfg: AssemblerConfig, geo: LegGeometry, j: int, i: int) -> None:
+    """Leg i of platform j: ``_ux`` → ``_cross`` → ``_uy`` → ``_motor`` → ``_actuator`` → ``_shaft``."""
+    leg, dim = cfg.leg, DIMENSIONS
+    defl = leg.max_deflection
+    n_ = functools.partial(names.leg, j, i)
+    _inertial(ET.SubElement(robot, "link", name=n_("cross")), 0.0, _ZERO, _ZERO)
     _joint(
         robot,
-        names.payload_joint,
-        "fixed",
-        names.plate(cfg.platforms),
-        names.payload,
-        np.array([0.0, 0.0, cfg.payload.offset]),
+        n_("ux"),
+        "revolute",
+        names.plate(j),
+        n_("cross"),
+        geo.bottom_in_plate[j, i],
+        geo.leg_base_rotation[j, i],
+        "1 0 0",
+        (-defl, defl, 0.0),
     )
+    _add_leg_body(robot, n_("motor"), leg.motor_mass, leg.motor_com, 2.0 * leg.motor_com, dim.motor_radius, "motor")
+    _joint(robot, n_("uy"), "revolute", n_("cross"), n_("motor"), _ZERO, None, "0 1 0", (-defl, defl, 0.0))
+    shaft_len = 2.0 * leg.shaft_com
+    _add_leg_body(robot, n_("shaft"), leg.shaft_mass, -leg.shaft_com, shaft_len, dim.shaft_radius, "shaft")
+    force_limit = max(leg.max_tension, leg.max_compression)
+    limit = (leg.min_length, leg.max_length, force_limit)
+    _joint(robot, n_("actuator"), "prismatic", n_("motor"), n_("shaft"), _ZERO, None, "0 0 1", limit)
+
+
+def _add_platform(robot: ET.Element, cfg: AssemblerConfig, geo: LegGeometry, j: int) -> None:
+    """Platform j: its six legs, plate j+1 on its floating joint, and the legs' top mounts."""
+    for i in range(LEGS_PER_PLATFORM):
+        _add_leg(robot, cfg, geo, j, i)
+    _add_plate(robot, cfg, j + 1)
+    home = np.array([0.0, 0.0, cfg.home_height])
+    _joint(robot, names.plate_joint(j), "floating", names.plate(j), names.plate(j + 1), home)
+    for i in range(LEGS_PER_PLATFORM):
+        top = ET.SubElement(robot, "link", name=names.leg(j, i, "top"))
+        _inertial(top, 0.0, _ZERO, _ZERO)
+        mount = names.leg(j, i, "top_mount")
+        _joint(robot, mount, "fixed", names.plate(j + 1), names.leg(j, i, "top"), geo.top_in_plate[j, i])
+
+
+def _add_payload(robot: ET.Element, cfg: AssemblerConfig) -> None:
+    """The payload: a box of the payload's mass fixed above the EE plate at its offset."""
+    size = DIMENSIONS.payload_size
+    payload = ET.SubElement(robot, "link", name=names.payload)
+    m = cfg.payload.mass
+    _inertial(payload, m, _ZERO, np.full(3, m * size**2 / 6.0))
+    _shape(payload, _ZERO, ("box", {"size": xml_vector(np.full(3, size))}), "payload")
+    offset = np.array([0.0, 0.0, cfg.payload.offset])
+    _joint(robot, names.payload_joint, "fixed", names.plate(cfg.platforms), names.payload, offset)
+
+
+def assembler_urdf(cfg: AssemblerConfig) -> str:
+    """The URDF text of the stack described by ``cfg`` (see module docstring), written in
+    document order: materials, plate 0, then per platform its legs and its top plate, the payload."""
+    robot = ET.Element("robot", name="assembler")
+    for name, rgba in _MATERIALS.items():
+        ET.SubElement(ET.SubElement(robot, "material", name=name), "color", rgba=rgba)
+    _add_plate(robot, cfg, 0)
+    geo = leg_geometry(cfg)
+    for j in range(cfg.platforms):
+        _add_platform(robot, cfg, geo, j)
+    _add_payload(robot, cfg)
     ET.indent(robot, space="  ")
     header = (
         '<?xml version="1.0"?>\n'
