@@ -46,7 +46,7 @@ import numpy as np
 import pinocchio as pin
 
 from .config import AssemblerConfig
-from .geometry import DIMENSIONS, LEGS_PER_PLATFORM, leg_geometry
+from .geometry import DIMENSIONS, LEGS_PER_PLATFORM, LegGeometry, leg_geometry
 from .naming import names
 from .urdf import cylinder_inertia, node_points, xml_number, xml_vector
 
@@ -149,20 +149,11 @@ def _cylinder_part(body: ET.Element, mass: float, radius: float, com_z: float, m
         ET.SubElement(body, "geom", type="cylinder", size=size, pos=xml_vector(centre), material=material)
 
 
-def assembler_mjcf(cfg: AssemblerConfig, weld_ee: bool = False) -> str:
-    """The MJCF text of the stack described by ``cfg`` (see module docstring); ``weld_ee`` adds
-    the equality ``<weld name="ee_weld" body1="plate_n"/>`` holding the EE plate to the world
-    (both ends held; its ``eq_data`` relative pose is the home one until set)."""
-    # Long by design: it writes the MJCF in document order, plate by plate and leg by leg.
-    geo = leg_geometry(cfg)
-    dim = DIMENSIONS
-    leg = cfg.leg
-    home_lengths = np.linalg.norm(
-        geo.top_in_plate + cfg.home_height * np.array([0.0, 0.0, 1.0]) - geo.bottom_in_plate, axis=-1
-    )
-    defl = leg.max_deflection
-    kp, kv, armature = actuator_gains(leg.stiffness)
-    root = ET.Element("mujoco", model="assembler")
+_Z_AXIS = np.array([0.0, 0.0, 1.0])
+
+
+def _mjcf_header(root: ET.Element, cfg: AssemblerConfig) -> None:
+    """Compiler, options (timestep, gravity [m/s²]), defaults, materials."""
     ET.SubElement(root, "compiler", angle="radian", autolimits="true")
     ET.SubElement(
         root,
@@ -179,69 +170,80 @@ def assembler_mjcf(cfg: AssemblerConfig, weld_ee: bool = False) -> str:
     asset = ET.SubElement(root, "asset")
     for name, rgba in _MATERIALS.items():
         ET.SubElement(asset, "material", name=name, rgba=rgba)
-    world = ET.SubElement(root, "worldbody")
-    ET.SubElement(world, "light", name="sun", pos="0 0 3", dir="0 0 -1", directional="true")
-    r = cfg.plate.node_radius
-    plate_inertia = cylinder_inertia(cfg.plate.mass, r, dim.plate_thickness)
-    zero = np.zeros(3)
-    z_axis = np.array([0.0, 0.0, 1.0])
 
-    def add_plate(parent: ET.Element, k: int) -> ET.Element:
-        if k == 0:
-            body = ET.SubElement(parent, "body", name=names.plate(0), pos="0 0 0")
-        else:
-            body = ET.SubElement(parent, "body", name=names.plate(k), pos=xml_vector(cfg.home_height * z_axis))
-            j = k - 1
-            for a, axis in zip("xyz", ("1 0 0", "0 1 0", "0 0 1"), strict=True):
-                ET.SubElement(body, "joint", name=names.plate_slide(j, a), type="slide", axis=axis, limited="false")
-            ET.SubElement(body, "joint", name=names.plate_joint(j), type="ball", limited="false")
-        _inertial(body, cfg.plate.mass, zero, plate_inertia)
+
+def _add_plate(parent: ET.Element, cfg: AssemblerConfig, k: int) -> ET.Element:
+    """The body of plate k in ``parent`` (plate k-1, or the world for plate 0): its three
+    slides and ball (k ≥ 1), inertia, disc and node spheres."""
+    dim, r = DIMENSIONS, cfg.plate.node_radius
+    if k == 0:
+        body = ET.SubElement(parent, "body", name=names.plate(0), pos="0 0 0")
+    else:
+        body = ET.SubElement(parent, "body", name=names.plate(k), pos=xml_vector(cfg.home_height * _Z_AXIS))
+        j = k - 1
+        for a, axis in zip("xyz", ("1 0 0", "0 1 0", "0 0 1"), strict=True):
+            ET.SubElement(body, "joint", name=names.plate_slide(j, a), type="slide", axis=axis, limited="false")
+        ET.SubElement(body, "joint", name=names.plate_joint(j), type="ball", limited="false")
+    _inertial(body, cfg.plate.mass, np.zeros(3), cylinder_inertia(cfg.plate.mass, r, dim.plate_thickness))
+    ET.SubElement(
+        body, "geom", type="cylinder", size=xml_vector(np.array([r, 0.5 * dim.plate_thickness])), material="plate"
+    )
+    for p in node_points(cfg, k):
         ET.SubElement(
-            body, "geom", type="cylinder", size=xml_vector(np.array([r, 0.5 * dim.plate_thickness])), material="plate"
+            body, "geom", type="sphere", size=xml_number(dim.node_sphere_radius), pos=xml_vector(p), material="node"
         )
-        for p in node_points(cfg, k):
-            ET.SubElement(
-                body, "geom", type="sphere", size=xml_number(dim.node_sphere_radius), pos=xml_vector(p), material="node"
-            )
-        return body
+    return body
 
-    parent = add_plate(world, 0)
+
+def _add_leg(parent: ET.Element, cfg: AssemblerConfig, geo: LegGeometry, j: int, i: int, home_length: float) -> None:
+    """Leg i of platform j in plate j's body: the motor body on the universal joint's two
+    hinges, the shaft body on the actuator slide (``ref`` the home length ``home_length`` [m])."""
+    leg, dim = cfg.leg, DIMENSIONS
+    defl = leg.max_deflection
+    _, _, armature = actuator_gains(leg.stiffness)
+    n_ = functools.partial(names.leg, j, i)
+    motor = ET.SubElement(
+        parent,
+        "body",
+        name=n_("motor"),
+        pos=xml_vector(geo.bottom_in_plate[j, i]),
+        quat=_quat_wxyz(geo.leg_base_rotation[j, i]),
+    )
+    for part, axis in (("ux", "1 0 0"), ("uy", "0 1 0")):
+        ET.SubElement(motor, "joint", name=n_(part), type="hinge", axis=axis, range=xml_vector(np.array([-defl, defl])))
+    _cylinder_part(motor, leg.motor_mass, dim.motor_radius, leg.motor_com, "motor")
+    shaft = ET.SubElement(motor, "body", name=n_("shaft"), pos=xml_vector(home_length * _Z_AXIS))
+    ET.SubElement(
+        shaft,
+        "joint",
+        name=n_("actuator"),
+        type="slide",
+        axis="0 0 1",
+        ref=xml_number(home_length),
+        armature=xml_number(armature),
+        range=xml_vector(np.array([leg.min_length, leg.max_length])),
+    )
+    _cylinder_part(shaft, leg.shaft_mass, dim.shaft_radius, -leg.shaft_com, "shaft")
+
+
+def _add_bodies(world: ET.Element, cfg: AssemblerConfig) -> None:
+    """The nested bodies: plate 0, then per platform its legs and the next plate, the payload."""
+    geo = leg_geometry(cfg)
+    home_lengths = np.linalg.norm(geo.top_in_plate + cfg.home_height * _Z_AXIS - geo.bottom_in_plate, axis=-1)
+    parent = _add_plate(world, cfg, 0)
     for j in range(cfg.platforms):
         for i in range(LEGS_PER_PLATFORM):
-            n_ = functools.partial(names.leg, j, i)
-            motor = ET.SubElement(
-                parent,
-                "body",
-                name=n_("motor"),
-                pos=xml_vector(geo.bottom_in_plate[j, i]),
-                quat=_quat_wxyz(geo.leg_base_rotation[j, i]),
-            )
-            ET.SubElement(
-                motor, "joint", name=n_("ux"), type="hinge", axis="1 0 0", range=xml_vector(np.array([-defl, defl]))
-            )
-            ET.SubElement(
-                motor, "joint", name=n_("uy"), type="hinge", axis="0 1 0", range=xml_vector(np.array([-defl, defl]))
-            )
-            _cylinder_part(motor, leg.motor_mass, dim.motor_radius, leg.motor_com, "motor")
-            home_length = home_lengths[j, i]
-            shaft = ET.SubElement(motor, "body", name=n_("shaft"), pos=xml_vector(home_length * z_axis))
-            ET.SubElement(
-                shaft,
-                "joint",
-                name=n_("actuator"),
-                type="slide",
-                axis="0 0 1",
-                ref=xml_number(home_length),
-                armature=xml_number(armature),
-                range=xml_vector(np.array([leg.min_length, leg.max_length])),
-            )
-            _cylinder_part(shaft, leg.shaft_mass, dim.shaft_radius, -leg.shaft_com, "shaft")
-        parent = add_plate(parent, j + 1)
-    payload = ET.SubElement(parent, "body", name=names.payload, pos=xml_vector(cfg.payload.offset * z_axis))
+            _add_leg(parent, cfg, geo, j, i, home_lengths[j, i])
+        parent = _add_plate(parent, cfg, j + 1)
+    size = DIMENSIONS.payload_size
+    payload = ET.SubElement(parent, "body", name=names.payload, pos=xml_vector(cfg.payload.offset * _Z_AXIS))
     m = cfg.payload.mass
-    _inertial(payload, m, zero, np.full(3, m * dim.payload_size**2 / 6.0))
-    ET.SubElement(payload, "geom", type="box", size=xml_vector(np.full(3, 0.5 * dim.payload_size)), material="payload")
+    _inertial(payload, m, np.zeros(3), np.full(3, m * size**2 / 6.0))
+    ET.SubElement(payload, "geom", type="box", size=xml_vector(np.full(3, 0.5 * size)), material="payload")
 
+
+def _add_equalities(root: ET.Element, cfg: AssemblerConfig, weld_ee: bool) -> None:
+    """The ball joints (``connect``) and, with ``weld_ee``, the EE weld."""
     equality = ET.SubElement(root, "equality")
     for j in range(cfg.platforms):
         for i in range(LEGS_PER_PLATFORM):
@@ -255,6 +257,12 @@ def assembler_mjcf(cfg: AssemblerConfig, weld_ee: bool = False) -> str:
             )
     if weld_ee:
         ET.SubElement(equality, "weld", name="ee_weld", body1=names.plate(cfg.platforms))
+
+
+def _add_actuators(root: ET.Element, cfg: AssemblerConfig) -> None:
+    """One position servo per leg (gains of :func:`actuator_gains`, stroke and force limits)."""
+    leg = cfg.leg
+    kp, kv, _ = actuator_gains(leg.stiffness)
     actuator = ET.SubElement(root, "actuator")
     for j in range(cfg.platforms):
         for i in range(LEGS_PER_PLATFORM):
@@ -268,6 +276,19 @@ def assembler_mjcf(cfg: AssemblerConfig, weld_ee: bool = False) -> str:
                 ctrlrange=xml_vector(np.array([leg.min_length, leg.max_length])),
                 forcerange=xml_vector(np.array([-leg.max_tension, leg.max_compression])),
             )
+
+
+def assembler_mjcf(cfg: AssemblerConfig, weld_ee: bool = False) -> str:
+    """The MJCF text of the stack described by ``cfg`` (see module docstring); ``weld_ee`` adds
+    the equality ``<weld name="ee_weld" body1="plate_n"/>`` holding the EE plate to the world
+    (both ends held; its ``eq_data`` relative pose is the home one until set)."""
+    root = ET.Element("mujoco", model="assembler")
+    _mjcf_header(root, cfg)
+    world = ET.SubElement(root, "worldbody")
+    ET.SubElement(world, "light", name="sun", pos="0 0 3", dir="0 0 -1", directional="true")
+    _add_bodies(world, cfg)
+    _add_equalities(root, cfg, weld_ee)
+    _add_actuators(root, cfg)
     ET.indent(root, space="  ")
     header = (
         '<?xml version="1.0"?>\n'
