@@ -74,7 +74,8 @@ Modules: :mod:`.limits` (what one platform can do), :mod:`.urdf` (the arm's URDF
 :mod:`.arm` (model, FK, IK problem), :mod:`.cache` (the arms by link length, owned by
 the caller: ``initial_condition(..., arms=ArmCache(cfg))``, or by default one per thread
 and configuration), :mod:`.repair` (the stack repair),
-:mod:`.options` and :mod:`.initial` (the d scan and its result). Measured success rates
+:mod:`.options`, :mod:`.link_lengths` (the order of the d scan) and :mod:`.initial` (the d scan
+and its result). Measured success rates
 are in the README.
 """
 

@@ -201,9 +201,8 @@ class HelperArm:
         ``[R_tipᵀ·p_tip/d_arm, 0]`` (LOCAL frame) and the LOCAL Jacobian's linear rows scale
         by ``d/d_arm``. This removes the singularity of changing a straight arm's length.
 
-        Starts: ``q0`` (default 0), then ``options.restarts`` deterministic random points
-        within half the limits (with d at the arm's own). Stops at the first start that
-        succeeds.
+        Starts: ``q0`` (default 0), then ``options.restarts`` deterministic random points within
+        half the limits (with d at the arm's own). Stops at the first start that succeeds.
 
         Args:
             goal: world pose of the tip (the EE) [m, rad].
@@ -227,24 +226,41 @@ class HelperArm:
         starts += [rng.uniform(0.5 * self.lower, 0.5 * self.upper) for _ in range(opts.restarts)]
         best: tuple[float, np.ndarray, float, float, float, float] | None = None
         for k, start in enumerate(starts):
-            x = problem.start(start)
-            x = problem.solve(x, opts.regularization, True) if opts.regularization > 0 else x
-            x = problem.solve(x, 0.0, False)
-            q, d = problem.split(x)
-            pos, rot, viol = problem.errors(q, d)
+            q, d, pos, rot, viol = _solve_from(problem, start, opts)
             if best is None or pos + rot + viol < best[0]:
                 best = (pos + rot + viol, q, d, pos, rot, viol)
             if pos <= opts.arm_tolerance and rot <= opts.arm_tolerance and viol == 0.0:
                 return ArmIKResult(True, q, pos, rot, problem.evaluations, k + 1, "reached", d)
         assert best is not None
-        _, q, d, pos, rot, viol = best
-        logger.debug("arm IK failed; least_squares statuses %s", problem.statuses)
-        if pos <= opts.arm_tolerance and rot <= opts.arm_tolerance:
-            why = f"reaches the goal only with plates past the stack's limits (by up to {viol:.3g})"
-        else:
-            why = f"cannot reach the goal within its joint limits: closest {pos:.3g} m, {rot:.3g} rad away"
-        message = f"the helper arm (d = {d:.4f} m) {why}"
-        return ArmIKResult(False, q, pos, rot, problem.evaluations, len(starts), message, d)
+        return _unreached(problem, best[1:], opts, len(starts))
+
+
+def _solve_from(
+    problem: ArmIKProblem, start: np.ndarray, opts: HelperArmOptions
+) -> tuple[np.ndarray, float, float, float, float]:
+    """One start of :meth:`HelperArm.ik`: the solve with the pull (when ``regularization`` > 0),
+    then without; returns q [rad], d [m] and the position [m], rotation [rad] and leg errors."""
+    x = problem.start(start)
+    x = problem.solve(x, opts.regularization, True) if opts.regularization > 0 else x
+    x = problem.solve(x, 0.0, False)
+    q, d = problem.split(x)
+    pos, rot, viol = problem.errors(q, d)
+    return q, d, pos, rot, viol
+
+
+def _unreached(
+    problem: ArmIKProblem, best: tuple[np.ndarray, float, float, float, float], opts: HelperArmOptions, starts: int
+) -> ArmIKResult:
+    """The failed :class:`ArmIKResult` of the closest start ``best`` (q, d, position,
+    rotation and leg errors), saying whether the goal or the stack's limits were missed."""
+    q, d, pos, rot, viol = best
+    logger.debug("arm IK failed; least_squares statuses %s", problem.statuses)
+    if pos <= opts.arm_tolerance and rot <= opts.arm_tolerance:
+        why = f"reaches the goal only with plates past the stack's limits (by up to {viol:.3g})"
+    else:
+        why = f"cannot reach the goal within its joint limits: closest {pos:.3g} m, {rot:.3g} rad away"
+    message = f"the helper arm (d = {d:.4f} m) {why}"
+    return ArmIKResult(False, q, pos, rot, problem.evaluations, starts, message, d)
 
 
 class ArmIKProblem:

@@ -24,6 +24,7 @@ from ..state import StackState, evaluate_state
 from ..threads import one_blas_thread
 from .cache import ArmCache, arm_cache
 from .limits import cluster_limits, height_range
+from .link_lengths import link_length_scan
 from .options import HelperArmOptions
 from .repair import perturbed_plates, repair_stack
 
@@ -98,37 +99,6 @@ class InitialConditionResult:
     def plates_if_valid(self) -> PlateArrays | None:
         """The valid state's plate poses, None when no valid initial condition was found."""
         return self.state.plates if self.success else None
-
-
-def _d_sequence(d0: float, step: float, d_range: tuple[float, float]) -> Iterator[float]:
-    """d0, d0+s, d0-s, d0+2s, … within ``d_range``, stopping when both sides are out."""
-    lo, hi = d_range
-    if lo <= d0 <= hi:
-        yield d0
-    k = 1
-    while True:
-        up, down = d0 + k * step, d0 - k * step
-        if up > hi and down < lo:
-            return
-        if up <= hi:
-            yield up
-        if down >= lo:
-            yield down
-        k += 1
-
-
-def _d_scan(d0: float, distance: float, n: int, step: float, d_range: tuple[float, float]) -> Iterator[float]:
-    """The link lengths tried [m]: the home height d0 first (the paper's start), then
-    ``d* = distance/n`` (the straight arm's length to the goal point) clipped to half a step
-    inside ``d_range``, then d*+s, d*-s, d*+2s, … within ``d_range``, leaving out the values
-    within half a step of d0 (already tried)."""
-    lo, hi = d_range
-    if lo <= d0 <= hi:
-        yield d0
-    d_star = min(max(distance / n, lo + 0.5 * step), hi - 0.5 * step)
-    for d in _d_sequence(d_star, step, d_range):
-        if abs(d - d0) >= 0.5 * step:
-            yield d
 
 
 def _kinematic_problems(
@@ -215,7 +185,7 @@ def initial_condition(
         )
         return _failure(am, goal_se3, opts, why, _Scan(), t0)
     scan = _Scan()
-    d_values = _d_scan(am.config.home_height, distance, am.n, opts.d_step, height_range(am.config))
+    d_values = link_length_scan(am.config.home_height, distance, am.n, opts.d_step, height_range(am.config))
     tried: set[tuple] = set()
     for limit in (min(CHEAP_SCAN, opts.max_attempts), opts.max_attempts):
         found = _scan_link_lengths(am, goal_se3, opts, arms, d_values, scan, limit)
