@@ -43,7 +43,8 @@ from typing import Any, ClassVar
 
 import yaml
 
-from .bounds import check_bound
+from .config_checks import LIMITS as LIMITS  # re-exported: the documented magnitudes
+from .config_checks import MAX_MESSAGE, check, shorten, validate
 from .exceptions import ConfigError, short_repr
 from .options import is_number
 
@@ -143,7 +144,7 @@ class AssemblerConfig:
     payload: PayloadConfig = field(default_factory=PayloadConfig)
 
     def __post_init__(self) -> None:
-        _validate(self)
+        validate(self)
 
     # ------------------------------------------------------------------ derived
     @property
@@ -174,102 +175,6 @@ _SECTIONS: dict[str, type] = {"plate": PlateConfig, "leg": LegConfig, "payload":
 _TOP_SCALARS = ("platforms", "gravity")
 
 
-#: Physically meaningful ranges beyond the per-key rules: every value is at most this
-#: large, so no product of them (forces ~ masses × gravity × lengths) overflows.
-LIMITS = {
-    "gravity": 1e3,  # [m/s^2], 100 g
-    "mass": 1e5,  # [kg], any plate, motor, shaft or payload mass
-    "length": 1e3,  # [m], radii, leg lengths, centres of mass, payload offset (absolute)
-    "force": 1e9,  # [N], force limits
-    "stiffness": 1e10,  # [N/m], leg stiffness
-}
-_UNIT_OF = {
-    "gravity": "gravity",
-    "mass": "mass",
-    "motor_mass": "mass",
-    "shaft_mass": "mass",
-    "max_tension": "force",
-    "max_compression": "force",
-    "stiffness": "stiffness",
-}
-
-
-def _is_number(value: Any) -> bool:
-    return is_number(value)
-
-
-def _check(condition: bool, key: str, value: Any, allowed: str) -> None:
-    if not condition:
-        raise ConfigError(shorten(f"config key '{key}' = {short_repr(value)} is invalid: {allowed}"))
-
-
-def _validate(cfg: AssemblerConfig) -> None:
-    """Check every value; raise ConfigError naming the key and what is allowed."""
-    p, leg, pl = cfg.plate, cfg.leg, cfg.payload
-    _check(
-        isinstance(cfg.platforms, int) and not isinstance(cfg.platforms, bool) and 1 <= cfg.platforms <= 64,
-        "platforms",
-        cfg.platforms,
-        "must be an integer from 1 to 64",
-    )
-    numbers = {"gravity": cfg.gravity}
-    numbers |= {f"plate.{f.name}": getattr(p, f.name) for f in dataclasses.fields(p)}
-    numbers |= {f"leg.{f.name}": getattr(leg, f.name) for f in dataclasses.fields(leg)}
-    numbers |= {f"payload.{f.name}": getattr(pl, f.name) for f in dataclasses.fields(pl)}
-    for key, value in numbers.items():
-        _check(_is_number(value) and math.isfinite(value), key, value, "must be a finite number")
-        name = key.rsplit(".", 1)[-1]
-        kind = _UNIT_OF.get(name, None if name.endswith("_deg") else "length")
-        if kind is not None:
-            _check(abs(value) <= LIMITS[kind], key, value, f"must be at most {LIMITS[kind]:g} in magnitude")
-    _check(cfg.gravity >= 0, "gravity", cfg.gravity, "must be >= 0 [m/s^2]")
-    _check(p.node_radius > 0, "plate.node_radius", p.node_radius, "must be > 0 [m]")
-    _check(
-        0 <= p.node_spacing_deg < 60,
-        "plate.node_spacing_deg",
-        p.node_spacing_deg,
-        "must be in [0, 60) degrees",
-    )
-    for key in ("mass",):
-        _check(getattr(p, key) >= 0, f"plate.{key}", getattr(p, key), "must be >= 0 [kg]")
-    for key in ("motor_mass", "shaft_mass"):
-        _check(getattr(leg, key) >= 0, f"leg.{key}", getattr(leg, key), "must be >= 0 [kg]")
-    _check(pl.mass >= 0, "payload.mass", pl.mass, "must be >= 0 [kg]")
-    _check(leg.min_length > 0, "leg.min_length", leg.min_length, "must be > 0 [m]")
-    _check(
-        leg.max_length > leg.min_length,
-        "leg.max_length",
-        leg.max_length,
-        f"must be > leg.min_length ({leg.min_length}) [m]",
-    )
-    for key in ("motor_com", "shaft_com"):
-        value = getattr(leg, key)
-        _check(
-            0 <= value <= leg.min_length,
-            f"leg.{key}",
-            value,
-            f"must be in [0, leg.min_length = {leg.min_length}] [m]",
-        )
-    _check(
-        0 < leg.max_deflection_deg < 90,
-        "leg.max_deflection_deg",
-        leg.max_deflection_deg,
-        "must be in (0, 90) degrees",
-    )
-    for key in ("max_tension", "max_compression"):
-        _check(getattr(leg, key) > 0, f"leg.{key}", getattr(leg, key), "must be > 0 [N]")
-    for key in ("max_speed", "max_acceleration"):  # a near-zero limit would plan a near-endless motion
-        check_bound(f"leg.{key}", getattr(leg, key), f"config key 'leg.{key}'", ConfigError)
-    _check(leg.stiffness >= 1e3, "leg.stiffness", leg.stiffness, "must be in [1e3, 1e10] [N/m]")
-    chord = cfg.leg_chord
-    if leg.mid_length <= chord * (1.0 + 1e-9):
-        raise ConfigError(
-            f"no home pose exists: mid-stroke leg length {leg.mid_length:.4g} m must exceed "
-            f"the horizontal span between its nodes {chord:.4g} m "
-            "(lengthen the legs or reduce plate.node_radius)"
-        )
-
-
 def _section_from_mapping(name: str, cls: type, data: Any) -> Any:
     if not isinstance(data, Mapping):
         raise ConfigError(f"config key '{name}' must be a mapping of keys to values, got {short_repr(data)}")
@@ -278,16 +183,13 @@ def _section_from_mapping(name: str, cls: type, data: Any) -> Any:
         if key not in allowed:
             raise ConfigError(f"unknown config key '{name}.{shorten(str(key), 12)}'; allowed: {','.join(allowed)}")
     for key, value in data.items():
-        if not _is_number(value):
+        if not is_number(value):
             raise ConfigError(f"config key '{name}.{key}' = {short_repr(value)} is invalid: must be a number")
     return cls(**{k: float(v) for k, v in data.items()})
 
 
 #: Longest configuration file read [bytes] (a real one is under 2 kB).
 MAX_CONFIG_BYTES = 1 << 20
-
-#: Longest message of a :class:`ConfigError` [characters].
-MAX_MESSAGE = 200
 
 _YAML12_INT = re.compile(r"^(?:[-+]?[0-9]+|0o[0-7]+|0x[0-9a-fA-F]+)$")
 _YAML12_FLOAT = re.compile(
@@ -378,12 +280,6 @@ def load_yaml(text: str, what: str) -> Any:
         raise ConfigError(f"{what} is not a readable configuration (nested too deeply or a malformed number)") from None
 
 
-def shorten(message: str, limit: int = MAX_MESSAGE) -> str:
-    """``message`` on one line of at most ``limit`` characters."""
-    line = " ".join(message.split())
-    return line if len(line) <= limit else line[: limit - 1] + "…"
-
-
 def config_from_dict(data: Mapping[str, Any] | None) -> AssemblerConfig:
     """Build a validated configuration from a (possibly partial) mapping.
 
@@ -403,7 +299,7 @@ def config_from_dict(data: Mapping[str, Any] | None) -> AssemblerConfig:
         value = data["platforms"]
         if is_number(value) and float(value).is_integer() and abs(value) < 2**31:
             value = int(value)  # 3.0 and numpy integers are the integer 3
-        _check(
+        check(
             isinstance(value, int) and not isinstance(value, bool),
             "platforms",
             value,
@@ -411,7 +307,7 @@ def config_from_dict(data: Mapping[str, Any] | None) -> AssemblerConfig:
         )
         kwargs["platforms"] = value
     if "gravity" in data:
-        _check(_is_number(data["gravity"]), "gravity", data["gravity"], "must be a number")
+        check(is_number(data["gravity"]), "gravity", data["gravity"], "must be a number")
         kwargs["gravity"] = float(data["gravity"])
     for name, cls in _SECTIONS.items():
         if name in data:
