@@ -452,3 +452,10 @@ def test_the_helper_arms_belong_to_the_caller_not_to_the_model(am):
     worker.start()
     worker.join()
     assert other[0] is not arm_cache(am)
+
+
+def test_the_cluster_limits_use_the_one_set_of_leg_measures():
+    from assembler_pin.helper_arm import limits
+    from assembler_pin.kinematics import legs
+
+    assert limits.relative_leg_measures is legs.relative_leg_measures

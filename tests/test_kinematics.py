@@ -186,3 +186,30 @@ def test_taa_round_trip_and_errors():
         taa_to_se3([1, 2, 3])
     with pytest.raises(PoseError, match="NaN"):
         taa_to_se3([0, 0, np.nan, 0, 0, 0])
+
+
+def test_the_leg_measures_batched_and_relative_equal_the_design(am, random_poses):
+    """kinematics.legs over a batch of stacks (leading axis), and from relative plate poses
+    (the helper arm's form), against the legs recomputed from the design (checks.py)."""
+    from assembler_pin.kinematics import legs
+
+    cfg, geo = am.config, am.geometry
+    R = np.stack([plates.R for _, plates in random_poses])  # (B, n+1, 3, 3)
+    p = np.stack([plates.p for _, plates in random_poses])
+    bottom, top = legs.leg_points(geo, R, p)
+    vec = top - bottom
+    lengths = legs.leg_lengths(vec)
+    in_bottom, in_top = legs.directions_in_plates(vec / lengths[..., None], R[:, :-1], R[:, 1:])
+    cos = legs.deflection_cosines(in_bottom, in_top, geo.home_direction)
+    rise = legs.leg_rise(in_bottom, lengths)
+    rel_R = np.matmul(np.swapaxes(R[:, :-1], -1, -2), R[:, 1:])
+    rel_p = np.matmul(np.swapaxes(R[:, :-1], -1, -2), (p[:, 1:] - p[:, :-1])[..., None])[..., 0]
+    rel_lengths, rel_cos, rel_rise = legs.relative_leg_measures(geo, rel_R, rel_p)
+    for b in range(R.shape[0]):
+        for j in range(am.n):
+            L, defl_b, defl_t, h = sp_legs(cfg, j, R[b, j], p[b, j], R[b, j + 1], p[b, j + 1])
+            expected_cos = np.stack([np.cos(defl_b), np.cos(defl_t)], axis=-1)
+            for got_L, got_cos, got_rise in ((lengths, cos, rise), (rel_lengths, rel_cos, rel_rise)):
+                np.testing.assert_allclose(got_L[b, j], L, rtol=0, atol=1e-14)
+                np.testing.assert_allclose(got_cos[b, j], expected_cos, rtol=0, atol=1e-13)
+                np.testing.assert_allclose(got_rise[b, j], h, rtol=0, atol=1e-14)

@@ -36,6 +36,7 @@ from .legs import (
     leg_rise,
     leg_state,
     leg_vectors,
+    relative_leg_directions,
     relative_leg_measures,
 )
 from .poses import (
@@ -78,6 +79,7 @@ __all__ = [
     "platform_configurations",
     "q_from_arrays",
     "q_from_plates",
+    "relative_leg_directions",
     "relative_leg_measures",
     "rotations_to_quaternions",
     "se3_to_taa",

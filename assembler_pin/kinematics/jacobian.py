@@ -11,6 +11,7 @@ import numpy as np
 import pinocchio as pin
 
 from ..model import AssemblerModel
+from .legs import relative_leg_directions
 from .poses import PlateArrays, plate_arrays
 
 __all__ = ["ee_jacobian_wrt_lengths", "sp_inverse_jacobian"]
@@ -21,8 +22,7 @@ def sp_inverse_jacobian(am: AssemblerModel, j: int, top_in_bottom: pin.SE3) -> n
     plate (pose perturbed as ``top_in_bottom * exp6(ξ)``), bottom plate fixed [m/m, m/rad]."""
     geo = am.geometry
     R, p = top_in_bottom.rotation, top_in_bottom.translation
-    vec = geo.top_in_plate[j] @ R.T + p - geo.bottom_in_plate[j]
-    u_top = (vec / np.linalg.norm(vec, axis=1, keepdims=True)) @ R
+    _, _, _, u_top = relative_leg_directions(geo.bottom_in_plate[j], geo.top_in_plate[j], R, p)
     return np.hstack([u_top, np.cross(geo.top_in_plate[j], u_top)])
 
 

@@ -28,6 +28,7 @@ __all__ = [
     "leg_rise",
     "leg_state",
     "leg_vectors",
+    "relative_leg_directions",
     "relative_leg_measures",
 ]
 
@@ -122,12 +123,29 @@ def relative_leg_measures(
         lengths (..., n, 6) [m], cos_deflection (..., n, 6, 2) (bottom, top joint),
         rise (..., n, 6): the top joint's height above the bottom joint, bottom frame [m].
     """
-    top = np.matmul(geo.top_in_plate, np.swapaxes(rotations, -1, -2)) + translations[..., None, :]
-    vec = top - geo.bottom_in_plate
+    _, lengths, u, in_top = relative_leg_directions(geo.bottom_in_plate, geo.top_in_plate, rotations, translations)
+    return lengths, deflection_cosines(u, in_top, geo.home_direction), leg_rise(u, lengths)
+
+
+def relative_leg_directions(
+    bottom: np.ndarray, top: np.ndarray, rotations: np.ndarray, translations: np.ndarray
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Leg vectors, lengths and directions of platforms given by the relative pose of their
+    top plate, all in the bottom plate's frame (the bottom plate's frame is the poses' frame).
+
+    Args:
+        bottom: (..., 6, 3) bottom joint centres in the bottom plate [m]; top: (..., 6, 3) top
+            joint centres in the top plate [m].
+        rotations: (..., 3, 3) top plate in the bottom plate's frame; translations: (..., 3) [m].
+
+    Returns:
+        vec (..., 6, 3) [m], lengths (..., 6) [m], u (..., 6, 3) unit directions (bottom
+        frame), u_top (..., 6, 3) the same directions in the top plate's frame.
+    """
+    vec = np.matmul(top, np.swapaxes(rotations, -1, -2)) + translations[..., None, :] - bottom
     lengths = leg_lengths(vec)
     u = vec / lengths[..., None]
-    in_top = np.matmul(u, rotations)  # the bottom plate's frame is the frame of the poses
-    return lengths, deflection_cosines(u, in_top, geo.home_direction), leg_rise(u, lengths)
+    return vec, lengths, u, np.matmul(u, rotations)
 
 
 def leg_vectors(am: AssemblerModel, pa: PlateArrays) -> tuple[np.ndarray, ...]:
