@@ -99,6 +99,7 @@ def evaluate_state(
     plates: PlateArrays | Sequence | np.ndarray,
     goal: pin.SE3 | None = None,
     tolerance: GoalTolerance = DEFAULT_GOAL_TOLERANCE,
+    data: pin.Data | None = None,
 ) -> StackState:
     """Leg state, statics and constraint check of the given plate poses.
 
@@ -106,6 +107,8 @@ def evaluate_state(
         plates: world poses of plates 0..n, plate 0 first.
         goal: optional EE goal to check plate n against.
         tolerance: EE goal tolerance.
+        data: a whole-stack Pinocchio ``Data`` the caller owns, for the statics
+            (:func:`~assembler_pin.statics.solve_statics`); default one model per platform.
     """
     checked_model(am)
     if goal is not None:
@@ -114,6 +117,6 @@ def evaluate_state(
         raise OptionsError(f"tolerance must be a GoalTolerance, got {type(tolerance).__name__}")
     pa = plate_arrays(am, plates)
     legs = leg_state(am, pa)
-    statics = solve_statics(am, pa, legs=legs)
+    statics = solve_statics(am, pa, legs=legs, data=data)
     violations = evaluate_constraints(am.config, legs, statics, pa, goal, tolerance)
     return StackState(pa, legs, statics, violations, goal)

@@ -68,3 +68,13 @@ def test_to_dict_is_strict_json_and_matches_the_state(am, random_poses):
     np.testing.assert_allclose(doc["forces"], state.forces)
     np.testing.assert_allclose(doc["leg_lengths"], state.leg_lengths)
     assert doc["max_abs_force"] == state.max_abs_force and doc["feasible"] == state.feasible
+
+
+def test_a_caller_data_gives_the_same_state(am, random_poses):
+    """The state on the caller's whole-stack Data: forces of the free-body statics."""
+    data = am.create_data()
+    for _, plates in random_poses[:2]:
+        state = ap.evaluate_state(am, plates, data=data)
+        reference = design_forces(am.config, plates)
+        np.testing.assert_allclose(state.forces, reference, rtol=0, atol=1e-9 * np.abs(reference).max())
+        assert state.feasible == (design_problems(am.config, plates) == [])
