@@ -9,7 +9,6 @@ import pytest
 from checks import design_forces, design_problems, home_directions
 
 import assembler_pin as ap
-import assembler_pin.statics as statics_module
 from assembler_pin.bench import random_reachable_plates
 
 
@@ -32,15 +31,15 @@ def whole_stack_forces(am: ap.AssemblerModel, plates) -> np.ndarray:
 
 
 @pytest.mark.parametrize("n", [1, 2, 3, 4, 5, 6])
-@pytest.mark.parametrize("whole_stack_max", [0, 64])
-def test_per_platform_statics_equal_the_whole_stack(n, whole_stack_max, monkeypatch):
-    # both engines of solve_statics: one model per platform (0) and the whole-stack model (64)
-    monkeypatch.setattr(statics_module, "WHOLE_STACK_STATICS_MAX_PLATFORMS", whole_stack_max)
+@pytest.mark.parametrize("whole_stack", [False, True])
+def test_per_platform_statics_equal_the_whole_stack(n, whole_stack):
+    # both engines of solve_statics: one model per platform, and the whole-stack model on a caller's Data
     am = ap.AssemblerModel.from_config({"platforms": n})
+    data = am.create_data() if whole_stack else None
     rng = np.random.default_rng(n)
     for _ in range(4):
         _, plates = random_reachable_plates(am, rng, spread=0.8)
-        result = ap.solve_statics(am, plates)
+        result = ap.solve_statics(am, plates, data=data)
         np.testing.assert_allclose(result.forces, whole_stack_forces(am, plates), atol=1e-9)
 
 
