@@ -13,6 +13,7 @@ from .common import (
     config_from_args,
     dumps,
     progress_for,
+    wrapped,
     writable_parent,
 )
 
@@ -165,7 +166,7 @@ def _write_outputs(args: argparse.Namespace, am: AssemblerModel, motion, prog) -
 def _print_summary(args: argparse.Namespace, motion, doc: dict) -> None:
     """The text answer of ``plan``: what was planned, the trajectory, the files written."""
     traj = motion.trajectory
-    print(f"plan: {'success' if doc['success'] else 'FAILED'} — {doc['reason']}")
+    print(wrapped(f"plan: {'success' if doc['success'] else 'FAILED'} — {doc['reason']}"))
     print("start: the home pose" if doc["start"] == "home" else "start: the optimized pose of --from")
     if motion.plan.states:
         print(
@@ -179,8 +180,10 @@ def _print_summary(args: argparse.Namespace, motion, doc: dict) -> None:
             else (f"the valid prefix only, to u = {doc['path_reached']:.4f} of {doc['path_segments']}")
         )
         print(
-            f"trajectory: {traj.duration:.2f} s at {args.rate:g} Hz ({len(traj.times)} samples, every one "
-            f"valid), {extent}"
+            wrapped(
+                f"trajectory: {traj.duration:.2f} s at {args.rate:g} Hz ({len(traj.times)} samples, every one "
+                f"valid), {extent}"
+            )
         )
     elif args.out:
         print(f"no valid trajectory: {args.out} not written")
@@ -217,20 +220,22 @@ def _plan_compare(args: argparse.Namespace, am: AssemblerModel, options) -> int:
         )
         return 0
     print(
-        f"{'path':<24}{'plan':<16}{'peak max|F| N':>14}{'leg travel m':>13}{'duration s':>11}"
-        f"{'valid %':>9}{'limits %':>9}{'off path mm':>12}"
+        f"{'path':<24}{'plan':<16}{'peak max|F| N':>14}{'travel m':>9}{'time s':>8}"
+        f"{'valid %':>8}{'limits %':>9}{'off path mm':>12}"
     )
     for c in results:
         if not c.figures:
-            print(f"{c.name:<24}no plan: {c.motion.reason}")
+            print(wrapped(f"{c.name:<24}no plan: {c.motion.reason}"))
         for m, f in c.figures.items():
             print(
-                f"{c.name:<24}{m:<16}{f.peak_max_abs_force:14.2f}{f.total_leg_travel:13.3f}{f.duration:11.2f}"
-                f"{100 * f.valid_fraction:9.1f}{100 * f.limits_fraction:9.1f}"
+                f"{c.name:<24}{m:<16}{f.peak_max_abs_force:14.2f}{f.total_leg_travel:9.3f}{f.duration:8.2f}"
+                f"{100 * f.valid_fraction:8.1f}{100 * f.limits_fraction:9.1f}"
                 f"{1e3 * f.max_path_deviation:12.2f}"
             )
     print(
-        "valid: every limit and the EE within the path tolerance at every output sample; "
-        "limits: legs, joints and forces only"
+        wrapped(
+            "travel: total leg travel; time: duration; valid: every limit and the EE within "
+            "the path tolerance at every output sample; limits: legs, joints and forces only"
+        )
     )
     return 0
