@@ -7,7 +7,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from ..exceptions import CLIError
-from .common import config_from_args, dumps, finite_range, progress_for, writable_parent
+from .common import config_from_args, dumps, finite_range, progress_for, wrapped, writable_parent
 
 if TYPE_CHECKING:
     from ..config import AssemblerConfig
@@ -150,8 +150,10 @@ def run(args: argparse.Namespace) -> int:
         print(dumps(doc))
         return 0
     print(
-        f"map: {doc['computed']} cells computed, {doc['already_done']} already in {doc['out']}; "
-        f"{run.workers or 'no'} workers, {run.time_s:.1f} s ({run.cells_per_second:.2f} cells/s)"
+        wrapped(
+            f"map: {doc['computed']} cells computed, {doc['already_done']} already in {doc['out']}; "
+            f"{run.workers or 'no'} workers, {run.time_s:.1f} s ({run.cells_per_second:.2f} cells/s)"
+        )
     )
     print(f"reachable: {doc['reachable']} of {len(reach)} cells")
     if doc["max_abs_force_range"]:
