@@ -90,17 +90,13 @@ def _pictures(args: argparse.Namespace, table, configs: list, doc: dict) -> None
 
         doc["png"] = str(save(map_heatmaps(table, am, configs[0][0]), args.png))
     if args.html:
-        from ..maps.pictures import show_map_points
+        from ..maps.pictures import write_map_page
         from ..viewer import StackViewer
 
         with StackViewer(am) as viewer:
             viewer.display(am.home)
-            lo, hi = show_map_points(viewer, table, config=configs[0][0])
-            viewer.set_title(
-                f"Capability map: payload capacity {lo:.1f} (light) – {hi:.1f} kg (dark); gray: not reachable"
-            )
             doc["html"] = str(Path(args.html).resolve())
-            viewer.static_html(doc["html"])
+            write_map_page(viewer, table, doc["html"], config=configs[0][0])
 
 
 def run(args: argparse.Namespace) -> int:

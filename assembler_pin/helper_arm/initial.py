@@ -393,9 +393,10 @@ def _why_not(scan: _Scan, repairs: list[Candidate], opts: HelperArmOptions) -> s
     return why
 
 
-def _short_why(scan: _Scan) -> str:
-    """The one-line cause of a failed scan (:mod:`~assembler_pin.messages`)."""
-    tried = f"{scan.attempts} link length(s) tried, repair failed"
+def _short_why(scan: _Scan, repaired: bool) -> str:
+    """The one-line cause of a failed scan (:mod:`~assembler_pin.messages`); ``repaired``:
+    a repair of the stack was tried too."""
+    tried = f"after {scan.attempts} attempt(s){', repair failed' if repaired else ''}"
     head = "no valid initial condition: "
     if scan.broken:
         return f"{head}{scan.broken[0].split(': ', 1)[-1]} (where the helper arm reaches the goal; {tried})"
@@ -424,7 +425,7 @@ def _failure(
             f"no valid initial condition after {scan.attempts} attempt(s) (d from {d0:.4f} m, then from "
             f"{min(max(distance / am.n, lo), hi):.4f} m, step {opts.d_step} m): {why}"
         )
-        message = one_line(_short_why(scan))
+        message = one_line(_short_why(scan, "repairing" in why))
     logger.info("initial condition failed: %s", details)
     return InitialConditionResult(
         False,
