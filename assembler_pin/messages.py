@@ -14,6 +14,7 @@ leg stroke          a leg shorter or longer than its stroke, or its top joint no
                     above its bottom joint (continuous translation)
 joint deflection    a ball joint deflected past its limit
 force limit         a leg's force beyond its tension or compression limit
+torque limit        a carrier arm's joint torque beyond its effort limit
 singular            a platform whose statics is singular (condition number too large)
 goal missed         the end effector away from the goal beyond the tolerance
 motion step         a leg would move more in one motion step than allowed
@@ -49,6 +50,7 @@ CAUSES = (
     "leg stroke",
     "joint deflection",
     "force limit",
+    "torque limit",
     "singular",
     "goal missed",
     "motion step",
