@@ -12,9 +12,13 @@ from __future__ import annotations
 import ast
 import base64
 import colorsys
+import contextlib
 import inspect
 import re
+import shutil
+import subprocess
 
+import matplotlib.image as mpimg
 import numpy as np
 import pytest
 from matplotlib.backends.backend_agg import FigureCanvasAgg
@@ -408,3 +412,56 @@ def test_map_pictures_name_no_colour_of_their_own():
     assert not re.search(r"#[0-9a-fA-F]{3,8}\b", source)
     assert not re.search(r"\"(magma|viridis|cividis|gray|grey|plasma)(_r)?\"", source)
     assert not re.search(r"rgba?\(\s*\d", source)
+
+
+CHROMIUM = shutil.which("chromium") or shutil.which("chromium-browser")
+
+
+def _screenshot(html, tmp_path, size=(900, 700)) -> np.ndarray:
+    """The page as headless Chromium draws it, (H, W, 3) in [0, 1]."""
+    png = html.with_suffix(".png")
+    cmd = [
+        CHROMIUM,
+        "--headless",
+        "--no-sandbox",
+        "--disable-gpu",
+        "--enable-unsafe-swiftshader",
+        "--no-first-run",
+        f"--user-data-dir={tmp_path / 'chromium-profile'}",
+        f"--screenshot={png}",
+        f"--window-size={size[0]},{size[1]}",
+        html.resolve().as_uri(),
+    ]
+    for _ in range(2):  # a stalled start can make one attempt fail
+        with contextlib.suppress(subprocess.TimeoutExpired):
+            subprocess.run(cmd, capture_output=True, timeout=120, check=False)
+        if png.exists():
+            break
+    assert png.exists(), "chromium wrote no screenshot"
+    return mpimg.imread(png)[..., :3]
+
+
+def _has_colour(img: np.ndarray, rgb, tol: float = 0.08) -> bool:
+    return bool((np.abs(img - np.asarray(rgb)[:3]).max(axis=-1) < tol).any())
+
+
+@pytest.mark.skipif(CHROMIUM is None, reason="chromium not installed (.ci/run installs it)")
+def test_map_page_in_a_real_browser(am, tmp_path):
+    """The map page as a browser shows it: the colour bar at the bottom left with both ends
+    of the capacity scale, and the cells drawn in the scale's colours above it."""
+    from matplotlib import colormaps
+
+    from assembler_pin.maps import pictures
+    from assembler_pin.viewer import StackViewer
+
+    page = tmp_path / "map.html"
+    with StackViewer(am) as v:
+        v.display(am.home)
+        pictures.write_map_page(v, _map_table(), page)
+    img = _screenshot(page, tmp_path)
+    h, w = img.shape[:2]
+    cmap = colormaps[palette.CAPACITY_CMAP]
+    corner = img[int(0.7 * h) :, : int(0.45 * w)]
+    assert _has_colour(corner, cmap(0.0)) and _has_colour(corner, cmap(1.0)), "no capacity colour bar"
+    scene = img[: int(0.7 * h)]
+    assert _has_colour(scene, cmap(1.0), 0.15) and _has_colour(scene, palette.UNREACHABLE, 0.1), "no map cells"
