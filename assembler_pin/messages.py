@@ -39,7 +39,7 @@ from .labels import leg_label, platform_label
 if TYPE_CHECKING:
     from .constraints import Violation
 
-__all__ = ["CAUSES", "MAX_LENGTH", "binding", "describe", "number", "one_line"]
+__all__ = ["CAUSES", "MAX_LENGTH", "binding", "describe", "finite_text", "number", "one_line"]
 
 #: The longest failure message [characters].
 MAX_LENGTH = 200
@@ -122,6 +122,11 @@ def binding(violations: Iterable[Violation]) -> Violation | None:
 
 
 _NON_FINITE = re.compile(r"(?<![A-Za-z])[-+]?(nan|inf|infinity)(?![A-Za-z])", re.IGNORECASE)
+
+
+def finite_text(text: str) -> str:
+    """``text`` with every "nan"/"inf" word written "not finite" (layout kept)."""
+    return _NON_FINITE.sub("not finite", text)
 
 
 def one_line(text: str, limit: int = MAX_LENGTH) -> str:

@@ -205,3 +205,24 @@ def test_reproduce_summary_is_at_most_100_wide(am):
     assert all(name in text for name in SCENARIOS)
     markdown = summary_table(outcomes, markdown=True)
     assert len(markdown.splitlines()) == 2 + len(outcomes)  # the report keeps one table
+
+
+def test_state_tables_write_no_nan(am):
+    """A force that overflowed reads "not finite" in the table, never "inf" or "nan"."""
+    from assembler_pin.cli.common import format_state_table
+    from assembler_pin.constraints import Violation
+
+    home = evaluate_state(am, am.home)
+    forces = home.forces.copy()
+    forces[1, 2] = np.inf
+    state = SimpleNamespace(
+        forces=forces,
+        leg_lengths=home.leg_lengths,
+        max_abs_force=np.inf,
+        mean_abs_force=np.nan,
+        statics=home.statics,
+        feasible=False,
+        violations=[Violation("non_finite_force", 1, 2, np.inf, np.inf)],
+    )
+    text = format_state_table(state, "overflow")
+    assert "not finite" in text and not NON_FINITE.search(text)

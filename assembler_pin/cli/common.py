@@ -242,7 +242,9 @@ def format_state_table(state: StackState, title: str = "") -> str:
     else:
         lines.append(f"feasible: NO — {len(state.violations)} violation(s):")
         lines += [f"  - {v}" for v in state.violations]
-    return "\n".join(lines)
+    from ..messages import finite_text
+
+    return finite_text("\n".join(lines))
 
 
 def goal_from_args(args: argparse.Namespace):
