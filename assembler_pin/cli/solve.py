@@ -178,7 +178,7 @@ def _print_result(args: argparse.Namespace, result, capacity) -> None:
         )
         print(format_state_table(opt.optimized, "Optimized"))
     elif not args.no_optimize:
-        print("\n" + wrapped(f"no optimization: {result.message}"))
+        print("\n" + wrapped(f"optimization: FAILED — {result.message}"))
     if capacity is not None:
         if capacity.success:
             print(
