@@ -34,6 +34,7 @@ from .exceptions import OptionsError
 from .geometry import DIMENSIONS
 from .kinematics import PlateArrays, to_se3
 from .labels import leg_label
+from .messages import one_line
 from .model import AssemblerModel
 from .statics import WHOLE_STACK_STATICS_MAX_PLATFORMS, solve_statics
 from .threads import one_blas_thread
@@ -265,8 +266,11 @@ def payload_capacity(
             arm_plates.append(initial_condition(am, goal).plates_if_valid())
         return arm_plates[0]
 
+    why: list[str] = []
+
     def solved(mass: float) -> PlateArrays | None:
         result = solve(models.at(mass), goal)
+        why.append(result.message)
         return result.optimized.plates if result.success and result.optimized is not None else None
 
     plates = start if start is not None or configured_failed else solved(float(am.config.payload.mass))
@@ -278,7 +282,7 @@ def payload_capacity(
             math.nan,
             "",
             None,
-            "no valid pose for the goal even without payload",
+            one_line(f"no valid pose for the goal even without payload: {why[-1] if why else 'none given'}"),
             1,
             [],
             time.perf_counter() - t0,

@@ -556,7 +556,7 @@ def solve_on_carrier(
         )
     best, candidates = _placements(s, q0, blends, progress)
     if best is None:
-        message = "no carrier placement gave a valid stack pose"
+        message = f"unreachable: no carrier placement gave a valid stack pose ({len(candidates)} placements tried)"
         return CarrierSolveResult(False, message, goal, None, True, candidates, time.perf_counter() - t0)
     note = ""
     if polish and s.optimize and best.within_limits:
@@ -629,8 +629,11 @@ def _verdict(statics: CarrierStatics) -> str:
         share = max(statics.stack_ratio, statics.carrier_ratio)
         return f"reached; {statics.binding} binds at {100 * share:.0f} % of its limit"
     if not statics.state.feasible:
-        return f"the stack violates its limits: {statics.state.violations[0]}"
+        from .messages import binding, describe
+
+        return f"the stack violates its limits: {describe(binding(statics.state.violations))}"
     k = int(np.argmax(statics.torque_ratio))
     return (
-        f"carrier joint {k} at {100 * statics.torque_ratio[k]:.0f} % of its effort limit ({statics.torques[k]:.1f} N·m)"
+        f"torque limit: carrier joint {k} at {100 * statics.torque_ratio[k]:.0f} % of its effort limit "
+        f"({statics.torques[k]:.1f} N·m)"
     )

@@ -49,6 +49,7 @@ from .constraints import leg_limit_margins
 from .exceptions import OptionsError, SingularConfigurationError, _SingularIterateError
 from .gradients import PoseDerivatives, pose_derivatives
 from .kinematics import LegState, PlateArrays, checked_goal, leg_state, plate_arrays, plate_deviation
+from .messages import binding, describe, one_line
 from .model import AssemblerModel, checked_model
 from .options import METHODS, OptimizeOptions, checked_options
 from .state import StackState, evaluate_state
@@ -468,7 +469,10 @@ def optimize_internal_poses(
         if acceptable(state) and (not acceptable(chosen) or (omega < omega_chosen and no_worse)):
             chosen, omega_chosen = state, omega
     if motion is not None and converged and final_state.feasible and not acceptable(final_state):
-        converged, singular = False, "the converged point moves a leg more than the motion step allows"
+        converged, singular = (
+            False,
+            f"motion step: the converged point moves a leg more than {1e3 * motion.max_step:.3g} mm",
+        )
     success, message = _verdict(res, singular, converged, final_state, chosen, initial_state)
     logger.info(
         "optimize[%s]: %s, Ω %.4g -> %.4g in %.3f s, %d iterations",
@@ -560,18 +564,16 @@ def _verdict(
 ) -> tuple[bool, str]:
     """(success, message) of an optimization: success only when the solver converged to a
     point that meets every constraint (or was pulled back inside) and that point was kept."""
-    solver = f" (solver: {singular or res.message})"
+    stopped = singular or f"the optimizer stopped after {res.nit} iterations (status {res.status})"
     if not converged:
         if not chosen.feasible:
-            worst = "; ".join(str(v) for v in chosen.violations[:3])
-            return False, f"no feasible state found{solver}: {worst}"
+            return False, one_line(f"no feasible state found: {describe(binding(chosen.violations))}")
         if chosen is initial:
-            return False, f"the solver did not converge{solver}; no better feasible state than the start"
-        return False, f"the solver did not converge{solver}; best feasible state met returned"
+            return False, one_line(f"did not converge: {stopped}; the start is returned")
+        return False, one_line(f"did not converge: {stopped}; the best feasible state met is returned")
     if not final.feasible:
-        worst = "; ".join(str(v) for v in final.violations[:2])
-        kept = "best feasible state met returned" if chosen.feasible else "no feasible state found"
-        return False, f"the solver's converged point breaks a limit ({worst}); {kept}"
+        kept = "the best feasible state met is returned" if chosen.feasible else "no feasible state found"
+        return False, one_line(f"{describe(binding(final.violations))} at the converged point; {kept}")
     return True, "converged"
 
 
@@ -580,9 +582,7 @@ def _nothing_to_optimize(initial_state: StackState, omega0: float, method: str) 
     if initial_state.feasible:
         message = "nothing to optimize (no internal plates): the start is the optimum"
     else:
-        message = "nothing to optimize (no internal plates) and the start is not feasible: " + "; ".join(
-            str(v) for v in initial_state.violations[:3]
-        )
+        message = one_line(f"{describe(binding(initial_state.violations))} (nothing to optimize: no internal plates)")
     return OptimizeResult(
         success=initial_state.feasible,
         message=message,

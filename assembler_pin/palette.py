@@ -17,6 +17,9 @@ payload                     orange       cube and rod in the viewer
 violation / at a bound      yellow       viewer balls, figure frames and rings
 EE goal                     gold star    pose views
 capacity (maps)             viridis      dark purple = low, yellow = high, in PNG and HTML alike
+max|F| (maps)               cividis      dark blue = low, yellow = high (a magnitude, no sign)
+reachable (maps)            teal         a grid cell where a valid state was found
+home pose, for scale        dark grey    drawn over the map panels
 not reachable (maps)        dark grey    a grid cell inside the grid with no state found
 outside the grid (maps)     white        hatched, light grey edge: no cell was computed there
 ==========================  ===========  =====================================================
@@ -36,6 +39,7 @@ __all__ = [
     "CARRIER",
     "COMPRESSION",
     "FLOOR",
+    "FORCE_MAGNITUDE_CMAP",
     "GHOST_OPACITY",
     "GOAL_EDGE",
     "GOAL_FACE",
@@ -47,9 +51,16 @@ __all__ = [
     "OUTSIDE_GRID",
     "OUTSIDE_GRID_EDGE",
     "OUTSIDE_GRID_HATCH",
+    "PAGE_EDGE",
+    "PAGE_INK",
+    "PAGE_PANEL",
     "PAYLOAD",
+    "REACHABLE",
+    "SCALE_POSE",
+    "SCALE_POSE_PLATE",
     "TENSION",
     "UNREACHABLE",
+    "UNREACHABLE_MARK",
     "VIOLATION",
     "force_cmap",
     "hex_color",
@@ -106,14 +117,32 @@ force signs). Platforms are told apart by panels, not colours."""
 CAPACITY_CMAP = "viridis"
 """Sequential colormap of the maps' capacity: low = dark purple, high = yellow, in the PNG
 and the HTML point cloud alike, with a colour bar."""
+FORCE_MAGNITUDE_CMAP = "cividis"
+"""Sequential colormap of the maps' optimized max|F| [N] (unsigned: not the force scale)."""
+REACHABLE: RGB = (0.10, 0.60, 0.55)
+"""Teal: a grid cell where a valid state was found (the maps' reachability panel)."""
+SCALE_POSE: RGB = (0.27, 0.27, 0.27)
+"""Dark grey: the home pose's legs drawn over a map for scale."""
+SCALE_POSE_PLATE: RGB = (0.13, 0.13, 0.13)
+"""Near black: the home pose's plates drawn over a map for scale."""
 UNREACHABLE: RGB = (0.40, 0.40, 0.40)
 """Dark grey: a grid cell where no valid state was found (drawn with a ``x`` marker)."""
+UNREACHABLE_MARK: RGB = (1.0, 1.0, 1.0)
+"""White: the ``x`` drawn on each unreachable cell (legible on its dark grey)."""
 OUTSIDE_GRID: RGB = (1.0, 1.0, 1.0)
 """White: where no cell was computed (outside the grid); hatched with :data:`OUTSIDE_GRID_HATCH`."""
 OUTSIDE_GRID_EDGE: RGB = (0.80, 0.80, 0.80)
 """Light grey: the hatch lines of the area outside the grid."""
 OUTSIDE_GRID_HATCH = "//"
 """Matplotlib hatch of the area outside the grid."""
+
+
+PAGE_INK: RGB = (0.13, 0.13, 0.13)
+"""Near black: the text of a page's overlay boxes (legend, colour bars)."""
+PAGE_EDGE: RGB = (0.33, 0.33, 0.33)
+"""Dark grey: the thin border of a page's swatches and colour bars."""
+PAGE_PANEL: RGB = (1.0, 1.0, 1.0)
+"""White: the background of a page's overlay boxes (drawn at 85 % opacity)."""
 
 
 def rgba(rgb: RGB, alpha: float = 1.0) -> tuple[float, float, float, float]:

@@ -220,9 +220,21 @@ def summary_table(outcomes: Sequence[ScenarioOutcome], markdown: bool = False) -
             return "| " + " | ".join(c.replace("|", "\\|") for c in cells) + " |"
 
         return "\n".join([md(header), "|" + "---|" * len(header)] + [md(r) for r in rows])
-    widths = [max(len(str(r[c])) for r in [header, *rows]) for c in range(len(header))]
+    return "\n\n".join(_text_table(header, rows, cols) for cols in TEXT_GROUPS)
+
+
+#: The summary's columns in the terminal: three tables, each under 100 characters, each
+#: led by the scenario's name (the markdown report keeps one table).
+TEXT_GROUPS = ((0, 1, 2, 3, 4), (0, 5, 6, 7, 10), (0, 8, 9))
+
+
+def _text_table(header: list[str], rows: list[list[str]], cols: Sequence[int]) -> str:
+    """The columns ``cols`` of a table as aligned text, a dashed rule under the header."""
+    picked = [[str(r[c]) for c in cols] for r in [header, *rows]]
+    widths = [max(len(r[k]) for r in picked) for k in range(len(cols))]
     fmt = "  ".join(f"{{:<{w}}}" for w in widths)
-    return "\n".join([fmt.format(*header), fmt.format(*["-" * w for w in widths])] + [fmt.format(*r) for r in rows])
+    lines = [fmt.format(*picked[0]), fmt.format(*["-" * w for w in widths])] + [fmt.format(*r) for r in picked[1:]]
+    return "\n".join(line.rstrip() for line in lines)
 
 
 def _reference_cells(o: ScenarioOutcome) -> list[str]:

@@ -19,6 +19,7 @@ import pinocchio as pin
 from .constraints import leg_limit_margins
 from .exceptions import ArgumentError, OptionsError
 from .kinematics import PlateArrays, leg_state, se3_to_taa, to_se3
+from .messages import binding, describe, one_line
 from .model import AssemblerModel, checked_model
 from .optimize import OptimizeOptions, OptimizeResult, optimize_internal_poses
 from .options import checked_options
@@ -54,7 +55,8 @@ class SolveResult:
         goal: the EE goal pose.
         success: the initial condition is valid and, when optimizing, the optimization
             converged to a state that satisfies every constraint.
-        message: what happened, or why not.
+        message: what happened, or why not: one line naming the binding cause
+            (:mod:`~assembler_pin.messages`); the long form in ``details``.
         initial_result: the helper-arm result (arm configuration, d used, attempts).
         optimization: the optimizer's result from the winning start (None with
             ``optimize=False`` or when no start gave a feasible state).
@@ -72,6 +74,8 @@ class SolveResult:
     timing_s: dict[str, float] = field(default_factory=dict)
     start: str | None = None
     runs: dict[str, OptimizeResult] = field(default_factory=dict)
+    details: str = ""
+    """What every step met: the helper arm's scan, each start's result (may be long)."""
 
     @property
     def initial(self) -> StackState | None:
@@ -104,6 +108,7 @@ class SolveResult:
             "goal": se3_to_taa(self.goal).tolist(),
             "success": self.success,
             "message": self.message,
+            "details": self.details,
             # the helper arm's state: the home pose, flagged by success false, when it failed
             "initial": self.initial_result.state.to_dict(),
         }
@@ -176,27 +181,35 @@ def solve(
     t0 = time.perf_counter()
     init = initial_condition(am, goal, helper_options)
     timing = {"initial": time.perf_counter() - t0}
+    helper = f"helper arm: {init.details or init.message}"
     if not optimize:
-        message = init.message if init.success else f"no valid initial condition: {init.message}"
-        return SolveResult(goal, init.success, message, init, None, timing)
+        return SolveResult(goal, init.success, init.message, init, None, timing, details=helper)
     if init.attempts == 0 and not init.success:  # out of reach: nothing to start from
         timing["optimize"] = 0.0
-        return SolveResult(goal, False, f"no valid initial condition: {init.message}", init, None, timing)
+        return SolveResult(goal, False, init.message, init, None, timing, details=helper)
     opts = options
     t1 = time.perf_counter()
     runs = _run_starts(am, goal, init, opts, starts)
     timing["optimize"] = time.perf_counter() - t1
     name, best = _best_run(runs)
+    details = "; ".join([helper, *(f"{k} start: {r.message}" for k, r in runs.items())])
     if best is None:
-        why = "; ".join(f"{k}: {r.message}" for k, r in list(runs.items())[:3])
-        prefix = "" if init.success else f"no valid initial condition ({init.message}); "
-        return SolveResult(
-            goal, False, f"{prefix}no start reached a feasible pose ({why})", init, None, timing, None, runs
-        )
+        return SolveResult(goal, False, _no_start_message(init, runs), init, None, timing, None, runs, details=details)
     message = f"{best.message} (from the {name} start)"
     if not init.success:
-        message += f"; the helper arm found no valid initial condition: {init.message}"
-    return SolveResult(goal, best.success, message, init, best, timing, name, runs)
+        message += "; the helper arm found no valid initial condition"
+    return SolveResult(goal, best.success, one_line(message), init, best, timing, name, runs, details=details)
+
+
+def _no_start_message(init: InitialConditionResult, runs: dict[str, OptimizeResult]) -> str:
+    """One line when no start reached a feasible pose: the helper arm's cause when it
+    failed, else the binding violation of the closest start (smallest Ω)."""
+    if not init.success:
+        return one_line(f"{init.message}; no optimizer start reached a feasible pose")
+    closest = min(runs.values(), key=lambda r: r.objective_optimized, default=None)
+    worst = None if closest is None else binding(closest.optimized.violations)
+    why = describe(worst) if worst is not None else "no feasible pose"
+    return one_line(f"{why} (closest of {len(runs)} optimizer starts)")
 
 
 def _run_starts(

@@ -128,7 +128,8 @@ def _minmax(eq: HeldEquilibrium, lo: np.ndarray, hi: np.ndarray) -> tuple[np.nda
     cost[-1] = 1.0
     res = linprog(cost, A_ub=A, b_ub=b, bounds=[(None, None)] * k + [(0, None)], method="highs")
     if res.status != 0 or res.x is None:
-        return None, f"no distribution within the force limits and the stroke (HiGHS: {res.message})"
+        why = f"force limit: no distribution of {k} free force(s) within the limits and the stroke"
+        return None, f"{why} (HiGHS status {res.status})"
     return res.x[:k], "minimal max|F| within the force limits and the stroke (HiGHS)"
 
 

@@ -17,10 +17,11 @@ from assembler_pin.cli.common import plates_from_file
 from assembler_pin.config import AssemblerConfig
 from assembler_pin.kinematics import plate_arrays, taa_to_se3
 from assembler_pin.motion.paths import read_waypoints
+from assembler_pin.motion.trajfile import read_trajectory
 
 EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
 CONFIGS = ("config.yaml", "light.yaml", "heavy.yaml")
-WAYPOINTS = [[0.0, 0.0, 0.95, 0.0, 0.0, 0.0], [0.2, 0.1, 0.85, 0.5, 0.5, 0.5], [0.3, 0.0, 0.75, 0.0, 0.6, 0.0]]
+WAYPOINTS = [[0.0, 0.0, 0.966062, 0.0, 0.0, 0.0], [0.2, 0.1, 0.85, 0.5, 0.5, 0.5], [0.3, 0.0, 0.75, 0.0, 0.6, 0.0]]
 
 
 def run_json(capsys, *argv: str) -> tuple[int, dict]:
@@ -95,3 +96,27 @@ def test_waypoint_examples(name):
     assert len(path.waypoints) == len(WAYPOINTS)
     for pose, row in zip(path.waypoints, WAYPOINTS, strict=True):
         assert pose.isApprox(taa_to_se3(row), 1e-12)
+
+
+def test_waypoints_start_where_to_starts(tmp_path, capsys):
+    """``plan --waypoints`` starts at the home pose, as ``--to`` does: the home pose is put
+    before a first waypoint that is elsewhere, the answer says so, and the trajectory's first
+    row holds the home lengths (0.275 m every leg), not the first waypoint's optimized pose."""
+    waypoints = tmp_path / "w.json"
+    waypoints.write_text(json.dumps({"waypoints": [[0.0, 0.0, 0.962, 0, 0, 0], [0.0, 0.0, 0.958, 0, 0, 0]]}))
+    out = tmp_path / "t.json"
+    argv = ["-q", "plan", "--waypoints", str(waypoints), "--rate", "5", "--out", str(out), "--json"]
+    status, doc = run_json(capsys, *argv)
+    assert doc["start"] == "home" and doc["path_segments"] == 2 and status in (0, 1)
+    first = read_trajectory(out).lengths[0]
+    np.testing.assert_allclose(first, 0.275, atol=1e-9)
+
+
+def test_timed_waypoints_away_from_the_start_are_refused(tmp_path, capsys):
+    """Times cannot be kept when the start is put before the first waypoint: one line, exit 2."""
+    waypoints = tmp_path / "w.json"
+    rows = [[0.0, 0.0, 0.95, 0, 0, 0], [0.1, 0, 0.9, 0, 0, 0]]
+    waypoints.write_text(json.dumps({"waypoints": rows, "times": [0, 2]}))
+    assert main(["plan", "--waypoints", str(waypoints)]) == 2
+    err = capsys.readouterr().err.strip()
+    assert "\n" not in err and "home pose" in err and "0.966062" in err

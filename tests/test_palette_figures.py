@@ -12,9 +12,13 @@ from __future__ import annotations
 import ast
 import base64
 import colorsys
+import contextlib
 import inspect
 import re
+import shutil
+import subprocess
 
+import matplotlib.image as mpimg
 import numpy as np
 import pytest
 from matplotlib.backends.backend_agg import FigureCanvasAgg
@@ -289,3 +293,175 @@ def test_viewer_payload_stays_orange_beside_the_ghost(am, bent_plates, tmp_path)
     zero_rgb = np.array(to_rgb(swatches["leg at 0 N"]))
     assert np.linalg.norm(carrier_rgb - zero_rgb) > 0.2
     np.testing.assert_allclose(np.array(to_rgb(swatches["payload 5 kg"])), palette.PAYLOAD, atol=1.5 / 255)
+
+
+# ---------------------------------------------------------------------- maps
+def _map_table():
+    """A 3 × 3 x–z slice: six reachable cells of capacities 1..6 kg, two unreachable cells,
+    one cell missing (outside what was computed)."""
+    import pyarrow as pa
+
+    xs, zs = [0.2, 0.3, 0.4], [0.7, 0.8, 0.9]
+    cells = [(x, z) for z in zs for x in xs][:-1]  # (0.4, 0.9) never computed
+    reach = [1, 1, 1, 0, 1, 1, 0, 1]
+    cap = [1.0, 2.0, 3.0, None, 4.0, 5.0, None, 6.0]
+    force = [20.0 + 5 * k if r else None for k, r in enumerate(reach)]
+    return pa.table(
+        {
+            "cell": list(range(len(cells))),
+            "config": ["default"] * len(cells),
+            "io": [0] * len(cells),
+            "x": [c[0] for c in cells],
+            "y": [0.0] * len(cells),
+            "z": [c[1] for c in cells],
+            "reachable": [bool(r) for r in reach],
+            "max_abs_force": force,
+            "capacity_kg": cap,
+        }
+    )
+
+
+class _Viewer:
+    """What the map page needs of a StackViewer, recorded."""
+
+    def __init__(self) -> None:
+        self.points: dict = {}
+        self.title = ""
+
+    def show_points(self, name, points, colors, size):
+        self.points[name] = (np.asarray(points), np.asarray(colors), size)
+
+    def set_title(self, title):
+        self.title = title
+
+    def static_html(self):
+        return f"<html><body><div>{self.title}</div></body></html>"
+
+
+@pytest.fixture(scope="module")
+def map_png(am):
+    """The heatmaps of :func:`_map_table`, drawn once: (figure, what its legends hide)."""
+    from assembler_pin.maps import pictures
+
+    fig = pictures.map_heatmaps(_map_table(), am)
+    return fig, legend_overlaps(fig)
+
+
+def _image_rgb(image, value: float) -> np.ndarray:
+    return np.array(image.cmap(image.norm(value)))[:3]
+
+
+def test_map_png_and_page_share_one_capacity_scale(map_png, tmp_path):
+    """Low capacity dark, high yellow in the PNG and on the page alike (the page's point
+    colours are the PNG's image colours at the same capacities), with a colour bar in kg."""
+    from assembler_pin.maps import pictures
+
+    table = _map_table()
+    fig = map_png[0]
+    cap_ax = next(ax for ax in fig.axes if ax.get_title().startswith("payload capacity"))
+    image = cap_ax.images[0]
+    assert image.cmap.name == palette.CAPACITY_CMAP
+    low, high = _image_rgb(image, 1.0), _image_rgb(image, 6.0)
+    assert sum(high) > sum(low) + 1.0  # yellow over dark purple
+    assert any(ax.get_ylabel() == "payload capacity [kg]" for ax in fig.axes)  # its colour bar
+
+    viewer = _Viewer()
+    page = tmp_path / "map.html"
+    lo, hi = pictures.write_map_page(viewer, table, page)
+    assert (lo, hi) == (1.0, 6.0)
+    _, colors, size = viewer.points["capability_map"]
+    cap = np.array(table.column("capacity_kg").to_pylist(), dtype=float)
+    for k in np.nonzero(np.isfinite(cap))[0]:
+        np.testing.assert_allclose(colors[k], _image_rgb(image, cap[k]), atol=1e-6)
+    for k in np.nonzero(~np.isfinite(cap))[0]:
+        np.testing.assert_allclose(colors[k], palette.UNREACHABLE)
+    assert size == pytest.approx(0.06)  # 0.6 of the 0.1 m spacing: points that read
+    html = page.read_text()
+    bar = html[html.index('id="assembler-map-colorbar"') :]
+    assert "payload capacity [kg]" in bar and "1.00" in bar and "6.00" in bar and "not reachable" in bar
+    stops = re.search(r"linear-gradient\(to right,([^)]*)\)", bar).group(1).split(",")
+    assert stops[0] == palette.hex_color(_image_rgb(image, 1.0)) and stops[-1] == palette.hex_color(high)
+    assert "(dark)" in viewer.title and "(yellow)" in viewer.title
+
+
+def test_map_png_marks_unreachable_and_outside_cells_and_hides_nothing(map_png):
+    """Unreachable cells dark grey with an x in every panel, where no cell was computed
+    white and hatched, and a legend below the panels that covers no drawn point or line."""
+    from matplotlib.patches import Rectangle
+
+    fig, hidden = map_png
+    assert not fig.axes[0].get_legend() and fig.legends
+    assert hidden == []
+    panels = [ax for ax in fig.axes if ax.images]
+    assert len(panels) == 3
+    for ax in panels:
+        marks = [c for c in ax.collections if isinstance(c, PathCollection) and c.get_label() == "not reachable"]
+        assert marks and len(marks[0].get_offsets()) == 2
+        grey = [im for im in ax.images if im.cmap.N == 1]
+        assert grey and np.allclose(grey[0].cmap(0.5)[:3], palette.UNREACHABLE)
+        hatched = [p for p in ax.patches if isinstance(p, Rectangle) and p.get_hatch() == palette.OUTSIDE_GRID_HATCH]
+        assert hatched and np.allclose(hatched[0].get_facecolor()[:3], palette.OUTSIDE_GRID)
+        assert np.allclose(to_rgb(ax.get_facecolor()), palette.OUTSIDE_GRID)
+
+
+def test_map_pictures_name_no_colour_of_their_own():
+    """Every colour and colormap of maps/pictures.py comes from the palette."""
+    from assembler_pin.maps import pictures
+
+    source = inspect.getsource(pictures)
+    assert not re.search(r"#[0-9a-fA-F]{3,8}\b", source)
+    assert not re.search(r"\"(magma|viridis|cividis|gray|grey|plasma)(_r)?\"", source)
+    assert not re.search(r"rgba?\(\s*\d", source)
+
+
+CHROMIUM = shutil.which("chromium") or shutil.which("chromium-browser")
+
+
+def _screenshot(html, tmp_path, size=(900, 700)) -> np.ndarray:
+    """The page as headless Chromium draws it, (H, W, 3) in [0, 1]."""
+    png = html.with_suffix(".png")
+    cmd = [
+        CHROMIUM,
+        "--headless",
+        "--no-sandbox",
+        "--disable-gpu",
+        "--enable-unsafe-swiftshader",
+        "--no-first-run",
+        f"--user-data-dir={tmp_path / 'chromium-profile'}",
+        f"--screenshot={png}",
+        f"--window-size={size[0]},{size[1]}",
+        html.resolve().as_uri(),
+    ]
+    for _ in range(2):  # a stalled start can make one attempt fail
+        with contextlib.suppress(subprocess.TimeoutExpired):
+            subprocess.run(cmd, capture_output=True, timeout=120, check=False)
+        if png.exists():
+            break
+    assert png.exists(), "chromium wrote no screenshot"
+    return mpimg.imread(png)[..., :3]
+
+
+def _has_colour(img: np.ndarray, rgb, tol: float = 0.08) -> bool:
+    return bool((np.abs(img - np.asarray(rgb)[:3]).max(axis=-1) < tol).any())
+
+
+@pytest.mark.skipif(CHROMIUM is None, reason="chromium not installed (.ci/run installs it)")
+def test_map_page_in_a_real_browser(am, tmp_path):
+    """The map page as a browser shows it: the colour bar at the bottom left with both ends
+    of the capacity scale, and the cells drawn in the scale's colours above it."""
+    from matplotlib import colormaps
+
+    from assembler_pin.maps import pictures
+    from assembler_pin.viewer import StackViewer
+
+    page = tmp_path / "map.html"
+    with StackViewer(am) as v:
+        v.display(am.home)
+        pictures.write_map_page(v, _map_table(), page)
+    img = _screenshot(page, tmp_path)
+    h, w = img.shape[:2]
+    cmap = colormaps[palette.CAPACITY_CMAP]
+    corner = img[int(0.7 * h) :, : int(0.45 * w)]
+    assert _has_colour(corner, cmap(0.0)) and _has_colour(corner, cmap(1.0)), "no capacity colour bar"
+    scene = img[: int(0.7 * h)]
+    assert _has_colour(scene, cmap(1.0), 0.15) and _has_colour(scene, palette.UNREACHABLE, 0.1), "no map cells"

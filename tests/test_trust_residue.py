@@ -83,14 +83,15 @@ def test_plan_refuses_a_path_that_is_not_an_eepath(am):
         ap.plan_trajectory(am, [am.home[-1], am.home[-1]], am.home)
 
 
-def test_cli_plan_refuses_from_with_waypoints(tmp_path, capsys):
+def test_cli_plan_refuses_timed_waypoints_away_from_the_from_pose(tmp_path, capsys):
+    """--waypoints starts at --from (as --to does); times that start elsewhere are refused."""
     from assembler_pin.cli.app import main
 
     wp = tmp_path / "wp.json"
-    wp.write_text('{"waypoints": [[0, 0, 0.95, 0, 0, 0], [0, 0, 0.94, 0, 0, 0]]}')
+    wp.write_text('{"waypoints": [[0, 0, 0.95, 0, 0, 0], [0, 0, 0.94, 0, 0, 0]], "times": [0, 2]}')
     code = main(["plan", "--json", "--waypoints", str(wp), "--from", "0", "0", "0.9", "0", "0", "0"])
     err = capsys.readouterr().err.strip().splitlines()
-    assert code == 2 and len(err) == 1 and "--waypoints" in err[0]
+    assert code == 2 and len(err) == 1 and "--waypoints" in err[0] and "--from pose" in err[0]
 
 
 @pytest.fixture(scope="module")

@@ -197,6 +197,18 @@ def plates_from_args(args: argparse.Namespace, am: AssemblerModel, missing: str)
     raise CLIError(missing)
 
 
+#: The widest line the text answers print [characters].
+TEXT_WIDTH = 100
+
+
+def wrapped(text: str, width: int = TEXT_WIDTH) -> str:
+    """``text`` folded at spaces into lines of at most ``width`` characters (a word longer
+    than that stays whole), the lines after the first indented by four spaces."""
+    import textwrap
+
+    return textwrap.fill(text, width, subsequent_indent="    ", break_long_words=False, break_on_hyphens=False) or text
+
+
 def format_state_table(state: StackState, title: str = "") -> str:
     """A readable table of a state: forces and lengths per actuator, then summary lines.
 
@@ -209,11 +221,13 @@ def format_state_table(state: StackState, title: str = "") -> str:
 
     n = state.forces.shape[0]
     lines = [title] if title else []
-    header = "leg | " + " | ".join(f"{platform_label(j)} F [N]  L [mm]" for j in range(n))
-    lines += [header, "-" * len(header)]
-    for i in range(6):
-        cells = [f"{state.forces[j, i]:9.3f} {1e3 * state.leg_lengths[j, i]:7.2f}" for j in range(n)]
-        lines.append(f"{i:>3} | " + " | ".join(cells))
+    for first in range(0, n, 4):  # four platforms a block: at most 83 characters wide
+        block = range(first, min(n, first + 4))
+        header = "leg | " + " | ".join(f"{platform_label(j)} F [N]  L [mm]" for j in block)
+        lines += [header, "-" * len(header)]
+        for i in range(6):
+            cells = [f"{state.forces[j, i]:9.3f} {1e3 * state.leg_lengths[j, i]:7.2f}" for j in block]
+            lines.append(f"{i:>3} | " + " | ".join(cells))
     j, i = np.unravel_index(np.abs(state.forces).argmax(), state.forces.shape)
     lines.append(
         f"max |F| = {state.max_abs_force:.3f} N ({leg_label(j, i)}), "
@@ -228,7 +242,9 @@ def format_state_table(state: StackState, title: str = "") -> str:
     else:
         lines.append(f"feasible: NO — {len(state.violations)} violation(s):")
         lines += [f"  - {v}" for v in state.violations]
-    return "\n".join(lines)
+    from ..messages import finite_text
+
+    return finite_text("\n".join(lines))
 
 
 def goal_from_args(args: argparse.Namespace):
@@ -312,9 +328,11 @@ def format_carrier(carrier, statics) -> str:
     ):
         lines.append(f"  joint {k}: {tau:9.3f}  ({limit:g}, {100 * ratio:5.1f} %)")
     lines.append(
-        f"stack at {100 * statics.stack_ratio:.1f} % of its force limit, carrier at "
-        f"{100 * statics.carrier_ratio:.1f} % of its effort limit: {statics.binding} binds; "
-        f"within every limit: {'yes' if statics.within_limits else 'NO'}"
+        wrapped(
+            f"stack at {100 * statics.stack_ratio:.1f} % of its force limit, carrier at "
+            f"{100 * statics.carrier_ratio:.1f} % of its effort limit: {statics.binding} binds; "
+            f"within every limit: {'yes' if statics.within_limits else 'NO'}"
+        )
     )
     return "\n".join(lines)
 

@@ -7,7 +7,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from ..exceptions import CLIError
-from .common import config_from_args, dumps, finite_range, progress_for, writable_parent
+from .common import config_from_args, dumps, finite_range, progress_for, wrapped, writable_parent
 
 if TYPE_CHECKING:
     from ..config import AssemblerConfig
@@ -90,17 +90,13 @@ def _pictures(args: argparse.Namespace, table, configs: list, doc: dict) -> None
 
         doc["png"] = str(save(map_heatmaps(table, am, configs[0][0]), args.png))
     if args.html:
-        from ..maps.pictures import show_map_points
+        from ..maps.pictures import write_map_page
         from ..viewer import StackViewer
 
         with StackViewer(am) as viewer:
             viewer.display(am.home)
-            lo, hi = show_map_points(viewer, table, config=configs[0][0])
-            viewer.set_title(
-                f"Capability map: payload capacity {lo:.1f} (light) – {hi:.1f} kg (dark); gray: not reachable"
-            )
             doc["html"] = str(Path(args.html).resolve())
-            viewer.static_html(doc["html"])
+            write_map_page(viewer, table, doc["html"], config=configs[0][0])
 
 
 def run(args: argparse.Namespace) -> int:
@@ -150,8 +146,10 @@ def run(args: argparse.Namespace) -> int:
         print(dumps(doc))
         return 0
     print(
-        f"map: {doc['computed']} cells computed, {doc['already_done']} already in {doc['out']}; "
-        f"{run.workers or 'no'} workers, {run.time_s:.1f} s ({run.cells_per_second:.2f} cells/s)"
+        wrapped(
+            f"map: {doc['computed']} cells computed, {doc['already_done']} already in {doc['out']}; "
+            f"{run.workers or 'no'} workers, {run.time_s:.1f} s ({run.cells_per_second:.2f} cells/s)"
+        )
     )
     print(f"reachable: {doc['reachable']} of {len(reach)} cells")
     if doc["max_abs_force_range"]:

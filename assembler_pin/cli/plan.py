@@ -13,6 +13,7 @@ from .common import (
     config_from_args,
     dumps,
     progress_for,
+    wrapped,
     writable_parent,
 )
 
@@ -28,14 +29,18 @@ def add_parser(add) -> None:
         metavar=("X", "Y", "Z", "RX", "RY", "RZ"),
         help="EE goal (m, rotation vector in rad); from the home pose unless --from",
     )
-    src.add_argument("--waypoints", metavar="FILE", help="JSON or CSV waypoints (TAA rows, optional times)")
+    src.add_argument(
+        "--waypoints",
+        metavar="FILE",
+        help="JSON or CSV waypoints (TAA rows, optional times); from the home pose unless --from, as --to",
+    )
     p.add_argument(
         "--from",
         dest="from_",
         nargs=6,
         type=float,
         metavar=("X", "Y", "Z", "RX", "RY", "RZ"),
-        help="with --to: start at the optimized pose of this EE pose",
+        help="with --to or --waypoints: start at the optimized pose of this EE pose (default: the home pose)",
     )
     p.add_argument(
         "--path",
@@ -62,16 +67,41 @@ COMPARE_SCENARIOS = ("translation", "vertical_lift", "orientation_transition")
 
 
 def _plan_path(args: argparse.Namespace, am: AssemblerModel):
-    """The EE path and start state of ``plan``: (path, start or None)."""
+    """The EE path and start state of ``plan``: (path, start or None). Every path starts
+    where ``--to`` starts: the home pose (its state given), or the ``--from`` pose (its
+    optimized pose); a waypoint file is joined on after that start."""
     from ..kinematics import taa_to_se3
     from ..motion import EEPath, read_waypoints
 
-    if args.waypoints:
-        return read_waypoints(args.waypoints, kind=args.path), None
-    goal = taa_to_se3(args.to, what="--to")
-    if args.from_ is None:
-        return EEPath((am.home[-1], goal), args.path), am.home
-    return EEPath((taa_to_se3(args.from_, what="--from"), goal), args.path), None
+    first = am.home[-1] if args.from_ is None else taa_to_se3(args.from_, what="--from")
+    start = am.home if args.from_ is None else None
+    if not args.waypoints:
+        return EEPath((first, taa_to_se3(args.to, what="--to")), args.path), start
+    path = read_waypoints(args.waypoints, kind=args.path)
+    if _same_pose(path.waypoints[0], first):
+        return EEPath((first, *path.waypoints[1:]), path.kind, path.times), start
+    if path.times is not None:
+        where = "the home pose" if args.from_ is None else "the --from pose"
+        raise CLIError(
+            f"--waypoints FILE has times and starts away from {where}: make its first waypoint "
+            f"{_taa_text(first)} at t = 0, or drop the times"
+        )
+    return EEPath((first, *path.waypoints), path.kind), start
+
+
+def _same_pose(a, b, tol: float = 1e-6) -> bool:
+    """Whether two EE poses coincide: ``|log6(a⁻¹ b)| <= tol`` [m and rad together]."""
+    import numpy as np
+    import pinocchio as pin
+
+    return bool(np.linalg.norm(pin.log6(a.actInv(b)).vector) <= tol)
+
+
+def _taa_text(pose) -> str:
+    """``x y z rx ry rz`` of a pose (m, rotation vector in rad), as a waypoint row reads."""
+    from ..kinematics import se3_to_taa
+
+    return " ".join(f"{v:.6g}" for v in se3_to_taa(pose))
 
 
 def run(args: argparse.Namespace) -> int:
@@ -89,8 +119,6 @@ def run(args: argparse.Namespace) -> int:
         if value:
             writable_parent(value, option)
     check_bound("plan.rate", args.rate, "--rate", CLIError)
-    if args.waypoints and (args.from_ is not None or args.to is not None):
-        raise CLIError("--waypoints FILE gives the whole path: drop --from and --to")
     if args.to is None and not args.waypoints and not args.compare:
         raise CLIError("give --to X Y Z RX RY RZ (from the home pose, or --from ..) or --waypoints FILE")
     try:
@@ -105,6 +133,7 @@ def run(args: argparse.Namespace) -> int:
     try:
         motion = plan_trajectory(am, path, start, options, rate=args.rate, progress=prog)
         doc = _write_outputs(args, am, motion, prog)
+        doc["start"] = "home" if args.from_ is None else "from"  # where the path starts (as --to)
     finally:
         prog.close()
     if args.json:
@@ -137,7 +166,8 @@ def _write_outputs(args: argparse.Namespace, am: AssemblerModel, motion, prog) -
 def _print_summary(args: argparse.Namespace, motion, doc: dict) -> None:
     """The text answer of ``plan``: what was planned, the trajectory, the files written."""
     traj = motion.trajectory
-    print(f"plan: {'success' if doc['success'] else 'FAILED'} — {doc['reason']}")
+    print(wrapped(f"plan: {'success' if doc['success'] else 'FAILED'} — {doc['reason']}"))
+    print("start: the home pose" if doc["start"] == "home" else "start: the optimized pose of --from")
     if motion.plan.states:
         print(
             f"{doc['samples']} samples, peak max|F| {doc['peak_max_abs_force']:.2f} N, total leg travel "
@@ -150,8 +180,10 @@ def _print_summary(args: argparse.Namespace, motion, doc: dict) -> None:
             else (f"the valid prefix only, to u = {doc['path_reached']:.4f} of {doc['path_segments']}")
         )
         print(
-            f"trajectory: {traj.duration:.2f} s at {args.rate:g} Hz ({len(traj.times)} samples, every one "
-            f"valid), {extent}"
+            wrapped(
+                f"trajectory: {traj.duration:.2f} s at {args.rate:g} Hz ({len(traj.times)} samples, every one "
+                f"valid), {extent}"
+            )
         )
     elif args.out:
         print(f"no valid trajectory: {args.out} not written")
@@ -188,20 +220,22 @@ def _plan_compare(args: argparse.Namespace, am: AssemblerModel, options) -> int:
         )
         return 0
     print(
-        f"{'path':<24}{'plan':<16}{'peak max|F| N':>14}{'leg travel m':>13}{'duration s':>11}"
-        f"{'valid %':>9}{'limits %':>9}{'off path mm':>12}"
+        f"{'path':<24}{'plan':<16}{'peak max|F| N':>14}{'travel m':>9}{'time s':>8}"
+        f"{'valid %':>8}{'limits %':>9}{'off path mm':>12}"
     )
     for c in results:
         if not c.figures:
-            print(f"{c.name:<24}no plan: {c.motion.reason}")
+            print(wrapped(f"{c.name:<24}no plan: {c.motion.reason}"))
         for m, f in c.figures.items():
             print(
-                f"{c.name:<24}{m:<16}{f.peak_max_abs_force:14.2f}{f.total_leg_travel:13.3f}{f.duration:11.2f}"
-                f"{100 * f.valid_fraction:9.1f}{100 * f.limits_fraction:9.1f}"
+                f"{c.name:<24}{m:<16}{f.peak_max_abs_force:14.2f}{f.total_leg_travel:9.3f}{f.duration:8.2f}"
+                f"{100 * f.valid_fraction:8.1f}{100 * f.limits_fraction:9.1f}"
                 f"{1e3 * f.max_path_deviation:12.2f}"
             )
     print(
-        "valid: every limit and the EE within the path tolerance at every output sample; "
-        "limits: legs, joints and forces only"
+        wrapped(
+            "travel: total leg travel; time: duration; valid: every limit and the EE within "
+            "the path tolerance at every output sample; limits: legs, joints and forces only"
+        )
     )
     return 0

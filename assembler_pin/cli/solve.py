@@ -22,6 +22,7 @@ from .common import (
     goal_from_args,
     optimize_options,
     progress_for,
+    wrapped,
     writable_parent,
 )
 
@@ -153,29 +154,31 @@ def _print_result(args: argparse.Namespace, result, capacity) -> None:
         f"rotation vector = ({np.rad2deg(taa[3]):.2f}, {np.rad2deg(taa[4]):.2f}, {np.rad2deg(taa[5]):.2f}) deg"
     )
     init = result.initial_result
-    status = "valid" if init.success else "FAILED"
-    print(f"initial condition (helper arm): {status} — {init.message} [{1e3 * init.time_s:.1f} ms]")
+    status = ("valid" if init.state.feasible else "valid, not feasible") if init.success else "FAILED"
+    print(wrapped(f"initial condition (helper arm): {status} — {init.message} [{1e3 * init.time_s:.1f} ms]"))
     title = "Initial condition" if init.success else "Home pose (no valid initial condition)"
     print(format_state_table(init.state, title))
     opt = result.optimization
     if opt is not None:
         print()
         print(
-            f"optimization ({opt.method}): {'success' if result.success else 'FAILED'} — {result.message}; "
-            f"{opt.iterations} iterations, {opt.evaluations} evaluations, {opt.time_s:.3f} s"
+            wrapped(
+                f"optimization ({opt.method}): {'success' if result.success else 'FAILED'} — {result.message}; "
+                f"{opt.iterations} iterations, {opt.evaluations} evaluations, {opt.time_s:.3f} s"
+            )
         )
         starts = ", ".join(
             f"{name} {r.optimized.max_abs_force:.1f} N{'' if r.success else ' (failed)'}"
             for name, r in result.runs.items()
         )
-        print(f"starts (max|F| reached): {starts}; kept: {result.start}")
+        print(wrapped(f"starts (max|F| reached): {starts}; kept: {result.start}"))
         print(
             f"objective Ω = w1·max|F| + w2·sqrt(Σλ²): {opt.objective_initial:.3f} (start) -> "
             f"{opt.objective_optimized:.3f}"
         )
         print(format_state_table(opt.optimized, "Optimized"))
     elif not args.no_optimize:
-        print(f"\nno optimization: {result.message}")
+        print("\n" + wrapped(f"optimization: FAILED — {result.message}"))
     if capacity is not None:
         if capacity.success:
             print(
@@ -183,7 +186,7 @@ def _print_result(args: argparse.Namespace, result, capacity) -> None:
                 f"{capacity.iterations} optimizations, {capacity.time_s:.2f} s)"
             )
         else:
-            print(f"\npayload capacity: none — {capacity.message}")
+            print("\n" + wrapped(f"payload capacity: none — {capacity.message}"))
 
 
 def _solve_on_carrier(args: argparse.Namespace, am: AssemblerModel, carrier, q, goal, helper) -> int:
@@ -212,12 +215,14 @@ def _solve_on_carrier(args: argparse.Namespace, am: AssemblerModel, carrier, q, 
         print(dumps(result.to_dict()))
         return 0 if result.success else 1
     print(
-        f"solve on {carrier.name} ({'carrier held' if args.fixed_carrier else 'carrier moving'}): "
-        f"{'success' if result.success else 'FAILED'} — {result.message} [{result.time_s:.2f} s]"
+        wrapped(
+            f"solve on {carrier.name} ({'carrier held' if args.fixed_carrier else 'carrier moving'}): "
+            f"{'success' if result.success else 'FAILED'} — {result.message} [{result.time_s:.2f} s]"
+        )
     )
     for t, cq, _score, note in result.candidates:
         where = "joint optimization (carrier joints and plates together)" if np.isnan(t) else f"placement t = {t:.2f}"
-        print(f"  {where}: q = {np.round(cq, 3).tolist()}: {note}")
+        print(wrapped(f"  {where}: q = {np.round(cq, 3).tolist()}: {note}"))
     if result.statics is not None:
         print(f"carrier q = {np.round(result.statics.q, 4).tolist()} rad")
         title = "Optimized" if optimize else "Helper-arm pose (not optimized)"

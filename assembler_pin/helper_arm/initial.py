@@ -18,6 +18,7 @@ import pinocchio as pin
 from ..constraints import GoalTolerance, evaluate_constraints
 from ..geometry import reach_bound
 from ..kinematics import PlateArrays, leg_state, to_se3
+from ..messages import binding, describe, number, one_line
 from ..model import AssemblerModel
 from ..options import checked_options
 from ..state import StackState, evaluate_state
@@ -60,7 +61,8 @@ class InitialConditionResult:
             (:data:`KINEMATIC_VIOLATIONS`: leg limits, joint deflection, continuous
             translation, EE at the goal, no singular platform). Force limits are *not*
             required: they are reported in ``state`` (``state.feasible`` requires them too).
-        message: what happened; the reason on failure.
+        message: what happened; on failure one line naming the binding cause
+            (:mod:`~assembler_pin.messages`).
         goal: the EE goal (world pose).
         state: the valid state, or the home state (checked against the goal) on failure.
         leg_lengths: (n, 6) leg lengths of ``state`` [m].
@@ -87,6 +89,8 @@ class InitialConditionResult:
     time_s: float
     arm_points: np.ndarray | None = None
     repaired: bool = False
+    details: str = ""
+    """Everything the scan and the repair met (the long form of a failure's message)."""
 
     def __repr__(self) -> str:
         d = f"{self.link_length:.4f} m" if self.link_length is not None else "-"
@@ -107,11 +111,11 @@ def _kinematic_problems(
     """The state of plates ``pa`` if it meets every kinematic constraint, else (None, why)."""
     kin = evaluate_constraints(am.config, leg_state(am, pa), None, pa, goal, tolerance)
     if kin:
-        return None, ", ".join(sorted({v.kind for v in kin}))
+        return None, describe(binding(kin))
     state = evaluate_state(am, pa, goal=goal, tolerance=tolerance)
     bad = [v for v in state.violations if v.kind in KINEMATIC_VIOLATIONS]
     if bad:
-        return None, str(bad[0])
+        return None, describe(binding(bad))
     return state, ""
 
 
@@ -141,6 +145,8 @@ class _Scan:
     broken: list[str] = field(default_factory=list)  # the arm reached the goal, the plates were invalid
     closest: str = ""
     closest_error: float = math.inf
+    closest_position: float = math.inf  # [m]
+    closest_rotation: float = math.inf  # [rad]
     last_q: np.ndarray | None = None
     last_points: np.ndarray | None = None
     candidates: list[Candidate] = field(default_factory=list)
@@ -181,7 +187,8 @@ def initial_condition(
     reach = reach_bound(am.config)
     if not distance <= reach:
         why = (
-            f"the goal is out of reach: {distance:.4g} m from the base, farther than the stack can span ({reach:.4g} m)"
+            f"no valid initial condition: unreachable: the goal is {number(distance, 'm')} from the base, "
+            f"out of reach: farther than the stack can span ({reach:.4g} m)"
         )
         return _failure(am, goal_se3, opts, why, _Scan(), t0)
     scan = _Scan()
@@ -231,10 +238,11 @@ def _scan_link_lengths(
             viol = float(arm.stack_violation(ik.q, 0.0, d).max())
             scan.candidates.append(Candidate(ik.position_error + ik.rotation_error + viol, plates, ik.q, d, points))
             if ik.position_error <= opts.arm_tolerance and ik.rotation_error <= opts.arm_tolerance:
-                scan.broken.append(f"d={d:.4f}: stack limits")
+                scan.broken.append(f"d={d:.4f}: leg stroke or joint deflection: the plates break the stack's limits")
             elif ik.position_error + ik.rotation_error < scan.closest_error:
                 scan.closest_error = ik.position_error + ik.rotation_error
                 scan.closest = f"closest: {ik.position_error:.3g} m, {ik.rotation_error:.3g} rad away at d = {d:.4f} m"
+                scan.closest_position, scan.closest_rotation = ik.position_error, ik.rotation_error
             logger.debug("initial condition: %s", ik.message)
             continue
         state, why = _kinematic_problems(am, PlateArrays.from_se3(plates), goal, opts.tolerance)
@@ -313,10 +321,12 @@ def _success(
     else:
         how = f"with link length d = {d:.4f} m"
     logger.info("initial condition found (%s) after %d attempt(s) in %.1f ms", how, attempts, 1e3 * dt)
-    forces = "" if state.feasible else f" (force limits exceeded: {len(state.violations)} violation(s))"
+    worst = binding(state.violations)
+    forces = "" if worst is None else f"; not feasible: {describe(worst)}"
+    how = how if worst is None else how.replace(" from the helper arm's closest pose at link length", " from")
     return InitialConditionResult(
         True,
-        f"valid initial condition {how} after {attempts} attempt(s){forces}",
+        one_line(f"valid initial condition {how} after {attempts} attempt(s){forces}"),
         goal,
         state,
         state.leg_lengths.copy(),
@@ -330,6 +340,7 @@ def _success(
 
 
 def _why_not(scan: _Scan, repairs: list[Candidate], opts: HelperArmOptions) -> str:
+    """The long form of a failure: what the scan and the repair met."""
     if scan.attempts == 0:
         why = "no link length within the heights an SP can have was tried"
     elif scan.broken:
@@ -346,6 +357,19 @@ def _why_not(scan: _Scan, repairs: list[Candidate], opts: HelperArmOptions) -> s
     return why
 
 
+def _short_why(scan: _Scan, repaired: bool) -> str:
+    """The one-line cause of a failed scan (:mod:`~assembler_pin.messages`); ``repaired``:
+    a repair of the stack was tried too."""
+    tried = f"after {scan.attempts} attempt(s){', repair failed' if repaired else ''}"
+    head = "no valid initial condition: "
+    if scan.broken:
+        return f"{head}{scan.broken[0].split(': ', 1)[-1]} (where the helper arm reaches the goal; {tried})"
+    if math.isfinite(scan.closest_error):
+        pos, rot = number(1e3 * scan.closest_position, "mm"), number(math.degrees(scan.closest_rotation), "°")
+        return f"{head}unreachable: the helper arm comes no closer than {pos} and {rot} to the goal ({tried})"
+    return f"{head}unreachable: no link length within the heights an SP can have"
+
+
 def _failure(
     am: AssemblerModel,
     goal: pin.SE3,
@@ -358,14 +382,15 @@ def _failure(
     """The home pose, checked against the goal, with the reason."""
     state = evaluate_state(am, am.home, goal=goal, tolerance=opts.tolerance)
     if distance is None:  # answered before the scan
-        message = why
+        message = details = why
     else:
         d0, (lo, hi) = am.config.home_height, height_range(am.config)
-        message = (
+        details = (
             f"no valid initial condition after {scan.attempts} attempt(s) (d from {d0:.4f} m, then from "
             f"{min(max(distance / am.n, lo), hi):.4f} m, step {opts.d_step} m): {why}"
         )
-    logger.info("initial condition failed: %s", message)
+        message = one_line(_short_why(scan, "repairing" in why))
+    logger.info("initial condition failed: %s", details)
     return InitialConditionResult(
         False,
         message,
@@ -377,4 +402,5 @@ def _failure(
         scan.attempts,
         time.perf_counter() - t0,
         scan.last_points,
+        details=details,
     )

@@ -9,10 +9,34 @@ from matplotlib.figure import Figure
 
 from ..exceptions import AssemblerError
 from ..model import AssemblerModel
+from ..palette import (
+    CAPACITY_CMAP,
+    FORCE_MAGNITUDE_CMAP,
+    OUTSIDE_GRID,
+    OUTSIDE_GRID_EDGE,
+    OUTSIDE_GRID_HATCH,
+    PAGE_EDGE,
+    PAGE_INK,
+    PAGE_PANEL,
+    REACHABLE,
+    SCALE_POSE,
+    SCALE_POSE_PLATE,
+    UNREACHABLE,
+    UNREACHABLE_MARK,
+    hex_color,
+)
 from ..plots import draw_state
 from ..state import evaluate_state
 
-__all__ = ["map_heatmaps", "map_slice", "show_map_points"]
+__all__ = [
+    "capacity_bar_html",
+    "capacity_range",
+    "map_heatmaps",
+    "map_slice",
+    "point_size",
+    "show_map_points",
+    "write_map_page",
+]
 
 _AXIS = {"x": 0, "y": 1, "z": 2}
 
@@ -48,47 +72,103 @@ def map_slice(table, config: str | None = None, orientation: int = 0) -> tuple[s
 
 def map_heatmaps(table, am: AssemblerModel, config: str | None = None, orientation: int = 0, title: str = "") -> Figure:
     """Reachability, optimized max|F| [N] and payload capacity [kg] over a 2-D map slice,
-    the stack's home pose drawn in each panel for scale; unreached cells are hatched gray."""
+    the stack's home pose drawn in each panel for scale. Colours are :mod:`~assembler_pin.palette`'s:
+    a cell with no valid state is dark grey with an ``x`` in every panel, and where no cell
+    was computed is white, hatched; the capacity scale is that of the HTML point cloud
+    (:func:`capacity_range`), and the legend sits below the panels, hiding nothing."""
     u_axis, v_axis, s = map_slice(table, config, orientation)
-    fig = Figure(figsize=(15, 4.8), layout="constrained")
+    fig = Figure(figsize=(15, 5.4), layout="constrained")
     axes = fig.subplots(1, 3)
     extent = _extent(s["u"], s["v"])
     home = evaluate_state(am, am.home)
+    cap_lo, cap_hi = capacity_range(s["capacity_kg"])
     panels = (
-        ("reachable", "reachable (a valid pose exists)", ListedColormap(["#d9d9d9", "#2ca02c"]), "reachable"),
-        ("max_abs_force", f"optimized max|F| [N] at {am.config.payload.mass:g} kg", colormaps["viridis"], "N"),
-        ("capacity_kg", "payload capacity [kg]", colormaps["magma"], "kg"),
+        ("reachable", "reachable (a valid pose exists)", ListedColormap([UNREACHABLE, REACHABLE]), "reachable"),
+        ("max_abs_force", f"optimized max|F| [N] at {am.config.payload.mass:g} kg", FORCE_MAGNITUDE_CMAP, "N"),
+        ("capacity_kg", "payload capacity [kg]", CAPACITY_CMAP, "kg"),
     )
+    unreached = s["reachable"] == 0  # NaN (no cell computed) is neither reached nor unreached
     for ax, (key, name, cmap, unit) in zip(axes, panels, strict=True):
-        data = np.ma.masked_invalid(s[key])
+        _outside_grid_background(ax)
+        lo, hi = (0, 1) if key == "reachable" else (cap_lo, cap_hi) if key == "capacity_kg" else (None, None)
         image = ax.imshow(
-            data,
-            origin="lower",
-            extent=extent,
-            cmap=cmap,
-            aspect="equal",
-            vmin=0 if key == "reachable" else None,
-            vmax=1 if key == "reachable" else None,
+            np.ma.masked_invalid(s[key]), origin="lower", extent=extent, cmap=cmap, aspect="equal", vmin=lo, vmax=hi
         )
-        ax.set_facecolor("#eeeeee")
-        draw_state(ax, home, (_AXIS[u_axis], _AXIS[v_axis]), "#444444", "#222222", "home pose (scale)", alpha=0.5)
+        _mark_unreached(ax, s, unreached, extent)
+        draw_state(
+            ax, home, (_AXIS[u_axis], _AXIS[v_axis]), hex_color(SCALE_POSE), hex_color(SCALE_POSE_PLATE), "", 0.5
+        )
         ax.set_xlabel(f"{u_axis} [m]")
         ax.set_ylabel(f"{v_axis} [m]")
         ax.set_title(name, fontsize=10)
         if key != "reachable":
-            fig.colorbar(image, ax=ax, shrink=0.8, label=unit)
-    axes[0].legend(
-        handles=[
-            _patch("#2ca02c", "reachable"),
-            _patch("#d9d9d9", "not reachable"),
-            _line("#444444", "home pose, for scale"),
-        ],
-        fontsize=8,
-        loc="upper right",
-    )
+            fig.colorbar(image, ax=ax, shrink=0.8, label=f"{name.split(' [')[0]} [{unit}]")
+    fig.legend(handles=_legend_handles(), fontsize=9, loc="outside lower center", ncols=4, frameon=False)
     reached = np.nan_to_num(s["reachable"]).astype(bool)
     fig.suptitle(title or f"Capability map: {int(reached.sum())} of {reached.size} cells reachable")
     return fig
+
+
+def capacity_range(capacity: np.ndarray) -> tuple[float, float]:
+    """The capacity colour scale [kg]: the finite values' (min, max), (0, 1) when none; one
+    rule for the PNG and the HTML point cloud."""
+    cap = np.asarray(capacity, dtype=float)
+    ok = np.isfinite(cap)
+    if not ok.any():
+        return 0.0, 1.0
+    lo, hi = float(cap[ok].min()), float(cap[ok].max())
+    return (lo, hi) if hi > lo else (lo, lo + 1e-9)
+
+
+def _outside_grid_background(ax) -> None:
+    """White, hatched behind the panel: what shows where no cell was computed."""
+    from matplotlib.patches import Rectangle
+
+    ax.set_facecolor(OUTSIDE_GRID)
+    ax.add_patch(
+        Rectangle(
+            (0, 0),
+            1,
+            1,
+            transform=ax.transAxes,
+            facecolor=OUTSIDE_GRID,
+            edgecolor=OUTSIDE_GRID_EDGE,
+            hatch=OUTSIDE_GRID_HATCH,
+            lw=0,
+            zorder=-1,
+        )
+    )
+
+
+def _mark_unreached(ax, s: dict[str, np.ndarray], unreached: np.ndarray, extent) -> None:
+    """Cells with no valid state: dark grey, with an ``x`` at each centre."""
+    if not unreached.any():
+        return
+    ax.imshow(
+        np.ma.masked_where(~unreached, np.ones_like(s["reachable"])),
+        origin="lower",
+        extent=extent,
+        cmap=ListedColormap([UNREACHABLE]),
+        aspect="equal",
+        vmin=0,
+        vmax=1,
+    )
+    iv, iu = np.nonzero(unreached)
+    ax.scatter(
+        s["u"][iu], s["v"][iv], marker="x", s=18, color=hex_color(UNREACHABLE_MARK), lw=0.8, label="not reachable"
+    )
+
+
+def _legend_handles() -> list:
+    from matplotlib.lines import Line2D
+    from matplotlib.patches import Patch
+
+    return [
+        Patch(facecolor=REACHABLE, label="reachable"),
+        Patch(facecolor=UNREACHABLE, label="not reachable (marked x)"),
+        Patch(facecolor=OUTSIDE_GRID, edgecolor=OUTSIDE_GRID_EDGE, hatch=OUTSIDE_GRID_HATCH, label="outside the grid"),
+        Line2D([], [], color=SCALE_POSE, label="home pose, for scale"),
+    ]
 
 
 def _extent(u: np.ndarray, v: np.ndarray) -> tuple[float, float, float, float]:
@@ -97,21 +177,21 @@ def _extent(u: np.ndarray, v: np.ndarray) -> tuple[float, float, float, float]:
     return (u[0] - du, u[-1] + du, v[0] - dv, v[-1] + dv)
 
 
-def _patch(color: str, label: str):
-    from matplotlib.patches import Patch
-
-    return Patch(color=color, label=label)
-
-
-def _line(color: str, label: str):
-    from matplotlib.lines import Line2D
-
-    return Line2D([], [], color=color, label=label)
+def point_size(points: np.ndarray) -> float:
+    """A point size for a map's cells [m]: 0.6 of the smallest spacing of the grid (points
+    that fill most of their cell and never touch), within [0.02, 0.15] m; 0.05 m for one cell."""
+    gaps = [np.diff(np.unique(points[:, k])) for k in range(3)]
+    gaps = [g.min() for g in gaps if g.size]
+    return float(np.clip(0.6 * min(gaps), 0.02, 0.15)) if gaps else 0.05
 
 
-def show_map_points(viewer, table, size: float = 0.03, config: str | None = None) -> tuple[float, float]:
+def show_map_points(viewer, table, size: float | None = None, config: str | None = None) -> tuple[float, float]:
     """Draw a map's cells as a point cloud in a :class:`~assembler_pin.viewer.StackViewer`,
-    colored by payload capacity (magma, light to dark = low to high); unreached cells light gray.
+    colored by payload capacity on :data:`~assembler_pin.palette.CAPACITY_CMAP` (dark = low,
+    yellow = high, the PNG's scale); unreached cells :data:`~assembler_pin.palette.UNREACHABLE`.
+
+    Args:
+        size: point size [m] (default :func:`point_size` of the grid).
 
     Returns:
         The capacity range of the color scale (min, max) [kg].
@@ -122,9 +202,39 @@ def show_map_points(viewer, table, size: float = 0.03, config: str | None = None
     pts = np.stack([cols["x"][keep], cols["y"][keep], cols["z"][keep]], axis=1).astype(float)
     cap = cols["capacity_kg"][keep].astype(float)
     ok = np.isfinite(cap)
-    lo, hi = (float(cap[ok].min()), float(cap[ok].max())) if ok.any() else (0.0, 1.0)
-    colors = np.full(pts.shape, 0.85)
+    lo, hi = capacity_range(cap)
+    colors = np.tile(np.asarray(UNREACHABLE, dtype=float), (len(pts), 1))
     if ok.any():
-        colors[ok] = colormaps["magma_r"]((cap[ok] - lo) / max(hi - lo, 1e-9))[:, :3]
-    viewer.show_points("capability_map", pts, colors, size)
+        colors[ok] = colormaps[CAPACITY_CMAP]((cap[ok] - lo) / (hi - lo))[:, :3]
+    viewer.show_points("capability_map", pts, colors, point_size(pts) if size is None else size)
+    return lo, hi
+
+
+def capacity_bar_html(lo: float, hi: float) -> str:
+    """The HTML colour bar of the point cloud: the capacity scale with its ends [kg], and
+    the swatch of an unreached cell (placed at the page's bottom left, clear of the legend)."""
+    stops = ",".join(hex_color(colormaps[CAPACITY_CMAP](t)) for t in np.linspace(0.0, 1.0, 9))
+    grey, ink, edge = hex_color(UNREACHABLE), hex_color(PAGE_INK), hex_color(PAGE_EDGE)
+    panel = "rgba({},{},{},0.85)".format(*(round(255 * c) for c in PAGE_PANEL))
+    swatch = f"display:inline-block;width:12px;height:12px;background:{grey};margin-right:6px;border:1px solid {edge}"
+    return (
+        '<div id="assembler-map-colorbar" style="position:absolute;bottom:12px;left:8px;z-index:10;'
+        f"background:{panel};padding:6px 8px;border-radius:4px;font:13px sans-serif;color:{ink};"
+        'pointer-events:none">payload capacity [kg]'
+        f'<div style="height:14px;width:260px;background:linear-gradient(to right,{stops});border:1px solid {edge}">'
+        '</div><div style="display:flex;justify-content:space-between;width:262px">'
+        f"<span>{lo:.2f}</span><span>{0.5 * (lo + hi):.2f}</span><span>{hi:.2f}</span></div>"
+        f'<div style="margin-top:4px"><span style="{swatch}"></span>not reachable</div></div>'
+    )
+
+
+def write_map_page(viewer, table, path, config: str | None = None) -> tuple[float, float]:
+    """The map's standalone page: the cells over the stack, a title, and the capacity colour
+    bar (:func:`capacity_bar_html`), written atomically to ``path``. Returns the scale [kg]."""
+    from ..files import write_atomic
+
+    lo, hi = show_map_points(viewer, table, config=config)
+    viewer.set_title(f"Capability map: payload capacity {lo:.2f} (dark) – {hi:.2f} kg (yellow); grey: not reachable")
+    html = viewer.static_html().replace("</body>", capacity_bar_html(lo, hi) + "\n</body>", 1)
+    write_atomic(path, html)
     return lo, hi

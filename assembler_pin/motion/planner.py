@@ -27,6 +27,7 @@ import pinocchio as pin
 from ..constraints import GoalTolerance
 from ..exceptions import OptionsError
 from ..kinematics import PlateArrays, plate_arrays, stack_forward_kinematics
+from ..messages import binding, describe, one_line
 from ..model import AssemblerModel
 from ..optimize import MotionTerm, OptimizeOptions, optimize_internal_poses
 from ..options import checked_options
@@ -149,7 +150,7 @@ def _between_problems(
         lengths = (1 - t) * a.leg_lengths + t * b.leg_lengths
         fk = stack_forward_kinematics(am, lengths, base=a.plates.se3(0), guess=on_se3(guess))
         if not fk.success:
-            return f"stack FK between samples failed ({fk.message})", dev_p, dev_r
+            return f"{fk.message}, between samples", dev_p, dev_r
         guess = fk.plates
         target = path.at((1 - t) * u0 + t * u1)
         state = evaluate_state(am, fk.plates, goal=target, tolerance=opts.path_tolerance)
@@ -157,7 +158,7 @@ def _between_problems(
         dev_p = max(dev_p, float(np.linalg.norm(ee.translation - target.translation)))
         dev_r = max(dev_r, float(np.linalg.norm(pin.log3(target.rotation.T @ ee.rotation))))
         if not state.feasible:
-            return f"between samples: {state.violations[0]}", dev_p, dev_r
+            return f"{describe(binding(state.violations))}, between samples", dev_p, dev_r
     return "", dev_p, dev_r
 
 
@@ -174,7 +175,8 @@ def _step(
     state = result.optimized
     jump = float(np.abs(state.leg_lengths - prev.leg_lengths).max())
     if jump > opts.max_leg_step * (1 + 1e-9):  # held by the optimizer; checked again here
-        return None, f"a leg would move {1e3 * jump:.2f} mm in one step", result.time_s, (0.0, 0.0)
+        why = f"motion step: a leg would move {1e3 * jump:.2f} mm, at most {1e3 * opts.max_leg_step:.3g} mm"
+        return None, why, result.time_s, (0.0, 0.0)
     problem, dev_p, dev_r = _between_problems(am, path, u0, u1, prev, state, opts)
     if problem:
         return None, problem, result.time_s, (dev_p, dev_r)
@@ -191,14 +193,13 @@ def _start_state(
 
         solved = solve(am, first, options=opts.optimize)
         if not solved.success:
-            return None, f"no valid pose at the path's start: {solved.message}"
+            return None, one_line(f"{solved.message}, at the path's start")
         return solved.optimized, ""
     pa = start.plates if isinstance(start, StackState) else plate_arrays(am, start)
     state = evaluate_state(am, pa, goal=first, tolerance=GoalTolerance(1e-6, 1e-6))
     if not state.feasible:
-        return None, "the start state is not valid at the path's start: " + "; ".join(
-            str(v) for v in state.violations[:2]
-        )
+        why = describe(binding(state.violations))
+        return None, one_line(f"the start state is not valid at the path's start: {why}")
     return state, ""
 
 
@@ -247,7 +248,10 @@ def plan_path(
         if state is None:
             if (u1 - u0) <= base_step * path.segments / 2**opts.max_refinements + 1e-12 or opts.max_refinements == 0:
                 success = False
-                reason = f"no valid sample after u = {u0:.4f} (step refined {opts.max_refinements} times): {why}"
+                where = (
+                    f"no valid sample after u = {u0:.4f} of {path.segments}, step halved {opts.max_refinements} times"
+                )
+                reason = one_line(f"{why} ({where})")
                 break
             targets.insert(0, 0.5 * (u0 + u1))
             refinements += 1

@@ -30,6 +30,7 @@ import numpy as np
 
 from ..bounds import BOUNDS, check_bound
 from ..exceptions import PathError, TrajectoryError
+from ..messages import one_line
 from ..model import AssemblerModel
 from ..options import checked_options
 from ..progress import ProgressCallback
@@ -342,7 +343,7 @@ def _answer(
     if problems:
         final, cut = _valid_prefix(am, plan, traj, s, rate, progress)
         reasons.append(cut)
-    reason = plan.reason if success else "; ".join(reasons)
+    reason = plan.reason if success else one_line("; ".join(reasons))
     if final is not None:
         final.meta.update(complete=success, reason=reason)
     return MotionResult(success, reason, plan, final, problems, time.perf_counter() - t0)
