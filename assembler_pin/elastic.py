@@ -35,13 +35,14 @@ its blocks from the base up (linear in n).
 from __future__ import annotations
 
 import math
+import weakref
 from dataclasses import dataclass, replace
 
 import numpy as np
 import pinocchio as pin
 from scipy.linalg.lapack import dgesv, dposv, dpotrf
 
-from .linalg import cross, inverse_or_nan, skew
+from .linalg import inverse_or_nan, skew
 from .model import AssemblerModel
 
 __all__ = [
@@ -110,54 +111,61 @@ class ElasticTerms:
     base_gradient: np.ndarray
 
 
-def _chart(f: np.ndarray, r: np.ndarray) -> np.ndarray:
-    """Σ over the points' last-but-one axis of ``sym(f rᵀ) - (f·r) I`` (the rotation block's
-    second-order term), (..., m, 3) arrays → (..., 3, 3)."""
-    M = np.matmul(np.swapaxes(f, -1, -2), r)  # Σ f ⊗ r
-    tr = M[..., 0, 0] + M[..., 1, 1] + M[..., 2, 2]
-    return 0.5 * (M + np.swapaxes(M, -1, -2)) - tr[..., None, None] * _I3
+_SKEW_INDEX = np.array([0, 2, 1, 2, 0, 0, 1, 0, 0])  # skew(v).ravel() = v[_SKEW_INDEX] * _SKEW_SIGN
+_SKEW_SIGN = np.array([0.0, -1.0, 1.0, 1.0, 0.0, -1.0, -1.0, 1.0, 0.0])
 
 
-def _platform_hessians(dirs, arms, c1, c2, c3, gravity: float) -> np.ndarray:
-    """(n, 12, 12) Hessians of each platform's legs over (bottom plate, top plate) coordinates.
+@dataclass(frozen=True)
+class _Design:
+    """What :func:`elastic_terms` needs of one model, computed once per geometry.
 
-    A leg's Hessian in d, ``c1 u uᵀ + c2 I + c3 (a uᵀ + u aᵀ)`` with ``a = -g e_z``, is a sum of
-    outer products of directions ``e`` (``dirs`` (n, 6, 4, 3): u, e_x, e_y, e_z); each becomes
-    the 12-vector ``[-e, -(r_b × e), e, r_t × e]`` (its line at both plates; ``arms`` (2, n, 6,
-    4, 3) holds ``r_b × e`` and ``r_t × e``), so the platform's Hessian is a few (12 × 24)
-    matrix products.
+    anchors: (2, n, 6, 3) bottom and top joints in their plates' frames [m]; template:
+    (n, 6, 3, 12) ``∂d/∂(bottom, top plate)`` with its translation blocks ``-I, I`` filled;
+    weights: (2, 1, 1) the motor's and the shaft's weight [N] at the bottom and top joints;
+    lever: ``λ = m_m c_m - m_s c_s`` [kg·m].
     """
-    n = dirs.shape[0]
-    lines = np.concatenate([-dirs, -arms[0], dirs, arms[1]], axis=-1)
-    weights = np.empty((n, 6, 4, 1))
-    weights[:, :, 0, 0] = c1
-    weights[:, :, 1:, 0] = c2[..., None]
-    V = lines.reshape(n, 24, 12)
-    H = np.matmul(np.swapaxes((lines * weights).reshape(n, 24, 12), 1, 2), V)
-    a_lines = (-gravity * c3)[..., None] * lines[:, :, 3]  # the gravity direction's lines, weighted
-    M = np.matmul(np.swapaxes(a_lines, 1, 2), lines[:, :, 0])
-    return H + M + np.swapaxes(M, 1, 2)
+
+    anchors: np.ndarray
+    template: np.ndarray
+    weights: np.ndarray
+    lever: float
 
 
-def _joint_gradient(am: AssemblerModel, u, arm_x, along, across) -> tuple[np.ndarray, np.ndarray]:
-    """The gradient at the joints, ``f`` (2, n, 6, 3): bottom ``-G - m_m a``, top ``G - m_s a``
-    with ``G = along u - across a`` (a = -g e_z), and the plates' gradient (n+1, 6) from them,
-    their moments ``r × f`` and the plates' weight, plate 0's included (the payload's is the caller's)."""
+_DESIGNS: dict[int, tuple[weakref.ref, _Design]] = {}
+
+
+def _design(am: AssemblerModel) -> _Design:
+    geo = am.geometry
+    hit = _DESIGNS.get(id(geo))
+    if hit is not None and hit[0]() is geo:
+        return hit[1]
     leg, g, n = am.config.leg, am.config.gravity, am.n
-    f = np.empty((2, n, 6, 3))
-    f[1] = along[..., None] * u
-    f[1, ..., 2] += g * (across + leg.shaft_mass)
-    f[0] = -f[1]
-    f[0, ..., 2] += g * (leg.motor_mass + leg.shaft_mass)
-    m_top = along[..., None] * arm_x[1, :, :, 0] + (g * (across + leg.shaft_mass))[..., None] * arm_x[1, :, :, 3]
-    m_bottom = -along[..., None] * arm_x[0, :, :, 0] + (g * (leg.motor_mass - across))[..., None] * arm_x[0, :, :, 3]
-    grad = np.zeros((n + 1, 6))
-    grad[1:, :3] = f[1].sum(axis=1)
-    grad[:, 2] += am.config.plate.mass * g  # plate 0 too: its row is what its support supplies
-    grad[1:, 3:] = m_top.sum(axis=1)
-    grad[:-1, :3] += f[0].sum(axis=1)
-    grad[:-1, 3:] += m_bottom.sum(axis=1)
-    return f, grad
+    template = np.zeros((n, 6, 3, 12))
+    template[..., 0:3] = -_I3
+    template[..., 6:9] = _I3
+    design = _Design(
+        np.stack([geo.bottom_in_plate, geo.top_in_plate]).astype(float),
+        template,
+        np.array([leg.motor_mass * g, leg.shaft_mass * g]).reshape(2, 1, 1),
+        leg.motor_mass * leg.motor_com - leg.shaft_mass * leg.shaft_com,
+    )
+    if len(_DESIGNS) > 64:
+        _DESIGNS.clear()
+    _DESIGNS[id(geo)] = (weakref.ref(geo), design)
+    return design
+
+
+def _leg_hessians(u: np.ndarray, inv_L: np.ndarray, T: np.ndarray, stiffness: float, lever: float, g: float):
+    """(n, 6, 3, 3) each leg's Hessian in ``d``: ``c1 u uᵀ + c2 I + c3 (a uᵀ + u aᵀ)``, a = -g e_z."""
+    c3 = lever * inv_L * inv_L
+    au = -g * u[..., 2]
+    c2 = T * inv_L + c3 * au
+    c1 = stiffness - T * inv_L - 3.0 * c3 * au
+    Hd = c1[..., None, None] * (u[..., :, None] * u[..., None, :]) + c2[..., None, None] * _I3
+    v = (-g * c3)[..., None] * u
+    Hd[..., 2, :] += v
+    Hd[..., :, 2] += v
+    return Hd
 
 
 def elastic_terms(
@@ -172,48 +180,53 @@ def elastic_terms(
     """Gradient and Hessian of the total potential (module doc) at plates ``R`` (n+1, 3, 3),
     ``p`` (n+1, 3) [m] for unloaded leg lengths ``rest`` (n, 6) [m] (None: the lengths here).
 
+    Every leg of every platform at once: with ``D`` (3 × 12) the map of the bottom and top
+    plates' motions to the leg's ``d``, the platform's Hessian is ``Σ Dᵀ H_d D`` (two batched
+    matrix products) plus the rotation blocks' second-order terms.
+
     Args:
         stiffness: each leg's axial stiffness [N/m].
         wrench: (6,) ``[f, m]`` on the EE [N, N·m], world axes, moment about the EE origin.
         hessian: False skips the Hessian.
     """
-    cfg, geo, n = am.config, am.geometry, am.n
-    leg = cfg.leg
+    cfg, n, des = am.config, am.n, _design(am)
     g = cfg.gravity
-    rb = np.matmul(geo.bottom_in_plate, np.swapaxes(R[:-1], 1, 2))  # bottom joints from plate j's origin
-    rt = np.matmul(geo.top_in_plate, np.swapaxes(R[1:], 1, 2))  # top joints from plate j+1's origin
-    d = rt - rb + (p[1:] - p[:-1])[:, None, :]
-    L = np.sqrt((d * d).sum(axis=2))
+    r = np.matmul(des.anchors, np.swapaxes(np.stack((R[:-1], R[1:])), -1, -2))  # joints from their plates' origins
+    d = r[1] - r[0] + (p[1:] - p[:-1])[:, None, :]
+    L = np.sqrt(np.einsum("...i,...i->...", d, d))
     inv_L = 1.0 / L
     u = d * inv_L[..., None]
-    dirs = np.empty((n, 6, 4, 3))
-    dirs[:, :, 0] = u
-    dirs[:, :, 1:] = _I3
-    arms = np.stack([rb, rt])
-    arm_x = cross(arms[:, :, :, None, :], dirs)  # r × e for the bottom and top joints
     T = np.zeros_like(L) if rest is None else stiffness * (L - rest)
-    lam = leg.motor_mass * leg.motor_com - leg.shaft_mass * leg.shaft_com
-    au = -g * u[..., 2]
-    along = T + lam * au * inv_L  # G = along u - (λ/L) a: the potential's gradient in d
-    across = lam * inv_L
-    f, grad = _joint_gradient(am, u, arm_x, along, across)
+    lever = des.lever
+    F = np.empty((2, n, 6, 3))  # the potential's gradient at the bottom and top joints
+    F[1] = (T - lever * g * u[..., 2] * inv_L)[..., None] * u  # G = along u - (λ/L) a
+    F[1, ..., 2] += (lever * g) * inv_L
+    F[0] = -F[1]
+    F[..., 2] += des.weights
+    S = (r[..., _SKEW_INDEX] * _SKEW_SIGN).reshape(2, n, 6, 3, 3)  # r× of every joint
+    wrenches = np.concatenate([F, np.matmul(S, F[..., None])[..., 0]], axis=-1).sum(axis=2)
+    grad = np.zeros((n + 1, 6))
+    grad[:-1] += wrenches[0]
+    grad[1:] += wrenches[1]
+    grad[:, 2] += cfg.plate.mass * g  # plate 0 too: its row is what its support supplies
     r_pay = R[n, :, 2] * cfg.payload.offset
     w_pay = cfg.payload.mass * g  # the payload's weight, along -z
-    grad[n, 2] += w_pay
-    grad[n, 3:5] += (w_pay * r_pay[1], -w_pay * r_pay[0])  # r × (0, 0, w)
+    grad[n, 2:5] += (w_pay, w_pay * r_pay[1], -w_pay * r_pay[0])  # r × (0, 0, w)
     if wrench is not None:
         grad[n] -= wrench
-    lines = np.concatenate([u, arm_x[1, :, :, 0]], axis=2)
+    lines = np.concatenate([u, np.matmul(S[1], u[..., None])[..., 0]], axis=2)
     symmetric = wrench is None or not np.any(wrench[3:])
     if not hessian:
         return ElasticTerms(grad[1:], None, None, None, symmetric, T, L, lines, grad[0])
-    c3 = lam * inv_L * inv_L
-    c2 = T * inv_L + c3 * au
-    c1 = stiffness - T * inv_L - 3.0 * c3 * au
-    H12 = _platform_hessians(dirs, arm_x, c1, c2, c3, g)
-    charts = _chart(f, arms)  # (2, n, 3, 3): bottom joints on plate j, top joints on plate j+1
+    D = des.template.copy()
+    D[..., 3:6] = S[0]
+    D[..., 9:12] = -S[1]
+    W = np.matmul(_leg_hessians(u, inv_L, T, stiffness, lever, g), D).reshape(n, 18, 12)
+    H12 = np.matmul(np.swapaxes(D.reshape(n, 18, 12), 1, 2), W)
+    M = np.matmul(np.swapaxes(F, -1, -2), r)  # Σ f ⊗ r over each plate's joints
+    charts = 0.5 * (M + np.swapaxes(M, -1, -2)) - np.einsum("...ii->...", M)[..., None, None] * _I3
+    H12[:, 3:6, 3:6] += charts[0]  # plate 0's own (platform 0) is dropped with its rows
     H12[:, 9:, 9:] += charts[1]
-    H12[1:, 3:6, 3:6] += charts[0, 1:]
     f_pay = np.array([0.0, 0.0, w_pay])
     ee = 0.5 * (np.outer(f_pay, r_pay) + np.outer(r_pay, f_pay)) - (w_pay * r_pay[2]) * _I3
     if wrench is not None and not symmetric:  # a constant world moment on a rotating plate: -½ [m]×
