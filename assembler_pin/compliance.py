@@ -34,9 +34,11 @@ __all__ = [
     "MAX_WRENCH",
     "CompensatedLengths",
     "LoadedPose",
+    "SagGradient",
     "benchmark_stiffness",
     "compensated_lengths",
     "loaded_pose",
+    "sag_and_gradient",
 ]
 
 #: Largest force [N] or moment [N·m] component of an EE wrench accepted.
@@ -272,3 +274,98 @@ def benchmark_stiffness(am: AssemblerModel, repeat: int = 200) -> dict[str, floa
     from .bench import median_time_us
 
     return {name: 1e-6 * median_time_us(call, repeat) for name, call in calls.items()}
+
+
+@dataclass(frozen=True)
+class SagGradient:
+    """The EE's linear sag of a pose and its gradient (:func:`sag_and_gradient`).
+
+    Attributes:
+        sag: ``|δp|`` [m], the length of the EE origin's first-order displacement under the
+            pose's own loads (gravity and payload) with legs of stiffness ``k``.
+        translation: (3,) ``δp`` [m], world axes.
+        gradient: (6n,) ``∂ sag / ∂η`` [m per (m, rad)], per plate 1..n its six coordinates in
+            ``chart`` order ``[v, ω]`` (see :func:`sag_and_gradient`).
+        chart: ``"world"`` or ``"local"``.
+    """
+
+    sag: float
+    translation: np.ndarray
+    gradient: np.ndarray
+    chart: str
+
+
+def _point_rows(force: np.ndarray, point: np.ndarray) -> np.ndarray:
+    """(..., 6) ``[f, x × f]``: the row ``f · (v + ω × x)`` of a point force f at x on a plate."""
+    return np.concatenate([force, np.cross(point, force)], axis=-1)
+
+
+def sag_and_gradient(
+    am: AssemblerModel, plates: PlateArrays | Sequence | np.ndarray, chart: str = "world"
+) -> SagGradient:
+    """The EE's sag under gravity and payload, linear in the legs' compliance, and its gradient.
+
+    Every leg stretches by ``F / k`` (``F`` the statics forces of the pose, tension positive,
+    ``k = leg.stiffness``); the plates move by ``y = A⁻¹ F / k`` with ``A = ∂L/∂η`` the legs'
+    length Jacobian, and the EE origin by ``δp = v_n + ω_n × p_n`` (the elastic compliance
+    ``Σ k ∇L ∇Lᵀ`` under the pose's own loads; the load-dependent stiffness, about 1e-4 of
+    it at 1e6 N/m, is left out). The measure is ``sag = |δp|`` [m].
+
+    The gradient is exact (adjoint of ``A y = F / k``): ``chart="world"`` gives it per world
+    twist ``η_k = (v, ω)`` of plate k (``T_k ← exp6(η_k) T_k``, the columns of
+    :func:`~assembler_pin.gradients.pose_derivatives`, so ``gradient @ B`` is the optimizer's
+    chart gradient for its ``B``); ``chart="local"`` per body twist ``ξ_k``
+    (``T_k ← T_k exp6(ξ_k)``, the optimizer's chart at its reference).
+
+    Raises:
+        PoseError: malformed plates. SingularConfigurationError: a singular platform.
+        OptionsError: an unknown chart.
+    """
+    from .exceptions import OptionsError, SingularConfigurationError
+    from .gradients import pose_derivatives
+
+    if chart not in ("world", "local"):
+        raise OptionsError(f"chart must be 'world' or 'local', got {chart!r}")
+    pa = plate_arrays(am, plates)
+    n, k = am.n, float(am.config.leg.stiffness)
+    d = pose_derivatives(am, pa)
+    A = d.d_lengths.reshape(6 * n, 6 * n)
+    try:
+        y = np.linalg.solve(A, d.forces.ravel() / k).reshape(n, 6)
+    except np.linalg.LinAlgError:
+        raise SingularConfigurationError("the leg-length Jacobian is singular: no sag is defined") from None
+    p_ee = pa.p[n]
+    dp = y[-1, :3] + np.cross(y[-1, 3:], p_ee)
+    sag = float(np.linalg.norm(dp))
+    e = dp / sag if sag > 0 else np.zeros(3)
+    ds_dy = np.zeros(6 * n)
+    ds_dy[-6:] = np.r_[e, np.cross(p_ee, e)]
+    lam = np.linalg.solve(A.T, ds_dy).reshape(n, 6)  # the adjoint, one per leg
+    gradient = lam.ravel() @ d.d_forces.reshape(6 * n, 6 * n) / k
+    gradient -= _curvature_rows(am, pa, y, lam).ravel()
+    gradient[-6:] += _point_rows(np.cross(e, y[-1, 3:]), p_ee)  # δp's own p_n
+    if chart == "local":
+        action = np.array([pa.se3(j).action for j in range(1, n + 1)])
+        gradient = np.einsum("ja,jab->jb", gradient.reshape(n, 6), action).ravel()
+    return SagGradient(sag, dp, gradient, chart)
+
+
+def _curvature_rows(am: AssemblerModel, pa: PlateArrays, y: np.ndarray, lam: np.ndarray) -> np.ndarray:
+    """(n, 6) ``λᵀ ∂(A y)/∂η``: each leg's second derivative of its length along the plates'
+    motion ``y`` (n, 6) and a world twist, weighted by ``λ`` (n, 6), as point forces at its joints."""
+    geo = am.geometry
+    b = np.matmul(geo.bottom_in_plate, np.swapaxes(pa.R[:-1], 1, 2)) + pa.p[:-1, None, :]
+    t = np.matmul(geo.top_in_plate, np.swapaxes(pa.R[1:], 1, 2)) + pa.p[1:, None, :]
+    dvec = t - b
+    L = np.linalg.norm(dvec, axis=-1)
+    u = dvec / L[..., None]
+    y0 = np.vstack([np.zeros((1, 6)), y])  # plate 0 stays
+    move_b = y0[:-1, None, :3] + np.cross(y0[:-1, None, 3:], b)
+    move_t = y0[1:, None, :3] + np.cross(y0[1:, None, 3:], t)
+    dd = move_t - move_b
+    g = lam[..., None] * (dd - (dd * u).sum(-1, keepdims=True) * u) / L[..., None]
+    f_t = g + lam[..., None] * np.cross(u, y0[1:, None, 3:])
+    f_b = -g - lam[..., None] * np.cross(u, y0[:-1, None, 3:])
+    rows = _point_rows(f_t, t).sum(axis=1)
+    rows[:-1] += _point_rows(f_b[1:], b[1:]).sum(axis=1)  # platform j's bottom is on plate j
+    return rows
