@@ -60,6 +60,17 @@ def run(args: argparse.Namespace) -> int:
     return 0 if result.success else 1
 
 
+def stiffness_blocks(am, plates) -> tuple[dict, bool, str]:
+    """The ``sag`` and ``stiffness`` blocks that ``statics --stiffness`` adds to its JSON
+    (``stiffness``: the object of ``stiffness --json``; ``sag``: its sag block), whether there
+    is a stiffness, and the text report."""
+    from ..ee_stiffness import stiffness
+
+    result = stiffness(am, plates)
+    doc = result.to_dict()
+    return {"sag": doc["sag"], "stiffness": doc}, result.success, format_stiffness(result, am)
+
+
 def _vec(v) -> str:
     return "(" + ", ".join(f"{round(float(x), 4) + 0.0:.4f}" for x in v) + ")"
 
