@@ -39,7 +39,7 @@ def map_slice(table, config: str | None = None, orientation: int = 0) -> tuple[s
     u, v = np.unique(cols[u_axis]), np.unique(cols[v_axis])
     iu, iv = np.searchsorted(u, cols[u_axis]), np.searchsorted(v, cols[v_axis])
     out: dict[str, np.ndarray] = {"u": u, "v": v}
-    for c in ("reachable", "max_abs_force", "capacity_kg"):
+    for c in ("reachable", "max_abs_force", "capacity_kg", "sag_m", "weakest_stiffness_n_per_m"):
         grid = np.full((len(v), len(u)), np.nan)
         grid[iv, iu] = cols[c].astype(float)
         out[c] = grid
@@ -50,14 +50,16 @@ def map_heatmaps(table, am: AssemblerModel, config: str | None = None, orientati
     """Reachability, optimized max|F| [N] and payload capacity [kg] over a 2-D map slice,
     the stack's home pose drawn in each panel for scale; unreached cells are hatched gray."""
     u_axis, v_axis, s = map_slice(table, config, orientation)
-    fig = Figure(figsize=(15, 4.8), layout="constrained")
-    axes = fig.subplots(1, 3)
+    fig = Figure(figsize=(25, 4.8), layout="constrained")
+    axes = fig.subplots(1, 5)
     extent = _extent(s["u"], s["v"])
     home = evaluate_state(am, am.home)
     panels = (
         ("reachable", "reachable (a valid pose exists)", ListedColormap(["#d9d9d9", "#2ca02c"]), "reachable"),
         ("max_abs_force", f"optimized max|F| [N] at {am.config.payload.mass:g} kg", colormaps["viridis"], "N"),
         ("capacity_kg", "payload capacity [kg]", colormaps["magma"], "kg"),
+        ("sag_m", "EE sag under gravity and payload [m]", colormaps["cividis"], "m"),
+        ("weakest_stiffness_n_per_m", "weakest EE stiffness [N/m]", colormaps["plasma"], "N/m"),
     )
     for ax, (key, name, cmap, unit) in zip(axes, panels, strict=True):
         data = np.ma.masked_invalid(s[key])
