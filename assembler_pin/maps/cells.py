@@ -32,8 +32,8 @@ from .grid import Cell
 __all__ = [
     "COLUMNS",
     "cell_key",
-    "compute_batch",
     "cell_stiffness",
+    "compute_batch",
     "compute_cell",
     "config_hash",
     "config_key",
