@@ -119,10 +119,11 @@ _SKEW_SIGN = np.array([0.0, -1.0, 1.0, 1.0, 0.0, -1.0, -1.0, 1.0, 0.0])
 class _Design:
     """What :func:`elastic_terms` needs of one model, computed once per geometry.
 
-    anchors: (2, n, 6, 3) bottom and top joints in their plates' frames [m]; template:
-    (n, 6, 3, 12) ``∂d/∂(bottom, top plate)`` with its translation blocks ``-I, I`` filled;
-    weights: (2, 1, 1) the motor's and the shaft's weight [N] at the bottom and top joints;
-    lever: ``λ = m_m c_m - m_s c_s`` [kg·m].
+    anchors: (n+1, 12, 3) per plate k, the bottom joints of platform k (rows 0..5) and the
+    top joints of platform k-1 (rows 6..11) in its frame [m] (zeros where there is none);
+    template: (n, 6, 3, 12) ``∂d/∂(bottom, top plate)`` with its translation blocks ``-I, I``
+    filled; weights: (2, 1, 1) the motor's and the shaft's weight [N] at the bottom and top
+    joints; lever: ``λ = m_m c_m - m_s c_s`` [kg·m].
     """
 
     anchors: np.ndarray
@@ -143,8 +144,11 @@ def _design(am: AssemblerModel) -> _Design:
     template = np.zeros((n, 6, 3, 12))
     template[..., 0:3] = -_I3
     template[..., 6:9] = _I3
+    anchors = np.zeros((n + 1, 12, 3))
+    anchors[:-1, :6] = geo.bottom_in_plate
+    anchors[1:, 6:] = geo.top_in_plate
     design = _Design(
-        np.stack([geo.bottom_in_plate, geo.top_in_plate]).astype(float),
+        anchors,
         template,
         np.array([leg.motor_mass * g, leg.shaft_mass * g]).reshape(2, 1, 1),
         leg.motor_mass * leg.motor_com - leg.shaft_mass * leg.shaft_com,
@@ -155,17 +159,24 @@ def _design(am: AssemblerModel) -> _Design:
     return design
 
 
-def _leg_hessians(u: np.ndarray, inv_L: np.ndarray, T: np.ndarray, stiffness: float, lever: float, g: float):
-    """(n, 6, 3, 3) each leg's Hessian in ``d``: ``c1 u uᵀ + c2 I + c3 (a uᵀ + u aᵀ)``, a = -g e_z."""
+def _platform_hessians(u, inv_L, T, D, stiffness: float, lever: float, g: float) -> np.ndarray:
+    """(n, 12, 12) ``Σ Dᵀ H_d D`` over each platform's legs, ``H_d = c1 u uᵀ + c2 I + c3 (a uᵀ
+    + u aᵀ)`` (a = -g e_z) and ``D`` (n, 6, 3, 12) each leg's ``∂d/∂(bottom, top plate)``.
+
+    With the leg's line ``l = Dᵀ u`` and ``m = Dᵀ e_z`` (both 12-vectors) it is ``Σ (c1 l -
+    g c3 m) lᵀ - g c3 l mᵀ + c2 DᵀD``: one product of stacked (30 × 12) factors per platform.
+    """
+    n = u.shape[0]
     c3 = lever * inv_L * inv_L
     au = -g * u[..., 2]
     c2 = T * inv_L + c3 * au
     c1 = stiffness - T * inv_L - 3.0 * c3 * au
-    Hd = c1[..., None, None] * (u[..., :, None] * u[..., None, :]) + c2[..., None, None] * _I3
-    v = (-g * c3)[..., None] * u
-    Hd[..., 2, :] += v
-    Hd[..., :, 2] += v
-    return Hd
+    line = np.matmul(u[..., None, :], D)[..., 0, :]  # (n, 6, 12)
+    m = D[..., 2, :]
+    gc3 = (-g * c3)[..., None]
+    left = np.concatenate([c1[..., None] * line + gc3 * m, gc3 * line, (c2[..., None, None] * D).reshape(n, 18, 12)], 1)
+    right = np.concatenate([line, m, D.reshape(n, 18, 12)], axis=1)
+    return np.matmul(np.swapaxes(left, 1, 2), right)
 
 
 def elastic_terms(
@@ -181,8 +192,8 @@ def elastic_terms(
     ``p`` (n+1, 3) [m] for unloaded leg lengths ``rest`` (n, 6) [m] (None: the lengths here).
 
     Every leg of every platform at once: with ``D`` (3 × 12) the map of the bottom and top
-    plates' motions to the leg's ``d``, the platform's Hessian is ``Σ Dᵀ H_d D`` (two batched
-    matrix products) plus the rotation blocks' second-order terms.
+    plates' motions to the leg's ``d``, the platform's Hessian is ``Σ Dᵀ H_d D``
+    (:func:`_platform_hessians`) plus the rotation blocks' second-order terms.
 
     Args:
         stiffness: each leg's axial stiffness [N/m].
@@ -191,7 +202,8 @@ def elastic_terms(
     """
     cfg, n, des = am.config, am.n, _design(am)
     g = cfg.gravity
-    r = np.matmul(des.anchors, np.swapaxes(np.stack((R[:-1], R[1:])), -1, -2))  # joints from their plates' origins
+    joints = np.matmul(des.anchors, np.swapaxes(R, 1, 2))  # every joint from its plate's origin
+    r = np.stack((joints[:-1, :6], joints[1:, 6:]))  # (2, n, 6, 3): bottom and top joints
     d = r[1] - r[0] + (p[1:] - p[:-1])[:, None, :]
     L = np.sqrt(np.einsum("...i,...i->...", d, d))
     inv_L = 1.0 / L
@@ -221,14 +233,16 @@ def elastic_terms(
     D = des.template.copy()
     D[..., 3:6] = S[0]
     D[..., 9:12] = -S[1]
-    W = np.matmul(_leg_hessians(u, inv_L, T, stiffness, lever, g), D).reshape(n, 18, 12)
-    H12 = np.matmul(np.swapaxes(D.reshape(n, 18, 12), 1, 2), W)
+    H12 = _platform_hessians(u, inv_L, T, D, stiffness, lever, g)
     M = np.matmul(np.swapaxes(F, -1, -2), r)  # Σ f ⊗ r over each plate's joints
-    charts = 0.5 * (M + np.swapaxes(M, -1, -2)) - np.einsum("...ii->...", M)[..., None, None] * _I3
-    H12[:, 3:6, 3:6] += charts[0]  # plate 0's own (platform 0) is dropped with its rows
-    H12[:, 9:, 9:] += charts[1]
-    f_pay = np.array([0.0, 0.0, w_pay])
-    ee = 0.5 * (np.outer(f_pay, r_pay) + np.outer(r_pay, f_pay)) - (w_pay * r_pay[2]) * _I3
+    charts = M + np.swapaxes(M, -1, -2)
+    charts.reshape(2, n, 9)[..., ::4] -= 2.0 * (M[..., 0, 0] + M[..., 1, 1] + M[..., 2, 2])[..., None]
+    H12[:, 3:6, 3:6] += 0.5 * charts[0]  # plate 0's own (platform 0) is dropped with its rows
+    H12[:, 9:, 9:] += 0.5 * charts[1]
+    ee = np.zeros((3, 3))  # the payload's ½ (f rᵀ + r fᵀ) - (f·r) I, f = (0, 0, w)
+    ee[2] += 0.5 * w_pay * r_pay
+    ee[:, 2] += 0.5 * w_pay * r_pay
+    ee.flat[::4] -= w_pay * r_pay[2]
     if wrench is not None and not symmetric:  # a constant world moment on a rotating plate: -½ [m]×
         ee = ee - 0.5 * skew(wrench[3:])
     return _assembled(grad, H12, ee, symmetric, T, L, lines)
@@ -241,11 +255,12 @@ def _assembled(grad, H12, ee, symmetric: bool, T, L, lines) -> ElasticTerms:
     n = H12.shape[0]
     base, grad = grad[0], grad[1:]
     if n <= DENSE_MAX_PLATFORMS:
-        full = np.zeros((6 * n + 6, 6 * n + 6))
-        for j in range(n):
-            full[6 * j : 6 * j + 12, 6 * j : 6 * j + 12] += H12[j]
+        full = np.zeros((6 * n, 6 * n))
+        full[:6, :6] = H12[0, 6:, 6:]  # plate 0 is fixed: platform 0 adds only to plate 1
+        for j in range(1, n):
+            full[6 * j - 6 : 6 * j + 6, 6 * j - 6 : 6 * j + 6] += H12[j]
         full[-3:, -3:] += ee
-        return ElasticTerms(grad, full[6:, 6:], None, None, symmetric, T, L, lines, base)
+        return ElasticTerms(grad, full, None, None, symmetric, T, L, lines, base)
     diag = H12[:, 6:, 6:].copy()
     diag[:-1] += H12[1:, :6, :6]
     diag[-1, 3:, 3:] += ee
