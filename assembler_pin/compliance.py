@@ -21,6 +21,7 @@ import numpy as np
 import numpy.typing as npt
 import pinocchio as pin
 
+from .bounds import BOUNDS, check_bound
 from .ee_stiffness import stiffness
 from .elastic import line_conditions, solve_equilibrium
 from .exceptions import LoadError
@@ -41,8 +42,8 @@ __all__ = [
     "sag_and_gradient",
 ]
 
-#: Largest force [N] or moment [N·m] component of an EE wrench accepted.
-MAX_WRENCH = 1e6
+#: Largest force [N] or moment [N·m] component of an EE wrench accepted (bounds key ``elastic.wrench``).
+MAX_WRENCH = BOUNDS["elastic.wrench"].high
 
 
 @dataclass(frozen=True)
@@ -108,10 +109,7 @@ def _checked_wrench(wrench: npt.ArrayLike | None) -> np.ndarray | None:
     w = as_float_array(wrench, "EE wrench (six numbers fx fy fz mx my mz)", (6,), error=LoadError)
     if not np.all(np.isfinite(w)):
         raise LoadError(f"EE wrench contains NaN or infinite values: {w.tolist()}")
-    if np.abs(w).max() > MAX_WRENCH:
-        raise LoadError(
-            f"EE wrench components must be at most {MAX_WRENCH:g} N or N·m in magnitude, got {np.abs(w).max():.3g}"
-        )
+    check_bound("elastic.wrench", float(np.abs(w).max()), "the largest |component| of the EE wrench", LoadError)
     return w
 
 
@@ -136,9 +134,12 @@ def loaded_pose(
         tol: largest Newton step accepted as converged [m] (rotations times the node radius).
 
     Raises:
-        PoseError: malformed lengths or base. LoadError: a non-finite or absurd wrench.
+        PoseError: malformed lengths or base. LoadError: a non-finite or absurd wrench, ``tol``
+            or ``max_iterations`` (bounds keys ``elastic.*``).
     """
     w = _checked_wrench(wrench)
+    check_bound("elastic.tol", tol, "tol", LoadError)
+    max_iterations = int(check_bound("elastic.max_iterations", max_iterations, "max_iterations", LoadError))
     rest = as_float_array(lengths, "leg lengths", (am.n, 6))
     fk = stack_forward_kinematics(am, rest, base=base)
     rigid = fk.plates
@@ -241,8 +242,7 @@ def compensated_lengths(
         PoseError: malformed plates. SingularConfigurationError: the pose is singular.
         LoadError: ``tolerance`` not in [1e-12, 1e-3] m.
     """
-    if not (isinstance(tolerance, (int, float)) and 1e-12 <= tolerance <= 1e-3):
-        raise LoadError(f"tolerance of the compensated pose must be in [1e-12, 1e-3] m, got {tolerance!r}")
+    check_bound("compensated.tolerance", tolerance, "tolerance", LoadError)
     pa = plate_arrays(am, plates)
     statics = solve_statics(am, pa, raise_on_singular=True)
     geometric = leg_vectors(am, pa)[3]
@@ -261,19 +261,26 @@ def compensated_lengths(
 
 def benchmark_stiffness(am: AssemblerModel, repeat: int = 200) -> dict[str, float]:
     """Median wall time [s] per call of :func:`~assembler_pin.ee_stiffness.stiffness`,
-    :func:`loaded_pose` and :func:`compensated_lengths` at the home pose (and, for scale,
-    :func:`~assembler_pin.statics.solve_statics`)."""
+    :func:`loaded_pose`, :func:`compensated_lengths` and :func:`sag_and_gradient` at the home
+    pose (and, for scale, :func:`~assembler_pin.statics.solve_statics` and the force
+    objective's derivatives :func:`~assembler_pin.gradients.pose_derivatives`), BLAS on one
+    thread as in the optimizer."""
+    from .bench import median_time_us
+    from .gradients import pose_derivatives
+    from .threads import single_blas_thread
+
     pa = plate_arrays(am, am.home)
     lengths = compensated_lengths(am, pa).lengths
     calls = {
         "stiffness": lambda: stiffness(am, pa),
         "loaded_pose": lambda: loaded_pose(am, lengths),
         "compensated_lengths": lambda: compensated_lengths(am, pa),
+        "sag_and_gradient": lambda: sag_and_gradient(am, pa),
         "solve_statics": lambda: solve_statics(am, pa),
+        "pose_derivatives": lambda: pose_derivatives(am, pa),
     }
-    from .bench import median_time_us
-
-    return {name: 1e-6 * median_time_us(call, repeat) for name, call in calls.items()}
+    with single_blas_thread():
+        return {name: 1e-6 * median_time_us(call, repeat) for name, call in calls.items()}
 
 
 @dataclass(frozen=True)

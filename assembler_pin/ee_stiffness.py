@@ -27,8 +27,9 @@ import numpy as np
 import numpy.typing as npt
 import pinocchio as pin
 
+from .bounds import check_bound
 from .elastic import Equilibrium, line_conditions, solve_equilibrium
-from .exceptions import PoseError
+from .exceptions import LoadError, PoseError
 from .kinematics import PlateArrays, plate_arrays
 from .linalg import skew
 from .model import AssemblerModel
@@ -243,8 +244,9 @@ def stiffness(
         equilibrium does not converge or is not stable.
 
     Raises:
-        PoseError: malformed plates or lengths.
+        PoseError: malformed plates or lengths. LoadError: ``tol`` out of bounds (``elastic.tol``).
     """
+    check_bound("elastic.tol", tol, "tol", LoadError)
     pa = plate_arrays(am, plates)
     k = float(am.config.leg.stiffness)
     rest = None if lengths is None else _checked_lengths(am, lengths)
