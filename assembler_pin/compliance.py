@@ -335,12 +335,15 @@ def sag_and_gradient(
         raise OptionsError(f"chart must be 'world' or 'local', got {chart!r}")
     pa = plate_arrays(am, plates)
     n, k = am.n, float(am.config.leg.stiffness)
+    legs = _leg_points(am, pa)
+    cond = line_conditions(np.concatenate([legs[2], np.cross(legs[1] - pa.p[1:, None, :], legs[2])], axis=2))[1]
+    if not cond.max() <= CONDITION_LIMIT:
+        worst = int(np.argmax(cond))
+        why = f"platform {worst} is at a singular configuration (condition number {cond[worst]:.3g}): no sag"
+        raise SingularConfigurationError(why, float(cond[worst]), worst)
     d = pose_derivatives(am, pa)
     A = d.d_lengths.reshape(6 * n, 6 * n)
-    try:
-        y = np.linalg.solve(A, d.forces.ravel() / k).reshape(n, 6)
-    except np.linalg.LinAlgError:
-        raise SingularConfigurationError("the leg-length Jacobian is singular: no sag is defined") from None
+    y = np.linalg.solve(A, d.forces.ravel() / k).reshape(n, 6)
     p_ee = pa.p[n]
     dp = y[-1, :3] + np.cross(y[-1, 3:], p_ee)
     sag = float(np.linalg.norm(dp))
@@ -349,7 +352,7 @@ def sag_and_gradient(
     ds_dy[-6:] = np.r_[e, np.cross(p_ee, e)]
     lam = np.linalg.solve(A.T, ds_dy).reshape(n, 6)  # the adjoint, one per leg
     gradient = lam.ravel() @ d.d_forces.reshape(6 * n, 6 * n) / k
-    gradient -= _curvature_rows(am, pa, y, lam).ravel()
+    gradient -= _curvature_rows(pa, legs, y, lam).ravel()
     gradient[-6:] += _point_rows(np.cross(e, y[-1, 3:]), p_ee)  # δp's own p_n
     if chart == "local":
         action = np.array([pa.se3(j).action for j in range(1, n + 1)])
@@ -357,15 +360,20 @@ def sag_and_gradient(
     return SagGradient(sag, dp, gradient, chart)
 
 
-def _curvature_rows(am: AssemblerModel, pa: PlateArrays, y: np.ndarray, lam: np.ndarray) -> np.ndarray:
-    """(n, 6) ``λᵀ ∂(A y)/∂η``: each leg's second derivative of its length along the plates'
-    motion ``y`` (n, 6) and a world twist, weighted by ``λ`` (n, 6), as point forces at its joints."""
+def _leg_points(am: AssemblerModel, pa: PlateArrays) -> tuple[np.ndarray, ...]:
+    """(b, t, u, L): bottom and top joints (n, 6, 3) [m, world], unit directions, lengths (n, 6) [m]."""
     geo = am.geometry
     b = np.matmul(geo.bottom_in_plate, np.swapaxes(pa.R[:-1], 1, 2)) + pa.p[:-1, None, :]
     t = np.matmul(geo.top_in_plate, np.swapaxes(pa.R[1:], 1, 2)) + pa.p[1:, None, :]
-    dvec = t - b
-    L = np.linalg.norm(dvec, axis=-1)
-    u = dvec / L[..., None]
+    L = np.linalg.norm(t - b, axis=-1)
+    return b, t, (t - b) / L[..., None], L
+
+
+def _curvature_rows(pa: PlateArrays, legs: tuple[np.ndarray, ...], y: np.ndarray, lam: np.ndarray) -> np.ndarray:
+    """(n, 6) ``λᵀ ∂(A y)/∂η``: each leg's second derivative of its length along the plates'
+    motion ``y`` (n, 6) and a world twist, weighted by ``λ`` (n, 6), as point forces at its joints
+    (``legs``: :func:`_leg_points`)."""
+    b, t, u, L = legs
     y0 = np.vstack([np.zeros((1, 6)), y])  # plate 0 stays
     move_b = y0[:-1, None, :3] + np.cross(y0[:-1, None, 3:], b)
     move_t = y0[1:, None, :3] + np.cross(y0[1:, None, 3:], t)

@@ -42,7 +42,7 @@ import numpy as np
 import pinocchio as pin
 from scipy.linalg.lapack import dgesv, dposv, dpotrf
 
-from .linalg import inverse_or_nan, skew
+from .linalg import cross, inverse_or_nan, skew
 from .model import AssemblerModel
 
 __all__ = [
@@ -119,14 +119,11 @@ _SKEW_SIGN = np.array([0.0, -1.0, 1.0, 1.0, 0.0, -1.0, -1.0, 1.0, 0.0])
 class _Design:
     """What :func:`elastic_terms` needs of one model, computed once per geometry.
 
-    anchors: (n+1, 12, 3) per plate k, the bottom joints of platform k (rows 0..5) and the
-    top joints of platform k-1 (rows 6..11) in its frame [m] (zeros where there is none);
     template: (n, 6, 3, 12) ``∂d/∂(bottom, top plate)`` with its translation blocks ``-I, I``
     filled; weights: (2, 1, 1) the motor's and the shaft's weight [N] at the bottom and top
     joints; lever: ``λ = m_m c_m - m_s c_s`` [kg·m].
     """
 
-    anchors: np.ndarray
     template: np.ndarray
     weights: np.ndarray
     lever: float
@@ -144,11 +141,7 @@ def _design(am: AssemblerModel) -> _Design:
     template = np.zeros((n, 6, 3, 12))
     template[..., 0:3] = -_I3
     template[..., 6:9] = _I3
-    anchors = np.zeros((n + 1, 12, 3))
-    anchors[:-1, :6] = geo.bottom_in_plate
-    anchors[1:, 6:] = geo.top_in_plate
     design = _Design(
-        anchors,
         template,
         np.array([leg.motor_mass * g, leg.shaft_mass * g]).reshape(2, 1, 1),
         leg.motor_mass * leg.motor_com - leg.shaft_mass * leg.shaft_com,
@@ -179,6 +172,29 @@ def _platform_hessians(u, inv_L, T, D, stiffness: float, lever: float, g: float)
     return np.matmul(np.swapaxes(left, 1, 2), right)
 
 
+def _joint_gradient(am: AssemblerModel, u, r, r_u, along, across) -> tuple[np.ndarray, np.ndarray]:
+    """The gradient at the joints, ``f`` (2, n, 6, 3): bottom ``-G - m_m a``, top ``G - m_s a``
+    with ``G = along u - across a`` (a = -g e_z), and the plates' gradient (n+1, 6) from them,
+    their moments ``r × f`` (``r_u`` = r × u) and the plates' weight, plate 0's included (the
+    payload's is the caller's)."""
+    leg, g, n = am.config.leg, am.config.gravity, am.n
+    f = np.empty((2, n, 6, 3))
+    f[1] = along[..., None] * u
+    f[1, ..., 2] += g * (across + leg.shaft_mass)
+    f[0] = -f[1]
+    f[0, ..., 2] += g * (leg.motor_mass + leg.shaft_mass)
+    r_z = np.stack([r[..., 1], -r[..., 0], np.zeros_like(r[..., 0])], axis=-1)  # r × e_z
+    m_top = along[..., None] * r_u[1] + (g * (across + leg.shaft_mass))[..., None] * r_z[1]
+    m_bottom = -along[..., None] * r_u[0] + (g * (leg.motor_mass - across))[..., None] * r_z[0]
+    grad = np.zeros((n + 1, 6))
+    grad[1:, :3] = f[1].sum(axis=1)
+    grad[:, 2] += am.config.plate.mass * g  # plate 0 too: its row is what its support supplies
+    grad[1:, 3:] = m_top.sum(axis=1)
+    grad[:-1, :3] += f[0].sum(axis=1)
+    grad[:-1, 3:] += m_bottom.sum(axis=1)
+    return f, grad
+
+
 def elastic_terms(
     am: AssemblerModel,
     R: np.ndarray,
@@ -202,34 +218,28 @@ def elastic_terms(
     """
     cfg, n, des = am.config, am.n, _design(am)
     g = cfg.gravity
-    joints = np.matmul(des.anchors, np.swapaxes(R, 1, 2))  # every joint from its plate's origin
-    r = np.stack((joints[:-1, :6], joints[1:, 6:]))  # (2, n, 6, 3): bottom and top joints
-    d = r[1] - r[0] + (p[1:] - p[:-1])[:, None, :]
-    L = np.sqrt(np.einsum("...i,...i->...", d, d))
+    rb = np.matmul(am.geometry.bottom_in_plate, np.swapaxes(R[:-1], 1, 2))  # bottom joints from plate j's origin
+    rt = np.matmul(am.geometry.top_in_plate, np.swapaxes(R[1:], 1, 2))  # top joints from plate j+1's origin
+    r = np.stack((rb, rt))
+    d = rt - rb + (p[1:] - p[:-1])[:, None, :]
+    L = np.sqrt((d * d).sum(axis=2))
     inv_L = 1.0 / L
     u = d * inv_L[..., None]
     T = np.zeros_like(L) if rest is None else stiffness * (L - rest)
     lever = des.lever
-    F = np.empty((2, n, 6, 3))  # the potential's gradient at the bottom and top joints
-    F[1] = (T - lever * g * u[..., 2] * inv_L)[..., None] * u  # G = along u - (λ/L) a
-    F[1, ..., 2] += (lever * g) * inv_L
-    F[0] = -F[1]
-    F[..., 2] += des.weights
-    S = (r[..., _SKEW_INDEX] * _SKEW_SIGN).reshape(2, n, 6, 3, 3)  # r× of every joint
-    wrenches = np.concatenate([F, np.matmul(S, F[..., None])[..., 0]], axis=-1).sum(axis=2)
-    grad = np.zeros((n + 1, 6))
-    grad[:-1] += wrenches[0]
-    grad[1:] += wrenches[1]
-    grad[:, 2] += cfg.plate.mass * g  # plate 0 too: its row is what its support supplies
+    r_u = cross(r, u)  # r × u of the bottom and top joints
+    F, grad = _joint_gradient(am, u, r, r_u, T + lever * (-g * u[..., 2]) * inv_L, lever * inv_L)
     r_pay = R[n, :, 2] * cfg.payload.offset
     w_pay = cfg.payload.mass * g  # the payload's weight, along -z
-    grad[n, 2:5] += (w_pay, w_pay * r_pay[1], -w_pay * r_pay[0])  # r × (0, 0, w)
+    grad[n, 2] += w_pay
+    grad[n, 3:5] += (w_pay * r_pay[1], -w_pay * r_pay[0])  # r × (0, 0, w)
     if wrench is not None:
         grad[n] -= wrench
-    lines = np.concatenate([u, np.matmul(S[1], u[..., None])[..., 0]], axis=2)
+    lines = np.concatenate([u, r_u[1]], axis=2)
     symmetric = wrench is None or not np.any(wrench[3:])
     if not hessian:
         return ElasticTerms(grad[1:], None, None, None, symmetric, T, L, lines, grad[0])
+    S = (r[..., _SKEW_INDEX] * _SKEW_SIGN).reshape(2, n, 6, 3, 3)  # r× of every joint
     D = des.template.copy()
     D[..., 3:6] = S[0]
     D[..., 9:12] = -S[1]

@@ -120,9 +120,13 @@ def stiffness_scaling(
         if progress is not None:
             progress(i + 1, len(ns), f"{n} platforms")
     table, el = np.array(rows), np.array(elastic)
+    lateral, axial, torsional, sag = table.T
     return ScalingTable(
         ns,
-        *table.T,
+        lateral,
+        axial,
+        torsional,
+        sag,
         {q: el[:, j] for j, q in enumerate(_QUANTITIES)},
         np.array(stable),
         message,

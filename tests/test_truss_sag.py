@@ -74,3 +74,12 @@ def test_sag_scales_as_the_compliance():
 def test_an_unknown_chart_is_refused(am):
     with pytest.raises(OptionsError, match="chart"):
         sag_and_gradient(am, am.home, chart="taa")
+
+
+def test_a_singular_pose_has_no_sag(am):
+    """The octahedral singularity (plates turned 90°): refused, never a huge number."""
+    turned = [pin.SE3.Identity()]
+    for _ in range(am.n):
+        turned.append(turned[-1] * pin.SE3(pin.exp3(np.array([0, 0, np.pi / 2])), np.array([0, 0, 0.24])))
+    with pytest.raises(ap.SingularConfigurationError, match="platform 0"):
+        sag_and_gradient(am, turned)
