@@ -25,6 +25,7 @@ from .bounds import BOUNDS, check_bound
 from .ee_stiffness import stiffness
 from .elastic import line_conditions, solve_equilibrium
 from .exceptions import LoadError
+from .gradients import PoseDerivatives
 from .kinematics import PlateArrays, leg_vectors, plate_arrays, stack_forward_kinematics
 from .labels import leg_label
 from .model import AssemblerModel
@@ -308,7 +309,10 @@ def _point_rows(force: np.ndarray, point: np.ndarray) -> np.ndarray:
 
 
 def sag_and_gradient(
-    am: AssemblerModel, plates: PlateArrays | Sequence | np.ndarray, chart: str = "world"
+    am: AssemblerModel,
+    plates: PlateArrays | Sequence | np.ndarray,
+    chart: str = "world",
+    derivatives: PoseDerivatives | None = None,
 ) -> SagGradient:
     """The EE's sag under gravity and payload, linear in the legs' compliance, and its gradient.
 
@@ -322,7 +326,9 @@ def sag_and_gradient(
     twist ``η_k = (v, ω)`` of plate k (``T_k ← exp6(η_k) T_k``, the columns of
     :func:`~assembler_pin.gradients.pose_derivatives`, so ``gradient @ B`` is the optimizer's
     chart gradient for its ``B``); ``chart="local"`` per body twist ``ξ_k``
-    (``T_k ← T_k exp6(ξ_k)``, the optimizer's chart at its reference).
+    (``T_k ← T_k exp6(ξ_k)``, the optimizer's chart at its reference). ``derivatives``: the
+    pose's :func:`~assembler_pin.gradients.pose_derivatives` when the caller has them already
+    (the optimizer's force rows), else computed here.
 
     Raises:
         PoseError: malformed plates. SingularConfigurationError: a singular platform.
@@ -341,7 +347,7 @@ def sag_and_gradient(
         worst = int(np.argmax(cond))
         why = f"platform {worst} is at a singular configuration (condition number {cond[worst]:.3g}): no sag"
         raise SingularConfigurationError(why, float(cond[worst]), worst)
-    d = pose_derivatives(am, pa)
+    d = pose_derivatives(am, pa) if derivatives is None else derivatives
     A = d.d_lengths.reshape(6 * n, 6 * n)
     y = np.linalg.solve(A, d.forces.ravel() / k).reshape(n, 6)
     p_ee = pa.p[n]

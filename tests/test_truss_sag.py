@@ -83,3 +83,11 @@ def test_a_singular_pose_has_no_sag(am):
         turned.append(turned[-1] * pin.SE3(pin.exp3(np.array([0, 0, np.pi / 2])), np.array([0, 0, 0.24])))
     with pytest.raises(ap.SingularConfigurationError, match="platform 0"):
         sag_and_gradient(am, turned)
+
+
+def test_given_pose_derivatives_give_the_same_answer(am, random_poses):
+    from assembler_pin.gradients import pose_derivatives
+
+    _, pa = random_poses[4]
+    own, given = sag_and_gradient(am, pa), sag_and_gradient(am, pa, derivatives=pose_derivatives(am, pa))
+    assert own.sag == given.sag and np.array_equal(own.gradient, given.gradient)
