@@ -207,9 +207,8 @@ def elastic_terms(
     """Gradient and Hessian of the total potential (module doc) at plates ``R`` (n+1, 3, 3),
     ``p`` (n+1, 3) [m] for unloaded leg lengths ``rest`` (n, 6) [m] (None: the lengths here).
 
-    Every leg of every platform at once: with ``D`` (3 × 12) the map of the bottom and top
-    plates' motions to the leg's ``d``, the platform's Hessian is ``Σ Dᵀ H_d D``
-    (:func:`_platform_hessians`) plus the rotation blocks' second-order terms.
+    Every leg at once: with ``D`` (3 × 12) the map of the two plates' motions to the leg's ``d``,
+    a platform's Hessian is ``Σ Dᵀ H_d D`` (:func:`_platform_hessians`) plus the charts' terms.
 
     Args:
         stiffness: each leg's axial stiffness [N/m].
