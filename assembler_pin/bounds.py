@@ -73,6 +73,10 @@ BOUNDS: dict[str, Bound] = {
     "fk.tol": Bound(1e-15, 1e-3, "m", False, "stack_forward_kinematics(tol=...): leg-length residual"),
     "plan.refinements": Bound(0, 10, "", True, "plan_trajectory(refinements=...): re-plans with half steps"),
     "batch.stacks": Bound(1, 10_000_000, "", True, "stacks in one batched statics call"),
+    "elastic.wrench": Bound(0.0, 1e6, "N, N m", False, "loaded_pose(wrench=...): largest EE force or moment"),
+    "elastic.tol": Bound(1e-15, 1e-3, "m", False, "stiffness / loaded_pose(tol=...): Newton step accepted"),
+    "elastic.max_iterations": Bound(1, 1000, "", True, "loaded_pose(max_iterations=...): Newton steps"),
+    "compensated.tolerance": Bound(1e-12, 1e-3, "m", False, "compensated_lengths(tolerance=...): pose error"),
 }
 
 

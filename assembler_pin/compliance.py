@@ -21,9 +21,11 @@ import numpy as np
 import numpy.typing as npt
 import pinocchio as pin
 
+from .bounds import BOUNDS, check_bound
 from .ee_stiffness import stiffness
 from .elastic import line_conditions, solve_equilibrium
 from .exceptions import LoadError
+from .gradients import PoseDerivatives
 from .kinematics import PlateArrays, leg_vectors, plate_arrays, stack_forward_kinematics
 from .labels import leg_label
 from .model import AssemblerModel
@@ -34,13 +36,15 @@ __all__ = [
     "MAX_WRENCH",
     "CompensatedLengths",
     "LoadedPose",
+    "SagGradient",
     "benchmark_stiffness",
     "compensated_lengths",
     "loaded_pose",
+    "sag_and_gradient",
 ]
 
-#: Largest force [N] or moment [N·m] component of an EE wrench accepted.
-MAX_WRENCH = 1e6
+#: Largest force [N] or moment [N·m] component of an EE wrench accepted (bounds key ``elastic.wrench``).
+MAX_WRENCH = BOUNDS["elastic.wrench"].high
 
 
 @dataclass(frozen=True)
@@ -106,10 +110,7 @@ def _checked_wrench(wrench: npt.ArrayLike | None) -> np.ndarray | None:
     w = as_float_array(wrench, "EE wrench (six numbers fx fy fz mx my mz)", (6,), error=LoadError)
     if not np.all(np.isfinite(w)):
         raise LoadError(f"EE wrench contains NaN or infinite values: {w.tolist()}")
-    if np.abs(w).max() > MAX_WRENCH:
-        raise LoadError(
-            f"EE wrench components must be at most {MAX_WRENCH:g} N or N·m in magnitude, got {np.abs(w).max():.3g}"
-        )
+    check_bound("elastic.wrench", float(np.abs(w).max()), "the largest |component| of the EE wrench", LoadError)
     return w
 
 
@@ -134,9 +135,12 @@ def loaded_pose(
         tol: largest Newton step accepted as converged [m] (rotations times the node radius).
 
     Raises:
-        PoseError: malformed lengths or base. LoadError: a non-finite or absurd wrench.
+        PoseError: malformed lengths or base. LoadError: a non-finite or absurd wrench, ``tol``
+            or ``max_iterations`` (bounds keys ``elastic.*``).
     """
     w = _checked_wrench(wrench)
+    check_bound("elastic.tol", tol, "tol", LoadError)
+    max_iterations = int(check_bound("elastic.max_iterations", max_iterations, "max_iterations", LoadError))
     rest = as_float_array(lengths, "leg lengths", (am.n, 6))
     fk = stack_forward_kinematics(am, rest, base=base)
     rigid = fk.plates
@@ -239,8 +243,7 @@ def compensated_lengths(
         PoseError: malformed plates. SingularConfigurationError: the pose is singular.
         LoadError: ``tolerance`` not in [1e-12, 1e-3] m.
     """
-    if not (isinstance(tolerance, (int, float)) and 1e-12 <= tolerance <= 1e-3):
-        raise LoadError(f"tolerance of the compensated pose must be in [1e-12, 1e-3] m, got {tolerance!r}")
+    check_bound("compensated.tolerance", tolerance, "tolerance", LoadError)
     pa = plate_arrays(am, plates)
     statics = solve_statics(am, pa, raise_on_singular=True)
     geometric = leg_vectors(am, pa)[3]
@@ -259,16 +262,131 @@ def compensated_lengths(
 
 def benchmark_stiffness(am: AssemblerModel, repeat: int = 200) -> dict[str, float]:
     """Median wall time [s] per call of :func:`~assembler_pin.ee_stiffness.stiffness`,
-    :func:`loaded_pose` and :func:`compensated_lengths` at the home pose (and, for scale,
-    :func:`~assembler_pin.statics.solve_statics`)."""
+    :func:`loaded_pose`, :func:`compensated_lengths` and :func:`sag_and_gradient` at the home
+    pose (and, for scale, :func:`~assembler_pin.statics.solve_statics` and the force
+    objective's derivatives :func:`~assembler_pin.gradients.pose_derivatives`), BLAS on one
+    thread as in the optimizer."""
+    from .bench import median_time_us
+    from .gradients import pose_derivatives
+    from .threads import single_blas_thread
+
     pa = plate_arrays(am, am.home)
     lengths = compensated_lengths(am, pa).lengths
     calls = {
         "stiffness": lambda: stiffness(am, pa),
         "loaded_pose": lambda: loaded_pose(am, lengths),
         "compensated_lengths": lambda: compensated_lengths(am, pa),
+        "sag_and_gradient": lambda: sag_and_gradient(am, pa),
         "solve_statics": lambda: solve_statics(am, pa),
+        "pose_derivatives": lambda: pose_derivatives(am, pa),
     }
-    from .bench import median_time_us
+    with single_blas_thread():
+        return {name: 1e-6 * median_time_us(call, repeat) for name, call in calls.items()}
 
-    return {name: 1e-6 * median_time_us(call, repeat) for name, call in calls.items()}
+
+@dataclass(frozen=True)
+class SagGradient:
+    """The EE's linear sag of a pose and its gradient (:func:`sag_and_gradient`).
+
+    Attributes:
+        sag: ``|δp|`` [m], the length of the EE origin's first-order displacement under the
+            pose's own loads (gravity and payload) with legs of stiffness ``k``.
+        translation: (3,) ``δp`` [m], world axes.
+        gradient: (6n,) ``∂ sag / ∂η`` [m per (m, rad)], per plate 1..n its six coordinates in
+            ``chart`` order ``[v, ω]`` (see :func:`sag_and_gradient`).
+        chart: ``"world"`` or ``"local"``.
+    """
+
+    sag: float
+    translation: np.ndarray
+    gradient: np.ndarray
+    chart: str
+
+
+def _point_rows(force: np.ndarray, point: np.ndarray) -> np.ndarray:
+    """(..., 6) ``[f, x × f]``: the row ``f · (v + ω × x)`` of a point force f at x on a plate."""
+    return np.concatenate([force, np.cross(point, force)], axis=-1)
+
+
+def sag_and_gradient(
+    am: AssemblerModel,
+    plates: PlateArrays | Sequence | np.ndarray,
+    chart: str = "world",
+    derivatives: PoseDerivatives | None = None,
+) -> SagGradient:
+    """The EE's sag under gravity and payload, linear in the legs' compliance, and its gradient.
+
+    Every leg stretches by ``F / k`` (``F`` the statics forces of the pose, tension positive,
+    ``k = leg.stiffness``); the plates move by ``y = A⁻¹ F / k`` with ``A = ∂L/∂η`` the legs'
+    length Jacobian, and the EE origin by ``δp = v_n + ω_n × p_n`` (the elastic compliance
+    ``Σ k ∇L ∇Lᵀ`` under the pose's own loads; the load-dependent stiffness, about 1e-4 of
+    it at 1e6 N/m, is left out). The measure is ``sag = |δp|`` [m].
+
+    The gradient is exact (adjoint of ``A y = F / k``): ``chart="world"`` gives it per world
+    twist ``η_k = (v, ω)`` of plate k (``T_k ← exp6(η_k) T_k``, the columns of
+    :func:`~assembler_pin.gradients.pose_derivatives`, so ``gradient @ B`` is the optimizer's
+    chart gradient for its ``B``); ``chart="local"`` per body twist ``ξ_k``
+    (``T_k ← T_k exp6(ξ_k)``, the optimizer's chart at its reference). ``derivatives``: the
+    pose's :func:`~assembler_pin.gradients.pose_derivatives` when the caller has them already
+    (the optimizer's force rows), else computed here.
+
+    Raises:
+        PoseError: malformed plates. SingularConfigurationError: a singular platform.
+        OptionsError: an unknown chart.
+    """
+    from .exceptions import OptionsError, SingularConfigurationError
+    from .gradients import pose_derivatives
+
+    if chart not in ("world", "local"):
+        raise OptionsError(f"chart must be 'world' or 'local', got {chart!r}")
+    pa = plate_arrays(am, plates)
+    n, k = am.n, float(am.config.leg.stiffness)
+    legs = _leg_points(am, pa)
+    cond = line_conditions(np.concatenate([legs[2], np.cross(legs[1] - pa.p[1:, None, :], legs[2])], axis=2))[1]
+    if not cond.max() <= CONDITION_LIMIT:
+        worst = int(np.argmax(cond))
+        why = f"platform {worst} is at a singular configuration (condition number {cond[worst]:.3g}): no sag"
+        raise SingularConfigurationError(why, float(cond[worst]), worst)
+    d = pose_derivatives(am, pa) if derivatives is None else derivatives
+    A = d.d_lengths.reshape(6 * n, 6 * n)
+    y = np.linalg.solve(A, d.forces.ravel() / k).reshape(n, 6)
+    p_ee = pa.p[n]
+    dp = y[-1, :3] + np.cross(y[-1, 3:], p_ee)
+    sag = float(np.linalg.norm(dp))
+    e = dp / sag if sag > 0 else np.zeros(3)
+    ds_dy = np.zeros(6 * n)
+    ds_dy[-6:] = np.r_[e, np.cross(p_ee, e)]
+    lam = np.linalg.solve(A.T, ds_dy).reshape(n, 6)  # the adjoint, one per leg
+    gradient = lam.ravel() @ d.d_forces.reshape(6 * n, 6 * n) / k
+    gradient -= _curvature_rows(pa, legs, y, lam).ravel()
+    gradient[-6:] += _point_rows(np.cross(e, y[-1, 3:]), p_ee)  # δp's own p_n
+    if chart == "local":
+        action = np.array([pa.se3(j).action for j in range(1, n + 1)])
+        gradient = np.einsum("ja,jab->jb", gradient.reshape(n, 6), action).ravel()
+    return SagGradient(sag, dp, gradient, chart)
+
+
+def _leg_points(am: AssemblerModel, pa: PlateArrays) -> tuple[np.ndarray, ...]:
+    """(b, t, u, L): bottom and top joints (n, 6, 3) [m, world], unit directions, lengths (n, 6) [m]."""
+    geo = am.geometry
+    b = np.matmul(geo.bottom_in_plate, np.swapaxes(pa.R[:-1], 1, 2)) + pa.p[:-1, None, :]
+    t = np.matmul(geo.top_in_plate, np.swapaxes(pa.R[1:], 1, 2)) + pa.p[1:, None, :]
+    L = np.linalg.norm(t - b, axis=-1)
+    return b, t, (t - b) / L[..., None], L
+
+
+def _curvature_rows(pa: PlateArrays, legs: tuple[np.ndarray, ...], y: np.ndarray, lam: np.ndarray) -> np.ndarray:
+    """(n, 6) ``λᵀ ∂(A y)/∂η``: each leg's second derivative of its length along the plates'
+    motion ``y`` (n, 6) and a world twist, weighted by ``λ`` (n, 6), as point forces at its joints
+    (``legs``: :func:`_leg_points`)."""
+    b, t, u, L = legs
+    y0 = np.vstack([np.zeros((1, 6)), y])  # plate 0 stays
+    move_b = y0[:-1, None, :3] + np.cross(y0[:-1, None, 3:], b)
+    move_t = y0[1:, None, :3] + np.cross(y0[1:, None, 3:], t)
+    dd = move_t - move_b
+    g = lam[..., None] * (dd - (dd * u).sum(-1, keepdims=True) * u) / L[..., None]
+    f_t = g + lam[..., None] * np.cross(u, y0[1:, None, 3:])
+    f_b = -g - lam[..., None] * np.cross(u, y0[:-1, None, 3:])
+    rows = _point_rows(f_t, t).sum(axis=1)
+    rows[:-1] += _point_rows(f_b[1:], b[1:]).sum(axis=1)  # platform j's bottom is on plate j
+    return rows

@@ -27,15 +27,16 @@ import numpy as np
 import numpy.typing as npt
 import pinocchio as pin
 
+from .bounds import check_bound
 from .elastic import Equilibrium, line_conditions, solve_equilibrium
-from .exceptions import PoseError
+from .exceptions import LoadError, PoseError
 from .kinematics import PlateArrays, plate_arrays
 from .linalg import skew
 from .model import AssemblerModel
 from .statics import CONDITION_LIMIT
 from .validation import as_float_array
 
-__all__ = ["StiffnessResult", "stiffness", "stiffness_from_equilibrium"]
+__all__ = ["StiffnessResult", "elastic_compliance", "platform_compliances", "stiffness", "stiffness_from_equilibrium"]
 
 _AXES = ("x", "y", "z")
 
@@ -201,6 +202,29 @@ def _transport(p_from: np.ndarray, p_ee: np.ndarray) -> np.ndarray:
     return X
 
 
+def platform_compliances(lines: np.ndarray, J_inv: np.ndarray, p: np.ndarray, k: float) -> np.ndarray:
+    """(n, 6, 6) each platform's elastic compliance ``J⁻¹ J⁻ᵀ / k`` at its top plate, moved to
+    the EE origin (world axes, ``[v, ω]``): ``lines`` (n, 6, 6) the legs' lines, ``J_inv`` their
+    inverses, ``p`` (n+1, 3) the plate origins [m], ``k`` [N/m]. They sum to the stack's."""
+    XJ = np.matmul(_transport(p[1:], p[-1]), J_inv)
+    return np.matmul(XJ, np.swapaxes(XJ, 1, 2)) / k
+
+
+def elastic_compliance(am: AssemblerModel, plates: PlateArrays | Sequence | np.ndarray) -> np.ndarray:
+    """(6, 6) the EE's compliance of the legs' springs alone at the pose ``plates`` (no loads,
+    no equilibrium: ``Σ k ∇L ∇Lᵀ`` condensed), world axes at the EE origin, ``[v, ω]`` [m/N,
+    rad/N; m/(N·m), rad/(N·m)]; NaN when a platform is singular."""
+    from .elastic import elastic_terms
+
+    pa = plate_arrays(am, plates)
+    k = float(am.config.leg.stiffness)
+    lines = elastic_terms(am, pa.R, pa.p, None, k, hessian=False).lines
+    J_inv, cond = line_conditions(lines)
+    if not cond.max() <= CONDITION_LIMIT:
+        return np.full((6, 6), np.nan)
+    return platform_compliances(lines, J_inv, pa.p, k).sum(axis=0)
+
+
 def stiffness(
     am: AssemblerModel,
     plates: PlateArrays | Sequence | np.ndarray,
@@ -220,8 +244,9 @@ def stiffness(
         equilibrium does not converge or is not stable.
 
     Raises:
-        PoseError: malformed plates or lengths.
+        PoseError: malformed plates or lengths. LoadError: ``tol`` out of bounds (``elastic.tol``).
     """
+    check_bound("elastic.tol", tol, "tol", LoadError)
     pa = plate_arrays(am, plates)
     k = float(am.config.leg.stiffness)
     rest = None if lengths is None else _checked_lengths(am, lengths)
@@ -252,9 +277,7 @@ def stiffness_from_equilibrium(am: AssemblerModel, rigid: PlateArrays, eq: Equil
     C = 0.5 * (eq.compliance + eq.compliance.T)
     K = np.linalg.inv(C)
     K = 0.5 * (K + K.T)
-    # each platform's elastic compliance at its top plate, J⁻¹ J⁻ᵀ / k, moved to the EE
-    XJ = np.matmul(_transport(eq.p[1:], eq.p[-1]), J_inv)
-    platform_c = np.matmul(XJ, np.swapaxes(XJ, 1, 2)) / k
+    platform_c = platform_compliances(terms.lines, J_inv, eq.p, k)
     K_el = np.linalg.inv(platform_c.sum(axis=0))
     K_el = 0.5 * (K_el + K_el.T)
     t_stiff, t_dirs, r_stiff, r_axes = _principal(C)

@@ -35,6 +35,7 @@ its blocks from the base up (linear in n).
 from __future__ import annotations
 
 import math
+import weakref
 from dataclasses import dataclass, replace
 
 import numpy as np
@@ -110,47 +111,81 @@ class ElasticTerms:
     base_gradient: np.ndarray
 
 
-def _chart(f: np.ndarray, r: np.ndarray) -> np.ndarray:
-    """Σ over the points' last-but-one axis of ``sym(f rᵀ) - (f·r) I`` (the rotation block's
-    second-order term), (..., m, 3) arrays → (..., 3, 3)."""
-    M = np.matmul(np.swapaxes(f, -1, -2), r)  # Σ f ⊗ r
-    tr = M[..., 0, 0] + M[..., 1, 1] + M[..., 2, 2]
-    return 0.5 * (M + np.swapaxes(M, -1, -2)) - tr[..., None, None] * _I3
+_SKEW_INDEX = np.array([0, 2, 1, 2, 0, 0, 1, 0, 0])  # skew(v).ravel() = v[_SKEW_INDEX] * _SKEW_SIGN
+_SKEW_SIGN = np.array([0.0, -1.0, 1.0, 1.0, 0.0, -1.0, -1.0, 1.0, 0.0])
 
 
-def _platform_hessians(dirs, arms, c1, c2, c3, gravity: float) -> np.ndarray:
-    """(n, 12, 12) Hessians of each platform's legs over (bottom plate, top plate) coordinates.
+@dataclass(frozen=True)
+class _Design:
+    """What :func:`elastic_terms` needs of one model, computed once per geometry.
 
-    A leg's Hessian in d, ``c1 u uᵀ + c2 I + c3 (a uᵀ + u aᵀ)`` with ``a = -g e_z``, is a sum of
-    outer products of directions ``e`` (``dirs`` (n, 6, 4, 3): u, e_x, e_y, e_z); each becomes
-    the 12-vector ``[-e, -(r_b × e), e, r_t × e]`` (its line at both plates; ``arms`` (2, n, 6,
-    4, 3) holds ``r_b × e`` and ``r_t × e``), so the platform's Hessian is a few (12 × 24)
-    matrix products.
+    template: (n, 6, 3, 12) ``∂d/∂(bottom, top plate)`` with its translation blocks ``-I, I``
+    filled; weights: (2, 1, 1) the motor's and the shaft's weight [N] at the bottom and top
+    joints; lever: ``λ = m_m c_m - m_s c_s`` [kg·m].
     """
-    n = dirs.shape[0]
-    lines = np.concatenate([-dirs, -arms[0], dirs, arms[1]], axis=-1)
-    weights = np.empty((n, 6, 4, 1))
-    weights[:, :, 0, 0] = c1
-    weights[:, :, 1:, 0] = c2[..., None]
-    V = lines.reshape(n, 24, 12)
-    H = np.matmul(np.swapaxes((lines * weights).reshape(n, 24, 12), 1, 2), V)
-    a_lines = (-gravity * c3)[..., None] * lines[:, :, 3]  # the gravity direction's lines, weighted
-    M = np.matmul(np.swapaxes(a_lines, 1, 2), lines[:, :, 0])
-    return H + M + np.swapaxes(M, 1, 2)
+
+    template: np.ndarray
+    weights: np.ndarray
+    lever: float
 
 
-def _joint_gradient(am: AssemblerModel, u, arm_x, along, across) -> tuple[np.ndarray, np.ndarray]:
+_DESIGNS: dict[int, tuple[weakref.ref, _Design]] = {}
+
+
+def _design(am: AssemblerModel) -> _Design:
+    geo = am.geometry
+    hit = _DESIGNS.get(id(geo))
+    if hit is not None and hit[0]() is geo:
+        return hit[1]
+    leg, g, n = am.config.leg, am.config.gravity, am.n
+    template = np.zeros((n, 6, 3, 12))
+    template[..., 0:3] = -_I3
+    template[..., 6:9] = _I3
+    design = _Design(
+        template,
+        np.array([leg.motor_mass * g, leg.shaft_mass * g]).reshape(2, 1, 1),
+        leg.motor_mass * leg.motor_com - leg.shaft_mass * leg.shaft_com,
+    )
+    if len(_DESIGNS) > 64:
+        _DESIGNS.clear()
+    _DESIGNS[id(geo)] = (weakref.ref(geo), design)
+    return design
+
+
+def _platform_hessians(u, inv_L, T, D, stiffness: float, lever: float, g: float) -> np.ndarray:
+    """(n, 12, 12) ``Σ Dᵀ H_d D`` over each platform's legs, ``H_d = c1 u uᵀ + c2 I + c3 (a uᵀ
+    + u aᵀ)`` (a = -g e_z) and ``D`` (n, 6, 3, 12) each leg's ``∂d/∂(bottom, top plate)``.
+
+    With the leg's line ``l = Dᵀ u`` and ``m = Dᵀ e_z`` (both 12-vectors) it is ``Σ (c1 l -
+    g c3 m) lᵀ - g c3 l mᵀ + c2 DᵀD``: one product of stacked (30 × 12) factors per platform.
+    """
+    n = u.shape[0]
+    c3 = lever * inv_L * inv_L
+    au = -g * u[..., 2]
+    c2 = T * inv_L + c3 * au
+    c1 = stiffness - T * inv_L - 3.0 * c3 * au
+    line = np.matmul(u[..., None, :], D)[..., 0, :]  # (n, 6, 12)
+    m = D[..., 2, :]
+    gc3 = (-g * c3)[..., None]
+    left = np.concatenate([c1[..., None] * line + gc3 * m, gc3 * line, (c2[..., None, None] * D).reshape(n, 18, 12)], 1)
+    right = np.concatenate([line, m, D.reshape(n, 18, 12)], axis=1)
+    return np.matmul(np.swapaxes(left, 1, 2), right)
+
+
+def _joint_gradient(am: AssemblerModel, u, r, r_u, along, across) -> tuple[np.ndarray, np.ndarray]:
     """The gradient at the joints, ``f`` (2, n, 6, 3): bottom ``-G - m_m a``, top ``G - m_s a``
     with ``G = along u - across a`` (a = -g e_z), and the plates' gradient (n+1, 6) from them,
-    their moments ``r × f`` and the plates' weight, plate 0's included (the payload's is the caller's)."""
+    their moments ``r × f`` (``r_u`` = r × u) and the plates' weight, plate 0's included (the
+    payload's is the caller's)."""
     leg, g, n = am.config.leg, am.config.gravity, am.n
     f = np.empty((2, n, 6, 3))
     f[1] = along[..., None] * u
     f[1, ..., 2] += g * (across + leg.shaft_mass)
     f[0] = -f[1]
     f[0, ..., 2] += g * (leg.motor_mass + leg.shaft_mass)
-    m_top = along[..., None] * arm_x[1, :, :, 0] + (g * (across + leg.shaft_mass))[..., None] * arm_x[1, :, :, 3]
-    m_bottom = -along[..., None] * arm_x[0, :, :, 0] + (g * (leg.motor_mass - across))[..., None] * arm_x[0, :, :, 3]
+    r_z = np.stack([r[..., 1], -r[..., 0], np.zeros_like(r[..., 0])], axis=-1)  # r × e_z
+    m_top = along[..., None] * r_u[1] + (g * (across + leg.shaft_mass))[..., None] * r_z[1]
+    m_bottom = -along[..., None] * r_u[0] + (g * (leg.motor_mass - across))[..., None] * r_z[0]
     grad = np.zeros((n + 1, 6))
     grad[1:, :3] = f[1].sum(axis=1)
     grad[:, 2] += am.config.plate.mass * g  # plate 0 too: its row is what its support supplies
@@ -172,50 +207,51 @@ def elastic_terms(
     """Gradient and Hessian of the total potential (module doc) at plates ``R`` (n+1, 3, 3),
     ``p`` (n+1, 3) [m] for unloaded leg lengths ``rest`` (n, 6) [m] (None: the lengths here).
 
+    Every leg at once: with ``D`` (3 × 12) the map of the two plates' motions to the leg's ``d``,
+    a platform's Hessian is ``Σ Dᵀ H_d D`` (:func:`_platform_hessians`) plus the charts' terms.
+
     Args:
         stiffness: each leg's axial stiffness [N/m].
         wrench: (6,) ``[f, m]`` on the EE [N, N·m], world axes, moment about the EE origin.
         hessian: False skips the Hessian.
     """
-    cfg, geo, n = am.config, am.geometry, am.n
-    leg = cfg.leg
+    cfg, n, des = am.config, am.n, _design(am)
     g = cfg.gravity
-    rb = np.matmul(geo.bottom_in_plate, np.swapaxes(R[:-1], 1, 2))  # bottom joints from plate j's origin
-    rt = np.matmul(geo.top_in_plate, np.swapaxes(R[1:], 1, 2))  # top joints from plate j+1's origin
+    rb = np.matmul(am.geometry.bottom_in_plate, np.swapaxes(R[:-1], 1, 2))  # bottom joints from plate j's origin
+    rt = np.matmul(am.geometry.top_in_plate, np.swapaxes(R[1:], 1, 2))  # top joints from plate j+1's origin
+    r = np.stack((rb, rt))
     d = rt - rb + (p[1:] - p[:-1])[:, None, :]
     L = np.sqrt((d * d).sum(axis=2))
     inv_L = 1.0 / L
     u = d * inv_L[..., None]
-    dirs = np.empty((n, 6, 4, 3))
-    dirs[:, :, 0] = u
-    dirs[:, :, 1:] = _I3
-    arms = np.stack([rb, rt])
-    arm_x = cross(arms[:, :, :, None, :], dirs)  # r × e for the bottom and top joints
     T = np.zeros_like(L) if rest is None else stiffness * (L - rest)
-    lam = leg.motor_mass * leg.motor_com - leg.shaft_mass * leg.shaft_com
-    au = -g * u[..., 2]
-    along = T + lam * au * inv_L  # G = along u - (λ/L) a: the potential's gradient in d
-    across = lam * inv_L
-    f, grad = _joint_gradient(am, u, arm_x, along, across)
+    lever = des.lever
+    r_u = cross(r, u)  # r × u of the bottom and top joints
+    F, grad = _joint_gradient(am, u, r, r_u, T + lever * (-g * u[..., 2]) * inv_L, lever * inv_L)
     r_pay = R[n, :, 2] * cfg.payload.offset
     w_pay = cfg.payload.mass * g  # the payload's weight, along -z
     grad[n, 2] += w_pay
     grad[n, 3:5] += (w_pay * r_pay[1], -w_pay * r_pay[0])  # r × (0, 0, w)
     if wrench is not None:
         grad[n] -= wrench
-    lines = np.concatenate([u, arm_x[1, :, :, 0]], axis=2)
+    lines = np.concatenate([u, r_u[1]], axis=2)
     symmetric = wrench is None or not np.any(wrench[3:])
     if not hessian:
         return ElasticTerms(grad[1:], None, None, None, symmetric, T, L, lines, grad[0])
-    c3 = lam * inv_L * inv_L
-    c2 = T * inv_L + c3 * au
-    c1 = stiffness - T * inv_L - 3.0 * c3 * au
-    H12 = _platform_hessians(dirs, arm_x, c1, c2, c3, g)
-    charts = _chart(f, arms)  # (2, n, 3, 3): bottom joints on plate j, top joints on plate j+1
-    H12[:, 9:, 9:] += charts[1]
-    H12[1:, 3:6, 3:6] += charts[0, 1:]
-    f_pay = np.array([0.0, 0.0, w_pay])
-    ee = 0.5 * (np.outer(f_pay, r_pay) + np.outer(r_pay, f_pay)) - (w_pay * r_pay[2]) * _I3
+    S = (r[..., _SKEW_INDEX] * _SKEW_SIGN).reshape(2, n, 6, 3, 3)  # r× of every joint
+    D = des.template.copy()
+    D[..., 3:6] = S[0]
+    D[..., 9:12] = -S[1]
+    H12 = _platform_hessians(u, inv_L, T, D, stiffness, lever, g)
+    M = np.matmul(np.swapaxes(F, -1, -2), r)  # Σ f ⊗ r over each plate's joints
+    charts = M + np.swapaxes(M, -1, -2)
+    charts.reshape(2, n, 9)[..., ::4] -= 2.0 * (M[..., 0, 0] + M[..., 1, 1] + M[..., 2, 2])[..., None]
+    H12[:, 3:6, 3:6] += 0.5 * charts[0]  # plate 0's own (platform 0) is dropped with its rows
+    H12[:, 9:, 9:] += 0.5 * charts[1]
+    ee = np.zeros((3, 3))  # the payload's ½ (f rᵀ + r fᵀ) - (f·r) I, f = (0, 0, w)
+    ee[2] += 0.5 * w_pay * r_pay
+    ee[:, 2] += 0.5 * w_pay * r_pay
+    ee.flat[::4] -= w_pay * r_pay[2]
     if wrench is not None and not symmetric:  # a constant world moment on a rotating plate: -½ [m]×
         ee = ee - 0.5 * skew(wrench[3:])
     return _assembled(grad, H12, ee, symmetric, T, L, lines)
@@ -228,11 +264,12 @@ def _assembled(grad, H12, ee, symmetric: bool, T, L, lines) -> ElasticTerms:
     n = H12.shape[0]
     base, grad = grad[0], grad[1:]
     if n <= DENSE_MAX_PLATFORMS:
-        full = np.zeros((6 * n + 6, 6 * n + 6))
-        for j in range(n):
-            full[6 * j : 6 * j + 12, 6 * j : 6 * j + 12] += H12[j]
+        full = np.zeros((6 * n, 6 * n))
+        full[:6, :6] = H12[0, 6:, 6:]  # plate 0 is fixed: platform 0 adds only to plate 1
+        for j in range(1, n):
+            full[6 * j - 6 : 6 * j + 6, 6 * j - 6 : 6 * j + 6] += H12[j]
         full[-3:, -3:] += ee
-        return ElasticTerms(grad, full[6:, 6:], None, None, symmetric, T, L, lines, base)
+        return ElasticTerms(grad, full, None, None, symmetric, T, L, lines, base)
     diag = H12[:, 6:, 6:].copy()
     diag[:-1] += H12[1:, :6, :6]
     diag[-1, 3:, 3:] += ee

@@ -56,8 +56,10 @@ __all__ = [
     "PAGE_PANEL",
     "PAYLOAD",
     "REACHABLE",
+    "SAG_CMAP",
     "SCALE_POSE",
     "SCALE_POSE_PLATE",
+    "STIFFNESS_CMAP",
     "TENSION",
     "UNREACHABLE",
     "UNREACHABLE_MARK",
@@ -119,6 +121,10 @@ CAPACITY_CMAP = "viridis"
 and the HTML point cloud alike, with a colour bar."""
 FORCE_MAGNITUDE_CMAP = "cividis"
 """Sequential colormap of the maps' optimized max|F| [N] (unsigned: not the force scale)."""
+SAG_CMAP = "magma"
+"""Sequential colormap of the maps' EE sag [m] under gravity and payload."""
+STIFFNESS_CMAP = "plasma"
+"""Sequential colormap of the maps' weakest EE stiffness [N/m]."""
 REACHABLE: RGB = (0.10, 0.60, 0.55)
 """Teal: a grid cell where a valid state was found (the maps' reachability panel)."""
 SCALE_POSE: RGB = (0.27, 0.27, 0.27)

@@ -106,8 +106,12 @@ def test_map_is_resumable_and_loses_no_finished_cell(tmp_path):
     row = whole.slice(0, 1).to_pylist()[0]
     direct = solve(am, pin.SE3(np.eye(3), np.array([row["x"], row["y"], row["z"]])))
     assert row["reachable"] and row["max_abs_force"] == pytest.approx(direct.optimized.max_abs_force, rel=1e-9)
+    # and its sag and weakest stiffness those of the stiffness at that pose
+    stiff = ap.stiffness(am, direct.optimized.plates)
+    assert row["sag_m"] == pytest.approx(float(np.linalg.norm(stiff.sag_translation)), rel=1e-6)
+    assert row["weakest_stiffness_n_per_m"] == pytest.approx(stiff.weakest_stiffness, rel=1e-6)
     fig = map_heatmaps(whole, am)
-    assert len([ax for ax in fig.axes if ax.images]) == 3
+    assert len([ax for ax in fig.axes if ax.images]) == 5
 
 
 def _free_port() -> int:

@@ -25,6 +25,11 @@ def add_parser(add) -> None:
     src.add_argument("--plates", metavar="FILE", help='JSON {"plates": [n+1 4x4]} file, or - for stdin')
     src.add_argument("--home", action="store_true", help="use the home pose")
     add_carrier_arguments(p, " (the plates are then relative to the base plate)")
+    p.add_argument(
+        "--stiffness",
+        action="store_true",
+        help="add the EE's sag and stiffness (legs as springs of leg.stiffness N/m; the keys of stiffness --json)",
+    )
     p.add_argument("--json", action="store_true", help="print one JSON object")
     p.set_defaults(func=run)
 
@@ -36,6 +41,10 @@ def run(args: argparse.Namespace) -> int:
     am = AssemblerModel.from_config(config_from_args(args))
     carrier, q = carrier_from_args(args)
     plates = plates_from_args(args, am, "give --plates FILE (or - for stdin) or --home")
+    if carrier is not None and args.stiffness:
+        from ..exceptions import CLIError
+
+        raise CLIError("--stiffness is not available with --carrier (the stiffness is of the stack on a fixed base)")
     if carrier is not None:
         from ..carrier import carrier_statics
 
@@ -47,8 +56,11 @@ def run(args: argparse.Namespace) -> int:
         print(format_carrier(carrier, statics))
         return 0
     state = evaluate_state(am, plates)
+    from .stiffness import stiffness_blocks
+
+    blocks, stiff_ok, stiff_text = stiffness_blocks(am, plates) if args.stiffness else ({}, True, None)
     if args.json:
-        print(dumps(state.to_dict()))
+        print(dumps(state.to_dict() | blocks))
     else:
         print(
             format_state_table(
@@ -56,4 +68,6 @@ def run(args: argparse.Namespace) -> int:
                 f"Statics of {am.n} platforms, payload {am.config.payload.mass:g} kg at {am.config.payload.offset:g} m",
             )
         )
-    return 0
+        if stiff_text is not None:
+            print(stiff_text)
+    return 0 if stiff_ok else 1

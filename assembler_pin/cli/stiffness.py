@@ -19,6 +19,13 @@ def add_parser(add) -> None:
     src.add_argument("--plates", metavar="FILE", help='JSON {"plates": [n+1 4x4]} file, or - for stdin')
     src.add_argument("--home", action="store_true", help="use the home pose")
     add_goal_arguments(src, " (the pose: solve's force optimum for it)")
+    src.add_argument(
+        "--scaling",
+        action="store_true",
+        help="stiffness and sag of the home pose against the number of platforms, n = 1..--max-platforms",
+    )
+    p.add_argument("--max-platforms", type=int, default=64, metavar="N", help="with --scaling: the largest n (64)")
+    p.add_argument("--out", metavar="FILE.png", help="with --scaling: write the log-log figure there")
     p.add_argument(
         "--compensated",
         action="store_true",
@@ -33,6 +40,12 @@ def run(args: argparse.Namespace) -> int:
     from ..ee_stiffness import stiffness
     from ..model import AssemblerModel
 
+    if args.scaling:
+        return _run_scaling(args)
+    if args.out is not None:
+        from ..exceptions import CLIError
+
+        raise CLIError("--out writes the figure of --scaling: give --scaling too")
     am = AssemblerModel.from_config(config_from_args(args))
     plates: PlateArrays | list
     if args.goal is not None or args.goal_deg is not None:
@@ -46,7 +59,9 @@ def run(args: argparse.Namespace) -> int:
         assert solved.optimized is not None  # a successful solve optimizes (the default)
         plates = solved.optimized.plates
     else:
-        plates = plates_from_args(args, am, "give --plates FILE (or - for stdin), --home or --goal X Y Z RX RY RZ")
+        plates = plates_from_args(
+            args, am, "give --plates FILE (or - for stdin), --home, --goal X Y Z RX RY RZ or --scaling"
+        )
     lengths = None
     if args.compensated:
         from ..compliance import compensated_lengths
@@ -58,6 +73,68 @@ def run(args: argparse.Namespace) -> int:
     else:
         print(format_stiffness(result, am))
     return 0 if result.success else 1
+
+
+def _run_scaling(args: argparse.Namespace) -> int:
+    """``--scaling``: the table (text or JSON) and, with ``--out``, the figure; exit 0."""
+    from ..bounds import check_bound
+    from ..exceptions import CLIError
+    from ..stiffness_scaling import scaling_figure, stiffness_scaling
+    from .common import progress_for
+
+    top = int(check_bound("config.platforms", args.max_platforms, "--max-platforms", CLIError))
+    if args.out is not None and not str(args.out).lower().endswith(".png"):
+        raise CLIError(f"--out must name a .png file, got {args.out!r}")
+    cfg = config_from_args(args)
+    prog = progress_for(args, "scaling")
+    table = stiffness_scaling(cfg, top, progress=prog)
+    doc = table.to_dict()
+    if args.out is not None:
+        from ..files import atomic_path
+
+        fig = scaling_figure(table)
+        with atomic_path(args.out) as tmp:
+            fig.savefig(tmp, dpi=150, format="png")
+        doc["out"] = str(args.out)
+    prog.close()
+    print(dumps(doc) if args.json else format_scaling(table, doc.get("out")))
+    return 0
+
+
+def format_scaling(table, out: str | None) -> str:
+    """The text table of ``--scaling``: n = 1, 2, 4, ... and the last n (lines ≤ 100 characters)."""
+    ns = table.platforms
+    show = sorted({int(n) for n in ns if n & (n - 1) == 0} | {int(ns[-1])})
+    if table.first_unstable is not None:
+        show = sorted(set(show) | {table.first_unstable - 1, table.first_unstable} - {0})
+    lines = [
+        f"EE stiffness and sag of the home pose against the platforms (legs {table.leg_stiffness:g} N/m)",
+        f"{'n':>3} {'lateral N/m':>12} {'axial N/m':>12} {'torsion N·m/rad':>16} {'sag mm':>9}  springs alone: lateral",
+    ]
+    for n in show:
+        i = n - 1
+        if table.stable[i]:
+            stiff = f"{table.lateral[i]:>12.4g} {table.axial[i]:>12.4g} {table.torsional[i]:>16.4g}"
+            row = f"{stiff} {1e3 * table.sag[i]:>9.4g}"
+        else:
+            row = f"{'buckles':>12} {'—':>12} {'—':>16} {'—':>9}"
+        lines.append(f"{n:>3} {row}  {table.elastic['lateral'][i]:.4g}")
+    if table.first_unstable is not None:
+        lines.append(f"the loaded stack buckles under its own weight from n = {table.first_unstable}")
+    if out is not None:
+        lines.append(f"figure: {out}")
+    return "\n".join(lines)
+
+
+def stiffness_blocks(am, plates) -> tuple[dict, bool, str]:
+    """The ``sag`` and ``stiffness`` blocks that ``statics --stiffness`` adds to its JSON
+    (``stiffness``: the object of ``stiffness --json``; ``sag``: its sag block), whether there
+    is a stiffness, and the text report."""
+    from ..ee_stiffness import stiffness
+
+    result = stiffness(am, plates)
+    doc = result.to_dict()
+    return {"sag": doc["sag"], "stiffness": doc}, result.success, format_stiffness(result, am)
 
 
 def _vec(v) -> str:

@@ -19,6 +19,7 @@ import numpy as np
 from ..capacity import PayloadModels, payload_capacity
 from ..config import AssemblerConfig, config_from_dict
 from ..constraints import leg_limit_margins
+from ..ee_stiffness import stiffness
 from ..exceptions import AssemblerError
 from ..helper_arm import HelperArmOptions
 from ..labels import leg_label
@@ -31,6 +32,7 @@ from .grid import Cell
 __all__ = [
     "COLUMNS",
     "cell_key",
+    "cell_stiffness",
     "compute_batch",
     "compute_cell",
     "config_hash",
@@ -58,11 +60,17 @@ COLUMNS = (
     "capacity_kg",
     "capacity_binding",
     "binding",
+    "sag_m",
+    "weakest_stiffness_n_per_m",
     "solve_time_s",
     "capacity_time_s",
     "key",
 )
 """The columns of a map file, in order. Positions [m], rotation vector [rad], forces [N];
+``sag_m``: the EE's sag [m] at the optimized pose (``|sag translation|`` of
+:func:`~assembler_pin.ee_stiffness.stiffness`, legs of ``leg.stiffness``), and
+``weakest_stiffness_n_per_m`` its smallest principal stiffness under a pure force [N/m] (both
+NaN where no pose was optimized or the stiffness is not defined);
 ``key``: what the row was computed from (:func:`cell_key`)."""
 
 
@@ -136,6 +144,14 @@ def geometric_binding(am: AssemblerModel, state: StackState) -> str:
     return f"{leg_label(int(j), int(i))} {kind}"
 
 
+def cell_stiffness(am: AssemblerModel, state: StackState) -> tuple[float, float]:
+    """The EE's sag [m] and weakest stiffness [N/m] at a pose (NaN when not defined there)."""
+    result = stiffness(am, state.plates)
+    if not result.success:
+        return math.nan, math.nan
+    return float(np.linalg.norm(result.sag_translation)), result.weakest_stiffness
+
+
 def compute_cell(models: PayloadModels, cell: Cell, config_name: str = "") -> dict:
     """The row of one cell (see :data:`COLUMNS`)."""
     am = models.base
@@ -158,6 +174,8 @@ def compute_cell(models: PayloadModels, cell: Cell, config_name: str = "") -> di
         "capacity_kg": math.nan,
         "capacity_binding": "",
         "binding": "",
+        "sag_m": math.nan,
+        "weakest_stiffness_n_per_m": math.nan,
         "solve_time_s": 0.0,
         "capacity_time_s": 0.0,
         "key": "",
@@ -171,6 +189,7 @@ def compute_cell(models: PayloadModels, cell: Cell, config_name: str = "") -> di
         row["reachable"], row["reason"] = True, ""
         row["max_abs_force"] = state.max_abs_force
         row["binding"] = geometric_binding(am, state)
+        row["sag_m"], row["weakest_stiffness_n_per_m"] = cell_stiffness(am, state)
     else:
         row["reason"] = result.message
     if state is None and not result.initial_result.success:

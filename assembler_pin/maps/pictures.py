@@ -19,8 +19,10 @@ from ..palette import (
     PAGE_INK,
     PAGE_PANEL,
     REACHABLE,
+    SAG_CMAP,
     SCALE_POSE,
     SCALE_POSE_PLATE,
+    STIFFNESS_CMAP,
     UNREACHABLE,
     UNREACHABLE_MARK,
     hex_color,
@@ -63,7 +65,7 @@ def map_slice(table, config: str | None = None, orientation: int = 0) -> tuple[s
     u, v = np.unique(cols[u_axis]), np.unique(cols[v_axis])
     iu, iv = np.searchsorted(u, cols[u_axis]), np.searchsorted(v, cols[v_axis])
     out: dict[str, np.ndarray] = {"u": u, "v": v}
-    for c in ("reachable", "max_abs_force", "capacity_kg"):
+    for c in ("reachable", "max_abs_force", "capacity_kg", "sag_m", "weakest_stiffness_n_per_m"):
         grid = np.full((len(v), len(u)), np.nan)
         grid[iv, iu] = cols[c].astype(float)
         out[c] = grid
@@ -77,8 +79,8 @@ def map_heatmaps(table, am: AssemblerModel, config: str | None = None, orientati
     was computed is white, hatched; the capacity scale is that of the HTML point cloud
     (:func:`capacity_range`), and the legend sits below the panels, hiding nothing."""
     u_axis, v_axis, s = map_slice(table, config, orientation)
-    fig = Figure(figsize=(15, 5.4), layout="constrained")
-    axes = fig.subplots(1, 3)
+    fig = Figure(figsize=(25, 5.4), layout="constrained")
+    axes = fig.subplots(1, 5)
     extent = _extent(s["u"], s["v"])
     home = evaluate_state(am, am.home)
     cap_lo, cap_hi = capacity_range(s["capacity_kg"])
@@ -86,6 +88,8 @@ def map_heatmaps(table, am: AssemblerModel, config: str | None = None, orientati
         ("reachable", "reachable (a valid pose exists)", ListedColormap([UNREACHABLE, REACHABLE]), "reachable"),
         ("max_abs_force", f"optimized max|F| [N] at {am.config.payload.mass:g} kg", FORCE_MAGNITUDE_CMAP, "N"),
         ("capacity_kg", "payload capacity [kg]", CAPACITY_CMAP, "kg"),
+        ("sag_m", "EE sag under gravity and payload [m]", SAG_CMAP, "m"),
+        ("weakest_stiffness_n_per_m", "weakest EE stiffness [N/m]", STIFFNESS_CMAP, "N/m"),
     )
     unreached = s["reachable"] == 0  # NaN (no cell computed) is neither reached nor unreached
     for ax, (key, name, cmap, unit) in zip(axes, panels, strict=True):

@@ -26,7 +26,7 @@ __all__ = ["MANIFEST", "check_manifest", "grid_hash", "manifest_for", "read_part
 MANIFEST = "map.json"
 """The manifest's file name in a map directory."""
 FORMAT = "assembler_pin map"
-VERSION = 2
+VERSION = 3  # 3: the sag and weakest-stiffness columns
 _HOW = "use another --out directory, or delete this one to start afresh"
 
 
