@@ -317,6 +317,8 @@ def _map_table():
             "reachable": [bool(r) for r in reach],
             "max_abs_force": force,
             "capacity_kg": cap,
+            "sag_m": [1e-5 * k if r else None for k, r in enumerate(reach)],
+            "weakest_stiffness_n_per_m": [1e4 + 1e3 * k if r else None for k, r in enumerate(reach)],
         }
     )
 
@@ -393,7 +395,7 @@ def test_map_png_marks_unreachable_and_outside_cells_and_hides_nothing(map_png):
     assert not fig.axes[0].get_legend() and fig.legends
     assert hidden == []
     panels = [ax for ax in fig.axes if ax.images]
-    assert len(panels) == 3
+    assert len(panels) == 5  # reachable, max|F|, capacity, sag, weakest stiffness
     for ax in panels:
         marks = [c for c in ax.collections if isinstance(c, PathCollection) and c.get_label() == "not reachable"]
         assert marks and len(marks[0].get_offsets()) == 2
