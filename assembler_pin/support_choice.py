@@ -19,7 +19,8 @@ program in ``(w, t)`` solved by HiGHS. The
 legs realize it when commanded ``L0 = L − T / k``: the pose is then an exact elastic equilibrium
 with these forces (``k (L − L0) = T``), so the offsets are ``−T / k`` [m]; they are applied
 through :func:`~assembler_pin.supports.two_point_statics` (or the base-held
-:func:`~assembler_pin.compliance.loaded_pose`) to check that the forces come back.
+:func:`~assembler_pin.compliance.loaded_pose`, the EE-held
+:func:`~assembler_pin.supports.ee_loaded_pose`) to check that the forces come back.
 """
 
 from __future__ import annotations
@@ -36,7 +37,14 @@ from .elastic import elastic_terms, line_conditions
 from .kinematics import PlateArrays, leg_vectors, plate_arrays
 from .model import AssemblerModel
 from .statics import CONDITION_LIMIT
-from .supports import TwoPointStatics, held_plates, mechanism_message, residual_tolerance, two_point_statics
+from .supports import (
+    TwoPointStatics,
+    ee_loaded_pose,
+    held_plates,
+    mechanism_message,
+    residual_tolerance,
+    two_point_statics,
+)
 
 __all__ = [
     "CHECK_TOLERANCE",
@@ -148,7 +156,7 @@ class ChosenDistribution:
         residual: largest unbalanced force or moment at a free plate, from the potential's
             gradient at the pose with the commanded lengths [N, N·m].
         check_error: largest difference [N] between ``forces`` and those of the elastic solve of
-            the commanded lengths (NaN when not checked: the EE-only support).
+            the commanded lengths (NaN when not checked: ``verify`` false).
         within_stroke: every commanded length lies within the legs' stroke.
         success: a distribution within the force limits, in equilibrium, reproduced by its
             offsets and commandable; message: what was done, or why not.
@@ -206,12 +214,13 @@ def _check(
     am: AssemblerModel, pa: PlateArrays, support: str, commanded: np.ndarray, F: np.ndarray
 ) -> tuple[float, str]:
     """Apply the commanded lengths through the elastic solve of the support: the largest force
-    difference [N] and a note (NaN when the support has no elastic solve yet)."""
-    if support == "ee":
-        return math.nan, "offsets not checked by an elastic solve (none yet for the EE-only support)"
+    difference [N] and a note (the EE-only support through the turned model,
+    :func:`~assembler_pin.supports.ee_loaded_pose`)."""
     got: TwoPointStatics | LoadedPose
     if support == "both":
         got = two_point_statics(am, pa, commanded)
+    elif support == "ee":
+        got = ee_loaded_pose(am, commanded, pa.se3(am.n))
     else:
         got = loaded_pose(am, commanded, base=pa.se3(0))
     if not got.success:
@@ -221,12 +230,14 @@ def _check(
 
 def _where(am: AssemblerModel, pa: PlateArrays, support: str, loaded: bool) -> PlateArrays | str:
     """The plates the distribution is chosen at: where the elastic solve of the pose's own
-    lengths puts them (``loaded``, supports ``base`` and ``both``), else the pose itself."""
-    if not loaded or support not in ("base", "both"):
+    lengths puts them (``loaded``), else the pose itself."""
+    if not loaded:
         return pa
     el: TwoPointStatics | LoadedPose
     if support == "both":
         el = two_point_statics(am, pa)
+    elif support == "ee":
+        el = ee_loaded_pose(am, leg_vectors(am, pa)[3], pa.se3(am.n))
     else:
         el = loaded_pose(am, leg_vectors(am, pa)[3], base=pa.se3(0))
     return el.plates if el.success else f"no elastic equilibrium of the pose's own lengths: {el.message}"
@@ -252,12 +263,13 @@ def chosen_distribution(
 
     ``loaded`` (default): chosen where the elastic distribution of the pose's own lengths puts
     the plates (:func:`~assembler_pin.supports.two_point_statics`; the base-held
-    :func:`~assembler_pin.compliance.loaded_pose`), so the elastic forces are one of the
+    :func:`~assembler_pin.compliance.loaded_pose`; the EE-held
+    :func:`~assembler_pin.supports.ee_loaded_pose`), so the elastic forces are one of the
     candidates and ``max|F|`` is never above theirs; else at ``plates`` exactly. The offsets are
     the commanded lengths minus the pose's own. Held at one end the forces are unique; held at
     both, HiGHS picks the six internal forces. With ``verify`` the commanded lengths are applied
     through the elastic solve and must give the forces back within :data:`CHECK_TOLERANCE`
-    (not possible yet for ``ee``: its ``check_error`` is NaN).
+    (``check_error``; NaN without ``verify``).
 
     Returns:
         A :class:`ChosenDistribution`; ``success`` false (NaN forces) for a support that leaves

@@ -1,0 +1,1 @@
+"""Two-point support in motion: the turned stack and the inchworm walk."""
