@@ -121,6 +121,10 @@ def force_bounds(am: AssemblerModel, lengths: np.ndarray) -> tuple[np.ndarray, n
     return lo, hi
 
 
+#: HiGHS's dual simplex without presolve: the fastest on these small dense programs (7 unknowns).
+_LP_OPTIONS = {"presolve": False}
+
+
 def _minmax(eq: HeldEquilibrium, lo: np.ndarray, hi: np.ndarray) -> tuple[np.ndarray | None, str]:
     """``w`` minimizing max|F| with ``lo ≤ F ≤ hi`` (HiGHS), or None and why not."""
     Fp = eq.particular.ravel()
@@ -134,7 +138,7 @@ def _minmax(eq: HeldEquilibrium, lo: np.ndarray, hi: np.ndarray) -> tuple[np.nda
     b = np.concatenate([-Fp, Fp, hi.ravel() - Fp, Fp - lo.ravel()])
     cost = np.zeros(k + 1)
     cost[-1] = 1.0
-    res = linprog(cost, A_ub=A, b_ub=b, bounds=[(None, None)] * k + [(0, None)], method="highs")
+    res = linprog(cost, A_ub=A, b_ub=b, bounds=[(None, None)] * k + [(0, None)], method="highs-ds", options=_LP_OPTIONS)
     if res.status != 0 or res.x is None:
         return None, f"no distribution within the force limits and the stroke (HiGHS: {res.message})"
     return res.x[:k], "minimal max|F| within the force limits and the stroke (HiGHS)"
@@ -213,8 +217,9 @@ def _failed(support: str, pa: PlateArrays, message: str) -> ChosenDistribution:
 def _check(
     am: AssemblerModel, pa: PlateArrays, support: str, commanded: np.ndarray, F: np.ndarray
 ) -> tuple[float, str]:
-    """Apply the commanded lengths through the elastic solve of the support: the largest force
-    difference [N] and a note (the EE-only support through the turned model,
+    """Apply the commanded lengths through the elastic solve of the support (held at both ends:
+    Newton started from ``pa``, where the forces were chosen): the largest force difference
+    [N] and a note (the EE-only support through the turned model,
     :func:`~assembler_pin.supports.ee_loaded_pose`)."""
     got: TwoPointStatics | LoadedPose
     if support == "both":
@@ -300,7 +305,7 @@ def chosen_distribution(
     grad = np.vstack([terms.base_gradient, terms.gradient])
     free = [m for m in range(am.n + 1) if m not in held]
     residual = float(np.abs(grad[free]).max()) if free else 0.0
-    error, checked = _check(am, pa, support, commanded, F) if verify else (math.nan, "offsets not checked")
+    error, checked = _check(am, at, support, commanded, F) if verify else (math.nan, "offsets not checked")
     why = _verdict(residual, residual_tolerance(am, at), error, checked) or stroke_problem(am, commanded)
     walls = (grad[0] if 0 in held else np.zeros(6), grad[-1] if am.n in held else np.zeros(6))
     offsets = commanded - leg_vectors(am, pa)[3]
