@@ -74,6 +74,7 @@ BOUNDS: dict[str, Bound] = {
     "plan.refinements": Bound(0, 10, "", True, "plan_trajectory(refinements=...): re-plans with half steps"),
     "batch.stacks": Bound(1, 10_000_000, "", True, "stacks in one batched statics call"),
     "walk.footholds": Bound(2, 100, "", True, "walk --footholds / --floor COUNT: footholds of one walk"),
+    "walk.file_bytes": Bound(1, 1 << 20, "bytes", True, "size of a footholds file read"),
     "walk.floor_step": Bound(0.01, 10.0, "m", False, "walk --floor STEP: distance between floor footholds"),
     "walk.clearance": Bound(0.0, 0.5, "m", False, "WalkOptions.clearance: lift and pre-contact height"),
     "walk.transfer_samples": Bound(2, 1000, "", True, "WalkOptions.transfer_samples: samples of a load transfer"),

@@ -38,8 +38,8 @@ import numpy as np
 import pinocchio as pin
 
 from ..bounds import check_bound
-from ..exceptions import AssemblerError, WalkError
-from ..kinematics import PlateArrays, leg_vectors, plate_arrays, to_se3
+from ..exceptions import WalkError
+from ..kinematics import PlateArrays, leg_vectors, plate_arrays
 from ..model import AssemblerModel
 from ..motion.paths import EEPath
 from ..motion.planner import PlanOptions, plan_path
@@ -47,10 +47,11 @@ from ..options import checked_options
 from ..progress import ProgressCallback
 from ..support_choice import CHECK_TOLERANCE, ChosenDistribution, chosen_distribution, force_bounds, held_equilibrium
 from ..supports import two_point_statics
+from .footholds import checked_footholds
 from .turned import turned_model
 from .verify import verify_walk
 
-__all__ = ["WalkOptions", "WalkPhase", "WalkResult", "plan_walk", "plate_target"]
+__all__ = ["WalkOptions", "WalkPhase", "WalkResult", "checked_footholds", "plan_walk", "plate_target"]
 
 logger = logging.getLogger(__name__)
 
@@ -182,40 +183,6 @@ def _other(foot: str) -> str:
     return "ee" if foot == "base" else "base"
 
 
-def checked_footholds(am: AssemblerModel, footholds: object, floor_z: float | None = None) -> tuple[pin.SE3, ...]:
-    """The footholds as world frames: 2..100 proper poses, consecutive ones (one foot's and the
-    other's) at least a plate's diameter (2 ``node_radius``) apart, on the floor when one is given.
-
-    Raises:
-        WalkError: a malformed list, a pose that is not one, overlapping feet, off the floor.
-    """
-    if isinstance(footholds, (str, bytes)) or not hasattr(footholds, "__len__"):
-        raise WalkError(f"footholds must be a list of world poses (pin.SE3 or 4x4), got {type(footholds).__name__}")
-    check_bound("walk.footholds", len(footholds), "the number of footholds", error=WalkError)
-    out = []
-    for k, f in enumerate(footholds):
-        try:
-            out.append(to_se3(f, f"foothold {k}"))
-        except AssemblerError as exc:  # a PoseError: one line naming the foothold
-            raise WalkError(f"foothold {k} is not a world pose (4x4, proper rotation): {exc}") from None
-    span = 2.0 * am.config.plate.node_radius
-    for k in range(len(out) - 1):
-        d = float(np.linalg.norm(out[k + 1].translation - out[k].translation))
-        if d < span:
-            raise WalkError(
-                f"footholds {k} and {k + 1} overlap: their centres are {d:.4g} m apart, the two feet need "
-                f"at least {span:.4g} m (2 x plate.node_radius)"
-            )
-    if floor_z is not None:
-        for k, f in enumerate(out):
-            if abs(f.translation[2] - floor_z) > 1e-6 or f.rotation[2, 2] < 1.0 - 1e-9:
-                raise WalkError(
-                    f"foothold {k} is not on the floor z = {floor_z:g} m (its origin at z = {f.translation[2]:.6g} m, "
-                    "its z axis must point straight up)"
-                )
-    return tuple(out)
-
-
 def _start_plates(am: AssemblerModel, base: pin.SE3, start: object) -> PlateArrays:
     """The physical plates at the start: ``start``, or the home pose standing on ``base``."""
     if start is None:
@@ -276,6 +243,14 @@ def _waypoints(
     return tuple(points)
 
 
+def _out_of_reach(am: AssemblerModel, held: pin.SE3, target: pin.SE3) -> str:
+    """Why no pose puts the moving plate on ``target`` ("" when that is not excluded): a platform
+    moves its top plate's centre at most ``max_length + 2 node_radius`` from its bottom's."""
+    reach = am.n * (am.config.leg.max_length + 2.0 * am.config.plate.node_radius)
+    d = float(np.linalg.norm(target.translation - held.translation))
+    return f"out of reach: {d:.4g} m from the held foot, the stack reaches at most {reach:.4g} m" if d > reach else ""
+
+
 def _below_floor(am: AssemblerModel, pa: PlateArrays, floor_z: float | None) -> str:
     if floor_z is None:
         return ""
@@ -294,6 +269,10 @@ def _move_phase(
     model = tm.model if turned else am
     start = tm.plates(cur) if turned else cur
     target = plate_target(foothold, "base") * tm.flip if turned else plate_target(foothold, "ee")
+    far = _out_of_reach(am, start.se3(0), target)
+    if far:
+        empty = np.zeros((0, am.n, 6))
+        return WalkPhase("swing" if turned else "reach", stance, step, [], empty, empty, empty, False, far)
     apex = start.se3(0) * model.home[-1]
     path = EEPath(_waypoints(start.se3(0), apex, start.se3(am.n), target, opts.clearance, lift), kind="linear")
     plan = plan_path(model, path, start=start, options=opts.plan)
@@ -394,7 +373,8 @@ def plan_walk(
             if progress is not None:
                 progress(len(phases), total, f"walk: {phase.kind} to foothold {step}")
             if not phase.complete:
-                what = "the load cannot move to" if make == "transfer" else f"the {_other(stance)} foot cannot reach"
+                foot = "EE" if stance == "base" else "base"
+                what = "the load cannot move to" if make == "transfer" else f"the {foot} foot cannot reach"
                 return WalkResult(False, f"step {step}: {what} foothold {step}: {phase.reason}", feet, phases)
             cur = phase.plates[-1]
         stance = moving
