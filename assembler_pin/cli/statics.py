@@ -5,6 +5,8 @@ from __future__ import annotations
 import argparse
 from typing import TYPE_CHECKING
 
+from ..exceptions import CLIError
+
 if TYPE_CHECKING:
     pass
 from .common import (
@@ -25,6 +27,12 @@ def add_parser(add) -> None:
     src.add_argument("--plates", metavar="FILE", help='JSON {"plates": [n+1 4x4]} file, or - for stdin')
     src.add_argument("--home", action="store_true", help="use the home pose")
     add_carrier_arguments(p, " (the plates are then relative to the base plate)")
+    p.add_argument(
+        "--support",
+        choices=("base", "ee", "both"),
+        default="base",
+        help="the plates held: base (plate 0, default), ee (the EE plate alone), both (see 'support')",
+    )
     p.add_argument("--json", action="store_true", help="print one JSON object")
     p.set_defaults(func=run)
 
@@ -33,9 +41,15 @@ def run(args: argparse.Namespace) -> int:
     from ..model import AssemblerModel
     from ..state import evaluate_state
 
+    if args.support != "base" and args.carrier is not None:
+        raise CLIError("--support ee or both holds the stack at its own plates: give it without --carrier")
     am = AssemblerModel.from_config(config_from_args(args))
     carrier, q = carrier_from_args(args)
     plates = plates_from_args(args, am, "give --plates FILE (or - for stdin) or --home")
+    if args.support != "base":
+        from .support import held_statics
+
+        return held_statics(am, plates, args.support, args.json)
     if carrier is not None:
         from ..carrier import carrier_statics
 
