@@ -167,7 +167,7 @@ class WalkResult:
             "success": self.success,
             "reason": self.reason,
             "footholds": [f.homogeneous.tolist() for f in self.footholds],
-            "max_abs_force": self.max_abs_force,
+            "max_abs_force": None if math.isnan(self.max_abs_force) else self.max_abs_force,
             "phases": [p.to_dict() for p in self.phases],
             "units": "N (tension positive), m; plates world frame",
         }
