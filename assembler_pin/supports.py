@@ -189,6 +189,8 @@ def _equilibrium(am: AssemblerModel, pa: PlateArrays, rest: np.ndarray, max_iter
         hold_ee=True,
     )
     its = eq.iterations
+    if eq.message is None and its == 0 and k * eq.step <= 1e-3 * tolerance:
+        return eq, eq.terms, its  # already balanced: the step left moves no force by 1e-3 × tolerance
     end = None if eq.message else elastic_terms(am, eq.R, eq.p, rest, k, hessian=False)
     if end is not None and not _residual(end) <= tolerance:  # polish: Newton to the last digits
         eq = solve_equilibrium(am, eq.R, eq.p, rest, k, max_iterations=max_iterations, hold_ee=True)
