@@ -121,12 +121,88 @@ def force_bounds(am: AssemblerModel, lengths: np.ndarray) -> tuple[np.ndarray, n
     return lo, hi
 
 
-#: HiGHS's dual simplex without presolve: the fastest on these small dense programs (7 unknowns).
+#: HiGHS's dual simplex without presolve: the fastest of its methods on these small programs.
 _LP_OPTIONS = {"presolve": False}
+
+#: Pivot and feasibility tolerance of the small simplex, relative to the program's scale.
+_SIMPLEX_TOL = 1e-11
+
+
+def _pivot(T: np.ndarray, basis: np.ndarray, row: int, col: int) -> None:
+    T[row] /= T[row, col]
+    factors = T[:, col].copy()
+    factors[row] = 0.0
+    T -= np.outer(factors, T[row])
+    basis[row] = col
+
+
+def _simplex_pivots(T: np.ndarray, basis: np.ndarray, allowed: int, tol: float) -> bool:
+    """Simplex pivots on the tableau ``T`` (last row the reduced costs, last column the values)
+    over its first ``allowed`` columns until optimal (True) or unbounded (False): Dantzig's
+    rule, and Bland's (which cannot cycle) after 10 pivots without progress."""
+    stalled, value = 0, T[-1, -1]
+    for _ in range(50 * T.shape[1]):
+        costs = T[-1, :allowed]
+        if stalled < 10:
+            col = int(np.argmin(costs))
+            if costs[col] >= -tol:
+                return True
+        else:
+            enter = np.flatnonzero(costs < -tol)
+            if enter.size == 0:
+                return True
+            col = int(enter[0])
+        a = T[:-1, col]
+        rows = np.flatnonzero(a > tol)
+        if rows.size == 0:
+            return False
+        ratios = T[rows, -1] / a[rows]
+        ties = rows[ratios <= ratios.min() + tol]
+        _pivot(T, basis, int(ties[np.argmin(basis[ties])]), col)
+        stalled = stalled + 1 if T[-1, -1] <= value + tol else 0
+        value = max(value, T[-1, -1])
+    return False
+
+
+def _small_simplex(A: np.ndarray, b: np.ndarray, c: np.ndarray) -> np.ndarray | None:
+    """``z`` minimizing ``c·z`` subject to ``A z ≤ b`` (z free, A of full column rank m), by a
+    two-phase tableau simplex (:func:`_simplex_pivots`) on the dual ``min b·y, Aᵀy = −c, y ≥ 0``; the
+    answer is returned only when it certifies itself (primal feasible, the duality gap closed),
+    else None."""
+    m, rows = A.shape[1], A.shape[0]
+    E, r = A.T.copy(), -c.astype(float)
+    flip = r < 0
+    E[flip], r[flip] = -E[flip], -r[flip]
+    scale = max(1.0, float(np.abs(b).max()))
+    T = np.zeros((m + 1, rows + m + 1))
+    T[:m, :rows], T[:m, rows : rows + m], T[:m, -1] = E, np.eye(m), r
+    T[-1] = -T[:m].sum(axis=0)
+    T[-1, rows : rows + m] = 0.0
+    basis = np.arange(rows, rows + m)
+    if not _simplex_pivots(T, basis, rows, _SIMPLEX_TOL) or T[-1, -1] < -_SIMPLEX_TOL:
+        return None  # no dual feasible point: the primal is infeasible or unbounded
+    if np.any(basis >= rows):
+        return None  # a degenerate artificial left in the basis: leave it to HiGHS
+    T[-1] = 0.0
+    T[-1, :rows] = b / scale
+    T[-1] -= T[-1, basis] @ T[:m]
+    if not _simplex_pivots(T, basis, rows, _SIMPLEX_TOL):
+        return None
+    try:
+        z = np.linalg.solve(A[basis], b[basis])
+    except np.linalg.LinAlgError:
+        return None
+    y = np.zeros(rows)
+    y[basis] = T[:m, -1]
+    gap = abs(float(c @ z) + float(b @ y))
+    if not (np.all(A @ z <= b + 1e-9 * scale) and np.all(y >= -1e-12) and gap <= 1e-9 * scale):
+        return None
+    return z
 
 
 def _minmax(eq: HeldEquilibrium, lo: np.ndarray, hi: np.ndarray) -> tuple[np.ndarray | None, str]:
-    """``w`` minimizing max|F| with ``lo ≤ F ≤ hi`` (HiGHS), or None and why not."""
+    """``w`` minimizing max|F| with ``lo ≤ F ≤ hi``, or None and why not: the small certified
+    simplex, HiGHS when it does not certify its answer."""
     Fp = eq.particular.ravel()
     N = eq.null.reshape(Fp.size, -1)
     k = N.shape[1]
@@ -138,6 +214,9 @@ def _minmax(eq: HeldEquilibrium, lo: np.ndarray, hi: np.ndarray) -> tuple[np.nda
     b = np.concatenate([-Fp, Fp, hi.ravel() - Fp, Fp - lo.ravel()])
     cost = np.zeros(k + 1)
     cost[-1] = 1.0
+    z = _small_simplex(A, b, cost)
+    if z is not None:
+        return z[:k], "minimal max|F| within the force limits and the stroke (simplex, certified)"
     res = linprog(cost, A_ub=A, b_ub=b, bounds=[(None, None)] * k + [(0, None)], method="highs-ds", options=_LP_OPTIONS)
     if res.status != 0 or res.x is None:
         return None, f"no distribution within the force limits and the stroke (HiGHS: {res.message})"

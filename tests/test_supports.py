@@ -449,3 +449,30 @@ def test_cli_statics_support_ee_and_both(capsys, am):
     ):
         assert main(argv) == 2
         assert len(capsys.readouterr().err.strip().splitlines()) == 1
+
+
+def test_small_simplex_matches_highs_or_declines():
+    """The chosen distribution's own simplex against HiGHS on random minimax programs of its
+    shape (degenerate ties and infeasible bounds among them): the same optimum, or None."""
+    from assembler_pin.support_choice import _small_simplex
+
+    rng = np.random.default_rng(3)
+    answered = 0
+    for trial in range(60):
+        N, Fp = rng.normal(size=(24, 6)), rng.normal(scale=50, size=24)
+        if trial % 5 == 0:
+            Fp[:] = 10.0  # every force tied, as at home
+        bound = np.full(24, 200.0) if trial % 3 == 0 else rng.uniform(10, 200, 24)
+        ones, zeros = np.ones((24, 1)), np.zeros((24, 1))
+        A = np.block([[N, -ones], [-N, -ones], [N, zeros], [-N, zeros]])
+        b = np.concatenate([-Fp, Fp, bound - Fp, Fp + bound])
+        c = np.r_[np.zeros(6), 1.0]
+        z = _small_simplex(A, b, c)
+        ref = linprog(c, A_ub=A, b_ub=b, bounds=[(None, None)] * 6 + [(0, None)], method="highs")
+        if z is None:
+            assert ref.status != 0, trial  # declined only where HiGHS finds no optimum either
+            continue
+        answered += 1
+        assert ref.status == 0 and abs(z[-1] - ref.fun) <= 1e-7 * max(1.0, ref.fun), trial
+        assert np.all(A @ z <= b + 1e-7)
+    assert answered >= 30
