@@ -43,7 +43,7 @@ def _footholds(args: argparse.Namespace):
         return got.footholds, got.floor_z
     if args.floor:
         step = _number(args.floor[0], "--floor STEP", float)
-        count = _number(args.floor[1], "--floor COUNT", int)
+        count = int(_number(args.floor[1], "--floor COUNT", int))
         return floor_footholds(step, count), 0.0
     raise CLIError("give --footholds FILE or --floor STEP COUNT")
 
@@ -98,7 +98,8 @@ def write_walk(am, walk, out: Path) -> None:
     out.mkdir(parents=True, exist_ok=True)
     header, rows = walk_rows(am, walk)
     write_atomic(out / "walk.json", dumps(walk.to_dict()) + "\n")
-    write_atomic(out / "walk.csv", "\n".join(",".join(map(str, r)) for r in [header, *rows]) + "\n")
+    lines = [",".join(header)] + [",".join(str(x) for x in r) for r in rows]
+    write_atomic(out / "walk.csv", "\n".join(lines) + "\n")
 
 
 def plot_walk(walk, path: str) -> None:

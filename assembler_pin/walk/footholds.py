@@ -15,8 +15,10 @@ refused in one line (:class:`~assembler_pin.exceptions.WalkError`).
 from __future__ import annotations
 
 import json
+from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
+from typing import cast
 
 import numpy as np
 import pinocchio as pin
@@ -47,9 +49,10 @@ def checked_footholds(am: AssemblerModel, footholds: object, floor_z: float | No
     """
     if isinstance(footholds, (str, bytes, dict)) or not hasattr(footholds, "__len__"):
         raise WalkError(f"footholds must be a list of world poses (pin.SE3 or 4x4), got {type(footholds).__name__}")
-    check_bound("walk.footholds", len(footholds), "the number of footholds", error=WalkError)
+    items = cast(Sequence[object], footholds)
+    check_bound("walk.footholds", len(items), "the number of footholds", error=WalkError)
     out = []
-    for k, f in enumerate(footholds):
+    for k, f in enumerate(items):
         try:
             out.append(to_se3(f, f"foothold {k}"))
         except AssemblerError as exc:  # a PoseError: one line naming the foothold

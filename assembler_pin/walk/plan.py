@@ -183,7 +183,7 @@ def _other(foot: str) -> str:
     return "ee" if foot == "base" else "base"
 
 
-def _start_plates(am: AssemblerModel, base: pin.SE3, start: object) -> PlateArrays:
+def _start_plates(am: AssemblerModel, base: pin.SE3, start: PlateArrays | list | None) -> PlateArrays:
     """The physical plates at the start: ``start``, or the home pose standing on ``base``."""
     if start is None:
         return PlateArrays.from_se3([base * p for p in am.home])
@@ -276,7 +276,9 @@ def _move_phase(
     apex = start.se3(0) * model.home[-1]
     path = EEPath(_waypoints(start.se3(0), apex, start.se3(am.n), target, opts.clearance, lift), kind="linear")
     plan = plan_path(model, path, start=start, options=opts.plan)
-    plates, lengths, forces = [], [], []
+    plates: list[PlateArrays] = []
+    lengths: list[np.ndarray] = []
+    forces: list[np.ndarray] = []
     reason = "" if plan.success else plan.reason
     for state in plan.states:
         pa = tm.original_plates(state.plates) if turned else state.plates
