@@ -225,3 +225,62 @@ def test_cli_walk_one_step_writes_the_samples_and_the_figure(capsys, tmp_path, a
     last = dict(zip(header, lines[-1].split(","), strict=True))
     assert last["kind"] == "transfer" and last["support"] == "both"
     assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+# ---------------------------------------------------------------------- the macro-configuration
+def _ring(am, count: int = 6, radius: float = 1.0) -> list:
+    out = []
+    for a in np.arange(count) * 2 * np.pi / count:
+        foot = pin.SE3(pin.exp3(np.array([0.0, 0.0, a])), np.array([radius * np.cos(a), radius * np.sin(a), 0.0]))
+        out.append(ap.plate_arrays(am, [foot * p for p in am.home]))
+    return out
+
+
+def test_one_stack_carrying_a_body_is_the_stack_with_that_payload(am):
+    """One stack under a body on its EE axis: Pinocchio's statics of the stack whose payload is
+    the payload and the body together (their combined centre of mass)."""
+    from assembler_pin.walk import macro_capacity, macro_statics
+
+    home, pay = ap.plate_arrays(am, am.home), am.config.payload
+    mass, offset = 3.0, 0.1
+    got = macro_statics(am, [home], mass, home.p[-1] + [0, 0, offset])
+    combined = {"mass": pay.mass + mass, "offset": (pay.mass * pay.offset + mass * offset) / (pay.mass + mass)}
+    ref = ap.solve_statics(ap.AssemblerModel.from_config({"payload": combined}), am.home).forces
+    assert got.success and np.abs(got.forces[0] - ref).max() <= 1e-9
+    capacity, _ = macro_capacity(am, [home], home.p[-1])
+    at = {"mass": pay.mass + capacity, "offset": pay.mass * pay.offset / (pay.mass + capacity)}
+    peak = ap.solve_statics(ap.AssemblerModel.from_config({"payload": at}), am.home).max_abs_force
+    assert peak == pytest.approx(min(am.config.leg.max_tension, am.config.leg.max_compression), abs=1e-6)
+
+
+def test_six_stacks_carry_a_body_and_its_capacity(am):
+    from assembler_pin.compliance import loaded_pose
+    from assembler_pin.walk import macro_capacity, macro_statics
+
+    stacks, mass, com = _ring(am), 20.0, np.array([0.0, 0.0, 1.0])
+    got = macro_statics(am, stacks, mass, com)
+    assert got.success, got.message
+    # the body balances: the stacks' reactions and its weight, about the world origin
+    f = -got.body_wrenches[:, :3]
+    m = -got.body_wrenches[:, 3:] + np.cross([s.p[-1] for s in stacks], f)
+    weight = np.array([0.0, 0.0, -mass * am.config.gravity])
+    np.testing.assert_allclose(f.sum(0) + weight, 0, atol=1e-8)
+    np.testing.assert_allclose(m.sum(0) + np.cross(com, weight), 0, atol=1e-8)
+    # each stack, commanded its offsets and loaded by its body wrench, stands at its pose with these forces
+    k = am.config.leg.stiffness
+    for pa, F, u in zip(stacks, got.forces, got.body_wrenches, strict=True):
+        lp = loaded_pose(am, ap.leg_state(am, pa).lengths - F / k, wrench=u, base=pa.se3(0))
+        assert lp.success and np.abs(lp.forces - F).max() <= 1e-6
+        assert np.abs(lp.plates.p - pa.p).max() <= 1e-9
+    # no worse than an even share of the weight as pure forces at the EE origins (balanced here):
+    # each stack then carries a sixth of the body as more payload at its EE origin (Pinocchio)
+    pay = am.config.payload
+    share = {"mass": pay.mass + mass / 6, "offset": pay.mass * pay.offset / (pay.mass + mass / 6)}
+    even = ap.AssemblerModel.from_config({"payload": share})
+    assert got.max_abs_force <= max(ap.solve_statics(even, pa).max_abs_force for pa in stacks) + 1e-6
+    capacity, note = macro_capacity(am, stacks, com)
+    assert capacity > mass, note
+    assert macro_statics(am, stacks, 0.999 * capacity, com).success
+    assert not macro_statics(am, stacks, 1.01 * capacity, com).success
+    with pytest.raises(ap.WalkError):
+        macro_statics(am, stacks, math.nan, com)
