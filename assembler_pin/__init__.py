@@ -54,6 +54,12 @@ _LAZY: dict[str, str] = {
     "LoadError": ".exceptions",
     "SupportError": ".exceptions",
     "two_point_statics": ".supports",
+    "ee_held_statics": ".supports",
+    "plan_walk": ".walk",
+    "WalkOptions": ".walk",
+    "WalkResult": ".walk",
+    "turned_model": ".walk",
+    "WalkError": ".exceptions",
     "TwoPointStatics": ".supports",
     "LegConfig": ".config",
     "LegState": ".kinematics",
@@ -135,6 +141,7 @@ if TYPE_CHECKING:  # for type checkers and IDEs: the same names, imported eagerl
         SupportError,
         UnknownScenarioError,
         ViewerError,
+        WalkError,
     )
     from .export import export_model_files
     from .geometry import home_plates, leg_geometry
@@ -170,5 +177,6 @@ if TYPE_CHECKING:  # for type checkers and IDEs: the same names, imported eagerl
     from .state import StackState, evaluate_state
     from .statics import StaticsResult, solve_statics, solve_statics_batch
     from .support_choice import ChosenDistribution, chosen_distribution
-    from .supports import TwoPointStatics, two_point_statics
+    from .supports import TwoPointStatics, ee_held_statics, two_point_statics
     from .urdf import assembler_urdf, closure_sidecar
+    from .walk import WalkOptions, WalkResult, plan_walk, turned_model

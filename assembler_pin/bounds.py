@@ -77,6 +77,11 @@ BOUNDS: dict[str, Bound] = {
     "elastic.tol": Bound(1e-15, 1e-3, "m", False, "stiffness / loaded_pose(tol=...): Newton step accepted"),
     "elastic.max_iterations": Bound(1, 1000, "", True, "loaded_pose(max_iterations=...): Newton steps"),
     "compensated.tolerance": Bound(1e-12, 1e-3, "m", False, "compensated_lengths(tolerance=...): pose error"),
+    "walk.footholds": Bound(2, 100, "", True, "walk --footholds / --floor COUNT: footholds of one walk"),
+    "walk.file_bytes": Bound(1, 1 << 20, "bytes", True, "size of a footholds file read"),
+    "walk.floor_step": Bound(0.01, 10.0, "m", False, "walk --floor STEP: distance between floor footholds"),
+    "walk.clearance": Bound(0.0, 0.5, "m", False, "WalkOptions.clearance: lift and pre-contact height"),
+    "walk.transfer_samples": Bound(2, 1000, "", True, "WalkOptions.transfer_samples: samples of a load transfer"),
 }
 
 

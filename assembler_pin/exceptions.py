@@ -121,5 +121,9 @@ class SupportError(AssemblerError, ValueError):
     """A support that is not one of the known ones (``base``, ``ee``, ``both``, ``none``)."""
 
 
+class WalkError(AssemblerError, ValueError):
+    """Footholds that cannot start a walk: malformed, overlapping, off the declared floor."""
+
+
 class MapError(AssemblerError, ValueError):
     """A capability map that cannot be run, resumed or read (arguments, directory, parts, cluster)."""

@@ -19,7 +19,8 @@ program in ``(w, t)`` solved by HiGHS. The
 legs realize it when commanded ``L0 = L − T / k``: the pose is then an exact elastic equilibrium
 with these forces (``k (L − L0) = T``), so the offsets are ``−T / k`` [m]; they are applied
 through :func:`~assembler_pin.supports.two_point_statics` (or the base-held
-:func:`~assembler_pin.compliance.loaded_pose`) to check that the forces come back.
+:func:`~assembler_pin.compliance.loaded_pose`, the EE-held
+:func:`~assembler_pin.supports.ee_loaded_pose`) to check that the forces come back.
 """
 
 from __future__ import annotations
@@ -36,7 +37,14 @@ from .elastic import elastic_terms, line_conditions
 from .kinematics import PlateArrays, leg_vectors, plate_arrays
 from .model import AssemblerModel
 from .statics import CONDITION_LIMIT
-from .supports import TwoPointStatics, held_plates, mechanism_message, residual_tolerance, two_point_statics
+from .supports import (
+    TwoPointStatics,
+    ee_loaded_pose,
+    held_plates,
+    mechanism_message,
+    residual_tolerance,
+    two_point_statics,
+)
 
 __all__ = [
     "CHECK_TOLERANCE",
@@ -113,8 +121,88 @@ def force_bounds(am: AssemblerModel, lengths: np.ndarray) -> tuple[np.ndarray, n
     return lo, hi
 
 
+#: HiGHS's dual simplex without presolve: the fastest of its methods on these small programs.
+_LP_OPTIONS = {"presolve": False}
+
+#: Pivot and feasibility tolerance of the small simplex, relative to the program's scale.
+_SIMPLEX_TOL = 1e-11
+
+
+def _pivot(T: np.ndarray, basis: np.ndarray, row: int, col: int) -> None:
+    T[row] /= T[row, col]
+    factors = T[:, col].copy()
+    factors[row] = 0.0
+    T -= np.outer(factors, T[row])
+    basis[row] = col
+
+
+def _simplex_pivots(T: np.ndarray, basis: np.ndarray, allowed: int, tol: float) -> bool:
+    """Simplex pivots on the tableau ``T`` (last row the reduced costs, last column the values)
+    over its first ``allowed`` columns until optimal (True) or unbounded (False): Dantzig's
+    rule, and Bland's (which cannot cycle) after 10 pivots without progress."""
+    stalled, value = 0, T[-1, -1]
+    for _ in range(50 * T.shape[1]):
+        costs = T[-1, :allowed]
+        if stalled < 10:
+            col = int(np.argmin(costs))
+            if costs[col] >= -tol:
+                return True
+        else:
+            enter = np.flatnonzero(costs < -tol)
+            if enter.size == 0:
+                return True
+            col = int(enter[0])
+        a = T[:-1, col]
+        rows = np.flatnonzero(a > tol)
+        if rows.size == 0:
+            return False
+        ratios = T[rows, -1] / a[rows]
+        ties = rows[ratios <= ratios.min() + tol]
+        _pivot(T, basis, int(ties[np.argmin(basis[ties])]), col)
+        stalled = stalled + 1 if T[-1, -1] <= value + tol else 0
+        value = max(value, T[-1, -1])
+    return False
+
+
+def _small_simplex(A: np.ndarray, b: np.ndarray, c: np.ndarray) -> np.ndarray | None:
+    """``z`` minimizing ``c·z`` subject to ``A z ≤ b`` (z free, A of full column rank m), by a
+    two-phase tableau simplex (:func:`_simplex_pivots`) on the dual ``min b·y, Aᵀy = −c, y ≥ 0``; the
+    answer is returned only when it certifies itself (primal feasible, the duality gap closed),
+    else None."""
+    m, rows = A.shape[1], A.shape[0]
+    E, r = A.T.copy(), -c.astype(float)
+    flip = r < 0
+    E[flip], r[flip] = -E[flip], -r[flip]
+    scale = max(1.0, float(np.abs(b).max()))
+    T = np.zeros((m + 1, rows + m + 1))
+    T[:m, :rows], T[:m, rows : rows + m], T[:m, -1] = E, np.eye(m), r
+    T[-1] = -T[:m].sum(axis=0)
+    T[-1, rows : rows + m] = 0.0
+    basis = np.arange(rows, rows + m)
+    if not _simplex_pivots(T, basis, rows, _SIMPLEX_TOL) or T[-1, -1] < -_SIMPLEX_TOL:
+        return None  # no dual feasible point: the primal is infeasible or unbounded
+    if np.any(basis >= rows):
+        return None  # a degenerate artificial left in the basis: leave it to HiGHS
+    T[-1] = 0.0
+    T[-1, :rows] = b / scale
+    T[-1] -= T[-1, basis] @ T[:m]
+    if not _simplex_pivots(T, basis, rows, _SIMPLEX_TOL):
+        return None
+    try:
+        z = np.linalg.solve(A[basis], b[basis])
+    except np.linalg.LinAlgError:
+        return None
+    y = np.zeros(rows)
+    y[basis] = T[:m, -1]
+    gap = abs(float(c @ z) + float(b @ y))
+    if not (np.all(A @ z <= b + 1e-9 * scale) and np.all(y >= -1e-12) and gap <= 1e-9 * scale):
+        return None
+    return z
+
+
 def _minmax(eq: HeldEquilibrium, lo: np.ndarray, hi: np.ndarray) -> tuple[np.ndarray | None, str]:
-    """``w`` minimizing max|F| with ``lo ≤ F ≤ hi`` (HiGHS), or None and why not."""
+    """``w`` minimizing max|F| with ``lo ≤ F ≤ hi``, or None and why not: the small certified
+    simplex, HiGHS when it does not certify its answer."""
     Fp = eq.particular.ravel()
     N = eq.null.reshape(Fp.size, -1)
     k = N.shape[1]
@@ -126,7 +214,10 @@ def _minmax(eq: HeldEquilibrium, lo: np.ndarray, hi: np.ndarray) -> tuple[np.nda
     b = np.concatenate([-Fp, Fp, hi.ravel() - Fp, Fp - lo.ravel()])
     cost = np.zeros(k + 1)
     cost[-1] = 1.0
-    res = linprog(cost, A_ub=A, b_ub=b, bounds=[(None, None)] * k + [(0, None)], method="highs")
+    z = _small_simplex(A, b, cost)
+    if z is not None:
+        return z[:k], "minimal max|F| within the force limits and the stroke (simplex, certified)"
+    res = linprog(cost, A_ub=A, b_ub=b, bounds=[(None, None)] * k + [(0, None)], method="highs-ds", options=_LP_OPTIONS)
     if res.status != 0 or res.x is None:
         why = f"force limit: no distribution of {k} free force(s) within the limits and the stroke"
         return None, f"{why} (HiGHS status {res.status})"
@@ -149,7 +240,7 @@ class ChosenDistribution:
         residual: largest unbalanced force or moment at a free plate, from the potential's
             gradient at the pose with the commanded lengths [N, N·m].
         check_error: largest difference [N] between ``forces`` and those of the elastic solve of
-            the commanded lengths (NaN when not checked: the EE-only support).
+            the commanded lengths (NaN when not checked: ``verify`` false).
         within_stroke: every commanded length lies within the legs' stroke.
         success: a distribution within the force limits, in equilibrium, reproduced by its
             offsets and commandable; message: what was done, or why not.
@@ -206,13 +297,15 @@ def _failed(support: str, pa: PlateArrays, message: str) -> ChosenDistribution:
 def _check(
     am: AssemblerModel, pa: PlateArrays, support: str, commanded: np.ndarray, F: np.ndarray
 ) -> tuple[float, str]:
-    """Apply the commanded lengths through the elastic solve of the support: the largest force
-    difference [N] and a note (NaN when the support has no elastic solve yet)."""
-    if support == "ee":
-        return math.nan, "offsets not checked by an elastic solve (none yet for the EE-only support)"
+    """Apply the commanded lengths through the elastic solve of the support (held at both ends:
+    Newton started from ``pa``, where the forces were chosen): the largest force difference
+    [N] and a note (the EE-only support through the turned model,
+    :func:`~assembler_pin.supports.ee_loaded_pose`)."""
     got: TwoPointStatics | LoadedPose
     if support == "both":
         got = two_point_statics(am, pa, commanded)
+    elif support == "ee":
+        got = ee_loaded_pose(am, commanded, pa.se3(am.n))
     else:
         got = loaded_pose(am, commanded, base=pa.se3(0))
     if not got.success:
@@ -222,12 +315,14 @@ def _check(
 
 def _where(am: AssemblerModel, pa: PlateArrays, support: str, loaded: bool) -> PlateArrays | str:
     """The plates the distribution is chosen at: where the elastic solve of the pose's own
-    lengths puts them (``loaded``, supports ``base`` and ``both``), else the pose itself."""
-    if not loaded or support not in ("base", "both"):
+    lengths puts them (``loaded``), else the pose itself."""
+    if not loaded:
         return pa
     el: TwoPointStatics | LoadedPose
     if support == "both":
         el = two_point_statics(am, pa)
+    elif support == "ee":
+        el = ee_loaded_pose(am, leg_vectors(am, pa)[3], pa.se3(am.n))
     else:
         el = loaded_pose(am, leg_vectors(am, pa)[3], base=pa.se3(0))
     return el.plates if el.success else f"no elastic equilibrium of the pose's own lengths: {el.message}"
@@ -253,12 +348,13 @@ def chosen_distribution(
 
     ``loaded`` (default): chosen where the elastic distribution of the pose's own lengths puts
     the plates (:func:`~assembler_pin.supports.two_point_statics`; the base-held
-    :func:`~assembler_pin.compliance.loaded_pose`), so the elastic forces are one of the
+    :func:`~assembler_pin.compliance.loaded_pose`; the EE-held
+    :func:`~assembler_pin.supports.ee_loaded_pose`), so the elastic forces are one of the
     candidates and ``max|F|`` is never above theirs; else at ``plates`` exactly. The offsets are
     the commanded lengths minus the pose's own. Held at one end the forces are unique; held at
     both, HiGHS picks the six internal forces. With ``verify`` the commanded lengths are applied
     through the elastic solve and must give the forces back within :data:`CHECK_TOLERANCE`
-    (not possible yet for ``ee``: its ``check_error`` is NaN).
+    (``check_error``; NaN without ``verify``).
 
     Returns:
         A :class:`ChosenDistribution`; ``success`` false (NaN forces) for a support that leaves
@@ -289,7 +385,7 @@ def chosen_distribution(
     grad = np.vstack([terms.base_gradient, terms.gradient])
     free = [m for m in range(am.n + 1) if m not in held]
     residual = float(np.abs(grad[free]).max()) if free else 0.0
-    error, checked = _check(am, pa, support, commanded, F) if verify else (math.nan, "offsets not checked")
+    error, checked = _check(am, at, support, commanded, F) if verify else (math.nan, "offsets not checked")
     why = _verdict(residual, residual_tolerance(am, at), error, checked) or stroke_problem(am, commanded)
     walls = (grad[0] if 0 in held else np.zeros(6), grad[-1] if am.n in held else np.zeros(6))
     offsets = commanded - leg_vectors(am, pa)[3]

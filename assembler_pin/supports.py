@@ -21,17 +21,21 @@ about that plate's origin.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
 import numpy.typing as npt
+import pinocchio as pin
 
+from .compliance import LoadedPose
 from .elastic import elastic_terms, line_conditions, solve_equilibrium
 from .exceptions import PoseError, SupportError
-from .kinematics import PlateArrays, leg_vectors, plate_arrays
+from .kinematics import PlateArrays, leg_vectors, plate_arrays, to_se3
 from .model import AssemblerModel
+from .state import StackState
 from .statics import CONDITION_LIMIT
 from .validation import as_float_array
 
@@ -39,8 +43,11 @@ __all__ = [
     "FAST_STEP",
     "RESIDUAL_TOLERANCE",
     "SUPPORTS",
+    "EEHeldStatics",
     "TwoPointStatics",
     "benchmark_supports",
+    "ee_held_statics",
+    "ee_loaded_pose",
     "held_plates",
     "two_point_statics",
 ]
@@ -166,6 +173,44 @@ def _failed(pa: PlateArrays, rest: np.ndarray, its: int, residual: float, messag
     return TwoPointStatics(pa, nan, nan, rest, nan6, nan6, residual, its, False, False, message)
 
 
+def _equilibrium(am: AssemblerModel, pa: PlateArrays, rest: np.ndarray, max_iterations: int, tolerance: float):
+    """Newton on plates 1..n−1 to :data:`FAST_STEP`, polished to 1e-12 m when the residual is
+    above ``tolerance``: (the solve's end, its terms or None on failure, the Newton steps)."""
+    k = float(am.config.leg.stiffness)
+    eq = solve_equilibrium(
+        am,
+        pa.R,
+        pa.p,
+        rest,
+        k,
+        tol=FAST_STEP,
+        max_iterations=max_iterations,
+        condition_limit=CONDITION_LIMIT,
+        hold_ee=True,
+    )
+    its = eq.iterations
+    if eq.message is None and its == 0 and k * eq.step <= 1e-3 * tolerance:
+        return eq, eq.terms, its  # already balanced: the step left moves no force by 1e-3 × tolerance
+    end = None if eq.message else elastic_terms(am, eq.R, eq.p, rest, k, hessian=False)
+    if end is not None and not _residual(end) <= tolerance:  # polish: Newton to the last digits
+        eq = solve_equilibrium(am, eq.R, eq.p, rest, k, max_iterations=max_iterations, hold_ee=True)
+        its += eq.iterations
+        end = None if eq.message else elastic_terms(am, eq.R, eq.p, rest, k, hessian=False)
+    return eq, end, its
+
+
+def _problem(end, eq, residual: float, tolerance: float) -> str | None:
+    """Why a converged two-point equilibrium is not accepted (None when it is)."""
+    cond = line_conditions(end.lines)[1]
+    if not cond.max() <= CONDITION_LIMIT:
+        return f"the loaded pose puts platform {int(np.argmax(cond))} at a singular configuration"
+    if not eq.stable:
+        return "the equilibrium held at both ends is not stable (the free plates buckle)"
+    if not residual <= tolerance:
+        return f"the equilibrium leaves {residual:.3g} N unbalanced at a free plate (> {tolerance:.3g})"
+    return None
+
+
 def two_point_statics(
     am: AssemblerModel,
     plates: PlateArrays | Sequence | np.ndarray,
@@ -191,52 +236,111 @@ def two_point_statics(
     """
     pa = plate_arrays(am, plates)
     rest = leg_vectors(am, pa)[3] if lengths is None else checked_lengths(am, lengths)
-    k = float(am.config.leg.stiffness)
     tolerance = residual_tolerance(am, pa)
-    eq = solve_equilibrium(
-        am,
-        pa.R,
-        pa.p,
-        rest,
-        k,
-        tol=FAST_STEP,
-        max_iterations=max_iterations,
-        condition_limit=CONDITION_LIMIT,
-        hold_ee=True,
-    )
-    its = eq.iterations
-    end = None if eq.message else elastic_terms(am, eq.R, eq.p, rest, k, hessian=False)
-    if end is not None and not _residual(end) <= tolerance:  # polish: Newton to the last digits
-        eq = solve_equilibrium(am, eq.R, eq.p, rest, k, max_iterations=max_iterations, hold_ee=True)
-        its += eq.iterations
-        end = None if eq.message else elastic_terms(am, eq.R, eq.p, rest, k, hessian=False)
+    eq, end, its = _equilibrium(am, pa, rest, max_iterations, tolerance)
     loaded = PlateArrays(eq.R, eq.p)
     if end is None:
         assert eq.message is not None  # no terms are computed after a failed solve
         return _failed(loaded, rest, its, math.inf, eq.message)
     residual = _residual(end)
-    cond = line_conditions(end.lines)[1]
-    message = None
-    if not cond.max() <= CONDITION_LIMIT:
-        message = f"the loaded pose puts platform {int(np.argmax(cond))} at a singular configuration"
-    elif not eq.stable:
-        message = "the equilibrium held at both ends is not stable (the free plates buckle)"
-    elif not residual <= tolerance:
-        message = f"the equilibrium leaves {residual:.3g} N unbalanced at a free plate (> {tolerance:.3g})"
+    message = _problem(end, eq, residual, tolerance)
     if message is not None:
         return _failed(loaded, rest, its, residual, message)
-    return TwoPointStatics(
-        loaded,
-        end.tension,
-        end.lengths,
-        rest,
-        end.base_gradient.copy(),
-        end.gradient[-1].copy(),
-        residual,
-        its,
-        True,
-        True,
-        "converged",
+    base, top = end.base_gradient.copy(), end.gradient[-1].copy()
+    return TwoPointStatics(loaded, end.tension, end.lengths, rest, base, top, residual, its, True, True, "converged")
+
+
+@dataclass(frozen=True)
+class EEHeldStatics:
+    """The stack held at its EE plate alone (support ``ee``), from the turned model
+    (:mod:`assembler_pin.walk.turned`) held at its base.
+
+    Attributes:
+        state: the turned model's :class:`~assembler_pin.state.StackState` of the pose (its
+            plates and legs in the turned order).
+        forces: (n, 6) leg forces [N], tension positive, in the original's order.
+        ee_wrench: (6,) what the EE support applies to plate n [N, N·m], world axes, moment
+            about plate n's origin (the payload's weight included).
+        violations: every broken limit, named for the original's platforms and legs.
+    """
+
+    state: StackState
+    forces: np.ndarray
+    ee_wrench: np.ndarray
+    violations: list
+
+    @property
+    def feasible(self) -> bool:
+        return not self.violations
+
+    @property
+    def max_abs_force(self) -> float:
+        """max |F| [N]."""
+        return float(np.abs(self.forces).max())
+
+    def to_dict(self) -> dict:
+        """JSON-ready: ``support``, ``forces`` (original order), ``max_abs_force``, ``feasible``,
+        ``violations``, ``support_wrenches`` (``ee`` only) and the plates."""
+        return {
+            "support": "ee",
+            "forces": self.forces.tolist(),
+            "max_abs_force": self.max_abs_force,
+            "feasible": self.feasible,
+            "violations": [v.to_dict() for v in self.violations],
+            "support_wrenches": {"ee": self.ee_wrench.tolist()},
+            "singular": bool(self.state.statics.singular),
+        }
+
+
+def _payload_wrench(am: AssemblerModel, pa: PlateArrays) -> np.ndarray:
+    """What a support of plate n applies to carry the payload: [f, m] about plate n's origin."""
+    pay = am.config.payload
+    f = np.array([0.0, 0.0, pay.mass * am.config.gravity])
+    r = pa.R[-1] @ np.array([0.0, 0.0, pay.offset])
+    return np.concatenate([f, np.cross(r, f)])
+
+
+def ee_held_statics(am: AssemblerModel, plates: PlateArrays | Sequence | np.ndarray) -> EEHeldStatics:
+    """The leg forces and limits of the stack held at plate n alone, plate 0 free: the turned
+    model's base-held statics of the same physical pose (:mod:`assembler_pin.walk.turned`).
+
+    Raises:
+        PoseError: malformed plates.
+    """
+    from .state import evaluate_state
+    from .walk.turned import turned_model
+
+    pa = plate_arrays(am, plates)
+    tm = turned_model(am)
+    state = evaluate_state(tm.model, tm.plates(pa))
+    forces = tm.original_legs(state.forces)
+    wrench = state.statics.base_wrench + _payload_wrench(am, pa)
+    return EEHeldStatics(state, forces, wrench, [tm.original_violation(v) for v in state.violations])
+
+
+def ee_loaded_pose(am: AssemblerModel, lengths: npt.ArrayLike, ee: pin.SE3) -> LoadedPose:
+    """The elastic equilibrium of commanded ``lengths`` (n, 6) [m] (original order) with plate n
+    welded at the world pose ``ee`` and plate 0 free: the turned model's
+    :func:`~assembler_pin.compliance.loaded_pose`, its plates, forces and lengths given back
+    in the original's order.
+
+    Raises:
+        PoseError: malformed lengths or pose.
+    """
+    from .compliance import loaded_pose
+    from .walk.turned import turned_model
+
+    tm = turned_model(am)
+    rest = checked_lengths(am, lengths)
+    got = loaded_pose(tm.model, tm.turned_legs(rest), base=to_se3(ee, "EE pose") * tm.flip)
+    back = tm.original_legs
+    return dataclasses.replace(
+        got,
+        plates=tm.original_plates(got.plates),
+        rigid=tm.original_plates(got.rigid),
+        forces=back(got.forces),
+        lengths=back(got.lengths),
+        commanded=rest,
     )
 
 

@@ -17,12 +17,12 @@ from collections.abc import Sequence
 from typing import NoReturn
 
 from ..exceptions import AssemblerError, CLIError
-from . import bench, export, map, plan, reproduce, simulate, solve, statics, stiffness, support, view
+from . import bench, export, map, plan, reproduce, simulate, solve, statics, stiffness, support, view, walk
 
 logger = logging.getLogger("assembler_pin")
 
 #: The subcommands in the order ``--help`` lists them.
-SUBCOMMANDS = (export, statics, stiffness, support, solve, reproduce, bench, plan, map, simulate, view)
+SUBCOMMANDS = (export, statics, stiffness, support, solve, reproduce, bench, plan, walk, map, simulate, view)
 
 
 class _Parser(argparse.ArgumentParser):

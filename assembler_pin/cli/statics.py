@@ -5,6 +5,8 @@ from __future__ import annotations
 import argparse
 from typing import TYPE_CHECKING
 
+from ..exceptions import CLIError
+
 if TYPE_CHECKING:
     pass
 from .common import (
@@ -30,6 +32,12 @@ def add_parser(add) -> None:
         action="store_true",
         help="add the EE's sag and stiffness (legs as springs of leg.stiffness N/m; the keys of stiffness --json)",
     )
+    p.add_argument(
+        "--support",
+        choices=("base", "ee", "both"),
+        default="base",
+        help="the plates held: base (plate 0, default), ee (the EE plate alone), both (see 'support')",
+    )
     p.add_argument("--json", action="store_true", help="print one JSON object")
     p.set_defaults(func=run)
 
@@ -38,13 +46,21 @@ def run(args: argparse.Namespace) -> int:
     from ..model import AssemblerModel
     from ..state import evaluate_state
 
+    if args.support != "base" and args.carrier is not None:
+        raise CLIError("--support ee or both holds the stack at its own plates: give it without --carrier")
     am = AssemblerModel.from_config(config_from_args(args))
     carrier, q = carrier_from_args(args)
     plates = plates_from_args(args, am, "give --plates FILE (or - for stdin) or --home")
-    if carrier is not None and args.stiffness:
+    if (carrier is not None or args.support != "base") and args.stiffness:
         from ..exceptions import CLIError
 
-        raise CLIError("--stiffness is not available with --carrier (the stiffness is of the stack on a fixed base)")
+        raise CLIError(
+            "--stiffness is the stiffness of the stack on a fixed base: not with --carrier or --support ee|both"
+        )
+    if args.support != "base":
+        from .support import held_statics
+
+        return held_statics(am, plates, args.support, args.json)
     if carrier is not None:
         from ..carrier import carrier_statics
 

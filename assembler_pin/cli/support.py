@@ -49,6 +49,38 @@ def run(args: argparse.Namespace) -> int:
     return 0 if doc["success"] else 1
 
 
+def held_statics(am, plates, support: str, as_json: bool) -> int:
+    """``statics --support ee|both``: print the forces of that support; exit 0 when they are
+    feasible (``ee``: every limit; ``both``: both distributions found), else 1."""
+    if support == "both":
+        doc = support_document(am, plates)
+        print(dumps(doc) if as_json else format_support(doc))
+        return 0 if doc["success"] else 1
+    from ..supports import ee_held_statics
+
+    held = ee_held_statics(am, plates)
+    doc = held.to_dict()
+    print(dumps(doc) if as_json else format_ee(held))
+    return 0 if held.feasible else 1
+
+
+def format_ee(held) -> str:
+    """The EE-held statics as text (lines ≤ 100 characters)."""
+    import numpy as np
+
+    from ..labels import platform_label
+
+    verdict = "feasible" if held.feasible else f"{len(held.violations)} violations: {held.violations[0]}"
+    lines = [
+        "held at the EE plate alone (plate 0 free): leg forces [N], tension positive",
+        f"max|F| {held.max_abs_force:.3f} N, {verdict}"[:100],
+        f"  EE support force {np.round(held.ee_wrench[:3], 3).tolist()} N",
+    ]
+    for j, row in enumerate(held.forces):
+        lines.append(f"  {platform_label(j)} " + " ".join(f"{x:8.2f}" for x in row))
+    return "\n".join(lines)
+
+
 def format_support(doc: dict) -> str:
     """A compact text report (lines ≤ 100 characters)."""
     import numpy as np

@@ -1,0 +1,146 @@
+"""``assembler-pin walk``: the inchworm walk between footholds (reach, transfer, swing, ...)."""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+from ..exceptions import CLIError
+from .common import config_from_args, dumps, progress_for
+
+
+def add_parser(add) -> None:
+    """Register the ``walk`` subcommand (``add`` makes a subparser with ``--config``)."""
+    p = add("walk", "the inchworm walk: the feet (plate 0, the EE plate) land on footholds in turn")
+    src = p.add_mutually_exclusive_group()
+    src.add_argument("--footholds", metavar="FILE", help='JSON {"footholds": [[x, y, z, rx, ry, rz] or 4x4, ...]}')
+    src.add_argument(
+        "--floor",
+        nargs=2,
+        metavar=("STEP", "COUNT"),
+        help="COUNT footholds STEP metres apart along +x on the floor z = 0, the first at the origin",
+    )
+    p.add_argument("--clearance", type=float, default=0.03, help="lift and pre-contact height [m] (default 0.03)")
+    p.add_argument("--out", metavar="DIR", help="write walk.json and walk.csv (one row per sample) into DIR")
+    p.add_argument("--plot", metavar="PNG", help="write max|F| over the walk with its phases marked")
+    p.add_argument("--json", action="store_true", help="print one JSON object")
+    p.set_defaults(func=run)
+
+
+def _number(text: str, what: str, kind: type) -> float:
+    try:
+        return kind(text)
+    except ValueError:
+        raise CLIError(f"{what} must be {'an integer' if kind is int else 'a number'}, got {text[:30]!r}") from None
+
+
+def _footholds(args: argparse.Namespace):
+    """(footholds, floor height or None) from ``--footholds`` or ``--floor``."""
+    from ..walk.footholds import floor_footholds, read_footholds
+
+    if args.footholds:
+        got = read_footholds(args.footholds)
+        return got.footholds, got.floor_z
+    if args.floor:
+        step = _number(args.floor[0], "--floor STEP", float)
+        count = int(_number(args.floor[1], "--floor COUNT", int))
+        return floor_footholds(step, count), 0.0
+    raise CLIError("give --footholds FILE or --floor STEP COUNT")
+
+
+def run(args: argparse.Namespace) -> int:
+    """Exit 0 when the walk reaches its last foothold, 1 when it cannot (the valid prefix is
+    still printed and written), 2 for refused input."""
+    from ..model import AssemblerModel
+    from ..walk import WalkOptions, plan_walk
+
+    am = AssemblerModel.from_config(config_from_args(args))
+    feet, floor_z = _footholds(args)
+    options = WalkOptions(clearance=args.clearance, floor_z=floor_z)
+    out = Path(args.out) if args.out else None
+    if out is not None and out.exists() and not out.is_dir():
+        raise CLIError(f"--out '{out}' exists and is not a directory")
+    prog = progress_for(args, "walk")
+    try:
+        walk = plan_walk(am, feet, options=options, progress=prog)
+    finally:
+        prog.close()
+    doc = walk.to_dict()
+    if out is not None:
+        write_walk(am, walk, out)
+    if args.plot:
+        plot_walk(walk, args.plot)
+    print(dumps(doc) if args.json else format_walk(walk))
+    return 0 if walk.success else 1
+
+
+def walk_rows(am, walk) -> tuple[list[str], list[list[object]]]:
+    """The CSV header and rows: one row per sample, its phase, support, max|F| [N] and the
+    commanded lengths [m] (the naming module's length columns)."""
+    from ..naming import names
+
+    header = ["sample", "phase", "kind", "support", "foothold", "max_abs_force"]
+    header += [names.length_column(j, i) for j in range(am.n) for i in range(6)]
+    rows, count = [], 0
+    for k, phase in enumerate(walk.phases):
+        for i in range(len(phase.plates)):
+            peak = float(abs(phase.forces[i]).max())
+            rows.append([count, k, phase.kind, phase.support, phase.step, f"{peak:.6f}"])
+            rows[-1] += [f"{x:.9f}" for x in phase.commanded[i].ravel()]
+            count += 1
+    return header, rows
+
+
+def write_walk(am, walk, out: Path) -> None:
+    """``walk.json`` (the answer) and ``walk.csv`` (the samples) in ``out``, each atomically."""
+    from ..files import write_atomic
+
+    out.mkdir(parents=True, exist_ok=True)
+    header, rows = walk_rows(am, walk)
+    write_atomic(out / "walk.json", dumps(walk.to_dict()) + "\n")
+    lines = [",".join(header)] + [",".join(str(x) for x in r) for r in rows]
+    write_atomic(out / "walk.csv", "\n".join(lines) + "\n")
+
+
+def plot_walk(walk, path: str) -> None:
+    """max|F| [N] per sample over the walk, each phase shaded and named."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    import numpy as np
+
+    from ..plots import save
+
+    fig, ax = plt.subplots(figsize=(8, 3.2))
+    start = 0
+    shades = {"reach": "#dce9f5", "transfer": "#f3e3c3", "swing": "#dcefdc"}
+    for phase in walk.phases:
+        m = len(phase.plates)
+        x = np.arange(start, start + m)
+        ax.axvspan(start - 0.5, start + max(m, 1) - 0.5, color=shades[phase.kind], lw=0)
+        if m:
+            ax.plot(x, phase.max_abs_forces, color="#333333", lw=1.2)
+        ax.text(start + max(m, 1) / 2 - 0.5, 0.02, phase.kind, transform=ax.get_xaxis_transform(), ha="center", size=7)
+        start += m
+    ax.set_xlabel("sample")
+    ax.set_ylabel("max |F| [N]")
+    ax.set_title(f"walk over {len(walk.footholds)} footholds: {'valid' if walk.success else walk.reason[:70]}", size=9)
+    save(fig, path)
+    plt.close(fig)
+
+
+def format_walk(walk) -> str:
+    """A compact text report (lines ≤ 100 characters)."""
+    import textwrap
+
+    lines = [f"walk over {len(walk.footholds)} footholds: {'success' if walk.success else 'not possible'}"]
+    if not walk.success:
+        lines += textwrap.wrap(walk.reason, 96, initial_indent="  ", subsequent_indent="    ")
+    for k, p in enumerate(walk.phases):
+        peak = f"{p.max_abs_forces.max():7.2f} N" if len(p.plates) else "      - "
+        state = "" if p.complete else "  (incomplete)"
+        lines.append(
+            f"  {k:2d} {p.kind:8s} support {p.support:4s} foothold {p.step:2d} {len(p.plates):4d} samples {peak}{state}"
+        )
+    return "\n".join(line[:100] for line in lines)

@@ -1,0 +1,388 @@
+"""The inchworm walk: the stack steps from foothold to foothold, a foot held at every instant.
+
+Footholds are world frames on a surface, their z the surface's outward normal [m, rad]. The
+base plate (plate 0) stands on one as its pose; the EE plate (plate n) stands on one turned
+over, its +z into the surface: plate n's pose is ``foothold · Ry(π)`` (a foothold's x points
+along the step onto it, the way the stack arrives). ``footholds[0]`` is
+where the base stands at the start; the feet then land in turn, the EE on ``footholds[1]``,
+the base on ``footholds[2]``, the EE on ``footholds[3]`` ... Each step is two phases:
+
+* **reach** (support ``base``: plate 0 held) or **swing** (support ``ee``: plate n held, the
+  stack planned on the turned model, :mod:`assembler_pin.walk.turned`): the free foot lifts
+  ``clearance`` off its foothold along the surface normal (not at the first step, which starts
+  from the home pose), moves to ``clearance`` above the next foothold (the pre-contact pose)
+  and lands, every sample a force-optimal valid pose of
+  :func:`~assembler_pin.motion.planner.plan_path` (FK of its lengths, every limit, the forces
+  of the support held in that phase);
+* **transfer** (support ``both``): both feet held at the landed pose, the load moves from the
+  old foot to the new: the EE support's wrench ``w`` goes from zero (the base carries all) to
+  the whole weight (the EE carries all), or back, in ``transfer_samples`` steps, the forces
+  ``F(w)`` set by length offsets ``−F / k`` (:mod:`assembler_pin.support_choice`); each sample
+  within the force limits and the stroke, and the commanded lengths applied through the
+  elastic solve (:func:`~assembler_pin.supports.two_point_statics`) give its forces back. The
+  chosen distribution (min max|F|) of the pose is reported with the phase.
+
+Reach and swing samples are rigid poses (commanded = pin-to-pin lengths), like the package's
+trajectories; a walk that cannot go on ends with ``success`` false, the reason, and the valid
+prefix (the phases done, and the valid samples of the one that failed).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import logging
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+import pinocchio as pin
+
+from ..bounds import check_bound
+from ..exceptions import WalkError
+from ..kinematics import PlateArrays, leg_vectors, plate_arrays
+from ..model import AssemblerModel
+from ..motion.paths import EEPath
+from ..motion.planner import PlanOptions, plan_path
+from ..options import checked_options
+from ..progress import ProgressCallback
+from ..support_choice import CHECK_TOLERANCE, ChosenDistribution, chosen_distribution, force_bounds, held_equilibrium
+from ..supports import two_point_statics
+from .footholds import checked_footholds
+from .turned import turned_model
+from .verify import verify_walk
+
+__all__ = ["WalkOptions", "WalkPhase", "WalkResult", "checked_footholds", "plan_walk", "plate_target"]
+
+logger = logging.getLogger(__name__)
+
+#: Turns a foothold frame into the pose of the EE plate standing on it (its +z into the
+#: surface): a half turn about the foothold's y, the stack arriving along its x.
+TURN_OVER = pin.SE3(pin.exp3(np.array([0.0, math.pi, 0.0])), np.zeros(3))
+
+
+def _walk_plan_options() -> PlanOptions:
+    return PlanOptions(position_step=0.02, rotation_step=math.radians(4.0), max_leg_step=0.02)
+
+
+@dataclass(frozen=True)
+class WalkOptions:
+    """Settings of :func:`plan_walk`.
+
+    Attributes:
+        clearance: lift-off and pre-contact height above a foothold, along its normal [m].
+        transfer_samples: samples of each load transfer (both feet held), ends included.
+        floor_z: the height of a level floor the footholds must lie on (None: any surface);
+            with it, no joint centre of any sample may go below it.
+        plan: the motion planner's settings for reach and swing.
+    """
+
+    clearance: float = 0.03
+    transfer_samples: int = 5
+    floor_z: float | None = None
+    plan: PlanOptions = field(default_factory=_walk_plan_options)
+
+    def __post_init__(self) -> None:
+        check_bound("walk.clearance", self.clearance, "clearance", error=WalkError)
+        check_bound("walk.transfer_samples", self.transfer_samples, "transfer_samples", error=WalkError)
+        if self.floor_z is not None and not (isinstance(self.floor_z, (int, float)) and math.isfinite(self.floor_z)):
+            raise WalkError(f"floor_z must be a finite number [m] or None, got {self.floor_z!r}")
+        if not isinstance(self.plan, PlanOptions):
+            raise WalkError(f"plan must be a PlanOptions, got {type(self.plan).__name__}")
+
+
+@dataclass(frozen=True)
+class WalkPhase:
+    """One phase of a walk (module doc); every per-sample array is in the original model's
+    plate and leg order, world frame.
+
+    Attributes:
+        kind: ``reach``, ``transfer`` or ``swing``; support: ``base``, ``both`` or ``ee``.
+        step: the foothold the phase's moving foot goes to (a transfer: the one it landed on).
+        plates: the samples' plate poses; lengths: (m, n, 6) pin-to-pin lengths [m];
+        commanded: (m, n, 6) the lengths to command [m]; forces: (m, n, 6) leg forces [N],
+            tension positive, with the phase's support.
+        complete: the phase reached its end; reason: why not ("" when complete).
+        chosen: a transfer's chosen distribution (min max|F|) at its pose, else None.
+    """
+
+    kind: str
+    support: str
+    step: int
+    plates: list[PlateArrays]
+    lengths: np.ndarray
+    commanded: np.ndarray
+    forces: np.ndarray
+    complete: bool
+    reason: str = ""
+    chosen: ChosenDistribution | None = None
+
+    @property
+    def max_abs_forces(self) -> np.ndarray:
+        """(m,) max|F| of each sample [N]."""
+        return np.abs(self.forces).reshape(len(self.forces), -1).max(axis=1) if len(self.forces) else np.zeros(0)
+
+    def to_dict(self) -> dict:
+        return {
+            "kind": self.kind,
+            "support": self.support,
+            "step": self.step,
+            "complete": self.complete,
+            "reason": self.reason,
+            "samples": len(self.plates),
+            "max_abs_force": float(self.max_abs_forces.max()) if len(self.plates) else None,
+            "max_abs_forces": self.max_abs_forces.tolist(),
+            "chosen": None if self.chosen is None else self.chosen.to_dict(),
+        }
+
+
+@dataclass(frozen=True)
+class WalkResult:
+    """A planned walk (:func:`plan_walk`).
+
+    Attributes:
+        success: every phase to the last foothold is complete and valid.
+        reason: "reached the last foothold" or why the walk stops.
+        footholds: the footholds (world frames).
+        phases: the phases planned, in order (the valid prefix when it failed: the last one
+            may be incomplete).
+    """
+
+    success: bool
+    reason: str
+    footholds: tuple[pin.SE3, ...]
+    phases: list[WalkPhase]
+
+    @property
+    def max_abs_force(self) -> float:
+        """max |F| over every sample of the walk [N] (NaN with no sample)."""
+        peaks = [p.max_abs_forces.max() for p in self.phases if len(p.plates)]
+        return float(max(peaks)) if peaks else math.nan
+
+    def __repr__(self) -> str:
+        kinds = "/".join(p.kind for p in self.phases)
+        return f"WalkResult(success={self.success}, {len(self.phases)} phases ({kinds}), reason={self.reason!r})"
+
+    def to_dict(self) -> dict:
+        return {
+            "success": self.success,
+            "reason": self.reason,
+            "footholds": [f.homogeneous.tolist() for f in self.footholds],
+            "max_abs_force": None if math.isnan(self.max_abs_force) else self.max_abs_force,
+            "phases": [p.to_dict() for p in self.phases],
+            "units": "N (tension positive), m; plates world frame",
+        }
+
+
+def plate_target(foothold: pin.SE3, foot: str) -> pin.SE3:
+    """The world pose of a foot's plate standing on ``foothold``: the base plate is the
+    foothold frame, the EE plate the frame turned over about its y (``foothold · Ry(π)``)."""
+    return foothold if foot == "base" else foothold * TURN_OVER
+
+
+def _other(foot: str) -> str:
+    return "ee" if foot == "base" else "base"
+
+
+def _start_plates(am: AssemblerModel, base: pin.SE3, start: PlateArrays | list | None) -> PlateArrays:
+    """The physical plates at the start: ``start``, or the home pose standing on ``base``."""
+    if start is None:
+        return PlateArrays.from_se3([base * p for p in am.home])
+    pa = plate_arrays(am, start)
+    gap = float(np.linalg.norm(pin.log6(base.actInv(pa.se3(0))).vector))
+    if gap > 1e-6:
+        raise WalkError(f"the start pose's plate 0 is {gap:.3g} (m, rad) from footholds[0]; it must stand on it")
+    return pa
+
+
+#: Angles [rad] of the arc waypoints between the upright stack (0) and a foot on the surface (π).
+ARC_STEPS = np.radians(np.arange(15.0, 180.0, 15.0))
+
+
+def _arc(base: pin.SE3, toward: np.ndarray, length: np.ndarray, theta: np.ndarray, lift: np.ndarray) -> list[pin.SE3]:
+    """Poses of the moving plate on the stack bent into an arc of ``length`` [m] and total turn
+    ``theta`` [rad] about ``z × toward`` (the held plate's frame), raised by ``lift`` [m]."""
+    axis = np.cross([0.0, 0.0, 1.0], toward)
+    out = []
+    for ell, th, up in zip(length, theta, lift, strict=True):
+        local = ell * ((1.0 - math.cos(th)) / th * toward + math.sin(th) / th * np.array([0.0, 0.0, 1.0]))
+        local[2] += up
+        out.append(base * pin.SE3(pin.exp3(th * axis), local))
+    return out
+
+
+def _side(base: pin.SE3, foot: pin.SE3) -> tuple[np.ndarray, float]:
+    """The unit direction (held plate's frame, horizontal) and distance [m] to a foot's plate."""
+    rel = base.actInv(foot).translation
+    d = float(np.hypot(rel[0], rel[1]))
+    return (np.array([rel[0], rel[1], 0.0]) / d if d > 0 else np.array([1.0, 0.0, 0.0])), d
+
+
+def _waypoints(
+    base: pin.SE3, apex: pin.SE3, ee: pin.SE3, target: pin.SE3, clearance: float, lift: bool
+) -> tuple[pin.SE3, ...]:
+    """The moving plate's path (held plate ``base``): off its foothold (``lift``) and back along
+    an arc to the upright ``apex`` (the home pose), then along an arc to ``clearance`` above
+    the target (the pre-contact pose) and onto it. The arcs shorten or lengthen the stack
+    evenly so that a turn of π ends on the foot's surface. A foot's plate has its +z into its
+    surface: the surface's outward normal is its −z."""
+    height = float(base.actInv(apex).translation[2])
+    points = [ee]
+    if lift:
+        u0, d0 = _side(base, ee)
+        points.append(pin.SE3(ee.rotation, ee.translation - clearance * ee.rotation[:, 2]))
+        th = ARC_STEPS[::-1]
+        ell = height + (0.5 * math.pi * d0 - height) * th / math.pi
+        points += _arc(base, u0, ell, th, clearance * th / math.pi)
+        points.append(apex)
+    u1, d1 = _side(base, target)
+    ell = height + (0.5 * math.pi * d1 - height) * ARC_STEPS / math.pi
+    points += _arc(base, u1, ell, ARC_STEPS, clearance * ARC_STEPS / math.pi)
+    if clearance > 0:
+        points.append(pin.SE3(target.rotation, target.translation - clearance * target.rotation[:, 2]))
+    points.append(target)
+    return tuple(points)
+
+
+def _out_of_reach(am: AssemblerModel, held: pin.SE3, target: pin.SE3) -> str:
+    """Why no pose puts the moving plate on ``target`` ("" when that is not excluded): a platform
+    moves its top plate's centre at most ``max_length + 2 node_radius`` from its bottom's."""
+    reach = am.n * (am.config.leg.max_length + 2.0 * am.config.plate.node_radius)
+    d = float(np.linalg.norm(target.translation - held.translation))
+    return f"out of reach: {d:.4g} m from the held foot, the stack reaches at most {reach:.4g} m" if d > reach else ""
+
+
+def _below_floor(am: AssemblerModel, pa: PlateArrays, floor_z: float | None) -> str:
+    if floor_z is None:
+        return ""
+    bottom, top = leg_vectors(am, pa)[:2]
+    low = float(min(bottom[..., 2].min(), top[..., 2].min()))
+    return f"a joint centre goes {1e3 * (floor_z - low):.3g} mm below the floor" if low < floor_z - 1e-6 else ""
+
+
+def _move_phase(
+    am: AssemblerModel, cur: PlateArrays, stance: str, step: int, foothold: pin.SE3, lift: bool, opts: WalkOptions
+) -> WalkPhase:
+    """Reach (base held, the EE moves) or swing (EE held, the base moves, on the turned model)
+    from the physical pose ``cur`` to the foothold ``step``."""
+    tm = turned_model(am)
+    turned = stance == "ee"
+    model = tm.model if turned else am
+    start = tm.plates(cur) if turned else cur
+    target = plate_target(foothold, "base") * tm.flip if turned else plate_target(foothold, "ee")
+    far = _out_of_reach(am, start.se3(0), target)
+    if far:
+        empty = np.zeros((0, am.n, 6))
+        return WalkPhase("swing" if turned else "reach", stance, step, [], empty, empty, empty, False, far)
+    apex = start.se3(0) * model.home[-1]
+    path = EEPath(_waypoints(start.se3(0), apex, start.se3(am.n), target, opts.clearance, lift), kind="linear")
+    plan = plan_path(model, path, start=start, options=opts.plan)
+    plates: list[PlateArrays] = []
+    lengths: list[np.ndarray] = []
+    forces: list[np.ndarray] = []
+    reason = "" if plan.success else plan.reason
+    for state in plan.states:
+        pa = tm.original_plates(state.plates) if turned else state.plates
+        low = _below_floor(am, pa, opts.floor_z)
+        if low:
+            reason = f"sample {len(plates)}: {low}"
+            break
+        plates.append(pa)
+        lengths.append(tm.original_legs(state.leg_lengths) if turned else state.leg_lengths)
+        forces.append(tm.original_legs(state.forces) if turned else state.forces)
+    L, F = np.array(lengths).reshape(-1, am.n, 6), np.array(forces).reshape(-1, am.n, 6)
+    kind = "swing" if turned else "reach"
+    return WalkPhase(kind, stance, step, plates, L, L.copy(), F, not reason, reason)
+
+
+def _transfer_phase(am: AssemblerModel, pose: PlateArrays, stance: str, step: int, opts: WalkOptions) -> WalkPhase:
+    """Both feet held at ``pose``: the load moves from the ``stance`` foot to the other one."""
+    n, k = am.n, float(am.config.leg.stiffness)
+    eq = held_equilibrium(am, pose, "both")
+    if isinstance(eq, str):
+        return WalkPhase(
+            "transfer", "both", step, [], np.zeros((0, n, 6)), np.zeros((0, n, 6)), np.zeros((0, n, 6)), False, eq
+        )
+    ends = (np.zeros(6), eq.total) if stance == "base" else (eq.total, np.zeros(6))
+    L = leg_vectors(am, pose)[3]
+    lo, hi = force_bounds(am, L)
+    forces, commanded, reason = [], [], ""
+    for i, s in enumerate(np.linspace(0.0, 1.0, opts.transfer_samples)):
+        F = eq.particular + eq.null @ ((1.0 - s) * ends[0] + s * ends[1])
+        if not np.all((lo <= F) & (F <= hi)):
+            reason = f"sample {i}: leg forces beyond the force limits or the stroke ({np.abs(F).max():.4g} N)"
+            break
+        cmd = L - F / k
+        el = two_point_statics(am, pose, cmd)
+        error = float(np.abs(el.forces - F).max()) if el.success else math.inf
+        if not error <= CHECK_TOLERANCE:
+            reason = f"sample {i}: the elastic solve of its lengths does not hold ({el.message}, {error:.3g} N)"
+            break
+        forces.append(F)
+        commanded.append(cmd)
+    m = len(forces)
+    chosen = chosen_distribution(am, pose)
+    return WalkPhase(
+        "transfer",
+        "both",
+        step,
+        [pose] * m,
+        np.broadcast_to(L, (m, n, 6)).copy(),
+        np.array(commanded).reshape(m, n, 6),
+        np.array(forces).reshape(m, n, 6),
+        not reason,
+        reason,
+        chosen,
+    )
+
+
+def plan_walk(
+    am: AssemblerModel,
+    footholds: object,
+    start: PlateArrays | list | None = None,
+    options: WalkOptions | None = None,
+    progress: ProgressCallback | None = None,
+) -> WalkResult:
+    """The inchworm walk over ``footholds`` (module doc): reach / transfer / swing / transfer ...
+
+    Args:
+        footholds: world frames (pin.SE3 or 4×4) [m]: ``footholds[0]`` the base's at the start,
+            then the EE's, the base's ... (see :func:`plate_target`).
+        start: the physical plates at the start (plate 0 on ``footholds[0]``); default the home
+            pose standing on it.
+        options: :class:`WalkOptions`.
+        progress: called as ``(phases done, phases, note)``.
+
+    Returns:
+        A :class:`WalkResult`; ``success`` false with the reason and the valid prefix when a
+        foothold cannot be reached or a load cannot be moved. Every sample is checked again by
+        :func:`verify_walk` before success is reported.
+
+    Raises:
+        WalkError: malformed or overlapping footholds, off the floor, a start off footholds[0].
+    """
+    opts = checked_options(options, WalkOptions, "options")
+    feet = checked_footholds(am, footholds, opts.floor_z)
+    cur = _start_plates(am, feet[0], start)
+    stance, phases, total = "base", [], 2 * (len(feet) - 1)
+    for step in range(1, len(feet)):
+        moving = _other(stance)
+        for make in ("move", "transfer"):
+            if make == "move":
+                phase = _move_phase(am, cur, stance, step, feet[step], step >= 2, opts)
+            else:
+                phase = _transfer_phase(am, cur, stance, step, opts)
+            phases.append(phase)
+            if progress is not None:
+                progress(len(phases), total, f"walk: {phase.kind} to foothold {step}")
+            if not phase.complete:
+                foot = "EE" if stance == "base" else "base"
+                what = "the load cannot move to" if make == "transfer" else f"the {foot} foot cannot reach"
+                return WalkResult(False, f"step {step}: {what} foothold {step}: {phase.reason}", feet, phases)
+            cur = phase.plates[-1]
+        stance = moving
+    result = WalkResult(True, "reached the last foothold", feet, phases)
+    problems = verify_walk(am, result)
+    if problems:
+        return dataclasses.replace(result, success=False, reason=f"a sample does not check: {problems[0]}")
+    logger.info("walk: %s", result)
+    return result

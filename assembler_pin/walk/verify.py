@@ -1,0 +1,104 @@
+"""Every sample of a planned walk checked again, with the support of its phase.
+
+Reach and swing samples: stack FK of the sample's lengths from its held plate (on the model
+held at that foot: the package's own, or the turned one for the swing) gives back its plates;
+every limit of that model holds; its forces are that support's statics; the held foot does not
+move. Transfer samples: the pose's kinematic limits; the forces within the force limits and
+the stroke; the commanded lengths applied through the elastic solve held at both ends give the
+forces back. Phases follow one another without a jump, and a moving foot ends on its foothold.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pinocchio as pin
+
+from ..kinematics import PlateArrays, stack_forward_kinematics
+from ..model import AssemblerModel
+from ..motion.guess import on_se3
+from ..state import evaluate_state
+from ..support_choice import CHECK_TOLERANCE, force_bounds
+from ..supports import two_point_statics
+from .turned import turned_model
+
+__all__ = ["SAMPLE_TOLERANCE", "verify_walk"]
+
+#: Largest plate distance [m, or rad] accepted between a sample and the FK of its lengths,
+#: between consecutive phases, and between a landed foot and its foothold.
+SAMPLE_TOLERANCE = 1e-6
+
+_FORCE_KINDS = {"tension", "compression", "non_finite_force", "singular"}
+
+
+def _gap(a: PlateArrays, b: PlateArrays, plates: slice | list[int] | None = None) -> float:
+    """Largest position [m] or rotation [rad] difference between two sets of plate poses."""
+    idx = slice(None) if plates is None else plates
+    dp = np.abs(a.p[idx] - b.p[idx]).max()
+    dR = np.abs(a.R[idx] - b.R[idx]).max()
+    return float(max(dp, dR))
+
+
+def _moving_sample(am: AssemblerModel, phase, i: int) -> str:
+    """Problems of sample ``i`` of a reach or swing ("" when none)."""
+    tm = turned_model(am)
+    turned = phase.kind == "swing"
+    model = tm.model if turned else am
+    pa = phase.plates[i]
+    mp = tm.plates(pa) if turned else pa
+    lengths = tm.turned_legs(phase.lengths[i]) if turned else phase.lengths[i]
+    fk = stack_forward_kinematics(model, lengths, base=mp.se3(0), guess=on_se3(mp))
+    if not fk.success or _gap(fk.plates, mp) > SAMPLE_TOLERANCE:
+        return f"the FK of its lengths does not give its plates back ({fk.message})"
+    state = evaluate_state(model, mp)
+    if not state.feasible:
+        v = state.violations[0]
+        return str(tm.original_violation(v) if turned else v)
+    forces = tm.original_legs(state.forces) if turned else state.forces
+    if np.abs(forces - phase.forces[i]).max() > 1e-9 * max(1.0, np.abs(forces).max()):
+        return f"its forces are not the statics of support {phase.support}"
+    held = [am.n] if turned else [0]
+    if _gap(pa, phase.plates[0], held) > SAMPLE_TOLERANCE:
+        return "the held foot moved"
+    return ""
+
+
+def _transfer_sample(am: AssemblerModel, phase, i: int) -> str:
+    pa, F = phase.plates[i], phase.forces[i]
+    state = evaluate_state(am, pa)
+    kinematic = [v for v in state.violations if v.kind not in _FORCE_KINDS]
+    if kinematic:
+        return str(kinematic[0])
+    lo, hi = force_bounds(am, state.leg_lengths)
+    if not np.all((lo <= F) & (F <= hi)):
+        return "its forces are beyond the force limits or the stroke"
+    el = two_point_statics(am, pa, phase.commanded[i])
+    if not el.success or np.abs(el.forces - F).max() > CHECK_TOLERANCE:
+        return f"the elastic solve of its commanded lengths does not give its forces ({el.message})"
+    return ""
+
+
+def verify_walk(am: AssemblerModel, walk) -> list[str]:
+    """Every problem found in a :class:`~assembler_pin.walk.plan.WalkResult` (module doc),
+    each naming its phase and sample; empty when every sample checks."""
+    from .plan import plate_target
+
+    out: list[str] = []
+    previous = None
+    for k, phase in enumerate(walk.phases):
+        where = f"phase {k} ({phase.kind} to foothold {phase.step})"
+        if previous is not None and phase.plates and _gap(previous, phase.plates[0]) > SAMPLE_TOLERANCE:
+            out.append(f"{where}: it does not start where phase {k - 1} ended")
+        check = _transfer_sample if phase.kind == "transfer" else _moving_sample
+        for i in range(len(phase.plates)):
+            problem = check(am, phase, i)
+            if problem:
+                out.append(f"{where}, sample {i}: {problem}")
+        if phase.complete and phase.kind != "transfer":
+            foot = "ee" if phase.kind == "reach" else "base"
+            plate = am.n if foot == "ee" else 0
+            target = plate_target(walk.footholds[phase.step], foot)
+            landed = phase.plates[-1].se3(plate)
+            if float(np.abs(pin.log6(target.actInv(landed)).vector).max()) > SAMPLE_TOLERANCE:
+                out.append(f"{where}: the {foot} foot does not end on foothold {phase.step}")
+        previous = phase.plates[-1] if phase.plates else previous
+    return out
