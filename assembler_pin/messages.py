@@ -85,9 +85,12 @@ def number(value: float, unit: str = "", digits: int = 4) -> str:
     return f"{text} {unit}".rstrip() if unit not in ("°",) else f"{text}°"
 
 
-def describe(v: Violation) -> str:
+def describe(v: Violation | None) -> str:
     """One violation in the failure vocabulary, with its value, its limit and how far past,
-    e.g. ``leg stroke: SP3 leg 0 length 1824 mm, limit 350 mm (1474 mm over)``."""
+    e.g. ``leg stroke: SP3 leg 0 length 1824 mm, limit 350 mm (1474 mm over)``; ``None``
+    (what :func:`binding` gives for no violation) reads ``no limit violated``."""
+    if v is None:
+        return "no limit violated"
     cause, what, unit, scale = _KINDS.get(v.kind, (v.kind.replace("_", " "), "value", "", 1.0))
     if v.platform is None:
         where = "EE"

@@ -52,8 +52,6 @@ def run(args: argparse.Namespace) -> int:
     carrier, q = carrier_from_args(args)
     plates = plates_from_args(args, am, "give --plates FILE (or - for stdin) or --home")
     if (carrier is not None or args.support != "base") and args.stiffness:
-        from ..exceptions import CLIError
-
         raise CLIError(
             "--stiffness is the stiffness of the stack on a fixed base: not with --carrier or --support ee|both"
         )
