@@ -20,7 +20,7 @@ from scipy.optimize import linprog, minimize
 
 import assembler_pin as ap
 from assembler_pin.support_choice import chosen_distribution
-from assembler_pin.supports import benchmark_supports, held_plates, two_point_statics
+from assembler_pin.supports import benchmark_supports, held_plates, residual_tolerance, two_point_statics
 
 STEP = 1e-20  # complex step
 
@@ -163,11 +163,12 @@ def test_elastic_forces_are_the_independent_minimum_with_both_ends_fixed(n, kind
     x = ref.minimum()
     F = ref.forces(x)
     assert np.abs(ours.forces - F).max() <= 1e-6 * np.abs(F).max(), np.abs(ours.forces - F).max()
-    assert ours.residual <= 1e-9
-    # the reference potential is stationary at our plates too: ≤ 1e-9 N (its a-gradient is 2× the moment)
+    floor = residual_tolerance(am, pa)  # 1e-9 N, or the rounding floor of a tall stack (16 ε k max|p|)
+    assert ours.residual <= floor
+    # the reference potential is stationary at our plates too, to the same floor (its a-gradient is 2× the moment)
     at_ours = HeldStack(am.config, ours.plates.R, ours.plates.p, rest)
     grad = at_ours.gradient(np.zeros(6 * (n - 1))).reshape(n - 1, 6)
-    assert np.abs(grad[:, :3]).max() <= 1e-9 and np.abs(grad[:, 3:]).max() <= 2e-9
+    assert np.abs(grad[:, :3]).max() <= floor and np.abs(grad[:, 3:]).max() <= 2 * floor
     # the two supports carry the whole weight together
     cfg = am.config
     weight = cfg.gravity * (
