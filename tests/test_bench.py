@@ -21,3 +21,25 @@ def test_one_stack_size_row():
     assert all(row[k] > 0 for k in ("build_s", "resident_mb", "statics_us", "stack_fk_us", "initial_s"))
     table = format_sweep([row, {**row, "platforms": 3, "optimize_note": "skipped: test"}])
     assert "n = 3: skipped: test" in table and len(table.splitlines()) == 5
+
+
+def test_startup_row_runs_each_command_and_names_its_target(monkeypatch):
+    """The start-up row times real processes of each command (each one exits 0: a failing
+    command raises) interleaved round by round, and reports the medians beside the targets."""
+    import subprocess
+
+    from assembler_pin import bench_speed
+
+    calls: list[tuple[str, ...]] = []
+    real = subprocess.run
+
+    def recording(argv, **kwargs):
+        calls.append(tuple(argv[1:]))
+        return real(argv, **kwargs)
+
+    monkeypatch.setattr(subprocess, "run", recording)
+    row = bench_speed.benchmark_startup(repeat=2)
+    per_round = [("-m", "assembler_pin.cli", *args) for args in bench_speed.STARTUP_COMMANDS.values()]
+    assert calls == [*per_round, ("-c", "pass")] * 2
+    assert row["cli_help_target_s"] == 0.2 and row["cli_statics_home_json_target_s"] == 0.25
+    assert all(0 < row[k] < 60 for k in ("cli_help_s", "cli_statics_home_json_s", "bare_python_s"))
