@@ -91,6 +91,48 @@ def test_solve_and_plan_are_bit_identical_under_1_and_2_threads(am):
         assert np.array_equal(a, b)
 
 
+# ------------------------------------------------------------------ map workers
+SMALL_MAP = "x=0.2:0.45:2,y=0.05,z=0.8"  # two reachable cells
+
+
+def _worker_blas_threads() -> list[int]:
+    """The thread counts of the BLAS libraries of the process it runs in (scipy's loaded)."""
+    import scipy.linalg  # noqa: F401
+    from threadpoolctl import threadpool_info
+
+    return [lib["num_threads"] for lib in threadpool_info() if lib["user_api"] == "blas"]
+
+
+def test_map_workers_run_one_blas_thread_and_give_the_serial_numbers(tmp_path, monkeypatch):
+    """Workers started with 2 BLAS threads (a remote cluster's own setting) run a map with
+    one, and the map's numbers are those of the serial run in this process under a caller's
+    limit of 2 threads, exactly."""
+    distributed = pytest.importorskip("distributed")
+    from assembler_pin.config import load_config
+    from assembler_pin.maps import parse_grid, read_map, run_map
+    from assembler_pin.maps.cluster import client_for, stop
+
+    for var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
+        monkeypatch.setenv(var, "2")  # inherited by the worker process
+    grid, configs = parse_grid(SMALL_MAP), [("default", load_config())]
+    with distributed.LocalCluster(n_workers=1, threads_per_worker=1, processes=True, dashboard_address=None) as cluster:
+        with distributed.Client(cluster) as plain:
+            before = plain.run(_worker_blas_threads)
+        assert all(set(t) == {2} for t in before.values())  # the setting took effect
+        client, _ = client_for(cluster.scheduler_address, 1)
+        try:
+            after = client.run(_worker_blas_threads)
+        finally:
+            stop(client, None)
+        assert after and all(t and set(t) == {1} for t in after.values())
+        run_map(grid, configs, tmp_path / "dask", scheduler=cluster.scheduler_address, batch_size=1)
+    with threadpool_limits(limits=2):
+        run_map(grid, configs, tmp_path / "serial", workers=0)
+    a, b = read_map(tmp_path / "dask"), read_map(tmp_path / "serial")
+    numbers = [c for c in a.column_names if not c.endswith("time_s")]  # timings differ run to run
+    assert a.num_rows == 2 and a.select(numbers).equals(b.select(numbers))
+
+
 # ------------------------------------------------------------------ lazy starts
 def test_starts_option_is_checked(am):
     with pytest.raises(OptionsError, match="starts must be one of first, all"):
