@@ -91,12 +91,8 @@ def _statics(cfg: AssemblerConfig, heights: Vec) -> tuple[list[list[float]], lis
     bottom_in, top_in = home_anchors(cfg)
     bottom = Grid((n, 6, 3), [x for row in bottom_in for pt in row for x in pt])
     top = Grid((n, 6, 3), [x for row in top_in for pt in row for x in pt])
-    forces, condition, lev_f, lev_m = closed_form_pure(R, p, bottom, top, constants(cfg))
-    weight = math.fsum(lev_f.data) + cfg.plate.mass * cfg.gravity  # plate 0 too, at the origin
-    moment_x = math.fsum(lev_m[k, 0] for k in range(n + 1))
-    moment_y = math.fsum(lev_m[k, 1] for k in range(n + 1))
-    base = [0.0, 0.0, weight, -moment_x, -moment_y, 0.0]  # the mount balances gravity
-    return forces.nested()[0], condition.data, base
+    forces, condition, _, base = closed_form_pure(R, p, bottom, top, constants(cfg))
+    return forces.nested()[0], condition.data, base.data
 
 
 def _inside(value: float, low: float, high: float) -> bool:

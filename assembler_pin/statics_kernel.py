@@ -24,7 +24,7 @@ import logging
 import math
 import os
 import types
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -33,7 +33,21 @@ from .exceptions import OptionsError
 from .linalg import cross, inverse_or_nan
 from .model import AssemblerModel
 
-__all__ = ["BACKENDS", "ENV_VAR", "KERNEL_MIN_STACKS", "closed_form_forces", "kernel_available", "resolve_backend"]
+if TYPE_CHECKING:
+    from .kinematics import PlateArrays
+    from .statics import StaticsResult
+
+__all__ = [
+    "BACKENDS",
+    "ENV_VAR",
+    "KERNEL_MIN_STACKS",
+    "closed_form_forces",
+    "kernel_available",
+    "kernel_loaded",
+    "kernel_result",
+    "kernel_statics",
+    "resolve_backend",
+]
 
 logger = logging.getLogger(__name__)
 
@@ -48,7 +62,8 @@ ENV_VAR = "ASSEMBLER_PIN_STATICS"
 KERNEL_MIN_STACKS = 5000
 
 _kernel: Any = None  # the compiled function, once built (None: not yet; False: unavailable)
-_stack = loops._stack_py  # interpreted here; the compiled kernel calls its compiled copy
+_kernel_full: Any = None  # the compiled kernel with ball forces and base wrenches, once built
+_stack, _extras = loops._stack_py, loops._extras_py  # interpreted here; the kernels call compiled copies
 
 
 def _kernel_py(R, p, bottom, top, consts, forces, condition):  # pragma: no cover - compiled
@@ -60,6 +75,18 @@ def _kernel_py(R, p, bottom, top, consts, forces, condition):  # pragma: no cove
     A, rhs, up = np.zeros((6, 12)), np.zeros(6), np.zeros(3)
     for s in range(B):
         _stack(R, p, bottom, top, consts, s, t, u, fp, gu, lev_f, lev_m, A, rhs, up, forces, condition)
+
+
+def _kernel_full_py(R, p, bottom, top, consts, forces, condition, ball, base):  # pragma: no cover - compiled
+    """:func:`_kernel_py` plus the ball forces (B, n, 6, 3) and base wrenches (B, 6)
+    (:func:`~assembler_pin.statics_loops._extras_py`)."""
+    B, n = R.shape[0], R.shape[1] - 1
+    lev_f, lev_m = np.zeros(n + 1), np.zeros((n + 1, 2))
+    t, u, fp, gu = np.zeros((n, 6, 3)), np.zeros((n, 6, 3)), np.zeros((n, 6, 3)), np.zeros((n, 6))
+    A, rhs, up = np.zeros((6, 12)), np.zeros(6), np.zeros(3)
+    for s in range(B):
+        _stack(R, p, bottom, top, consts, s, t, u, fp, gu, lev_f, lev_m, A, rhs, up, forces, condition)
+        _extras(R, p, s, consts, u, fp, gu, forces, lev_f, lev_m, ball, base)
 
 
 def _build_kernel() -> Any:
@@ -79,10 +106,14 @@ def _build_kernel() -> Any:
         ("_rhs", loops._platform_rhs),
         ("_platform", loops._platform_py),
         ("_stack", loops._stack_py),
+        ("_extras", loops._extras_py),
         ("_kernel", _kernel_py),
+        ("_kernel_full", _kernel_full_py),
     )
     for name, func in parts:  # callees first: the callers see them compiled
         scope[name] = jit(types.FunctionType(func.__code__, scope, func.__name__))
+    global _kernel_full
+    _kernel_full = scope["_kernel_full"]
     return scope["_kernel"]
 
 
@@ -172,3 +203,64 @@ def closed_form_forces(
         condition,
     )
     return forces, condition
+
+
+def kernel_loaded() -> bool:
+    """Whether the compiled kernel is loaded in this process already (no compile, no import)."""
+    return _kernel not in (None, False)
+
+
+def kernel_statics(am: AssemblerModel, R: np.ndarray, p: np.ndarray) -> tuple[np.ndarray, ...]:
+    """The whole closed-form statics of B stacks on the compiled kernel.
+
+    Args:
+        R: (B, n+1, 3, 3) plate rotations; p: (B, n+1, 3) plate positions, world [m]
+            (checked by the caller).
+
+    Returns:
+        (forces (B, n, 6) [N, tension positive], ball forces (B, n, 6, 3) the top plates
+        exert on the shaft tips [N, world], base wrenches (B, 6) ``[f, m]`` the mount applies
+        to plate 0, moment about its origin, world axes [N, N·m], condition (B, n)); NaN
+        forces where a platform's system is exactly singular.
+
+    Raises:
+        OptionsError: numba is not installed.
+    """
+    if not kernel_available():
+        raise OptionsError("the numba statics backend needs numba: pip install numba")
+    R = np.ascontiguousarray(R, dtype=float)
+    p = np.ascontiguousarray(p, dtype=float)
+    B, n = R.shape[0], am.n
+    forces, condition = np.empty((B, n, 6)), np.empty((B, n))
+    ball, base = np.empty((B, n, 6, 3)), np.empty((B, 6))
+    geo = am.geometry
+    bottom, top = np.ascontiguousarray(geo.bottom_in_plate), np.ascontiguousarray(geo.top_in_plate)
+    _kernel_full(R, p, bottom, top, _constants(am), forces, condition, ball, base)
+    return forces, ball, base, condition
+
+
+def kernel_result(am: AssemblerModel, pa: PlateArrays, raise_on_singular: bool = False) -> StaticsResult:
+    """:func:`~assembler_pin.statics.solve_statics` of checked plate arrays on the compiled
+    kernel: the same :class:`~assembler_pin.statics.StaticsResult` (forces, ball forces,
+    base wrench, condition numbers, the singular flag and error of
+    :data:`~assembler_pin.statics.CONDITION_LIMIT`), which the tests hold to Pinocchio's.
+
+    Raises:
+        SingularConfigurationError: with ``raise_on_singular``, a platform's condition number
+            exceeds the limit.
+    """
+    from .exceptions import SingularConfigurationError
+    from .statics import CONDITION_LIMIT, StaticsResult
+
+    forces, ball, base, condition = kernel_statics(am, pa.R[None], pa.p[None])
+    condition = condition[0]
+    singular = not condition.max() <= CONDITION_LIMIT  # NaN counts as singular
+    if singular and raise_on_singular:
+        worst = int(np.argmax(np.where(np.isfinite(condition), condition, np.inf)))
+        raise SingularConfigurationError(
+            f"platform {worst} is near a singular configuration (condition number "
+            f"{condition[worst]:.3g} > {CONDITION_LIMIT:.0g}); its forces are not defined",
+            float(condition[worst]),
+            worst,
+        )
+    return StaticsResult(forces[0], ball[0], base[0], condition, singular)

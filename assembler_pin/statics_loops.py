@@ -183,8 +183,38 @@ def _stack_py(R, p, bottom, top, consts, s, t, u, fp, gu, lev_f, lev_m, A, rhs, 
         _platform(R, p, top, s, j, t, u, fp, gu, up, consts[2], A, rhs, forces, condition)
 
 
+def _extras_py(R, p, s, consts, u, fp, gu, forces, lev_f, lev_m, ball, base):
+    """After :func:`_stack_py` on stack ``s``: the ball forces (n, 6, 3) the top plates exert
+    on the shaft tips (axial part plus the transverse f⊥) [N, world], and the base wrench
+    [f, m] (6,) the mount applies to plate 0, moment about plate 0's origin, world axes
+    [N, N·m] (plate 0's weight at its origin)."""
+    n = R.shape[1] - 1
+    ms, w0 = consts[2], consts[5] * consts[0]
+    for j in range(n):
+        for i in range(6):
+            axial = forces[s, j, i] - ms * gu[j, i]
+            for a in range(3):
+                ball[s, j, i, a] = axial * u[j, i, a] + fp[j, i, a]
+    weight, mx, my = w0, -p[s, 0, 1] * w0, p[s, 0, 0] * w0  # gravity's moment about the world origin
+    for k in range(n + 1):
+        weight += lev_f[k]
+        mx += lev_m[k, 0]
+        my += lev_m[k, 1]
+    mx += p[s, 0, 1] * weight  # about plate 0's origin: m - p0 × (0, 0, -W)
+    my -= p[s, 0, 0] * weight
+    base[s, 0], base[s, 1], base[s, 2] = 0.0, 0.0, weight  # the mount balances gravity
+    base[s, 3], base[s, 4], base[s, 5] = -mx, -my, 0.0
+
+
 # The callees of the interpreted path; the compiled path binds the same names to compiled copies.
-_legs, _invert, _rhs, _platform = _legs_py, _invert_py, _platform_rhs, _platform_py
+_legs, _invert, _rhs, _platform, _stack, _extras = (
+    _legs_py,
+    _invert_py,
+    _platform_rhs,
+    _platform_py,
+    _stack_py,
+    _extras_py,
+)
 
 
 class Grid:
@@ -235,7 +265,7 @@ class Grid:
 def closed_form_pure(
     R: Grid, p: Grid, bottom: Grid, top: Grid, consts: Sequence[float]
 ) -> tuple[Grid, Grid, Grid, Grid]:
-    """Forces and condition numbers of one stack (B = 1), interpreted, without numpy.
+    """The statics of one stack (B = 1), interpreted, without numpy.
 
     Args:
         R: (1, n+1, 3, 3) plate rotations; p: (1, n+1, 3) plate positions, world [m].
@@ -243,14 +273,15 @@ def closed_form_pure(
         consts: the constants of :data:`CONSTANT_NAMES`.
 
     Returns:
-        (forces (1, n, 6) [N, tension positive], condition (1, n), the weight of each level
-        0..n (n+1,) [N, downward] and its moment's x, y about the world origin (n+1, 2) [N·m];
-        level k: plate k for k ≥ 1, the legs of SP k, the payload).
+        (forces (1, n, 6) [N, tension positive], condition (1, n), ball forces (1, n, 6, 3)
+        [N, world], base wrench (1, 6) [N, N·m]; see :func:`_extras_py`).
     """
     n = R.shape[1] - 1
     forces, condition = Grid((1, n, 6)), Grid((1, n))
+    ball, base = Grid((1, n, 6, 3)), Grid((1, 6))
     lev_f, lev_m = Grid((n + 1,)), Grid((n + 1, 2))
     t, u, fp, gu = Grid((n, 6, 3)), Grid((n, 6, 3)), Grid((n, 6, 3)), Grid((n, 6))
     A, rhs, up = Grid((6, 12)), Grid((6,)), Grid((3,))
-    _stack_py(R, p, bottom, top, consts, 0, t, u, fp, gu, lev_f, lev_m, A, rhs, up, forces, condition)
-    return forces, condition, lev_f, lev_m
+    _stack(R, p, bottom, top, consts, 0, t, u, fp, gu, lev_f, lev_m, A, rhs, up, forces, condition)
+    _extras(R, p, 0, consts, u, fp, gu, forces, lev_f, lev_m, ball, base)
+    return forces, condition, ball, base

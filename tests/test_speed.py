@@ -234,6 +234,40 @@ def test_statics_kernel_equals_pinocchio(n, backend):
 
 
 @pytest.mark.skipif(not HAS_NUMBA, reason="no numba")
+@pytest.mark.parametrize("n", [1, 4, 8, 16])
+def test_kernel_result_is_pinocchios_solve_statics(n):
+    """The whole result of the compiled kernel (forces, ball forces, base wrench, condition
+    numbers, the singular flag) against Pinocchio's solve_statics on random stacks whose
+    base plate is moved and turned too, to 1e-10 N (N·m)."""
+    from assembler_pin.kinematics import plate_arrays
+
+    am = AssemblerModel.from_config({"platforms": n})
+    rng = np.random.default_rng(n)
+    for stack in _random_stacks(am, 3, seed=10 + n):
+        base = pin.SE3(pin.exp3(rng.uniform(-0.3, 0.3, 3)), rng.uniform(-0.5, 0.5, 3))
+        pa = plate_arrays(am, np.array([base.homogeneous @ m for m in stack]))
+        mine, ref = statics_kernel.kernel_result(am, pa), solve_statics(am, pa)
+        for field in ("forces", "ball_forces", "base_wrench"):
+            np.testing.assert_allclose(getattr(mine, field), getattr(ref, field), atol=1e-10, rtol=0, err_msg=field)
+        np.testing.assert_allclose(mine.condition, ref.condition, rtol=1e-9)
+        assert mine.singular is ref.singular is False
+
+
+@pytest.mark.skipif(not HAS_NUMBA, reason="no numba")
+def test_kernel_result_refuses_a_singular_stack_as_pinocchios():
+    from assembler_pin.exceptions import SingularConfigurationError
+    from assembler_pin.kinematics import plate_arrays
+
+    am = AssemblerModel.from_config({"platforms": 2})
+    turn = pin.SE3(pin.exp3(np.array([0, 0, np.pi / 2])), np.array([0, 0, am.config.home_height]))
+    pa = plate_arrays(am, [am.home[0], turn, turn * turn])
+    assert statics_kernel.kernel_result(am, pa).singular and solve_statics(am, pa).singular
+    for fn in (statics_kernel.kernel_result, solve_statics):
+        with pytest.raises(SingularConfigurationError, match="is near a singular configuration"):
+            fn(am, pa, raise_on_singular=True)
+
+
+@pytest.mark.skipif(not HAS_NUMBA, reason="no numba")
 def test_statics_kernel_flags_a_singular_stack_as_the_numpy_path():
     """The octahedral singularity (a 3-3 platform turned 90° about its axis) gives NaN rows
     on both paths, the other stacks their forces."""
