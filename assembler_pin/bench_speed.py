@@ -184,28 +184,46 @@ STARTUP_TARGETS_S = {"cli_help_s": 0.2, "cli_statics_home_json_s": 0.25}
 STARTUP_COMMANDS = {"cli_help_s": ("--help",), "cli_statics_home_json_s": ("statics", "--home", "--json")}
 
 
+def _child_cpu_s() -> float:
+    """CPU time [s] of this process's finished children (user + system; NaN without ``resource``)."""
+    try:
+        import resource
+    except ImportError:  # not on Windows
+        return float("nan")
+    usage = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return usage.ru_utime + usage.ru_stime
+
+
 def benchmark_startup(repeat: int = 5) -> dict[str, float]:
     """Wall time [s] of fresh ``assembler-pin`` processes, medians of ``repeat``: ``--help``
-    and ``statics --home --json`` (run as ``python -m assembler_pin.cli``), each beside its
-    target (``..._target_s``, :data:`STARTUP_TARGETS_S`), and a bare ``python -c pass``
-    (the interpreter's own start, which no command can go below). The commands run
-    interleaved, round by round, so that a machine's changing load hits each alike.
+    and ``statics --home --json`` (run as ``python -m assembler_pin.cli`` from the directory
+    holding this package, so that the package measured is this one), each beside its target
+    (``..._target_s``, :data:`STARTUP_TARGETS_S`) and with its CPU time (``..._cpu_s``, which
+    a loaded machine moves much less than the wall time), and a bare ``python -c pass`` (the
+    interpreter's own start, which no command can go below). The commands run interleaved,
+    round by round, so that a machine's changing load hits each alike.
     """
     import subprocess
     import sys
+    from pathlib import Path
 
     check_bound("bench.repeat", repeat, "repeat")
+    home = Path(__file__).resolve().parent.parent
     argvs = {key: ["-m", "assembler_pin.cli", *args] for key, args in STARTUP_COMMANDS.items()}
     argvs["bare_python_s"] = ["-c", "pass"]
-    times: dict[str, list[float]] = {key: [] for key in argvs}
+    wall: dict[str, list[float]] = {key: [] for key in argvs}
+    cpu: dict[str, list[float]] = {key: [] for key in argvs}
     for _ in range(int(repeat)):
         for key, argv in argvs.items():
-            t0 = time.perf_counter()
-            subprocess.run([sys.executable, *argv], capture_output=True, check=True)
-            times[key].append(time.perf_counter() - t0)
+            c0, t0 = _child_cpu_s(), time.perf_counter()
+            subprocess.run([sys.executable, *argv], capture_output=True, check=True, cwd=home)
+            wall[key].append(time.perf_counter() - t0)
+            cpu[key].append(_child_cpu_s() - c0)
     out: dict[str, float] = {}
-    for key, values in times.items():
-        out[key] = float(np.median(values))
+    for key in argvs:
+        stem = key.removesuffix("_s")
+        out[key] = float(np.median(wall[key]))
+        out[f"{stem}_cpu_s"] = float(np.median(cpu[key]))
         if key in STARTUP_TARGETS_S:
-            out[key.removesuffix("_s") + "_target_s"] = STARTUP_TARGETS_S[key]
+            out[f"{stem}_target_s"] = STARTUP_TARGETS_S[key]
     return out

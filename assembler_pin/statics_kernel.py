@@ -3,16 +3,19 @@
 The equilibrium is the one of :func:`~assembler_pin.gradients.equilibrium` (each leg
 balances its own weight; the top plate of each platform the weight above it and the six
 ball forces; module docstring of :mod:`assembler_pin.gradients`), written as plain loops
-over the stacks, platforms and legs and compiled by numba (``cache=True``: compiled once
-per install and Python version, then loaded from numba's cache). Per platform it solves
-the 6×6 system in the top plate's own frame (moments about its origin) by Gauss–Jordan
-elimination with partial pivoting; the same inverse gives the 1-norm condition number of
-:func:`~assembler_pin.statics.solve_statics`.
+over the stacks, platforms and legs in :mod:`~assembler_pin.statics_loops` and compiled
+here by numba (``cache=True``: compiled once per install and Python version, then loaded
+from numba's cache). Per platform it solves the 6×6 system in the top plate's own frame
+(moments about its origin) by Gauss–Jordan elimination with partial pivoting; the same
+inverse gives the 1-norm condition number of :func:`~assembler_pin.statics.solve_statics`.
+:func:`kernel_result` gives the whole :class:`~assembler_pin.statics.StaticsResult` of one
+stack (ball forces and base wrench too).
 
 The numpy path (:func:`~assembler_pin.gradients.equilibrium`) stays the reference and the
 fallback: it is used when numba is not installed, when ``ASSEMBLER_PIN_STATICS=numpy`` is
-set in the environment, or with ``backend="numpy"``. The tests hold both to Pinocchio's
-statics (:func:`~assembler_pin.statics.solve_statics`) to 1e-10 N.
+set in the environment, or with ``backend="numpy"``. The tests hold both, and
+:func:`kernel_result`, to Pinocchio's statics (:func:`~assembler_pin.statics.solve_statics`)
+to 1e-10 N.
 
 Frames: world poses of plates 0..n; forces [N], tension positive.
 """

@@ -27,6 +27,7 @@ def test_startup_row_runs_each_command_and_names_its_target(monkeypatch):
     """The start-up row times real processes of each command (each one exits 0: a failing
     command raises) interleaved round by round, and reports the medians beside the targets."""
     import subprocess
+    from pathlib import Path
 
     from assembler_pin import bench_speed
 
@@ -35,6 +36,7 @@ def test_startup_row_runs_each_command_and_names_its_target(monkeypatch):
 
     def recording(argv, **kwargs):
         calls.append(tuple(argv[1:]))
+        assert kwargs["cwd"] == Path(bench_speed.__file__).resolve().parent.parent  # this package, not the cwd's
         return real(argv, **kwargs)
 
     monkeypatch.setattr(subprocess, "run", recording)
@@ -42,4 +44,5 @@ def test_startup_row_runs_each_command_and_names_its_target(monkeypatch):
     per_round = [("-m", "assembler_pin.cli", *args) for args in bench_speed.STARTUP_COMMANDS.values()]
     assert calls == [*per_round, ("-c", "pass")] * 2
     assert row["cli_help_target_s"] == 0.2 and row["cli_statics_home_json_target_s"] == 0.25
-    assert all(0 < row[k] < 60 for k in ("cli_help_s", "cli_statics_home_json_s", "bare_python_s"))
+    for key in ("cli_help", "cli_statics_home_json", "bare_python"):
+        assert 0 < row[f"{key}_s"] < 60 and 0 < row[f"{key}_cpu_s"] < 60, key
