@@ -150,3 +150,28 @@ def test_help_loads_no_numerical_library():
         "with contextlib.redirect_stdout(io.StringIO()), contextlib.suppress(SystemExit):\n    main(['--help'])"
     )
     assert _modules_after(code) == []
+
+
+@pytest.mark.parametrize(
+    "argv",
+    [
+        ["statics", "--home", "--json"],
+        ["-v", "solve", "--goal", "0", "0", "0.9", "0", "0", "0", "--starts", "all", "--w1", "2"],
+        ["map", "--grid", "x=0:1:2,y=0,z=0.8", "--out", "m"],
+        ["-q", "bench", "--speed"],
+    ],
+)
+def test_parser_of_one_subcommand_reads_as_the_whole_parser(argv):
+    """The parser ``main`` builds (the arguments of the subcommand named alone) gives the
+    arguments of the complete parser, and ``--help`` lists every subcommand alike."""
+    from assembler_pin.cli.app import _command_of, build_parser
+
+    full, partial = build_parser(), build_parser(only=_command_of(argv))
+    assert vars(partial.parse_args(argv)) == vars(full.parse_args(argv))
+    assert build_parser(only="").format_help() == full.format_help()
+    name = _command_of(argv)
+
+    def sub_help(parser) -> str:
+        return next(a for a in parser._actions if a.dest == "command").choices[name].format_help()
+
+    assert sub_help(partial) == sub_help(full)
