@@ -10,6 +10,7 @@ vs numpy) much less.
 from __future__ import annotations
 
 import functools
+import math
 import time
 import tracemalloc
 from typing import Any
@@ -25,6 +26,7 @@ __all__ = [
     "STARTUP_TARGETS_S",
     "THREAD_GOALS",
     "benchmark_capacity_memory",
+    "benchmark_single_statics",
     "benchmark_solve_starts",
     "benchmark_startup",
     "benchmark_statics_kernel",
@@ -152,6 +154,49 @@ def benchmark_statics_kernel(
             closed_form_forces(am, Rb, pb, backend)
             out[f"{backend}_{size}_peak_kb_per_stack"] = tracemalloc.get_traced_memory()[1] / 1024 / len(Rb)
             tracemalloc.stop()
+    return out
+
+
+def _statics_calls(am: AssemblerModel, poses: list, has_kernel: bool) -> dict[str, Any]:
+    """The calls timed by :func:`benchmark_single_statics`, cycling through ``poses``."""
+    from .kinematics import plate_arrays
+    from .statics import solve_statics
+    from .statics_kernel import kernel_result
+
+    counter = iter(range(10**9))
+    calls = {"pinocchio": lambda: solve_statics(am, poses[next(counter) % len(poses)])}
+    if has_kernel:
+        calls["kernel"] = lambda: kernel_result(am, plate_arrays(am, poses[next(counter) % len(poses)]))
+    return calls
+
+
+def benchmark_single_statics(
+    platforms: tuple[int, ...] = (4, 8, 16), repeat: int = 300, rounds: int = 3, seed: int = 0
+) -> dict[str, float]:
+    """One stack's whole statics per call [µs] at each stack size: Pinocchio's
+    :func:`~assembler_pin.statics.solve_statics` and the compiled kernel's
+    :func:`~assembler_pin.statics_kernel.kernel_result` (the same result), from plate arrays
+    and from 4×4 matrices (``..._4x4_us``: their validation included). Medians of ``repeat``
+    calls cycling through 20 random reachable poses, the best of ``rounds`` interleaved
+    rounds; NaN for the kernel without numba."""
+    from .config import load_config
+    from .statics_kernel import kernel_available
+
+    check_bound("bench.repeat", repeat, "repeat")
+    has_kernel = kernel_available()
+    out: dict[str, float] = {}
+    for n in platforms:
+        am = AssemblerModel.from_config(load_config().replace(platforms=n))
+        rng = np.random.default_rng(seed)
+        arrays = [random_reachable_plates(am, rng)[1] for _ in range(20)]
+        sources = {"": arrays, "_4x4": [a.as_matrices() for a in arrays]}
+        for _ in range(rounds):
+            for suffix, poses in sources.items():
+                for name, call in _statics_calls(am, poses, has_kernel).items():
+                    key = f"n{n}_{name}{suffix}_us"
+                    out[key] = min(out.get(key, math.inf), median_time_us(call, repeat))
+        if not has_kernel:
+            out[f"n{n}_kernel_us"] = out[f"n{n}_kernel_4x4_us"] = float("nan")
     return out
 
 

@@ -46,3 +46,16 @@ def test_startup_row_runs_each_command_and_names_its_target(monkeypatch):
     assert row["cli_help_target_s"] == 0.2 and row["cli_statics_home_json_target_s"] == 0.25
     for key in ("cli_help", "cli_statics_home_json", "bare_python"):
         assert 0 < row[f"{key}_s"] < 60 and 0 < row[f"{key}_cpu_s"] < 60, key
+
+
+def test_single_statics_row_times_both_paths():
+    """The row times Pinocchio's statics and the kernel's at each size asked (a figure per
+    path and input kind, all positive)."""
+    import importlib.util
+
+    from assembler_pin.bench_speed import benchmark_single_statics
+
+    row = benchmark_single_statics(platforms=(2,), repeat=3, rounds=1)
+    paths = ("pinocchio", "kernel") if importlib.util.find_spec("numba") else ("pinocchio",)
+    for path in paths:
+        assert row[f"n2_{path}_us"] > 0 and row[f"n2_{path}_4x4_us"] > 0
