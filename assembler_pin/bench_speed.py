@@ -189,7 +189,7 @@ def benchmark_single_statics(
         am = AssemblerModel.from_config(load_config().replace(platforms=n))
         rng = np.random.default_rng(seed)
         arrays = [random_reachable_plates(am, rng)[1] for _ in range(20)]
-        sources = {"": arrays, "_4x4": [a.as_matrices() for a in arrays]}
+        sources: dict[str, list] = {"": arrays, "_4x4": [a.as_matrices() for a in arrays]}
         for _ in range(rounds):
             for suffix, poses in sources.items():
                 for name, call in _statics_calls(am, poses, has_kernel).items():

@@ -66,7 +66,7 @@ def _legs(cfg: AssemblerConfig, heights: Vec) -> dict:
     bottom_in, top_in = home_anchors(cfg)
     out: dict = {"bottom": [], "top": [], "lengths": [], "deflection": [], "rise": []}
     for j in range(cfg.platforms):
-        rows = {key: [] for key in out}
+        rows: dict[str, list] = {key: [] for key in out}
         for i in range(6):
             b, t = bottom_in[j][i], top_in[j][i]
             home_dir, _ = _unit([t[0] - b[0], t[1] - b[1], t[2] + h - b[2]])
