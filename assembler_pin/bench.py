@@ -76,8 +76,10 @@ def run_benchmarks(
 ) -> dict[str, Any]:
     """Median per-call times [µs] of statics, SP FK, stack FK and closed-form q, then the
     helper-arm initial condition (:func:`benchmark_initial_condition`: ``initial_scenarios_ms``,
-    ``initial_random_ms`` [ms], ``initial_success_rate``), then the optimization of each
-    scenario by both methods (:func:`benchmark_optimization`).
+    ``initial_random_ms`` [ms], ``initial_success_rate``), the CLI start-up in fresh processes
+    beside its targets (``cli_help_s``, ``cli_statics_home_json_s``, ``bare_python_s`` [s],
+    medians of 5: :func:`~assembler_pin.bench_speed.benchmark_startup`), then the
+    optimization of each scenario by both methods (:func:`benchmark_optimization`).
 
     Each per-call figure is the median over ``repeat`` calls (bound ``bench.repeat``),
     cycling through 20 random poses. ``quick`` cuts the goal sets to a minimum (for smoke
@@ -104,6 +106,7 @@ def run_benchmarks(
         ),
         "initial_condition": lambda: benchmark_initial_condition(am, n_random=3 if quick else 20, seed=seed),
     }
+    figures["startup"] = lambda: _startup(repeat=3 if quick else 5)
     if optimize:
         figures["optimization"] = lambda: benchmark_optimization(
             am, names=["orientation_transition"] if quick else None
@@ -118,6 +121,13 @@ def run_benchmarks(
         if progress is not None:
             progress(k + 1, len(figures), name)
     return results
+
+
+def _startup(repeat: int) -> dict[str, float]:
+    """The CLI start-up row (:func:`~assembler_pin.bench_speed.benchmark_startup`)."""
+    from .bench_speed import benchmark_startup
+
+    return benchmark_startup(repeat)
 
 
 def benchmark_optimization(am: AssemblerModel, names: list[str] | None = None) -> dict[str, Any]:

@@ -10,6 +10,7 @@ vs numpy) much less.
 from __future__ import annotations
 
 import functools
+import math
 import time
 import tracemalloc
 from typing import Any
@@ -17,11 +18,15 @@ from typing import Any
 import numpy as np
 
 from .bench import LEVEL_GRID, median_time_us, random_reachable_plates
+from .bounds import check_bound
 from .model import AssemblerModel
 
 __all__ = [
+    "STARTUP_COMMANDS",
+    "STARTUP_TARGETS_S",
     "THREAD_GOALS",
     "benchmark_capacity_memory",
+    "benchmark_single_statics",
     "benchmark_solve_starts",
     "benchmark_startup",
     "benchmark_statics_kernel",
@@ -152,6 +157,49 @@ def benchmark_statics_kernel(
     return out
 
 
+def _statics_calls(am: AssemblerModel, poses: list, has_kernel: bool) -> dict[str, Any]:
+    """The calls timed by :func:`benchmark_single_statics`, cycling through ``poses``."""
+    from .kinematics import plate_arrays
+    from .statics import solve_statics
+    from .statics_kernel import kernel_result
+
+    counter = iter(range(10**9))
+    calls = {"pinocchio": lambda: solve_statics(am, poses[next(counter) % len(poses)])}
+    if has_kernel:
+        calls["kernel"] = lambda: kernel_result(am, plate_arrays(am, poses[next(counter) % len(poses)]))
+    return calls
+
+
+def benchmark_single_statics(
+    platforms: tuple[int, ...] = (4, 8, 16), repeat: int = 300, rounds: int = 3, seed: int = 0
+) -> dict[str, float]:
+    """One stack's whole statics per call [µs] at each stack size: Pinocchio's
+    :func:`~assembler_pin.statics.solve_statics` and the compiled kernel's
+    :func:`~assembler_pin.statics_kernel.kernel_result` (the same result), from plate arrays
+    and from 4×4 matrices (``..._4x4_us``: their validation included). Medians of ``repeat``
+    calls cycling through 20 random reachable poses, the best of ``rounds`` interleaved
+    rounds; NaN for the kernel without numba."""
+    from .config import load_config
+    from .statics_kernel import kernel_available
+
+    check_bound("bench.repeat", repeat, "repeat")
+    has_kernel = kernel_available()
+    out: dict[str, float] = {}
+    for n in platforms:
+        am = AssemblerModel.from_config(load_config().replace(platforms=n))
+        rng = np.random.default_rng(seed)
+        arrays = [random_reachable_plates(am, rng)[1] for _ in range(20)]
+        sources: dict[str, list] = {"": arrays, "_4x4": [a.as_matrices() for a in arrays]}
+        for _ in range(rounds):
+            for suffix, poses in sources.items():
+                for name, call in _statics_calls(am, poses, has_kernel).items():
+                    key = f"n{n}_{name}{suffix}_us"
+                    out[key] = min(out.get(key, math.inf), median_time_us(call, repeat))
+        if not has_kernel:
+            out[f"n{n}_kernel_us"] = out[f"n{n}_kernel_4x4_us"] = float("nan")
+    return out
+
+
 #: Goals of the capacity memory figure (level EE, world [m]).
 CAPACITY_GOALS = ((0.1, 0.05, 0.75), (0.1, 0.05, 0.9), (0.25, 0.05, 0.75), (0.25, 0.05, 0.9))
 
@@ -174,22 +222,53 @@ def benchmark_capacity_memory(am: AssemblerModel, goals: tuple = CAPACITY_GOALS)
     return out
 
 
+#: The start-up targets [s] of :func:`benchmark_startup`, wall time of a fresh process.
+STARTUP_TARGETS_S = {"cli_help_s": 0.2, "cli_statics_home_json_s": 0.25}
+
+#: The commands of :func:`benchmark_startup`: figure -> ``assembler-pin`` arguments.
+STARTUP_COMMANDS = {"cli_help_s": ("--help",), "cli_statics_home_json_s": ("statics", "--home", "--json")}
+
+
+def _child_cpu_s() -> float:
+    """CPU time [s] of this process's finished children (user + system; NaN without ``resource``)."""
+    try:
+        import resource
+    except ImportError:  # not on Windows
+        return float("nan")
+    usage = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return usage.ru_utime + usage.ru_stime
+
+
 def benchmark_startup(repeat: int = 5) -> dict[str, float]:
-    """Wall time [s] of fresh ``assembler-pin`` processes (medians of ``repeat``):
-    ``--help`` and ``statics --home --json``, run as ``python -m assembler_pin.cli``."""
+    """Wall time [s] of fresh ``assembler-pin`` processes, medians of ``repeat``: ``--help``
+    and ``statics --home --json`` (run as ``python -m assembler_pin.cli`` from the directory
+    holding this package, so that the package measured is this one), each beside its target
+    (``..._target_s``, :data:`STARTUP_TARGETS_S`) and with its CPU time (``..._cpu_s``, which
+    a loaded machine moves much less than the wall time), and a bare ``python -c pass`` (the
+    interpreter's own start, which no command can go below). The commands run interleaved,
+    round by round, so that a machine's changing load hits each alike.
+    """
     import subprocess
     import sys
+    from pathlib import Path
 
+    check_bound("bench.repeat", repeat, "repeat")
+    home = Path(__file__).resolve().parent.parent
+    argvs = {key: ["-m", "assembler_pin.cli", *args] for key, args in STARTUP_COMMANDS.items()}
+    argvs["bare_python_s"] = ["-c", "pass"]
+    wall: dict[str, list[float]] = {key: [] for key in argvs}
+    cpu: dict[str, list[float]] = {key: [] for key in argvs}
+    for _ in range(int(repeat)):
+        for key, argv in argvs.items():
+            c0, t0 = _child_cpu_s(), time.perf_counter()
+            subprocess.run([sys.executable, *argv], capture_output=True, check=True, cwd=home)
+            wall[key].append(time.perf_counter() - t0)
+            cpu[key].append(_child_cpu_s() - c0)
     out: dict[str, float] = {}
-    for key, argv in (("cli_help_s", ["--help"]), ("cli_statics_home_json_s", ["statics", "--home", "--json"])):
-        times = []
-        for _ in range(repeat):
-            t0 = time.perf_counter()
-            subprocess.run([sys.executable, "-m", "assembler_pin.cli", *argv], capture_output=True, check=True)
-            times.append(time.perf_counter() - t0)
-        out[key] = float(np.median(times))
-    t0 = time.perf_counter()
-    for _ in range(repeat):
-        subprocess.run([sys.executable, "-c", "pass"], check=True)
-    out["bare_python_s"] = (time.perf_counter() - t0) / repeat
+    for key in argvs:
+        stem = key.removesuffix("_s")
+        out[key] = float(np.median(wall[key]))
+        out[f"{stem}_cpu_s"] = float(np.median(cpu[key]))
+        if key in STARTUP_TARGETS_S:
+            out[f"{stem}_target_s"] = STARTUP_TARGETS_S[key]
     return out

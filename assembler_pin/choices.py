@@ -10,7 +10,7 @@ from __future__ import annotations
 
 from collections.abc import Iterable
 
-__all__ = ["CARRIER_NAMES", "FORCE_SCALES", "PATH_KINDS", "SCENARIO_NAMES", "check_names"]
+__all__ = ["CARRIER_NAMES", "FORCE_SCALES", "PATH_KINDS", "SCENARIO_NAMES", "SOLVE_STARTS", "check_names"]
 
 #: The paper's scenarios (:data:`assembler_pin.scenarios.SCENARIOS`), in the paper's order.
 SCENARIO_NAMES = ("translation", "ninety_degrees", "inchworm", "vertical_lift", "orientation_transition")
@@ -21,6 +21,11 @@ CARRIER_NAMES = ("ur3", "ur5", "ur10", "panda")
 #: Where the viewer's leg colors saturate: ``auto`` (max|F|, at least 10 % of the limit),
 #: ``limit`` (the force limits), ``max`` (max|F| of the shown pose).
 FORCE_SCALES = ("auto", "limit", "max")
+
+#: The start portfolios of ``solve --starts`` (:data:`assembler_pin.solver.START_MODES`,
+#: the default first): ``first`` runs the helper arm's start, the others only when its run
+#: fails or its optimum needs them; ``all`` runs every start and keeps the best optimum.
+SOLVE_STARTS = ("first", "all")
 
 #: Interpolations of an EE path on SE(3): ``screw`` (geodesic) or ``linear`` (line + slerp).
 PATH_KINDS = ("screw", "linear")

@@ -140,3 +140,24 @@ def test_cli_defaults_come_from_the_options_dataclasses():
         d.ftol,
     )
     assert (args.d_step, args.max_attempts) == (h.d_step, h.max_attempts)
+
+
+def test_solve_starts_option_reaches_the_solver(capsys):
+    """``--starts all`` runs every start of the solver; the default is ``first`` (the home
+    start only when the helper arm's run fails); a wrong value is one line, exit 2."""
+    from assembler_pin.choices import SOLVE_STARTS
+    from assembler_pin.solver import START_MODES, STARTS
+
+    assert SOLVE_STARTS == START_MODES and SOLVE_STARTS[0] == "first"
+    goal = ["0.1", "0.0", "0.8", "0", "0", "0"]
+    assert main(["solve", "--goal", *goal, "--starts", "all", "--json"]) == 0
+    doc = json.loads(capsys.readouterr().out)
+    assert set(doc["starts"]) == set(STARTS) and doc["success"]
+    assert main(["solve", "--goal", *goal, "--json"]) == 0
+    lazy = json.loads(capsys.readouterr().out)
+    assert lazy["success"] and "home" not in lazy["starts"]
+    assert main(["solve", "--goal", *goal, "--starts", "best"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and "--starts" in err and "first" in err
+    assert main(["solve", "--goal", *goal, "--starts", "all", "--carrier", "ur5"]) == 2
+    assert "not available with --carrier" in capsys.readouterr().err

@@ -92,6 +92,48 @@ def test_solve_and_plan_are_bit_identical_under_1_and_2_threads(am):
         assert np.array_equal(a, b)
 
 
+# ------------------------------------------------------------------ map workers
+SMALL_MAP = "x=0.2:0.45:2,y=0.05,z=0.8"  # two reachable cells
+
+
+def _worker_blas_threads() -> list[int]:
+    """The thread counts of the BLAS libraries of the process it runs in (scipy's loaded)."""
+    import scipy.linalg  # noqa: F401
+    from threadpoolctl import threadpool_info
+
+    return [lib["num_threads"] for lib in threadpool_info() if lib["user_api"] == "blas"]
+
+
+def test_map_workers_run_one_blas_thread_and_give_the_serial_numbers(tmp_path, monkeypatch):
+    """Workers started with 2 BLAS threads (a remote cluster's own setting) run a map with
+    one, and the map's numbers are those of the serial run in this process under a caller's
+    limit of 2 threads, exactly."""
+    distributed = pytest.importorskip("distributed")
+    from assembler_pin.config import load_config
+    from assembler_pin.maps import parse_grid, read_map, run_map
+    from assembler_pin.maps.cluster import client_for, stop
+
+    for var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
+        monkeypatch.setenv(var, "2")  # inherited by the worker process
+    grid, configs = parse_grid(SMALL_MAP), [("default", load_config())]
+    with distributed.LocalCluster(n_workers=1, threads_per_worker=1, processes=True, dashboard_address=None) as cluster:
+        with distributed.Client(cluster) as plain:
+            before = plain.run(_worker_blas_threads)
+        assert all(set(t) == {2} for t in before.values())  # the setting took effect
+        client, _ = client_for(cluster.scheduler_address, 1)
+        try:
+            after = client.run(_worker_blas_threads)
+        finally:
+            stop(client, None)
+        assert after and all(t and set(t) == {1} for t in after.values())
+        run_map(grid, configs, tmp_path / "dask", scheduler=cluster.scheduler_address, batch_size=1)
+    with threadpool_limits(limits=2):
+        run_map(grid, configs, tmp_path / "serial", workers=0)
+    a, b = read_map(tmp_path / "dask"), read_map(tmp_path / "serial")
+    numbers = [c for c in a.column_names if not c.endswith("time_s")]  # timings differ run to run
+    assert a.num_rows == 2 and a.select(numbers).equals(b.select(numbers))
+
+
 # ------------------------------------------------------------------ lazy starts
 def test_starts_option_is_checked(am):
     with pytest.raises(OptionsError, match="starts must be one of first, all"):
@@ -190,6 +232,40 @@ def test_statics_kernel_equals_pinocchio(n, backend):
         ref = solve_statics(am, stacks[b])
         np.testing.assert_allclose(forces[b], ref.forces, atol=1e-10, rtol=0)
         np.testing.assert_allclose(condition[b], ref.condition, rtol=1e-9)
+
+
+@pytest.mark.skipif(not HAS_NUMBA, reason="no numba")
+@pytest.mark.parametrize("n", [1, 4, 8, 16])
+def test_kernel_result_is_pinocchios_solve_statics(n):
+    """The whole result of the compiled kernel (forces, ball forces, base wrench, condition
+    numbers, the singular flag) against Pinocchio's solve_statics on random stacks whose
+    base plate is moved and turned too, to 1e-10 N (N·m)."""
+    from assembler_pin.kinematics import plate_arrays
+
+    am = AssemblerModel.from_config({"platforms": n})
+    rng = np.random.default_rng(n)
+    for stack in _random_stacks(am, 3, seed=10 + n):
+        base = pin.SE3(pin.exp3(rng.uniform(-0.3, 0.3, 3)), rng.uniform(-0.5, 0.5, 3))
+        pa = plate_arrays(am, np.array([base.homogeneous @ m for m in stack]))
+        mine, ref = statics_kernel.kernel_result(am, pa), solve_statics(am, pa)
+        for field in ("forces", "ball_forces", "base_wrench"):
+            np.testing.assert_allclose(getattr(mine, field), getattr(ref, field), atol=1e-10, rtol=0, err_msg=field)
+        np.testing.assert_allclose(mine.condition, ref.condition, rtol=1e-9)
+        assert mine.singular is ref.singular is False
+
+
+@pytest.mark.skipif(not HAS_NUMBA, reason="no numba")
+def test_kernel_result_refuses_a_singular_stack_as_pinocchios():
+    from assembler_pin.exceptions import SingularConfigurationError
+    from assembler_pin.kinematics import plate_arrays
+
+    am = AssemblerModel.from_config({"platforms": 2})
+    turn = pin.SE3(pin.exp3(np.array([0, 0, np.pi / 2])), np.array([0, 0, am.config.home_height]))
+    pa = plate_arrays(am, [am.home[0], turn, turn * turn])
+    assert statics_kernel.kernel_result(am, pa).singular and solve_statics(am, pa).singular
+    for fn in (statics_kernel.kernel_result, solve_statics):
+        with pytest.raises(SingularConfigurationError, match="is near a singular configuration"):
+            fn(am, pa, raise_on_singular=True)
 
 
 @pytest.mark.skipif(not HAS_NUMBA, reason="no numba")

@@ -37,8 +37,19 @@ class _Parser(argparse.ArgumentParser):
         raise CLIError(f"{message} (see '{self.prog} --help')")
 
 
-def build_parser() -> argparse.ArgumentParser:
-    """The ``assembler-pin`` argument parser (one-line refusals, see :class:`_Parser`)."""
+class _SkipSubcommandError(Exception):
+    """Raised by ``add`` to stop building the arguments of a subcommand this run does not use."""
+
+
+def build_parser(only: str | None = None) -> argparse.ArgumentParser:
+    """The ``assembler-pin`` argument parser (one-line refusals, see :class:`_Parser`).
+
+    Args:
+        only: build the arguments of this subcommand alone; every other one is listed by
+            its name and help (what ``assembler-pin --help`` prints) without its arguments,
+            which is most of the parser's cost. None (default): every subcommand complete
+            (the CLI reference, the tests).
+    """
     parser = _Parser(
         prog="assembler-pin",
         description="Serialized Stewart platforms (the Assembler) on Pinocchio: model, statics, solve.",
@@ -49,12 +60,23 @@ def build_parser() -> argparse.ArgumentParser:
 
     def add(name: str, help_: str) -> argparse.ArgumentParser:
         p = sub.add_parser(name, help=help_, description=help_)
+        if only is not None and name != only:
+            raise _SkipSubcommandError
         p.add_argument("--config", metavar="FILE", help="YAML configuration (default: built-in)")
         return p
 
     for module in SUBCOMMANDS:
-        module.add_parser(add)
+        try:
+            module.add_parser(add)
+        except _SkipSubcommandError:
+            pass
     return parser
+
+
+def _command_of(argv: Sequence[str]) -> str:
+    """The subcommand ``argv`` names (its first word that is not an option; the top-level
+    options take no value), or "" when it names none."""
+    return next((word for word in argv if not word.startswith("-")), "")
 
 
 #: Exit statuses of every subcommand: answered and successful, answered "not
@@ -78,9 +100,10 @@ def main(argv: Sequence[str] | None = None) -> int:
         with warnings.catch_warnings():
             warnings.showwarning = _log_warning
             warnings.simplefilter("default")
-            parser = build_parser()
+            words = sys.argv[1:] if argv is None else list(argv)
+            parser = build_parser(only=_command_of(words))
             try:
-                args = parser.parse_args(argv)
+                args = parser.parse_args(words)
             except CLIError as exc:
                 print(f"assembler-pin: error: {_one_line(exc)}", file=sys.stderr)
                 return EXIT_REFUSED

@@ -44,7 +44,8 @@ def add_parser(add) -> None:
     p.add_argument(
         "--speed",
         action="store_true",
-        help="only BLAS threads, lazy starts, the statics kernel, capacity memory, CLI start-up (~3 min)",
+        help="only BLAS threads, lazy starts, the statics kernel, one stack's statics at n = 4, 8, 16, "
+        "capacity memory, CLI start-up (~3 min)",
     )
     p.set_defaults(func=run)
 
@@ -117,6 +118,7 @@ def _extra_figures(args: argparse.Namespace, am) -> int:
         from ..bench import LEVEL_GRID
         from ..bench_speed import (
             benchmark_capacity_memory,
+            benchmark_single_statics,
             benchmark_solve_starts,
             benchmark_startup,
             benchmark_statics_kernel,
@@ -126,6 +128,7 @@ def _extra_figures(args: argparse.Namespace, am) -> int:
         doc["threads"] = benchmark_threads(am)
         doc["starts"] = benchmark_solve_starts(am, LEVEL_GRID[::12])
         doc["statics_kernel"] = benchmark_statics_kernel(am)
+        doc["single_statics"] = benchmark_single_statics()
         doc["capacity_memory"] = benchmark_capacity_memory(am)
         doc["startup"] = benchmark_startup()
     if args.json:

@@ -34,6 +34,7 @@ def add_parser(add) -> None:
     p.add_argument("--no-optimize", action="store_true", help="only the helper-arm initial condition")
     add_helper_arm_arguments(p)
     add_optimize_arguments(p)
+    _add_starts_argument(p)
     add_carrier_arguments(p, " (the goal is then in the world; the carrier's joints join the search)")
     p.add_argument("--fixed-carrier", action="store_true", help="with --carrier: hold it at --carrier-q")
     p.add_argument(
@@ -50,11 +51,25 @@ def add_parser(add) -> None:
     p.set_defaults(func=run)
 
 
+def _add_starts_argument(p: argparse.ArgumentParser) -> None:
+    """``--starts first|all`` (:data:`~assembler_pin.choices.SOLVE_STARTS`), passed to ``solve(starts=...)``."""
+    from ..choices import SOLVE_STARTS
+
+    p.add_argument(
+        "--starts",
+        choices=SOLVE_STARTS,
+        help=f"the optimizer's starts: {SOLVE_STARTS[0]} (default): the helper arm's; the screw start too "
+        "when its optimum needs it, every start when its run fails; all: every start (helper arm, home, "
+        "screw), the best optimum kept (slower; not with --carrier)",
+    )
+
+
 def run(args: argparse.Namespace) -> int:
     """Internal poses for an EE goal: helper-arm initial condition, then (by default) the
     force optimization. Exit 0 when solved; an unreachable goal is an answer too (printed,
     success false), with exit status 1, as is ``--capacity`` finding no capacity."""
     from ..bounds import check_bound
+    from ..choices import SOLVE_STARTS
     from ..model import AssemblerModel
     from ..solver import solve
 
@@ -70,7 +85,8 @@ def run(args: argparse.Namespace) -> int:
     carrier, q = carrier_from_args(args)
     if carrier is not None:
         return _solve_on_carrier(args, am, carrier, q, goal, helper)
-    result = solve(am, goal, optimize=not args.no_optimize, options=options, helper_options=helper)
+    starts = args.starts or SOLVE_STARTS[0]
+    result = solve(am, goal, optimize=not args.no_optimize, options=options, helper_options=helper, starts=starts)
     capacity = None
     if args.capacity:
         from ..capacity import payload_capacity
@@ -133,6 +149,8 @@ def _refuse_carrier_options(args: argparse.Namespace) -> None:
     """One line for an option that cannot apply with (or without) ``--carrier``."""
     if args.fixed_carrier and not args.carrier:
         raise CLIError("--fixed-carrier needs --carrier NAME")
+    if args.carrier and args.starts:
+        raise CLIError("--starts chooses the starts of the fixed-base solve and is not available with --carrier")
     if args.carrier and args.out:
         raise CLIError("--out writes a fixed-base plate file and is not available with --carrier")
     if args.carrier and args.capacity:

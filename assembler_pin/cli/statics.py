@@ -42,7 +42,27 @@ def add_parser(add) -> None:
     p.set_defaults(func=run)
 
 
+#: The arguments ``statics --home --json`` may carry for the fast path (any other option
+#: given, such as ``--carrier``, takes the full path).
+_FAST_HOME_ARGS = frozenset({"command", "func", "verbose", "quiet", "config", "home", "json"})
+
+
+def _fast_home(args: argparse.Namespace) -> bool:
+    """Answer ``statics --home --json`` without Pinocchio (:mod:`~assembler_pin.home_state`)
+    when no other option is given and the home pose is strictly inside every limit."""
+    if not (args.home and args.json) or any(v for k, v in vars(args).items() if k not in _FAST_HOME_ARGS):
+        return False
+    from ..home_state import home_state_document
+
+    doc = home_state_document(config_from_args(args))
+    if doc is not None:
+        print(dumps(doc))
+    return doc is not None
+
+
 def run(args: argparse.Namespace) -> int:
+    if _fast_home(args):
+        return 0
     from ..model import AssemblerModel
     from ..state import evaluate_state
 

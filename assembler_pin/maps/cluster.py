@@ -6,6 +6,10 @@ Addresses are those of Dask's communication backends: ``tcp://HOST:PORT`` (also 
 and ``inproc://...`` (a scheduler in this process). Anything else is refused before any
 connection is tried; a scheduler that does not answer within :data:`CONNECT_TIMEOUT_S`, or
 has no worker within :data:`WORKERS_TIMEOUT_S`, is reported in one line.
+
+Every worker of a map, local or remote, runs with one BLAS thread
+(:class:`~assembler_pin.maps.workers.OneBlasThread`), so that a map's numbers are the same
+whatever the machines' thread settings.
 """
 
 from __future__ import annotations
@@ -74,7 +78,8 @@ def client_for(scheduler: str | None, workers: int):
         ) from None
     _quiet_dask_logs()
     if scheduler is None:
-        return _local(workers, LocalCluster, Client)
+        client, cluster = _local(workers, LocalCluster, Client)
+        return _one_blas_thread(client, cluster, "the local cluster"), cluster
     try:
         client = Client(scheduler, timeout=f"{CONNECT_TIMEOUT_S:g}s")
     except Exception as exc:  # any failure to connect is reported in one line
@@ -90,7 +95,24 @@ def client_for(scheduler: str | None, workers: int):
     except BaseException:
         client.close()
         raise
-    return client, None
+    return _one_blas_thread(client, None, f"the Dask scheduler at {scheduler}"), None
+
+
+def _one_blas_thread(client, cluster, where: str):
+    """``client`` once every worker (and every worker that joins later) runs with one BLAS
+    thread; a :class:`MapError` when the plugin cannot be registered."""
+    from .workers import PLUGIN_NAME, OneBlasThread
+
+    try:
+        client.register_plugin(OneBlasThread(), name=PLUGIN_NAME)
+    except Exception as exc:  # e.g. a remote worker without assembler_pin installed
+        stop(client, cluster, abort=True)
+        why = " ".join(str(exc).split())[:120] or type(exc).__name__
+        raise MapError(f"the workers of {where} cannot be set to one BLAS thread ({why})") from None
+    except BaseException:
+        stop(client, cluster, abort=True)
+        raise
+    return client
 
 
 @contextlib.contextmanager
@@ -108,7 +130,9 @@ def _sigint_ignored():
 
 
 def _local(workers: int, local_cluster, client):
-    """A local cluster of ``workers`` single-threaded processes and its client."""
+    """A local cluster of ``workers`` single-threaded processes (one BLAS thread each) and its client."""
+    from .workers import ONE_THREAD_ENV
+
     cluster = None
     try:
         with _sigint_ignored():
@@ -119,6 +143,7 @@ def _local(workers: int, local_cluster, client):
                 dashboard_address=None,
                 silence_logs=logging.CRITICAL,
                 preload=[_IGNORE_SIGINT],
+                env=dict(ONE_THREAD_ENV),
             )
         return client(cluster), cluster
     except Exception as exc:
