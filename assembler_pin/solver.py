@@ -163,16 +163,9 @@ def solve(
         PoseError: the goal is not a valid SE(3) pose.
         OptionsError: ``starts`` is not one of :data:`START_MODES`.
     """
-    from .helper_arm import HelperArmOptions, initial_condition
+    from .helper_arm import initial_condition
 
-    checked_model(am)
-    if starts not in START_MODES:
-        raise OptionsError(f"starts must be one of {', '.join(START_MODES)}, got {starts!r}")
-    goal = to_se3(goal, "goal")
-    options = checked_options(options, OptimizeOptions, "options")
-    helper_options = checked_options(helper_options, HelperArmOptions, "helper_options")
-    if not isinstance(optimize, bool):
-        raise ArgumentError(f"optimize must be True or False, got {type(optimize).__name__}")
+    goal, options, helper_options = _checked_inputs(am, goal, optimize, options, helper_options, starts)
     t0 = time.perf_counter()
     init = initial_condition(am, goal, helper_options)
     timing = {"initial": time.perf_counter() - t0}
@@ -182,10 +175,39 @@ def solve(
     if init.attempts == 0 and not init.success:  # out of reach: nothing to start from
         timing["optimize"] = 0.0
         return SolveResult(goal, False, f"no valid initial condition: {init.message}", init, None, timing)
-    opts = options
     t1 = time.perf_counter()
-    runs = _run_starts(am, goal, init, opts, starts)
+    runs = _run_starts(am, goal, init, options, starts)
     timing["optimize"] = time.perf_counter() - t1
+    return _answer(goal, init, runs, timing)
+
+
+def _checked_inputs(
+    am: AssemblerModel,
+    goal: pin.SE3 | np.ndarray,
+    optimize: bool,
+    options: OptimizeOptions | None,
+    helper_options: HelperArmOptions | None,
+    starts: str,
+) -> tuple[pin.SE3, OptimizeOptions, HelperArmOptions]:
+    """(goal, options, helper options) of :func:`solve`, or the error naming what is wrong."""
+    from .helper_arm import HelperArmOptions
+
+    checked_model(am)
+    if starts not in START_MODES:
+        raise OptionsError(f"starts must be one of {', '.join(START_MODES)}, got {starts!r}")
+    goal = to_se3(goal, "goal")
+    options = checked_options(options, OptimizeOptions, "options")
+    helper_options = checked_options(helper_options, HelperArmOptions, "helper_options")
+    if not isinstance(optimize, bool):
+        raise ArgumentError(f"optimize must be True or False, got {type(optimize).__name__}")
+    return goal, options, helper_options
+
+
+def _answer(
+    goal: pin.SE3, init: InitialConditionResult, runs: dict[str, OptimizeResult], timing: dict[str, float]
+) -> SolveResult:
+    """The :class:`SolveResult` of the optimizer's runs: the best run (:func:`_best_run`) or
+    why none reached a feasible pose."""
     name, best = _best_run(runs)
     if best is None:
         why = "; ".join(f"{k}: {r.message}" for k, r in list(runs.items())[:3])
@@ -273,7 +295,9 @@ def _seed_of(plates: PlateArrays) -> int:
 
 
 def _best_run(runs: dict[str, OptimizeResult]) -> tuple[str | None, OptimizeResult | None]:
-    """The run whose returned state is feasible with the smallest Ω, successes first."""
+    """The run whose returned state is feasible with the smallest Ω, successes first (each
+    run's ``objective_optimized``: :func:`assembler_pin.objective.objective_value` of its
+    Pinocchio-checked state)."""
     feasible = [(not r.success, r.objective_optimized, name) for name, r in runs.items() if r.optimized.feasible]
     if not feasible:
         return None, None

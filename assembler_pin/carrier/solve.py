@@ -216,24 +216,36 @@ def solve_on_carrier(
     q0 = carrier.upright_q if q0 is None else carrier.check_q(q0, "q0")
     s = _Search(am, carrier, goal, opts, helper_options, bool(optimize), float(w_carrier))
     if not move_carrier:
-        statics, why = _stack_on(s, q0)
-        msg = why if statics is None else _verdict(statics)
-        ok = statics is not None and statics.within_limits
-        return CarrierSolveResult(
-            ok, msg, goal, statics, False, [(0.0, q0, s.score(statics), msg)], time.perf_counter() - t0
-        )
+        return _held(s, q0, t0)
+    return _moved(s, q0, blends, polish, limit, progress, t0)
+
+
+def _held(s: _Search, q0: np.ndarray, t0: float) -> CarrierSolveResult:
+    """:func:`solve_on_carrier` with the carrier held at ``q0``."""
+    statics, why = _stack_on(s, q0)
+    msg = why if statics is None else _verdict(statics)
+    ok = statics is not None and statics.within_limits
+    return CarrierSolveResult(
+        ok, msg, s.goal, statics, False, [(0.0, q0, s.score(statics), msg)], time.perf_counter() - t0
+    )
+
+
+def _moved(
+    s: _Search, q0: np.ndarray, blends: int, polish: bool, limit: int, progress: ProgressCallback | None, t0: float
+) -> CarrierSolveResult:
+    """:func:`solve_on_carrier` with the carrier's joints searched: the placements, then
+    (``polish``) the joint optimization from the best."""
     best, candidates = _placements(s, q0, blends, progress)
     if best is None:
         message = "no carrier placement gave a valid stack pose"
-        return CarrierSolveResult(False, message, goal, None, True, candidates, time.perf_counter() - t0)
+        return CarrierSolveResult(False, message, s.goal, None, True, candidates, time.perf_counter() - t0)
     note = ""
     if polish and s.optimize and best.within_limits:
         best, note = _polish(s, best, limit, candidates)
     if progress is not None:
         progress(len(candidates), len(candidates), "done")
-    return CarrierSolveResult(
-        best.within_limits, _verdict(best) + note, goal, best, True, candidates, time.perf_counter() - t0
-    )
+    message = _verdict(best) + note
+    return CarrierSolveResult(best.within_limits, message, s.goal, best, True, candidates, time.perf_counter() - t0)
 
 
 def _placements(

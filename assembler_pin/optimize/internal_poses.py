@@ -65,22 +65,10 @@ def optimize_internal_poses(
     t0 = time.perf_counter()
     res, x_final, singular = _run_solver(problem, initial_state)
     elapsed = time.perf_counter() - t0
-    final_state = check.state_at(problem, x_final)
-    converged = bool(res.success) and not singular
-    if converged and not check.acceptable(final_state):
-        final_state = _pulled_inside(check, problem, x_final, final_state)
-    chosen, omega_chosen = _chosen(check, problem, final_state, initial_state)
-    if motion is not None and converged and final_state.feasible and not check.acceptable(final_state):
-        converged, singular = False, "the converged point moves a leg more than the motion step allows"
-    success, message = verdict(res, singular, converged, final_state, chosen, initial_state)
+    chosen, omega_chosen, success, message = _outcome(check, problem, res, x_final, singular, initial_state)
     logger.info(
         "optimize[%s]: %s, Ω %.4g -> %.4g in %.3f s, %d iterations",
-        opts.method,
-        message,
-        omega0,
-        omega_chosen,
-        elapsed,
-        res.nit,
+        *(opts.method, message, omega0, omega_chosen, elapsed, res.nit),
     )
     return OptimizeResult(
         success=success,
@@ -97,6 +85,23 @@ def optimize_internal_poses(
         objective_optimized=omega_chosen,
         method=opts.method,
     )
+
+
+def _outcome(
+    check: _Check, problem: Problem, res: SolverResult, x_final: np.ndarray, singular: str, initial_state: StackState
+) -> tuple[StackState, float, bool, str]:
+    """(state returned, its Ω, success, message): the solver's point re-checked with the
+    Pinocchio statics, pulled back inside when just outside a limit, then the best of it,
+    the best feasible point met and the start (:func:`_chosen`)."""
+    final_state = check.state_at(problem, x_final)
+    converged = bool(res.success) and not singular
+    if converged and not check.acceptable(final_state):
+        final_state = _pulled_inside(check, problem, x_final, final_state)
+    chosen, omega_chosen = _chosen(check, problem, final_state, initial_state)
+    if check.motion is not None and converged and final_state.feasible and not check.acceptable(final_state):
+        converged, singular = False, "the converged point moves a leg more than the motion step allows"
+    success, message = verdict(res, singular, converged, final_state, chosen, initial_state)
+    return chosen, omega_chosen, success, message
 
 
 def _checked_inputs(
