@@ -14,7 +14,7 @@ import pinocchio as pin
 from ..exceptions import OptionsError
 from ..kinematics import to_se3
 from ..model import AssemblerModel
-from ..objective import omega
+from ..objective import objective_value
 from ..options import DEFAULT_GOAL_TOLERANCE, GoalTolerance, HelperArmOptions, OptimizeOptions
 from ..progress import ProgressCallback
 from ..threads import one_blas_thread
@@ -296,11 +296,8 @@ def carrier_objective(
     """Ω_c = w1·max|F| + w2·sqrt(Σλ²) + w_carrier·max|τ|/τ_max of a mounted state (the paper's
     eq. 10 with the weights of ``options``, default :class:`OptimizeOptions`, plus the
     carrier's torque term) [w1 in 1/N, w2 in 1/rad, w_carrier in N]."""
-    from ..kinematics import plate_deviation
-
     o = options or OptimizeOptions()
-    lam = plate_deviation(am, statics.state.plates).angles
-    return omega(statics.state.max_abs_force, lam, o.w1, o.w2) + w_carrier * statics.carrier_ratio
+    return objective_value(am, statics.state, o.w1, o.w2) + w_carrier * statics.carrier_ratio
 
 
 def _verdict(statics: CarrierStatics) -> str:
