@@ -35,8 +35,11 @@ __all__ = [
 class _Motion(Protocol):
     """What the motion term reads of a :class:`~assembler_pin.optimize.MotionTerm`."""
 
-    previous_lengths: np.ndarray
-    w3: float
+    @property
+    def previous_lengths(self) -> np.ndarray: ...
+
+    @property
+    def w3(self) -> float: ...
 
 
 def deviation_term(plate_angles: np.ndarray) -> float:

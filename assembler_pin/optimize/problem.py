@@ -102,13 +102,15 @@ class Problem:
         if self._derivs is not None and self._derivs[0] == key:
             return self._derivs[1]
         p = self.point(x_pose)
+        if not isinstance(self.chart, LocalChart):
+            raise TypeError("derivatives are taken in the local chart only (the paper's method has none)")
         if p.singular:
             raise _SingularIterateError("the statics are singular at the iterate")
         try:
             pose = pose_derivatives(self.am, p.plates, p.values)
         except (np.linalg.LinAlgError, SingularConfigurationError) as exc:
             raise _SingularIterateError(str(exc)) from None
-        d = ChartDerivatives(pose, self.chart.twist_jacobian(p.x, p.plates))  # type: ignore[union-attr]
+        d = ChartDerivatives(pose, self.chart.twist_jacobian(p.x, p.plates))
         self._derivs = (key, d)
         self.gradient_evaluations += 1
         return d
