@@ -36,5 +36,6 @@ class PaperForm:
         """Rows >= 0: the force limits, the leg limits, the EE tolerance."""
         pr = self.problem
         p = pr.point(x)
-        ee = [] if pr.ee is None else [pr.ee.values(p)]
-        return finite_rows(np.concatenate([pr.force_limits.values(p), pr.leg_limits.values(p), *ee]))
+        rows = pr.rows(p)
+        ee = [rows["ee"]] if "ee" in rows else []
+        return finite_rows(np.concatenate([rows["force"], rows["leg"], *ee]))

@@ -75,6 +75,7 @@ class Problem:
         self.gradient_evaluations = 0
         self._point: Point | None = None
         self._derivs: tuple[bytes, ChartDerivatives] | None = None
+        self._rows: tuple[Point, dict[str, np.ndarray]] | None = None
 
     def point(self, x_pose: np.ndarray) -> Point:
         """The values at the pose part of x (cached for the last point); tracks the best
@@ -119,12 +120,24 @@ class Problem:
         """Ω at the point, with the motion term (:mod:`assembler_pin.objective`)."""
         return omega(p.max_abs_force, p.plate_angles, self.opts.w1, self.opts.w2) + motion_cost(p.lengths, self.motion)
 
+    def rows(self, p: Point) -> dict[str, np.ndarray]:
+        """The rows of every family at the point (>= 0 when it holds), computed once per
+        point: ``leg``, ``force`` and, where they apply, ``ee`` and ``motion``."""
+        if self._rows is not None and self._rows[0] is p:
+            return self._rows[1]
+        rows = {"leg": self.leg_limits.values(p), "force": self.force_limits.values(p)}
+        if self.ee is not None:
+            rows["ee"] = self.ee.values(p)
+        if self.motion_rows is not None:
+            rows["motion"] = self.motion_rows.values(p)
+        self._rows = (p, rows)
+        return rows
+
     def optional_rows(self, p: Point) -> list[np.ndarray]:
         """The EE-tolerance and motion rows where they apply."""
-        rows = [] if self.ee is None else [self.ee.values(p)]
-        return rows + ([] if self.motion_rows is None else [self.motion_rows.values(p)])
+        rows = self.rows(p)
+        return [rows[k] for k in ("ee", "motion") if k in rows]
 
     def feasible(self, p: Point) -> bool:
         """Every row of the problem holds at the point."""
-        rows = [self.leg_limits.values(p), self.force_limits.values(p), *self.optional_rows(p)]
-        return bool(all(np.all(r >= 0) for r in rows))
+        return bool(all(np.all(r >= 0) for r in self.rows(p).values()))

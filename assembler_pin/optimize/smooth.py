@@ -52,8 +52,8 @@ class SmoothForm:
         pr = self.problem
         p, s = pr.point(x[:-1]), x[-1]
         fl = pr.force_limits
-        limits = np.array([fl.tension_limit - s]) if fl.symmetric else fl.values(p)
-        rows = [self.epigraph.values(p, s), limits, pr.leg_limits.values(p), *pr.optional_rows(p)]
+        limits = np.array([fl.tension_limit - s]) if fl.symmetric else pr.rows(p)["force"]
+        rows = [self.epigraph.values(p, s), limits, pr.rows(p)["leg"], *pr.optional_rows(p)]
         return finite_rows(np.concatenate(rows))
 
     def cons_jac(self, x: np.ndarray) -> np.ndarray:
