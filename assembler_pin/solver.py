@@ -266,12 +266,11 @@ def needs_other_starts(am: AssemblerModel, run: OptimizeResult, opts: OptimizeOp
 
 def optimizer_starts(am: AssemblerModel, goal: pin.SE3, helper_plates: PlateArrays | None) -> dict[str, PlateArrays]:
     """The optimizer's starts (:data:`STARTS`): plate 0 at home, plate n at the goal."""
-    n, base = am.n, am.home[0]
+    from .helper_arm.initial import even_screw_pose
+
     home = list(am.home)
-    home[n] = goal
-    screw = pin.log6(base.actInv(goal))
-    even = [base * pin.exp6(screw * (k / n)) for k in range(n)] + [goal]
-    starts = {"home": PlateArrays.from_se3(home), "screw": PlateArrays.from_se3(even)}
+    home[am.n] = goal
+    starts = {"home": PlateArrays.from_se3(home), "screw": PlateArrays.from_se3(even_screw_pose(am, goal))}
     if helper_plates is not None:
         starts = {"helper_arm": helper_plates, **starts}
     return starts
