@@ -36,7 +36,7 @@ from .kinematics import PlateArrays, to_se3
 from .labels import leg_label
 from .messages import one_line
 from .model import AssemblerModel
-from .statics import WHOLE_STACK_STATICS_MAX_PLATFORMS, solve_statics
+from .statics import solve_statics
 from .threads import one_blas_thread
 
 __all__ = [
@@ -70,11 +70,11 @@ def _payload_inertia(mass: float, offset: float) -> pin.Inertia:
 
 def with_payload(am: AssemblerModel, mass: float) -> AssemblerModel:
     """``am`` with a payload of ``mass`` [kg]: a shallow copy sharing the geometry, the index
-    maps, the helper arms and the whole-stack ``Data`` (its contents are recomputed by every
+    maps and the whole-stack ``Data`` (its contents are recomputed by every
     call), with its own configuration, its own copy of the Pinocchio model whose EE plate
-    body has the other payload's inertia, and its own last-platform model. No URDF of the
+    body has the other payload's inertia, and its own last-platform model (the helper arms
+    are shared: their cache is keyed on the configuration without its payload). No URDF of the
     whole stack is generated and no ``Data`` of the whole stack is created."""
-    from .helper_arm import arm_cache
     from .platform_model import PlatformModel, StackPlan
 
     cfg = am.config
@@ -87,11 +87,10 @@ def with_payload(am: AssemblerModel, mass: float) -> AssemblerModel:
     params = am.model.inertias[ee_joint].toDynamicParameters()
     params += (payload.mass - cfg.payload.mass) * _payload_inertia(1.0, payload.offset).toDynamicParameters()
     variant.model.inertias[ee_joint] = pin.Inertia.FromDynamicParameters(params)
-    # same structure: one Data serves both models (the statics use it up to this size)
-    variant._data = am.data if am.n <= WHOLE_STACK_STATICS_MAX_PLATFORMS else am._data
+    # same structure: the whole-stack Data, if one was made for inspection, serves both models
+    variant._data = am._data
     variant.platform_models = (am.platform_models[0], PlatformModel(variant.config, payload))
     variant.stack_plan = StackPlan(*variant.platform_models, am.n)
-    variant.helper_arms = arm_cache(am)
     return variant
 
 
@@ -246,25 +245,44 @@ def payload_capacity(
             the solve without payload).
         arm_start: the helper arm's valid pose for the goal, if the caller has it.
     """
-    from .optimize import optimize_internal_poses
-    from .solver import solve
-
     if not (0 < rtol < 0.5 and isinstance(max_iterations, int) and max_iterations >= 1):
         raise OptionsError("rtol must be in (0, 0.5) and max_iterations an integer >= 1")
     check_bound("capacity.max_iterations", max_iterations, "max_iterations", OptionsError)
     t0 = time.perf_counter()
     goal = to_se3(goal, "goal")
     models = models or PayloadModels(am)
+    plates, why = _valid_start(am, goal, models, start, configured_failed)
+    if plates is None:
+        message = one_line(f"no valid pose for the goal even without payload: {why or 'none given'}")
+        return CapacityResult(False, math.nan, "", None, message, 1, [], time.perf_counter() - t0)
+    climb = _Climb(models, goal, plates, _ArmStart(am, goal, arm_start), float(am.config.payload.mass))
+    message = climb.run(rtol, max_iterations)
+    label = f"{leg_label(*climb.binding)} {climb.kind}" if climb.binding is not None else ""
+    answer = CapacityResult(
+        True,
+        max(climb.cap, 0.0),
+        label,
+        climb.plates,
+        message,
+        climb.iterations,
+        climb.history,
+        time.perf_counter() - t0,
+    )
+    logger.info("capacity: %s", answer)
+    return answer
 
-    arm_plates: list[PlateArrays | None] = [] if arm_start is None else [arm_start]
 
-    def helper_plates() -> PlateArrays | None:
-        """The helper arm's valid pose for the goal (kinematic: the same for every payload)."""
-        if not arm_plates:
-            from .helper_arm import initial_condition
-
-            arm_plates.append(initial_condition(am, goal).plates_if_valid())
-        return arm_plates[0]
+def _valid_start(
+    am: AssemblerModel,
+    goal: pin.SE3,
+    models: PayloadModels,
+    start: PlateArrays | None,
+    configured_failed: bool,
+) -> tuple[PlateArrays | None, str]:
+    """A valid pose for the goal: ``start``, else the solve at the configured payload (unless
+    it is known to fail), else the solve without payload; None when none exists. With it, the
+    last solve's message ("" when none ran)."""
+    from .solver import solve
 
     why: list[str] = []
 
@@ -276,43 +294,70 @@ def payload_capacity(
     plates = start if start is not None or configured_failed else solved(float(am.config.payload.mass))
     if plates is None and am.config.payload.mass > 0:
         plates = solved(0.0)
-    if plates is None:
-        return CapacityResult(
-            False,
-            math.nan,
-            "",
-            None,
-            one_line(f"no valid pose for the goal even without payload: {why[-1] if why else 'none given'}"),
-            1,
-            [],
-            time.perf_counter() - t0,
-        )
-    cap, binding, kind = pose_capacity(models, plates)
-    history = [(float(am.config.payload.mass), cap)]
-    iterations, message = 1, "converged"
-    while iterations < max_iterations and np.isfinite(cap) and cap >= 0:
-        result = optimize_internal_poses(models.at(cap), plates, goal)
-        iterations += 1
-        new_cap = pose_capacity(models, result.optimized.plates)[0] if result.success else -1.0
-        history.append((cap, new_cap))
-        if new_cap > cap * (1 + rtol):
-            plates, (cap, binding, kind) = result.optimized.plates, pose_capacity(models, result.optimized.plates)
-            continue
-        if result.success and new_cap > cap:
-            plates, (cap, binding, kind) = result.optimized.plates, pose_capacity(models, result.optimized.plates)
-        # a local fixed point: do the solver's starts (helper arm, home, screw) hold 1 % more?
-        probe = cap * (1 + GLOBAL_PROBE)
-        found = _probe(models.at(probe), goal, helper_plates())
-        iterations += 1
-        history.append((probe, pose_capacity(models, found)[0] if found is not None else -1.0))
+    return plates, why[-1] if why else ""
+
+
+class _ArmStart:
+    """The helper arm's valid pose for the goal (kinematic: the same for every payload),
+    computed on first use."""
+
+    def __init__(self, am: AssemblerModel, goal: pin.SE3, known: PlateArrays | None) -> None:
+        self.am, self.goal = am, goal
+        self._plates: list[PlateArrays | None] = [] if known is None else [known]
+
+    def plates(self) -> PlateArrays | None:
+        if not self._plates:
+            from .helper_arm import initial_condition
+
+            self._plates.append(initial_condition(self.am, self.goal).plates_if_valid())
+        return self._plates[0]
+
+
+class _Climb:
+    """The alternation of :func:`payload_capacity`: optimize for the current capacity, take
+    the new pose's capacity; at a fixed point, probe the solver's starts for
+    :data:`GLOBAL_PROBE` more."""
+
+    def __init__(self, models: PayloadModels, goal: pin.SE3, plates: PlateArrays, arm: _ArmStart, mass: float) -> None:
+        self.models, self.goal, self.arm = models, goal, arm
+        self.iterations = 1
+        self.take(plates)
+        self.history = [(mass, self.cap)]
+
+    def take(self, plates: PlateArrays) -> None:
+        """Move to ``plates`` and its capacity."""
+        self.plates = plates
+        self.cap, self.binding, self.kind = pose_capacity(self.models, plates)
+
+    def run(self, rtol: float, max_iterations: int) -> str:
+        """Climb until the gain is below ``rtol`` and no start holds more; the message."""
+        from .optimize import optimize_internal_poses
+
+        while self.iterations < max_iterations and np.isfinite(self.cap) and self.cap >= 0:
+            cap = self.cap
+            result = optimize_internal_poses(self.models.at(cap), self.plates, self.goal)
+            self.iterations += 1
+            new_cap = pose_capacity(self.models, result.optimized.plates)[0] if result.success else -1.0
+            self.history.append((cap, new_cap))
+            if new_cap > cap * (1 + rtol):
+                self.take(result.optimized.plates)
+                continue
+            if result.success and new_cap > cap:
+                self.take(result.optimized.plates)
+            if not self.probe():
+                return f"converged; no start holds {self.cap * (1 + GLOBAL_PROBE):.3f} kg"
+        if self.iterations >= max_iterations:
+            return f"stopped after {max_iterations} optimizations (still gaining)"
+        return "converged"
+
+    def probe(self) -> bool:
+        """A local fixed point: do the solver's starts (helper arm, home, screw) hold
+        :data:`GLOBAL_PROBE` more? Moves to the first that does."""
+        probe = self.cap * (1 + GLOBAL_PROBE)
+        found = _probe(self.models.at(probe), self.goal, self.arm.plates())
+        self.iterations += 1
+        self.history.append((probe, pose_capacity(self.models, found)[0] if found is not None else -1.0))
         if found is None:
-            message = f"converged; no start holds {probe:.3f} kg"
-            break
-        plates, (cap, binding, kind) = found, pose_capacity(models, found)
-    else:
-        if iterations >= max_iterations:
-            message = f"stopped after {max_iterations} optimizations (still gaining)"
-    label = f"{leg_label(*binding)} {kind}" if binding is not None else ""
-    answer = CapacityResult(True, max(cap, 0.0), label, plates, message, iterations, history, time.perf_counter() - t0)
-    logger.info("capacity: %s", answer)
-    return answer
+            return False
+        self.take(found)
+        return True

@@ -30,11 +30,20 @@ from typing import Any
 
 import numpy as np
 
-from .kinematics import PlateArrays, plate_deviation
+from .kinematics import PlateArrays, PlateDeviation, plate_deviation
 from .linalg import cross, inverse_or_nan, skew
 from .model import AssemblerModel
 
-__all__ = ["Equilibrium", "LegDerivatives", "PoseDerivatives", "equilibrium", "leg_derivatives", "pose_derivatives"]
+__all__ = [
+    "Equilibrium",
+    "LegDerivatives",
+    "PoseDerivatives",
+    "PoseValues",
+    "equilibrium",
+    "leg_derivatives",
+    "pose_derivatives",
+    "pose_values",
+]
 
 _I3 = np.eye(3)
 
@@ -100,33 +109,46 @@ def _leg_jacobians(
     return db, dt, dd, dL, du
 
 
-def _deflection_and_rise(
-    home: np.ndarray, R: np.ndarray, d: np.ndarray, u: np.ndarray, dd: np.ndarray, du: np.ndarray
-) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """Cosines of the bottom / top joint deflections (n, 6) and the rise (n, 6) [m], with
-    their derivatives (n, 6, 6n), from the legs' vectors ``d``, directions ``u`` and their
-    derivatives; ``home`` (6, 3) is each leg's rest direction in its plates' frames."""
+def _rest_directions(home: np.ndarray, R: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Each leg's rest direction ``home`` (6, 3) in the world as seen by its bottom and its
+    top plate: (n, 6, 3) each."""
+    return np.matmul(home, R[:-1].transpose(0, 2, 1)), np.matmul(home, R[1:].transpose(0, 2, 1))
+
+
+def _cos_and_rise(
+    R: np.ndarray, d: np.ndarray, u: np.ndarray, h_bottom: np.ndarray, h_top: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """Cosines of the bottom / top joint deflections (n, 6, 2) and the rise (n, 6) [m]."""
+    cos = np.stack([np.einsum("jik,jik->ji", u, h_bottom), np.einsum("jik,jik->ji", u, h_top)], axis=-1)
+    return cos, np.einsum("jk,jik->ji", R[:-1, :, 2], d)
+
+
+def _deflection_and_rise_derivatives(
+    R: np.ndarray,
+    d: np.ndarray,
+    u: np.ndarray,
+    h_bottom: np.ndarray,
+    h_top: np.ndarray,
+    dd: np.ndarray,
+    du: np.ndarray,
+) -> tuple[np.ndarray, np.ndarray]:
+    """d(cos deflection) (n, 6, 2, 6n) and d(rise) (n, 6, 6n), from the legs' vectors ``d``,
+    directions ``u``, rest directions in the world and the derivatives ``dd``, ``du``."""
     n = d.shape[0]
-    h_bottom = np.matmul(home, R[:-1].transpose(0, 2, 1))  # home direction in world, bottom plate
-    h_top = np.matmul(home, R[1:].transpose(0, 2, 1))
-    cos_b = np.einsum("jik,jik->ji", u, h_bottom)
-    cos_t = np.einsum("jik,jik->ji", u, h_top)
     d_cos_b = np.einsum("jik,jikc->jic", h_bottom, du)
     d_cos_t = np.einsum("jik,jikc->jic", h_top, du)
     # rotating plate k by ω turns h into h + ω × h: d(u·h) += u·(ω × h) = (h × u)·ω
     hb_x_u = cross(h_bottom, u)
     ht_x_u = cross(h_top, u)
+    z_bottom = R[:-1, :, 2]  # (n, 3)
+    d_rise = np.einsum("jk,jikc->jic", z_bottom, dd)
+    z_x_d = cross(z_bottom[:, None, :], d)
     for j in range(n):
         if j >= 1:
             d_cos_b[j, :, 6 * (j - 1) + 3 : 6 * j] += hb_x_u[j]
+            d_rise[j, :, 6 * (j - 1) + 3 : 6 * j] += z_x_d[j]
         d_cos_t[j, :, 6 * j + 3 : 6 * j + 6] += ht_x_u[j]
-    z_bottom = R[:-1, :, 2]  # (n, 3)
-    rise = np.einsum("jk,jik->ji", z_bottom, d)
-    d_rise = np.einsum("jk,jikc->jic", z_bottom, dd)
-    z_x_d = cross(z_bottom[:, None, :], d)
-    for j in range(1, n):
-        d_rise[j, :, 6 * (j - 1) + 3 : 6 * j] += z_x_d[j]
-    return cos_b, cos_t, d_cos_b, d_cos_t, rise, d_rise
+    return np.stack([d_cos_b, d_cos_t], axis=2), d_rise
 
 
 @dataclass(frozen=True)
@@ -154,8 +176,10 @@ def leg_derivatives(am: AssemblerModel, pa: PlateArrays) -> LegDerivatives:
     L = np.sqrt(np.einsum("...k,...k->...", d, d))
     u = d / L[..., None]
     _, _, dd, dL, du = _leg_jacobians(b, t, L, u)
-    cos_b, cos_t, d_cos_b, d_cos_t, rise, d_rise = _deflection_and_rise(geo.home_direction, R, d, u, dd, du)
-    return LegDerivatives(L, dL, np.stack([cos_b, cos_t], axis=-1), np.stack([d_cos_b, d_cos_t], axis=2), rise, d_rise)
+    h_bottom, h_top = _rest_directions(geo.home_direction, R)
+    cos, rise = _cos_and_rise(R, d, u, h_bottom, h_top)
+    d_cos, d_rise = _deflection_and_rise_derivatives(R, d, u, h_bottom, h_top, dd, du)
+    return LegDerivatives(L, dL, cos, d_cos, rise, d_rise)
 
 
 @dataclass(frozen=True)
@@ -251,56 +275,112 @@ def equilibrium(
     return eq, K_inv
 
 
-def pose_derivatives(am: AssemblerModel, pa: PlateArrays) -> PoseDerivatives:
-    """Forces, lengths, deflections, rise and plate angles with their derivatives.
+@dataclass(frozen=True)
+class PoseValues:
+    """Everything the optimizer reads at one stack pose, from the closed form alone.
+
+    The intermediates are kept so that :func:`pose_derivatives` extends the same pass
+    instead of computing the pose again.
+
+    Attributes:
+        plates: the world poses of plates 0..n.
+        eq: the closed-form :class:`Equilibrium` (forces [N], leg vectors, directions, ...).
+        cos_deflection: (n, 6, 2) cosines of the bottom / top joint deflections.
+        rise: (n, 6) height of each top joint above its bottom joint, bottom plate's frame [m].
+        deviation: the plate-deviation angles λ_k and their vectors (paper eq. 9).
+        h_bottom, h_top: (n, 6, 3) each leg's rest direction in the world, as seen by its
+            bottom / top plate.
+    """
+
+    plates: PlateArrays
+    eq: Equilibrium
+    cos_deflection: np.ndarray
+    rise: np.ndarray
+    deviation: PlateDeviation
+    h_bottom: np.ndarray
+    h_top: np.ndarray
+
+    @property
+    def forces(self) -> np.ndarray:
+        """(n, 6) actuator forces [N, tension positive]; NaN where the statics are singular."""
+        return self.eq.forces
+
+    @property
+    def lengths(self) -> np.ndarray:
+        """(n, 6) leg lengths [m]."""
+        return self.eq.L
+
+    @property
+    def plate_angles(self) -> np.ndarray:
+        """(n,) λ_k [rad]."""
+        return self.deviation.angles
+
+
+def pose_values(am: AssemblerModel, pa: PlateArrays) -> PoseValues:
+    """Forces, lengths, deflection cosines, rise and plate angles of a stack pose in one
+    closed-form pass (no Pinocchio); a singular platform gives NaN forces.
 
     Args:
         pa: world poses of plates 0..n (validated, e.g. by
             :func:`~assembler_pin.kinematics.plate_arrays`).
     """
-    # Long by design: one chained pass whose intermediates (leg vectors, directions, forces) every
-    # derivative shares; split up, it would recompute them or pass dozens of arrays around.
-    cfg, geo = am.config, am.geometry
-    n = am.n
-    C = 6 * n
-    leg = cfg.leg
-    g = np.array([0.0, 0.0, -cfg.gravity])
-    R, p = pa.R, pa.p
-    eq, _ = equilibrium(am, R, p)
-    b, t, d, L, u, gu, g_perp, s = eq.b, eq.t, eq.d, eq.L, eq.u, eq.gu, eq.g_perp, eq.s
-    f_perp, K, a = eq.f_perp, eq.K, eq.a
-    # --- leg geometry derivatives ------------------------------------------------------
-    db, dt, dd, dL, du = _leg_jacobians(b, t, L, u)
-    # --- per-leg transverse ball force from the leg's own weight ----------------------
+    eq, _ = equilibrium(am, pa.R, pa.p)
+    h_bottom, h_top = _rest_directions(am.geometry.home_direction, pa.R)
+    cos, rise = _cos_and_rise(pa.R, eq.d, eq.u, h_bottom, h_top)
+    return PoseValues(pa, eq, cos, rise, plate_deviation(am, pa), h_bottom, h_top)
+
+
+def _transverse_force_derivatives(
+    am: AssemblerModel, eq: Equilibrium, dL: np.ndarray, du: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """d(gravity along each leg) (n, 6, 6n) [m/s²] and d(transverse ball force) (n, 6, 3, 6n) [N]."""
+    leg = am.config.leg
+    g = np.array([0.0, 0.0, -am.config.gravity])
     dgu = np.einsum("k,jikc->jic", g, du)
-    dg_perp = -(dgu[:, :, None, :] * u[..., None] + gu[..., None, None] * du)
+    dg_perp = -(dgu[:, :, None, :] * eq.u[..., None] + eq.gu[..., None, None] * du)
     lever = leg.motor_com * leg.motor_mass - leg.shaft_com * leg.shaft_mass
-    ds = (-lever / L**2)[..., None] * dL
-    df_perp = -(ds[:, :, None, :] * g_perp[..., None] + s[..., None, None] * dg_perp)
-    # --- moment of the weight above each platform's top plate ---------------------------
+    ds = (-lever / eq.L**2)[..., None] * dL
+    df_perp = -(ds[:, :, None, :] * eq.g_perp[..., None] + eq.s[..., None, None] * dg_perp)
+    return dgu, df_perp
+
+
+def _up_moment_derivatives(
+    am: AssemblerModel, eq: Equilibrium, p: np.ndarray, db: np.ndarray, dt: np.ndarray, du: np.ndarray
+) -> np.ndarray:
+    """d(moment about the world origin of the weight above each top plate) (n, 3, 6n) [N·m]."""
+    cfg, n = am.config, am.n
+    leg = cfg.leg
+    skew_g = skew(np.array([0.0, 0.0, -cfg.gravity]))
     d_motor_c = db + leg.motor_com * du
     d_shaft_c = dt - leg.shaft_com * du
-    level_dmoment = np.zeros((n + 1, 3, C))
-    skew_g = skew(g)
-    dp_plates = _point_jacobian(p[1:], 1, n)
-    level_dmoment[1:] = -cfg.plate.mass * np.matmul(skew_g, dp_plates)
+    level_dmoment = np.zeros((n + 1, 3, 6 * n))
+    level_dmoment[1:] = -cfg.plate.mass * np.matmul(skew_g, _point_jacobian(p[1:], 1, n))
     level_dmoment[:n] += (-np.matmul(skew_g, leg.motor_mass * d_motor_c + leg.shaft_mass * d_shaft_c)).sum(axis=1)
     d_payload = _point_jacobian(eq.payload_point[None], n, n)[0]
     level_dmoment[n] += -cfg.payload.mass * skew_g @ d_payload
-    up_dmoment = np.cumsum(level_dmoment[::-1], axis=0)[::-1][1:]
-    # --- derivative of the 6x6 system of each platform ---------------------------------
-    skew_t = skew(t)
+    return np.cumsum(level_dmoment[::-1], axis=0)[::-1][1:]
+
+
+def _axial_force_derivatives(
+    eq: Equilibrium, dt: np.ndarray, du: np.ndarray, df_perp: np.ndarray, up_dmoment: np.ndarray
+) -> np.ndarray:
+    """d(axial ball-force components) (n, 6, 6n) [N]: the 6×6 system of each platform
+    differentiated, ``K da = d(rhs) - dK a``."""
+    skew_t = skew(eq.t)
     # d(t × f) = -[f]× dt + [t]× df ;  d(t × u) = -[u]× dt + [t]× du
-    d_t_cross_f = -np.matmul(skew(f_perp), dt) + np.matmul(skew_t, df_perp)
-    d_t_cross_u = -np.matmul(skew(u), dt) + np.matmul(skew_t, du)
+    d_t_cross_f = -np.matmul(skew(eq.f_perp), dt) + np.matmul(skew_t, df_perp)
+    d_t_cross_u = -np.matmul(skew(eq.u), dt) + np.matmul(skew_t, du)
     d_rhs = np.concatenate([-df_perp.sum(axis=1), up_dmoment - d_t_cross_f.sum(axis=1)], axis=1)
+    a = eq.a
     dK_a = np.concatenate([np.einsum("ji,jikc->jkc", a, du), np.einsum("ji,jikc->jkc", a, d_t_cross_u)], axis=1)
-    da = np.linalg.solve(K, d_rhs - dK_a)  # (n, 6, C)
-    forces = eq.forces
-    d_forces = da + leg.shaft_mass * dgu
-    cos_b, cos_t, d_cos_b, d_cos_t, rise, d_rise = _deflection_and_rise(geo.home_direction, R, d, u, dd, du)
-    # --- plate angular deviation λ_k (paper eq. 9) --------------------------------------
-    dev = plate_deviation(am, pa)
+    return np.linalg.solve(eq.K, d_rhs - dK_a)
+
+
+def _plate_angle_sq_derivatives(dev: PlateDeviation, p: np.ndarray) -> np.ndarray:
+    """d(λ_k²) (n, 6n): ``dλ = -(c - cosλ â)·dâ / sinλ - (â - cosλ c)·dc / sinλ``, with
+    â the unit step ``p_k - p_{k-1}`` and c the rest direction (λ/sinλ → 1 at λ = 0)."""
+    n = p.shape[0] - 1
+    C = 6 * n
     lam, step_dir, step_len, rest_dir, sin_l, cos_l = (
         dev.angles,
         dev.step_dir,
@@ -309,31 +389,48 @@ def pose_derivatives(am: AssemblerModel, pa: PlateArrays) -> PoseDerivatives:
         dev.sin,
         dev.cos,
     )
-    # d(λ²) = 2 λ dλ;  dλ = -(c - cosλ â)·dâ / sinλ - (â - cosλ c)·dc / sinλ, λ/sinλ → 1
     ratio = np.where(sin_l > 1e-12, lam / np.maximum(sin_l, 1e-300), 1.0)
-    d_step = np.zeros((n, 3, C))
+    dp_all = _point_jacobian(p[1:], 1, n)
+    d_step = dp_all.copy()
+    d_step[1:] -= dp_all[:-1]
     d_rest_dir = np.zeros((n, 3, C))
-    dp_all = dp_plates
-    for k in range(n):
-        d_step[k] += dp_all[k]
-        if k >= 1:
-            d_step[k] -= dp_all[k - 1]
-            d_rest_dir[k, :, 6 * (k - 1) + 3 : 6 * k] = -skew(rest_dir[k])
+    for k in range(1, n):
+        d_rest_dir[k, :, 6 * (k - 1) + 3 : 6 * k] = -skew(rest_dir[k])
     d_step_dir = np.matmul((_I3 - step_dir[:, :, None] * step_dir[:, None, :]) / step_len[:, None, None], d_step)
     g_a = -(rest_dir - cos_l[:, None] * step_dir)
     g_c = -(step_dir - cos_l[:, None] * rest_dir)
-    d_lam_sq = (
-        2.0 * ratio[:, None] * (np.einsum("jk,jkc->jc", g_a, d_step_dir) + np.einsum("jk,jkc->jc", g_c, d_rest_dir))
-    )
+    inner = np.einsum("jk,jkc->jc", g_a, d_step_dir) + np.einsum("jk,jkc->jc", g_c, d_rest_dir)
+    return 2.0 * ratio[:, None] * inner
+
+
+def pose_derivatives(am: AssemblerModel, pa: PlateArrays, values: PoseValues | None = None) -> PoseDerivatives:
+    """Forces, lengths, deflections, rise and plate angles with their derivatives.
+
+    Args:
+        pa: world poses of plates 0..n (validated, e.g. by
+            :func:`~assembler_pin.kinematics.plate_arrays`).
+        values: :func:`pose_values` of ``pa`` when the caller has it: the derivatives then
+            extend that pass instead of computing the pose again.
+
+    Raises:
+        numpy.linalg.LinAlgError: a platform's 6×6 system is singular.
+    """
+    v = pose_values(am, pa) if values is None else values
+    eq = v.eq
+    db, dt, dd, dL, du = _leg_jacobians(eq.b, eq.t, eq.L, eq.u)
+    dgu, df_perp = _transverse_force_derivatives(am, eq, dL, du)
+    up_dmoment = _up_moment_derivatives(am, eq, pa.p, db, dt, du)
+    da = _axial_force_derivatives(eq, dt, du, df_perp, up_dmoment)
+    d_cos, d_rise = _deflection_and_rise_derivatives(pa.R, eq.d, eq.u, v.h_bottom, v.h_top, dd, du)
     return PoseDerivatives(
-        forces=forces,
-        d_forces=d_forces,
-        lengths=L,
+        forces=eq.forces,
+        d_forces=da + am.config.leg.shaft_mass * dgu,
+        lengths=eq.L,
         d_lengths=dL,
-        cos_deflection=np.stack([cos_b, cos_t], axis=-1),
-        d_cos_deflection=np.stack([d_cos_b, d_cos_t], axis=2),
-        rise=rise,
+        cos_deflection=v.cos_deflection,
+        d_cos_deflection=d_cos,
+        rise=v.rise,
         d_rise=d_rise,
-        plate_angles=lam,
-        d_plate_angles_sq=d_lam_sq,
+        plate_angles=v.plate_angles,
+        d_plate_angles_sq=_plate_angle_sq_derivatives(v.deviation, pa.p),
     )

@@ -168,16 +168,9 @@ def solve(
         PoseError: the goal is not a valid SE(3) pose.
         OptionsError: ``starts`` is not one of :data:`START_MODES`.
     """
-    from .helper_arm import HelperArmOptions, initial_condition
+    from .helper_arm import initial_condition
 
-    checked_model(am)
-    if starts not in START_MODES:
-        raise OptionsError(f"starts must be one of {', '.join(START_MODES)}, got {starts!r}")
-    goal = to_se3(goal, "goal")
-    options = checked_options(options, OptimizeOptions, "options")
-    helper_options = checked_options(helper_options, HelperArmOptions, "helper_options")
-    if not isinstance(optimize, bool):
-        raise ArgumentError(f"optimize must be True or False, got {type(optimize).__name__}")
+    goal, options, helper_options = _checked_inputs(am, goal, optimize, options, helper_options, starts)
     t0 = time.perf_counter()
     init = initial_condition(am, goal, helper_options)
     timing = {"initial": time.perf_counter() - t0}
@@ -187,11 +180,41 @@ def solve(
     if init.attempts == 0 and not init.success:  # out of reach: nothing to start from
         timing["optimize"] = 0.0
         return SolveResult(goal, False, init.message, init, None, timing, details=helper)
-    opts = options
     t1 = time.perf_counter()
-    runs = _run_starts(am, goal, init, opts, starts)
+    runs = _run_starts(am, goal, init, options, starts)
     timing["optimize"] = time.perf_counter() - t1
+    return _answer(goal, init, runs, timing)
+
+
+def _checked_inputs(
+    am: AssemblerModel,
+    goal: pin.SE3 | np.ndarray,
+    optimize: bool,
+    options: OptimizeOptions | None,
+    helper_options: HelperArmOptions | None,
+    starts: str,
+) -> tuple[pin.SE3, OptimizeOptions, HelperArmOptions]:
+    """(goal, options, helper options) of :func:`solve`, or the error naming what is wrong."""
+    from .helper_arm import HelperArmOptions
+
+    checked_model(am)
+    if starts not in START_MODES:
+        raise OptionsError(f"starts must be one of {', '.join(START_MODES)}, got {starts!r}")
+    goal = to_se3(goal, "goal")
+    options = checked_options(options, OptimizeOptions, "options")
+    helper_options = checked_options(helper_options, HelperArmOptions, "helper_options")
+    if not isinstance(optimize, bool):
+        raise ArgumentError(f"optimize must be True or False, got {type(optimize).__name__}")
+    return goal, options, helper_options
+
+
+def _answer(
+    goal: pin.SE3, init: InitialConditionResult, runs: dict[str, OptimizeResult], timing: dict[str, float]
+) -> SolveResult:
+    """The :class:`SolveResult` of the optimizer's runs: the best run (:func:`_best_run`) or
+    why none reached a feasible pose."""
     name, best = _best_run(runs)
+    helper = f"helper arm: {init.details or init.message}"
     details = "; ".join([helper, *(f"{k} start: {r.message}" for k, r in runs.items())])
     if best is None:
         return SolveResult(goal, False, _no_start_message(init, runs), init, None, timing, None, runs, details=details)
@@ -257,12 +280,11 @@ def needs_other_starts(am: AssemblerModel, run: OptimizeResult, opts: OptimizeOp
 
 def optimizer_starts(am: AssemblerModel, goal: pin.SE3, helper_plates: PlateArrays | None) -> dict[str, PlateArrays]:
     """The optimizer's starts (:data:`STARTS`): plate 0 at home, plate n at the goal."""
-    n, base = am.n, am.home[0]
+    from .helper_arm.initial import even_screw_pose
+
     home = list(am.home)
-    home[n] = goal
-    screw = pin.log6(base.actInv(goal))
-    even = [base * pin.exp6(screw * (k / n)) for k in range(n)] + [goal]
-    starts = {"home": PlateArrays.from_se3(home), "screw": PlateArrays.from_se3(even)}
+    home[am.n] = goal
+    starts = {"home": PlateArrays.from_se3(home), "screw": PlateArrays.from_se3(even_screw_pose(am, goal))}
     if helper_plates is not None:
         starts = {"helper_arm": helper_plates, **starts}
     return starts
@@ -286,7 +308,9 @@ def _seed_of(plates: PlateArrays) -> int:
 
 
 def _best_run(runs: dict[str, OptimizeResult]) -> tuple[str | None, OptimizeResult | None]:
-    """The run whose returned state is feasible with the smallest Ω, successes first."""
+    """The run whose returned state is feasible with the smallest Ω, successes first (each
+    run's ``objective_optimized``: :func:`assembler_pin.objective.objective_value` of its
+    Pinocchio-checked state)."""
     feasible = [(not r.success, r.objective_optimized, name) for name, r in runs.items() if r.optimized.feasible]
     if not feasible:
         return None, None

@@ -13,12 +13,19 @@ import json
 import numpy as np
 import pinocchio as pin
 import pytest
-from checks import kinematic_problems
+from checks import design_forces, design_plate_deviation, kinematic_problems
 from test_scaling import whole_stack_forces
 
 import assembler_pin as ap
 from assembler_pin.bench import random_reachable_plates
-from assembler_pin.carrier import CARRIERS, Carrier, UnknownCarrierError, carrier_statics, solve_on_carrier
+from assembler_pin.carrier import (
+    CARRIERS,
+    Carrier,
+    UnknownCarrierError,
+    carrier_objective,
+    carrier_statics,
+    solve_on_carrier,
+)
 from assembler_pin.cli import main
 
 MOUNTS = {
@@ -87,16 +94,18 @@ def test_solve_in_the_world_with_and_without_moving_the_carrier(am, carriers):
     np.testing.assert_allclose(held.statics.q, carrier.upright_q)
 
     # moving the carrier never scores worse than holding it (holding is one of the candidates);
-    # Ω_c recomputed here from its definition
+    # Ω_c recomputed here from its definition: free-body forces and λ of the world plates (checks.py)
     def omega(st):
-        lam = ap.kinematics.plate_deviation(am, st.state.plates).angles
+        lam = design_plate_deviation(st.state.plates)
+        forces = design_forces(am.config, st.state.plates)
+        np.testing.assert_allclose(st.state.forces, forces, rtol=1e-9, atol=1e-9)
         return (
-            np.abs(st.state.forces).max()
-            + np.sqrt(np.sum(lam**2))
-            + 200.0 * np.max(np.abs(st.torques) / carrier.effort_limit)
+            np.abs(forces).max() + np.sqrt(np.sum(lam**2)) + 200.0 * np.max(np.abs(st.torques) / carrier.effort_limit)
         )
 
+    assert held.candidates[0][2] == pytest.approx(omega(held.statics), rel=1e-9)  # the score it ranked by
     assert omega(moved.statics) <= omega(held.statics) + 1e-9
+    assert carrier_objective(am, moved.statics) == pytest.approx(omega(moved.statics), rel=1e-9)
     assert np.isnan(moved.candidates[-1][0]) and "joint optimization" in moved.candidates[-1][3]
     assert "array(" not in repr(moved)
 

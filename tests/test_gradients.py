@@ -89,3 +89,20 @@ def test_gravity_free_stack_carries_no_force(random_poses):
     _, pa = random_poses[2]
     d = pose_derivatives(am, pa)
     assert np.abs(d.forces).max() < 1e-12 and np.abs(d.d_forces).max() < 1e-12
+
+
+@pytest.mark.parametrize("pose", [3, 4])
+def test_one_pass_values_are_the_free_body_statics_and_feed_the_derivatives(am, random_poses, pose):
+    """``pose_values``: forces equal to free bodies from the design (checks.py), λ to eq. 9;
+    derivatives extending that pass equal the ones computed from scratch."""
+    from checks import design_forces, design_plate_deviation
+
+    from assembler_pin.gradients import pose_values
+
+    _, pa = random_poses[pose]
+    values = pose_values(am, pa)
+    np.testing.assert_allclose(values.forces, design_forces(am.config, pa), rtol=1e-9, atol=1e-9)
+    np.testing.assert_allclose(values.plate_angles, design_plate_deviation(pa), atol=1e-9)
+    extended, fresh = pose_derivatives(am, pa, values), pose_derivatives(am, pa)
+    for name in ("d_forces", "d_lengths", "d_cos_deflection", "d_rise", "d_plate_angles_sq"):
+        assert np.array_equal(getattr(extended, name), getattr(fresh, name)), name

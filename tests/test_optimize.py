@@ -99,3 +99,69 @@ def test_bad_options():
         OptimizeOptions(method="newton")
     with pytest.raises(ValueError, match="weights"):
         OptimizeOptions(w1=0, w2=0)
+
+
+def test_iterates_take_one_closed_form_pass(am, start, monkeypatch):
+    """Each point: one closed-form pass for the values, derivatives extending that same pass
+    (never computed again), and the Pinocchio statics only re-checking returned states."""
+    import assembler_pin.optimize.problem as problem
+    import assembler_pin.state as state_module
+
+    calls = {"values": 0, "derivatives": 0, "from_scratch": 0, "pinocchio": 0}
+    real_values, real_derivatives, real_statics = (
+        problem.pose_values,
+        problem.pose_derivatives,
+        state_module.solve_statics,
+    )
+
+    def values(*args, **kwargs):
+        calls["values"] += 1
+        return real_values(*args, **kwargs)
+
+    def derivatives(am_, plates, values=None):
+        calls["derivatives"] += 1
+        calls["from_scratch"] += values is None
+        return real_derivatives(am_, plates, values)
+
+    def statics(*args, **kwargs):
+        calls["pinocchio"] += 1
+        return real_statics(*args, **kwargs)
+
+    monkeypatch.setattr(problem, "pose_values", values)
+    monkeypatch.setattr(problem, "pose_derivatives", derivatives)
+    monkeypatch.setattr(state_module, "solve_statics", statics)
+    result = optimize_internal_poses(am, start)
+    assert result.success
+    assert calls["values"] == result.evaluations + 1  # + the start's max|F| (the force cap)
+    assert calls["derivatives"] == result.gradient_evaluations > 0 and calls["from_scratch"] == 0
+    # the start, the answer, the best point met and at most four pull-back trials
+    assert 2 <= calls["pinocchio"] <= 7 < result.evaluations
+    _assert_feasible_independently(am, result.optimized, goal=start.se3(am.n))
+
+
+def test_smooth_form_derivatives_match_finite_differences(start):
+    """Objective gradient and every constraint row's Jacobian (epigraph, unequal force
+    limits, leg limits, EE tolerance, motion step) against central differences."""
+    from assembler_pin.kinematics import leg_state
+    from assembler_pin.optimize import MotionTerm
+    from assembler_pin.optimize.problem import Problem
+    from assembler_pin.optimize.smooth import SmoothForm
+
+    am = AssemblerModel.from_config(load_config({"leg": {"max_tension": 150.0, "max_compression": 120.0}}))
+    opts = OptimizeOptions(w1=0.7, w2=3.0, ee_tolerance=GoalTolerance(position=0.01, rotation=0.02))
+    motion = MotionTerm(leg_state(am, start).lengths + 0.003, max_step=0.02, w3=50.0)
+    form = SmoothForm(Problem(am, start, start.se3(am.n), opts, False, motion))
+    rng = np.random.default_rng(3)
+    x = np.concatenate([rng.normal(0.0, 0.01, form.problem.nx_pose), [60.0]])
+    grad, jac = form.grad(x), form.cons_jac(x)
+    h = 1e-6
+    fd_grad, fd_jac = np.zeros_like(grad), np.zeros_like(jac)
+    for c in range(x.size):
+        e = np.zeros_like(x)
+        e[c] = h
+        fd_grad[c] = (form.fun(x + e) - form.fun(x - e)) / (2 * h)
+        fd_jac[:, c] = (form.cons(x + e) - form.cons(x - e)) / (2 * h)
+    assert np.abs(grad - fd_grad).max() <= 1e-6 * np.abs(fd_grad).max()
+    row_scale = np.abs(fd_jac).max(axis=1, keepdims=True)  # each row held at its own scale
+    assert np.all(np.abs(jac - fd_jac) <= 1e-6 * row_scale + 1e-10)
+    assert jac.shape[0] == 2 * 24 + 2 * 24 + 5 * 24 + 2 + 2 * 24  # every family present

@@ -98,3 +98,19 @@ def test_both_methods_reach_feasible_improvements(am, method):
     assert result.optimized.feasible and design_problems(am.config, result.optimized.plates, goal=scn.goal) == []
     start = result.optimization.initial.plates
     assert design_objective(am.config, result.optimized.plates) < design_objective(am.config, start)
+
+
+def test_the_screw_start_gives_every_platform_the_same_transform(am):
+    """The solver's ``screw`` start (the helper arm's last repair start too): plate 0 at home,
+    plate n at the goal, and one relative transform T_{k-1}⁻¹·T_k for every platform, whose
+    n-th power is base⁻¹·goal."""
+    from assembler_pin.helper_arm.initial import even_screw_pose
+    from assembler_pin.solver import optimizer_starts
+
+    goal = SCENARIOS["ninety_degrees"].goal
+    screw = optimizer_starts(am, goal, None)["screw"]
+    assert np.allclose(screw.as_matrices(), np.array([m.homogeneous for m in even_screw_pose(am, goal)]))
+    rel = [screw.se3(k - 1).actInv(screw.se3(k)).homogeneous for k in range(1, am.n + 1)]
+    assert all(np.allclose(r, rel[0], atol=1e-12) for r in rel)
+    assert np.allclose(screw.se3(0).homogeneous, am.home[0].homogeneous)
+    assert np.allclose(am.home[0].homogeneous @ np.linalg.matrix_power(rel[0], am.n), goal.homogeneous, atol=1e-12)

@@ -467,8 +467,9 @@ def test_an_unconverged_joint_optimization_is_never_kept(am, monkeypatch):
 
 def test_carrier_placements_report_progress(am, monkeypatch):
     import assembler_pin.carrier as carrier_mod
+    import assembler_pin.carrier.solve as carrier_solve
 
-    monkeypatch.setattr(carrier_mod, "_stack_on", lambda s, q: (None, "no stack pose (stub)"))
+    monkeypatch.setattr(carrier_solve, "_stack_on", lambda s, q: (None, "no stack pose (stub)"))
     carrier = carrier_mod.Carrier("ur10")
     goal = carrier.base_pose(carrier.upright_q) * ap.scenario("translation").goal
     stream = io.StringIO()
@@ -520,9 +521,9 @@ class _Terminal(io.StringIO):
 
 @pytest.mark.slow
 def test_the_cli_progress_shows_on_a_terminal_only(am, monkeypatch, capsys):
-    import assembler_pin.carrier as carrier_mod
+    import assembler_pin.carrier.solve as carrier_solve
 
-    monkeypatch.setattr(carrier_mod, "_stack_on", lambda s, q: (None, "no stack pose (stub)"))
+    monkeypatch.setattr(carrier_solve, "_stack_on", lambda s, q: (None, "no stack pose (stub)"))
     argv = ["solve", "--carrier", "ur10", "--goal", *CARRIER_GOAL]
     assert main(argv) == 1
     assert capsys.readouterr().err == ""  # stderr is not a terminal here: no progress text

@@ -29,7 +29,14 @@ from .link_lengths import link_length_scan
 from .options import HelperArmOptions
 from .repair import perturbed_plates, repair_stack
 
-__all__ = ["KINEMATIC_VIOLATIONS", "Candidate", "InitialConditionResult", "arm_cache", "initial_condition"]
+__all__ = [
+    "KINEMATIC_VIOLATIONS",
+    "Candidate",
+    "InitialConditionResult",
+    "arm_cache",
+    "even_screw_pose",
+    "initial_condition",
+]
 
 logger = logging.getLogger(__name__)
 
@@ -265,14 +272,16 @@ def _repair_starts(
     if opts.repair_starts == 0 or scan.last_q is None:
         return []
     starts = sorted(scan.candidates, key=lambda c: c.score)[: 1 if cheap else opts.repair_starts]
-    starts.append(Candidate(math.inf, _even_screw(am, goal)))
+    starts.append(Candidate(math.inf, even_screw_pose(am, goal)))
     if not cheap:
         starts += [Candidate(math.inf, plates) for plates in perturbed_plates(starts[-1].plates, opts.perturbed_starts)]
     return starts
 
 
-def _even_screw(am: AssemblerModel, goal: pin.SE3) -> list[pin.SE3]:
-    """Plate k at ``base·exp6(k/n · log6(base⁻¹·goal))``, plate n at the goal."""
+def even_screw_pose(am: AssemblerModel, goal: pin.SE3) -> list[pin.SE3]:
+    """The even screw pose: plate k at ``base·exp6(k/n · log6(base⁻¹·goal))`` (every platform
+    the same relative transform), plate n at the goal; the one definition (the helper arm's
+    last repair start and the solver's ``screw`` start)."""
     base, n = am.home[0], am.n
     screw = pin.log6(base.actInv(goal))
     return [base * pin.exp6(screw * (k / n)) for k in range(n)] + [goal.copy()]

@@ -13,10 +13,12 @@ import logging
 import numpy as np
 import pinocchio as pin
 
-from .carrier import Carrier, CarrierStatics, carrier_statics, carrier_torques
-from .kinematics import PlateArrays
-from .model import AssemblerModel
-from .options import GoalTolerance, OptimizeOptions
+from ..kinematics import PlateArrays
+from ..model import AssemblerModel
+from ..objective import omega
+from ..options import GoalTolerance, OptimizeOptions
+from .robot import Carrier
+from .statics import CarrierStatics, carrier_statics, carrier_torques
 
 __all__ = ["JointProblem", "joint_polish"]
 
@@ -58,10 +60,10 @@ class JointProblem:
 
     def vector(self, x: np.ndarray) -> np.ndarray:
         """[Ω_c, constraint rows (>= 0)...] at x (cached)."""
-        from .constraints import leg_limit_margins
-        from .kinematics import leg_state, plate_deviation
-        from .optimize import SINGULAR_FORCE
-        from .statics import solve_statics
+        from ..constraints import leg_limit_margins
+        from ..kinematics import leg_state, plate_deviation
+        from ..optimize import SINGULAR_FORCE
+        from ..statics import solve_statics
 
         key = x.tobytes()
         if key in self._cache:
@@ -82,9 +84,9 @@ class JointProblem:
         angles = plate_deviation(self.am, world).angles
         ratio = carrier_torques(self.carrier, q, world.p[0], statics.base_wrench) / self.carrier.effort_limit
         s, t = x[-2], x[-1]
-        omega = self.opts.w1 * s + self.opts.w2 * np.sqrt(np.sum(angles**2)) + self.w_carrier * t
+        omega_c = omega(s, angles, self.opts.w1, self.opts.w2) + self.w_carrier * t
         limits = [leg.max_tension - 1e-6 - forces, forces + leg.max_compression - 1e-6]
-        rows = np.concatenate([[omega], s - forces, s + forces, *limits, t - ratio, t + ratio, margins])
+        rows = np.concatenate([[omega_c], s - forces, s + forces, *limits, t - ratio, t + ratio, margins])
         if len(self._cache) > 512:
             self._cache.clear()
         self._cache[key] = rows

@@ -1,0 +1,207 @@
+"""``optimize_internal_poses``: run a method from a start and return a checked answer.
+
+The iterates are evaluated in closed form (:mod:`.problem`); every state the user gets back
+is evaluated again with the Pinocchio statics (:func:`~assembler_pin.state.evaluate_state`),
+and only such a re-checked state can be called feasible.
+"""
+
+from __future__ import annotations
+
+import logging
+import time
+from dataclasses import dataclass
+
+import numpy as np
+import pinocchio as pin
+
+from ..exceptions import OptionsError, _SingularIterateError
+from ..kinematics import PlateArrays, checked_goal, plate_arrays
+from ..model import AssemblerModel, checked_model
+from ..objective import objective_value
+from ..options import GoalTolerance, OptimizeOptions, checked_options
+from ..state import StackState, evaluate_state
+from ..threads import one_blas_thread
+from .options import MotionTerm
+from .paper import PaperForm
+from .problem import Problem
+from .result import OptimizeResult, SolverResult, StoppedEarly, nothing_to_optimize, verdict
+from .smooth import SmoothForm
+
+__all__ = ["optimize_internal_poses"]
+
+logger = logging.getLogger(__name__)
+
+
+@one_blas_thread
+def optimize_internal_poses(
+    am: AssemblerModel,
+    initial: StackState | PlateArrays | list,
+    goal: pin.SE3 | None = None,
+    options: OptimizeOptions | None = None,
+    motion: MotionTerm | None = None,
+) -> OptimizeResult:
+    """Minimize Ω over the intermediate plate poses, from a starting pose.
+
+    The start need not be valid (the solver may reach a feasible point from outside); the
+    result is a success only when the solver converged to a point that meets every
+    constraint. A converged point just outside a limit is pulled back inside along the
+    segment to the best feasible point met; when that fails the result says so.
+
+    Args:
+        initial: the starting pose (a state or plate poses), e.g. the helper-arm initial
+            condition; plate n is taken as the goal unless ``goal`` is given.
+        goal: the EE goal pose (default: the initial state's plate n).
+        options: see :class:`OptimizeOptions`.
+        motion: continuity with a previous sample (:class:`MotionTerm`, slsqp only); the
+            chosen state then also keeps every leg within ``max_step`` of it.
+    """
+    opts, start, goal = _checked_inputs(am, initial, goal, options, motion)
+    check = _Check(am, goal, opts.ee_tolerance or opts.goal_tolerance, opts, motion)
+    initial_state = evaluate_state(am, start, goal=goal, tolerance=check.tolerance)
+    omega0 = objective_value(am, initial_state, opts.w1, opts.w2)
+    problem = Problem(am, start, goal, opts, initial_state.feasible, motion)
+    if problem.nx_pose == 0:
+        return nothing_to_optimize(initial_state, omega0, opts.method)
+    t0 = time.perf_counter()
+    res, x_final, singular = _run_solver(problem, initial_state)
+    elapsed = time.perf_counter() - t0
+    chosen, omega_chosen, success, message = _outcome(check, problem, res, x_final, singular, initial_state)
+    logger.info(
+        "optimize[%s]: %s, Ω %.4g -> %.4g in %.3f s, %d iterations",
+        *(opts.method, message, omega0, omega_chosen, elapsed, res.nit),
+    )
+    return OptimizeResult(
+        success=success,
+        message=message,
+        status=int(res.status),
+        solver_message=str(res.message),
+        iterations=int(res.nit),
+        evaluations=problem.evaluations,
+        gradient_evaluations=problem.gradient_evaluations,
+        time_s=elapsed,
+        initial=initial_state,
+        optimized=chosen,
+        objective_initial=omega0,
+        objective_optimized=omega_chosen,
+        method=opts.method,
+    )
+
+
+def _outcome(
+    check: _Check, problem: Problem, res: SolverResult, x_final: np.ndarray, singular: str, initial_state: StackState
+) -> tuple[StackState, float, bool, str]:
+    """(state returned, its Ω, success, message): the solver's point re-checked with the
+    Pinocchio statics, pulled back inside when just outside a limit, then the best of it,
+    the best feasible point met and the start (:func:`_chosen`)."""
+    final_state = check.state_at(problem, x_final)
+    converged = bool(res.success) and not singular
+    if converged and not check.acceptable(final_state):
+        final_state = _pulled_inside(check, problem, x_final, final_state)
+    chosen, omega_chosen = _chosen(check, problem, final_state, initial_state)
+    if check.motion is not None and converged and final_state.feasible and not check.acceptable(final_state):
+        converged, singular = (
+            False,
+            f"motion step: the converged point moves a leg more than {1e3 * check.motion.max_step:.3g} mm",
+        )
+    success, message = verdict(res, singular, converged, final_state, chosen, initial_state)
+    return chosen, omega_chosen, success, message
+
+
+def _checked_inputs(
+    am: AssemblerModel,
+    initial: StackState | PlateArrays | list,
+    goal: pin.SE3 | None,
+    options: OptimizeOptions | None,
+    motion: MotionTerm | None,
+) -> tuple[OptimizeOptions, PlateArrays, pin.SE3]:
+    """(options, start plates, goal), or an :class:`OptionsError` / :class:`PoseError`."""
+    checked_model(am)
+    opts = checked_options(options, OptimizeOptions, "options")
+    if motion is not None and not isinstance(motion, MotionTerm):
+        raise OptionsError(f"motion must be a MotionTerm or None, got {type(motion).__name__}")
+    if goal is not None:
+        goal = checked_goal(goal, "goal")
+    if motion is not None:
+        if opts.method != "slsqp":
+            raise OptionsError("a motion term needs method 'slsqp'")
+        if motion.previous_lengths.shape != (am.n, 6):
+            raise OptionsError(f"previous_lengths must have shape ({am.n}, 6), got {motion.previous_lengths.shape}")
+    start = initial.plates if isinstance(initial, StackState) else plate_arrays(am, initial)
+    return opts, start, start.se3(am.n) if goal is None else goal
+
+
+@dataclass(frozen=True)
+class _Check:
+    """The Pinocchio re-check of candidate points: their states, whether they may be
+    returned, and their Ω (with the motion term)."""
+
+    am: AssemblerModel
+    goal: pin.SE3
+    tolerance: GoalTolerance
+    opts: OptimizeOptions
+    motion: MotionTerm | None
+
+    def state_at(self, problem: Problem, x_pose: np.ndarray) -> StackState:
+        return evaluate_state(self.am, problem.chart.plates(x_pose), goal=self.goal, tolerance=self.tolerance)
+
+    def acceptable(self, state: StackState) -> bool:
+        """Feasible, and within the motion step of the previous sample."""
+        return state.feasible and (self.motion is None or bool(np.all(self.motion.margins(state.leg_lengths) >= 0)))
+
+    def score(self, state: StackState) -> float:
+        return objective_value(self.am, state, self.opts.w1, self.opts.w2, self.motion)
+
+
+def _run_solver(problem: Problem, initial_state: StackState) -> tuple[SolverResult, np.ndarray, str]:
+    """Run SLSQP in the method's chart; returns (scipy result, final pose point, the reason
+    when it stopped at a singular iterate else "")."""
+    from scipy.optimize import minimize  # on first use: fast start-up
+
+    opts = problem.opts
+    form = SmoothForm(problem) if opts.method == "slsqp" else PaperForm(problem)
+    x0 = form.x0(initial_state)
+    cons: dict = {"type": "ineq", "fun": form.cons}
+    if isinstance(form, SmoothForm):
+        cons["jac"] = form.cons_jac
+    jac = form.grad if isinstance(form, SmoothForm) else None
+    try:
+        res = minimize(
+            form.fun,
+            x0,
+            jac=jac,
+            method="SLSQP",
+            constraints=[cons],
+            options={"maxiter": opts.max_iterations, "ftol": opts.ftol},
+        )
+        singular = ""
+    except _SingularIterateError as exc:
+        singular = f"stopped at a singular iterate: {exc}"
+        res = StoppedEarly(x0, singular)
+    x_final = res.x[:-1] if isinstance(form, SmoothForm) else res.x
+    return res, x_final, singular
+
+
+def _pulled_inside(check: _Check, problem: Problem, x_final: np.ndarray, final_state: StackState) -> StackState:
+    """SLSQP honours its rows to ~1e-8: step back towards the best feasible point met; the
+    first acceptable state on the way, else ``final_state``."""
+    x_inside = problem.best[1] if problem.best is not None else np.zeros_like(x_final)
+    for t in (1e-4, 1e-3, 1e-2, 1e-1):
+        trial = check.state_at(problem, x_final + t * (x_inside - x_final))
+        if check.acceptable(trial):
+            return trial
+    return final_state
+
+
+def _chosen(
+    check: _Check, problem: Problem, final_state: StackState, initial_state: StackState
+) -> tuple[StackState, float]:
+    """The state returned and its Ω: the acceptable one of (final, best met, start) with the
+    lowest Ω whose max|F| is no worse than a feasible start's."""
+    candidates = [final_state] + ([check.state_at(problem, problem.best[1])] if problem.best is not None else [])
+    chosen, omega_chosen = initial_state, check.score(initial_state)
+    for state in candidates:
+        value = check.score(state)
+        no_worse = not initial_state.feasible or state.max_abs_force <= initial_state.max_abs_force + 1e-9
+        if check.acceptable(state) and (not check.acceptable(chosen) or (value < omega_chosen and no_worse)):
+            chosen, omega_chosen = state, value
+    return chosen, omega_chosen

@@ -1,0 +1,47 @@
+"""The optimizer's settings: :class:`~assembler_pin.options.OptimizeOptions` and the
+continuity term of a motion (:class:`MotionTerm`)."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..exceptions import OptionsError
+from ..options import METHODS, OptimizeOptions
+from ..validation import is_number
+
+__all__ = ["METHODS", "MotionTerm", "OptimizeOptions"]
+
+
+@dataclass(frozen=True)
+class MotionTerm:
+    """Continuity with the previous sample of a motion.
+
+    Its cost ``w3·Σ (L_i - L_i^prev)²`` is :func:`assembler_pin.objective.motion_cost`.
+
+    Attributes:
+        previous_lengths: (n, 6) leg lengths of the previous sample [m].
+        max_step: largest change of any leg length from it [m] (> 0).
+        w3: weight of Σ ΔL² in the objective [1/m²] (>= 0).
+    """
+
+    previous_lengths: np.ndarray
+    max_step: float
+    w3: float = 0.0
+
+    def __post_init__(self) -> None:
+        if not (is_number(self.max_step) and 0 < self.max_step < math.inf):
+            raise OptionsError(f"max_step must be a finite number > 0 [m], got {self.max_step!r}")
+        if not (is_number(self.w3) and 0 <= self.w3 < math.inf):
+            raise OptionsError(f"w3 must be a finite number >= 0 [1/m^2], got {self.w3!r}")
+        prev = np.asarray(self.previous_lengths, dtype=float)
+        if prev.ndim != 2 or prev.shape[1] != 6 or not np.all(np.isfinite(prev)):
+            raise OptionsError(f"previous_lengths must be a finite (n, 6) array [m], got shape {prev.shape}")
+        object.__setattr__(self, "previous_lengths", prev)
+
+    def margins(self, lengths: np.ndarray) -> np.ndarray:
+        """Rows >= 0 when every leg moved at most ``max_step``: (2·6n,)."""
+        step = (lengths - self.previous_lengths).ravel()
+        return np.concatenate([self.max_step - step, self.max_step + step])

@@ -1,0 +1,94 @@
+"""One point of the optimizer: the closed-form values at a chart point, and their
+derivatives in chart coordinates (from the same pass, only where the solver asks)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from functools import cached_property
+
+import numpy as np
+
+from ..gradients import PoseDerivatives, PoseValues
+from ..kinematics import PlateArrays
+
+__all__ = ["SINGULAR_FORCE", "ChartDerivatives", "Point"]
+
+#: Forces [N] standing in for the statics at a singular trial point: finite (SLSQP cannot
+#: handle NaN) and far outside every force limit, so such a step is infeasible.
+SINGULAR_FORCE = 1e6
+
+
+@dataclass(frozen=True)
+class Point:
+    """The values at the pose part ``x`` of a decision vector.
+
+    Attributes:
+        x: the chart coordinates of the movable plates.
+        values: the closed-form pass (:func:`~assembler_pin.gradients.pose_values`).
+        forces: (n, 6) actuator forces [N, tension positive], :data:`SINGULAR_FORCE` where
+            the statics are not defined.
+    """
+
+    x: np.ndarray
+    values: PoseValues
+
+    @cached_property
+    def forces(self) -> np.ndarray:
+        f = self.values.forces
+        return np.where(np.isfinite(f), f, SINGULAR_FORCE)
+
+    @property
+    def singular(self) -> bool:
+        """Some platform's statics are not defined here."""
+        return not bool(np.all(np.isfinite(self.values.forces)))
+
+    @property
+    def plates(self) -> PlateArrays:
+        return self.values.plates
+
+    @property
+    def lengths(self) -> np.ndarray:
+        """(n, 6) leg lengths [m]."""
+        return self.values.lengths
+
+    @property
+    def plate_angles(self) -> np.ndarray:
+        """(n,) λ_k [rad]."""
+        return self.values.plate_angles
+
+    @property
+    def max_abs_force(self) -> float:
+        return float(np.abs(self.forces).max())
+
+
+@dataclass(frozen=True)
+class ChartDerivatives:
+    """Derivatives at a :class:`Point`, in chart coordinates.
+
+    Attributes:
+        pose: the derivatives w.r.t. the world twists of plates 1..n
+            (:func:`~assembler_pin.gradients.pose_derivatives`, last axis 6n).
+        B: (6n, m) the world twists of plates 1..n per chart coordinate.
+    """
+
+    pose: PoseDerivatives
+    B: np.ndarray
+
+    def chart(self, d: np.ndarray) -> np.ndarray:
+        """``d`` (..., 6n) as rows (prod(...), m) per chart coordinate."""
+        return d.reshape(-1, self.B.shape[0]) @ self.B
+
+    @cached_property
+    def forces(self) -> np.ndarray:
+        """(6n, m) d(forces) [N per chart unit], rows in the order of ``forces.ravel()``."""
+        return self.chart(self.pose.d_forces)
+
+    @cached_property
+    def lengths(self) -> np.ndarray:
+        """(6n, m) d(leg lengths)."""
+        return self.chart(self.pose.d_lengths)
+
+    @cached_property
+    def plate_angles_sq(self) -> np.ndarray:
+        """(n, m) d(λ_k²)."""
+        return self.chart(self.pose.d_plate_angles_sq)

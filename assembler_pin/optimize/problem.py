@@ -1,0 +1,143 @@
+"""The optimization problem common to both methods: the chart, the constraint row families,
+and the evaluation of a chart point.
+
+Every iterate is evaluated by ONE closed-form pass (:func:`~assembler_pin.gradients.pose_values`):
+forces, lengths, deflection cosines, rise and plate angles. Where the solver asks for
+derivatives at that point, :func:`~assembler_pin.gradients.pose_derivatives` extends the
+same pass. The Pinocchio statics are not used here: they re-check the returned state
+(:func:`~assembler_pin.state.evaluate_state` in :mod:`.internal_poses`), an independent path.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pinocchio as pin
+
+from ..exceptions import SingularConfigurationError, _SingularIterateError
+from ..gradients import pose_derivatives, pose_values
+from ..kinematics import PlateArrays
+from ..model import AssemblerModel
+from ..objective import motion_cost, omega
+from ..options import OptimizeOptions
+from .charts import LocalChart, TaaChart
+from .options import MotionTerm
+from .point import ChartDerivatives, Point
+from .rows import EETolerance, ForceLimitRows, LegLimitRows, MotionRows
+
+__all__ = ["Problem", "finite_rows"]
+
+#: What a non-finite constraint row (a degenerate trial point) is replaced by: infeasible.
+_NON_FINITE_ROW = -1e6
+
+
+def finite_rows(rows: np.ndarray) -> np.ndarray:
+    """``rows`` with NaN and -inf replaced by a large negative (infeasible) value, +inf by a
+    large positive one: SLSQP cannot handle non-finite rows."""
+    return np.nan_to_num(rows, nan=_NON_FINITE_ROW, posinf=-_NON_FINITE_ROW, neginf=_NON_FINITE_ROW)
+
+
+class Problem:
+    """The plates, the limits and the evaluation of chart points.
+
+    Args:
+        start: world poses of plates 0..n to start from.
+        goal: the EE goal (plate n's reference pose).
+        start_feasible: the start meets every constraint (then, for the smooth method, both
+            force limits are capped by its max|F|: max|F| never increases).
+        motion: continuity with a previous sample (smooth method only).
+    """
+
+    def __init__(
+        self,
+        am: AssemblerModel,
+        start: PlateArrays,
+        goal: pin.SE3,
+        opts: OptimizeOptions,
+        start_feasible: bool,
+        motion: MotionTerm | None = None,
+    ) -> None:
+        self.am, self.opts, self.goal, self.motion = am, opts, goal, motion
+        self.n = n = am.n
+        free_ee = opts.ee_tolerance is not None
+        ref = [start.se3(k) for k in range(n)] + [goal]
+        movable = list(range(1, n)) + ([n] if free_ee else [])
+        self.chart: LocalChart | TaaChart = (TaaChart if opts.method == "paper" else LocalChart)(ref, movable)
+        self.nx_pose = self.chart.size
+        leg = am.config.leg
+        self.start_max_force = Point(np.zeros(0), pose_values(am, start)).max_abs_force
+        cap = self.start_max_force if opts.method == "slsqp" and start_feasible else np.inf
+        self.force_limits = ForceLimitRows(min(leg.max_tension, cap) - 1e-6, min(leg.max_compression, cap) - 1e-6)
+        self.leg_limits = LegLimitRows(leg, opts.limit_margin, opts.rise_margin)
+        self.ee = EETolerance(goal, opts.ee_tolerance, self.chart) if opts.ee_tolerance is not None else None
+        self.motion_rows = MotionRows(motion) if motion is not None else None
+        self.best: tuple[float, np.ndarray] | None = None
+        self.evaluations = 0
+        self.gradient_evaluations = 0
+        self._point: Point | None = None
+        self._derivs: tuple[bytes, ChartDerivatives] | None = None
+        self._rows: tuple[Point, dict[str, np.ndarray]] | None = None
+
+    def point(self, x_pose: np.ndarray) -> Point:
+        """The values at the pose part of x (cached for the last point); tracks the best
+        feasible point met."""
+        if self._point is not None and np.array_equal(self._point.x, x_pose):
+            return self._point
+        x = np.array(x_pose, dtype=float)
+        with np.errstate(invalid="ignore", divide="ignore"):
+            p = Point(x, pose_values(self.am, self.chart.plates(x)))
+        self._point = p
+        self.evaluations += 1
+        if self.feasible(p):
+            value = self.omega(p)
+            if self.best is None or value < self.best[0]:
+                self.best = (value, x.copy())
+        return p
+
+    def derivatives(self, x_pose: np.ndarray) -> ChartDerivatives:
+        """Derivatives at the pose part of x, extending the point's closed-form pass.
+
+        Raises:
+            _SingularIterateError: the statics are singular there (no derivative exists).
+        """
+        key = np.asarray(x_pose, dtype=float).tobytes()
+        if self._derivs is not None and self._derivs[0] == key:
+            return self._derivs[1]
+        p = self.point(x_pose)
+        if not isinstance(self.chart, LocalChart):
+            raise TypeError("derivatives are taken in the local chart only (the paper's method has none)")
+        if p.singular:
+            raise _SingularIterateError("the statics are singular at the iterate")
+        try:
+            pose = pose_derivatives(self.am, p.plates, p.values)
+        except (np.linalg.LinAlgError, SingularConfigurationError) as exc:
+            raise _SingularIterateError(str(exc)) from None
+        d = ChartDerivatives(pose, self.chart.twist_jacobian(p.x, p.plates))
+        self._derivs = (key, d)
+        self.gradient_evaluations += 1
+        return d
+
+    def omega(self, p: Point) -> float:
+        """Ω at the point, with the motion term (:mod:`assembler_pin.objective`)."""
+        return omega(p.max_abs_force, p.plate_angles, self.opts.w1, self.opts.w2) + motion_cost(p.lengths, self.motion)
+
+    def rows(self, p: Point) -> dict[str, np.ndarray]:
+        """The rows of every family at the point (>= 0 when it holds), computed once per
+        point: ``leg``, ``force`` and, where they apply, ``ee`` and ``motion``."""
+        if self._rows is not None and self._rows[0] is p:
+            return self._rows[1]
+        rows = {"leg": self.leg_limits.values(p), "force": self.force_limits.values(p)}
+        if self.ee is not None:
+            rows["ee"] = self.ee.values(p)
+        if self.motion_rows is not None:
+            rows["motion"] = self.motion_rows.values(p)
+        self._rows = (p, rows)
+        return rows
+
+    def optional_rows(self, p: Point) -> list[np.ndarray]:
+        """The EE-tolerance and motion rows where they apply."""
+        rows = self.rows(p)
+        return [rows[k] for k in ("ee", "motion") if k in rows]
+
+    def feasible(self, p: Point) -> bool:
+        """Every row of the problem holds at the point."""
+        return bool(all(np.all(r >= 0) for r in self.rows(p).values()))

@@ -1,0 +1,126 @@
+"""The constraint rows of the optimizer, one family per class, each with its Jacobian.
+
+Every family gives rows that are >= 0 when the constraint holds (``values``) and their
+derivatives in chart coordinates (``jacobian``), in the same order:
+
+* :class:`LegLimitRows` — stroke, joint deflection (as cosines, smooth) and rise
+  (:func:`~assembler_pin.constraints.leg_limit_margins`, rows ``LEG_LIMIT_ROWS``);
+* :class:`ForceLimitRows` — ``limit_T - F >= 0`` and ``F + limit_C >= 0``;
+* :class:`EpigraphRows` — ``s - F >= 0`` and ``s + F >= 0`` (the smooth method's bound
+  ``s`` on max|F|);
+* :class:`EETolerance` — the EE within its position and rotation tolerance (squared norms);
+* :class:`MotionRows` — ``|L_i - L_i^prev| <= max_step`` along a motion.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pinocchio as pin
+
+from ..config import LegConfig
+from ..constraints import leg_limit_margins
+from ..options import GoalTolerance
+from .charts import LocalChart, TaaChart
+from .options import MotionTerm
+from .point import ChartDerivatives, Point
+
+__all__ = ["EETolerance", "EpigraphRows", "ForceLimitRows", "LegLimitRows", "MotionRows"]
+
+
+class LegLimitRows:
+    """Stroke, deflection and rise of every leg, ``limit_margin`` inside each limit."""
+
+    def __init__(self, leg: LegConfig, limit_margin: float, rise_margin: float) -> None:
+        self.leg, self.limit_margin, self.rise_margin = leg, limit_margin, rise_margin
+
+    def values(self, p: Point) -> np.ndarray:
+        """(5·6n,) margins [m or cos]."""
+        v = p.values
+        margins = leg_limit_margins(
+            self.leg, v.lengths, v.cos_deflection, v.rise, self.limit_margin, rise_margin=self.rise_margin
+        )
+        return margins.ravel()
+
+    def jacobian(self, d: ChartDerivatives) -> np.ndarray:
+        """(5·6n, m), in the order of :meth:`values`."""
+        dL = d.lengths
+        d_cos = d.pose.d_cos_deflection  # (n, 6, 2, 6n)
+        bottom, top = d.chart(d_cos[:, :, 0]), d.chart(d_cos[:, :, 1])
+        return np.vstack([dL, -dL, bottom, top, d.chart(d.pose.d_rise)])
+
+
+class ForceLimitRows:
+    """Tension and compression limits [N]: ``tension_limit - F`` and ``F + compression_limit``."""
+
+    def __init__(self, tension_limit: float, compression_limit: float) -> None:
+        self.tension_limit, self.compression_limit = tension_limit, compression_limit
+
+    @property
+    def symmetric(self) -> bool:
+        """Equal limits: the epigraph variable can carry them in one row."""
+        return self.tension_limit == self.compression_limit
+
+    def values(self, p: Point) -> np.ndarray:
+        """(2·6n,) [N]."""
+        F = p.forces.ravel()
+        return np.concatenate([self.tension_limit - F, F + self.compression_limit])
+
+    def jacobian(self, d: ChartDerivatives) -> np.ndarray:
+        """(2·6n, m)."""
+        return np.vstack([-d.forces, d.forces])
+
+
+class EpigraphRows:
+    """``s - F_i >= 0`` and ``s + F_i >= 0``: the bound ``s`` [N] on every |F_i|."""
+
+    def values(self, p: Point, s: float) -> np.ndarray:
+        """(2·6n,) [N]."""
+        F = p.forces.ravel()
+        return np.concatenate([s - F, s + F])
+
+    def jacobian(self, d: ChartDerivatives) -> tuple[np.ndarray, np.ndarray]:
+        """(2·6n, m) w.r.t. the poses, and (2·6n,) w.r.t. ``s``."""
+        return np.vstack([-d.forces, d.forces]), np.ones(2 * d.forces.shape[0])
+
+
+class EETolerance:
+    """The EE within ``tolerance`` of the goal: ``(0.999999·tol_p)² - |Δp|²`` and
+    ``(0.999999·tol_r)² - |Δθ|²`` (slightly inside the tolerance the final check applies)."""
+
+    SHRINK = 1.0 - 1e-6
+
+    def __init__(self, goal: pin.SE3, tolerance: GoalTolerance, chart: LocalChart | TaaChart) -> None:
+        self.goal, self.tolerance, self.chart = goal, tolerance, chart
+
+    def values(self, p: Point) -> np.ndarray:
+        """(2,) [m², rad²]."""
+        n, tol = self.chart.n, self.tolerance
+        dp = p.plates.p[n] - self.goal.translation
+        rot = self.chart.ee_rotation(p.x, p.plates, self.goal)
+        return np.array([(self.SHRINK * tol.position) ** 2 - dp @ dp, (self.SHRINK * tol.rotation) ** 2 - rot @ rot])
+
+    def jacobian(self, p: Point, d: ChartDerivatives) -> np.ndarray:
+        """(2, m), for the local chart (the EE rotation is its last three coordinates)."""
+        n, m = self.chart.n, self.chart.size
+        dp = p.plates.p[n] - self.goal.translation
+        # d p_n / d(world twist) = [I, -[p_n]x]
+        jp = np.hstack([np.eye(3), -pin.skew(p.plates.p[n])]) @ d.B[6 * (n - 1) : 6 * n]
+        ee = np.zeros((2, m))
+        ee[0] = -2.0 * dp @ jp
+        ee[1, m - 3 :] = -2.0 * p.x[m - 3 :]
+        return ee
+
+
+class MotionRows:
+    """``max_step ∓ (L_i - L_i^prev) >= 0`` for every leg [m]."""
+
+    def __init__(self, motion: MotionTerm) -> None:
+        self.motion = motion
+
+    def values(self, p: Point) -> np.ndarray:
+        """(2·6n,) [m]."""
+        return self.motion.margins(p.lengths)
+
+    def jacobian(self, d: ChartDerivatives) -> np.ndarray:
+        """(2·6n, m)."""
+        return np.vstack([-d.lengths, d.lengths])

@@ -1,0 +1,78 @@
+"""The smooth method (``"slsqp"``): max|F| through an epigraph variable ``s``.
+
+x = [poses in the local chart, s]; minimize ``w1·s + w2·sqrt(Σ λ_k²) (+ w3·Σ ΔL²)`` subject
+to ``-s <= F_i <= s``, the force limits (on ``s`` alone when they are equal), every leg
+limit, the EE tolerance and the motion step. Smooth, so SLSQP gets exact gradients
+(:mod:`assembler_pin.gradients`), all from the closed-form pass of each point.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..objective import deviation_term_gradient, motion_cost, motion_cost_gradient, omega
+from ..state import StackState
+from .problem import Problem, finite_rows
+from .rows import EpigraphRows
+
+__all__ = ["SmoothForm"]
+
+
+class SmoothForm:
+    """Objective, constraints and their derivatives of the epigraph formulation."""
+
+    def __init__(self, problem: Problem) -> None:
+        self.problem = problem
+        self.epigraph = EpigraphRows()
+
+    def x0(self, initial: StackState) -> np.ndarray:
+        """The start: the reference poses and ``s`` = the start's max|F| (0 when not finite)."""
+        x0 = np.zeros(self.problem.nx_pose + 1)
+        x0[-1] = np.abs(initial.forces).max() if np.all(np.isfinite(initial.forces)) else 0.0
+        return x0
+
+    def fun(self, x: np.ndarray) -> float:
+        """``w1·s + w2·sqrt(Σ λ²) + w3·Σ ΔL²``."""
+        pr = self.problem
+        p = pr.point(x[:-1])
+        return omega(x[-1], p.plate_angles, pr.opts.w1, pr.opts.w2) + motion_cost(p.lengths, pr.motion)
+
+    def grad(self, x: np.ndarray) -> np.ndarray:
+        """Gradient of :meth:`fun`."""
+        pr = self.problem
+        p, d = pr.point(x[:-1]), pr.derivatives(x[:-1])
+        grad = np.zeros_like(x)
+        grad[:-1] = pr.opts.w2 * deviation_term_gradient(p.plate_angles, d.plate_angles_sq)
+        grad[:-1] += motion_cost_gradient(p.lengths, d.lengths, pr.motion)
+        grad[-1] = pr.opts.w1
+        return grad
+
+    def cons(self, x: np.ndarray) -> np.ndarray:
+        """Rows >= 0: ``s ∓ F``, the force limits, the leg limits, EE tolerance, motion step."""
+        pr = self.problem
+        p, s = pr.point(x[:-1]), x[-1]
+        fl = pr.force_limits
+        limits = np.array([fl.tension_limit - s]) if fl.symmetric else pr.rows(p)["force"]
+        rows = [self.epigraph.values(p, s), limits, pr.rows(p)["leg"], *pr.optional_rows(p)]
+        return finite_rows(np.concatenate(rows))
+
+    def cons_jac(self, x: np.ndarray) -> np.ndarray:
+        """Jacobian of :meth:`cons`, in its order."""
+        pr = self.problem
+        p, d = pr.point(x[:-1]), pr.derivatives(x[:-1])
+
+        def with_s(block: np.ndarray, ds: float | np.ndarray = 0.0) -> np.ndarray:
+            return np.hstack([block, np.broadcast_to(np.asarray(ds, dtype=float), (block.shape[0],))[:, None]])
+
+        dF, ds = self.epigraph.jacobian(d)
+        if pr.force_limits.symmetric:
+            limits = np.zeros((1, x.size))
+            limits[0, -1] = -1.0
+        else:
+            limits = with_s(pr.force_limits.jacobian(d))
+        rows = [with_s(dF, ds), limits, with_s(pr.leg_limits.jacobian(d))]
+        if pr.ee is not None:
+            rows.append(with_s(pr.ee.jacobian(p, d)))
+        if pr.motion_rows is not None:
+            rows.append(with_s(pr.motion_rows.jacobian(d)))
+        return np.vstack(rows)
