@@ -29,7 +29,6 @@ from assembler_pin import evaluate_state, stack_forward_kinematics
 from assembler_pin.exceptions import AssemblerError, ConvergenceError, ViewerError
 from assembler_pin.kinematics import StackFKResult
 from assembler_pin.model import WHOLE_DATA_MAX_PLATFORMS
-from assembler_pin.viz import placements
 from assembler_pin.viz import (
     ARM_LINK_RGBA,
     CAMERA_FOV_DEG,
@@ -40,6 +39,7 @@ from assembler_pin.viz import (
     camera_for_points,
     force_color,
     interpolate_states,
+    placements,
 )
 
 WIDTH, HEIGHT = 800, 600

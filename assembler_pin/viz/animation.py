@@ -106,9 +106,9 @@ def build_animation(viewer, states: Sequence[StackState | PlateArrays], fps: flo
             plates = as_plates(am, state)
             if rod:
                 T_rod = payload_rod_transform(am, plates.R[-1], plates.p[-1])
-                frame[viewer._path("payload_rod")]["rod"].set_transform(T_rod)
+                frame[viewer.scene_path("payload_rod")]["rod"].set_transform(T_rod)
             if color_forces and isinstance(state, StackState):
-                force_band_frame(frame[viewer._path("force_bands")], am, state)
+                force_band_frame(frame[viewer.scene_path("force_bands")], am, state)
     return anim
 
 

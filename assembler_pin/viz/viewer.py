@@ -97,7 +97,7 @@ class StackViewer:
         self._ghosts: dict[str, MeshcatVisualizer] = {}
         self._legend: dict[str, overlay.LegendItem] = {}  # what is drawn besides the legs, by path
         self._extra_points: dict[str, np.ndarray] = {}
-        self._roots: list[str] = [prefix, self._path("violations")]
+        self._roots: list[str] = [prefix, self.scene_path("violations")]
         self.state: StackState | None = None
         self.title = ""
         self.force_range = (am.config.leg.max_tension, am.config.leg.max_compression)
@@ -109,7 +109,7 @@ class StackViewer:
         logger.info("meshcat viewer at %s", self.url)
 
     # ------------------------------------------------------------------ plumbing
-    def _path(self, what: str) -> str:
+    def scene_path(self, what: str) -> str:
         """The meshcat root of one kind of drawing beside the main stack: ``{prefix}_{what}``."""
         return f"{self.prefix}_{what}"
 
@@ -185,8 +185,8 @@ class StackViewer:
                 rgba = [*colors[j, i], 1.0] if color_forces else list(g.meshColor)
                 self.viz.loadViewerGeometryObject(g, pin.GeometryType.VISUAL, rgba)
         self._place(self.viz, state)
-        drawing.draw_violations(self.meshcat[self._path("violations")], state if mark_violations else None)
-        rod = self._path("payload_rod")
+        drawing.draw_violations(self.meshcat[self.scene_path("violations")], state if mark_violations else None)
+        rod = self.scene_path("payload_rod")
         if drawing.draw_payload_rod(self.meshcat[rod]["rod"], self.am, state.plates.R[-1], state.plates.p[-1]):
             self._add_root(rod)  # the rod's root carries the framing shift
         self._extra_points["stack"] = pl.stack_points(self.am, state)
@@ -215,7 +215,7 @@ class StackViewer:
         ``{prefix}_{name}``, named ``label`` in the legend. Its payload is an orange wireframe:
         a translucent cube over the solid payload would tint it."""
         plates = pl.as_plates(self.am, pose)
-        root = self._path(name)
+        root = self.scene_path(name)
         if name not in self._ghosts:
             self._ghosts[name] = self._make_visualizer(root, rgba)
             drawing.wireframe_payload(self._ghosts[name], self.am)
@@ -258,9 +258,10 @@ class StackViewer:
     ) -> None:
         """The paper's comparison: optimized pose solid (force colors), initial as a ghost
         (with only the initial pose, it is drawn solid); the helper arm if given; framed."""
-        if optimized is None and initial is None:
+        solid = optimized if optimized is not None else initial
+        if solid is None:
             raise AssemblerError("nothing to show: both the initial and the optimized state are missing")
-        self.display(optimized if optimized is not None else initial)
+        self.display(solid)
         if optimized is not None and initial is not None:
             self.show_ghost(initial)
         if arm_points is not None:
@@ -293,7 +294,7 @@ class StackViewer:
         translational compliance, each the sag under ``force`` [N] along it
         (:func:`.compliance.ellipsoid_view`); the force and the largest sag in the legend."""
         view = compliance.ellipsoid_view(self.am, self._shown_plates(pose), force)
-        root = self._path("compliance")
+        root = self.scene_path("compliance")
         compliance.draw_ellipsoid(self.meshcat[root]["ellipsoid"], view, COMPLIANCE_RGBA)
         self._add_root(root, view.extent)
         self._legend[root] = (COMPLIANCE_RGBA, view.label)
@@ -321,8 +322,8 @@ class StackViewer:
         if color_forces and not all(isinstance(st, StackState) for st in states):
             raise AssemblerError("color_forces needs StackState frames (their forces)")
         if color_forces:
-            anim_mod.make_force_bands(self.meshcat[self._path("force_bands")], self.am)
-            self._add_root(self._path("force_bands"))
+            anim_mod.make_force_bands(self.meshcat[self.scene_path("force_bands")], self.am)
+            self._add_root(self.scene_path("force_bands"))
         first = states[0]
         self.display(first if isinstance(first, StackState) else evaluate_state(self.am, first))
         self.meshcat.set_animation(
@@ -338,7 +339,7 @@ class StackViewer:
         if not self._animated:
             return
         self.meshcat.set_animation(meshcat.animation.Animation(), play=False)
-        self.meshcat[self._path("force_bands")].delete()
+        self.meshcat[self.scene_path("force_bands")].delete()
         self._animated = False
         for key in [k for k in self._extra_points if k.startswith("anim")]:
             del self._extra_points[key]
