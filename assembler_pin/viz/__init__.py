@@ -13,7 +13,8 @@ concern per module:
 * :mod:`.overlay` — the page's title, legend and colour bar (HTML/CSS);
 * :mod:`.animation` — :func:`interpolate_states`, force sleeves, meshcat animations;
 * :mod:`.compliance` — the loaded pose (exaggerated) and the compliance ellipsoid;
-* :mod:`.viewer` — :class:`StackViewer`;
+* :mod:`.scene` — :class:`StackScene`: the server, the main stack, animations, the page;
+* :mod:`.viewer` — :class:`StackViewer`: a scene that also draws beside the stack;
 * :mod:`.server` — the meshcat server process: its page listens on 127.0.0.1 unless another
   ``host`` is asked for, and it stops when the Python process that started it ends, by any
   signal.
@@ -52,6 +53,7 @@ from .compliance import (
     exaggerated_plates,
     loaded_view,
 )
+from .scene import StackScene
 from .server import DEFAULT_HOST, ServerProcess, start_server
 from .viewer import StackViewer
 
@@ -78,6 +80,7 @@ __all__ = [
     "EllipsoidView",
     "LoadedView",
     "ServerProcess",
+    "StackScene",
     "StackViewer",
     "StopRequested",
     "auto_exaggeration",
