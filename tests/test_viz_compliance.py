@@ -101,8 +101,8 @@ def test_ellipsoid_semi_axes_are_the_sag_under_the_force(am, bent_plates, page):
         pushed = loaded_pose(am, rest, wrench=np.r_[probe * u, 0.0, 0.0, 0.0], base=bent_plates.se3(0))
         assert pushed.success
         sag = (pushed.translation - base.translation) * (FORCE / probe)  # the sag under FORCE along u
-        np.testing.assert_allclose(np.linalg.norm(a), sag @ u, rtol=1e-2)
-        assert np.linalg.norm(sag - (sag @ u) * u) < 1e-2 * np.linalg.norm(sag)  # a principal direction
+        np.testing.assert_allclose(np.linalg.norm(a), sag @ u, rtol=1e-3)
+        assert np.linalg.norm(sag - (sag @ u) * u) < 1e-3 * np.linalg.norm(sag)  # a principal direction
     assert f"sag under {FORCE:g} N" in html and f"× {FACTOR:g}" in html
 
 
