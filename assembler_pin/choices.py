@@ -3,7 +3,7 @@
 The command line builds its ``choices`` and help texts from these tuples without loading
 Pinocchio; the modules that define what each name means check at import time that their
 tables carry exactly these names (:mod:`~assembler_pin.scenarios`,
-:mod:`~assembler_pin.carrier`, :mod:`~assembler_pin.viewer`).
+:mod:`~assembler_pin.carrier`, :mod:`~assembler_pin.viz`).
 """
 
 from __future__ import annotations
