@@ -6,8 +6,9 @@ forces, lengths, deflection cosines, rise and plate angles. Where the solver ask
 derivatives at that point, :func:`~assembler_pin.gradients.pose_derivatives` extends the
 same pass. The sag objectives and the sag limit read the EE's linear sag of the same pass
 (:func:`.sag.linear_sag`) and, with the derivatives, its adjoint gradient
-(:func:`~assembler_pin.compliance.sag_and_gradient`). The Pinocchio statics are not used here: they re-check the returned state
-(:func:`~assembler_pin.state.evaluate_state` in :mod:`.internal_poses`), an independent path.
+(:func:`~assembler_pin.compliance.sag_and_gradient`). The Pinocchio statics are not used
+here: they re-check the returned state (:func:`~assembler_pin.state.evaluate_state` in
+:mod:`.internal_poses`), an independent path.
 """
 
 from __future__ import annotations
