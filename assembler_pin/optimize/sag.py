@@ -16,6 +16,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..gradients import PoseValues
+from ..linalg import cross
 
 __all__ = ["linear_sag"]
 
@@ -30,15 +31,15 @@ def linear_sag(values: PoseValues, stiffness: float) -> tuple[float, np.ndarray]
     Returns NaN when a platform's lines are singular (no sag is defined there).
     """
     eq = values.eq
-    u, b, t = eq.u, eq.b, eq.t
-    top = np.concatenate([u, np.cross(t, u)], axis=-1)  # (n, 6 legs, 6)
-    bottom = np.concatenate([u, np.cross(b, u)], axis=-1)
+    top = eq.K  # (n, 6 rows, 6 legs): the lines [u; t × u], one column per leg
+    bottom = np.concatenate([eq.u, cross(eq.b, eq.u)], axis=-1)  # (n, 6 legs, 6)
     stretch = eq.forces / stiffness
     y = np.zeros(6)
     try:
-        for j in range(u.shape[0]):
-            y = np.linalg.solve(top[j], stretch[j] + bottom[j] @ y)
+        for j in range(top.shape[0]):
+            y = np.linalg.solve(top[j].T, stretch[j] + bottom[j] @ y)
     except np.linalg.LinAlgError:
         return float("nan"), np.full(3, np.nan)
-    dp = y[:3] + np.cross(y[3:], values.plates.p[-1])
+    p = values.plates.p[-1]
+    dp = y[:3] + np.array([y[4] * p[2] - y[5] * p[1], y[5] * p[0] - y[3] * p[2], y[3] * p[1] - y[4] * p[0]])
     return float(np.linalg.norm(dp)), dp
