@@ -274,8 +274,9 @@ def _sag_cells(am: AssemblerModel, result: SolveResult | None) -> list[str]:
 def sag_table(am: AssemblerModel, outcomes: Sequence[ScenarioOutcome], markdown: bool = False) -> str:
     """The force-optimal and the sag-optimal pose side by side: max|F| [N], the EE's linear
     sag under its own load [mm] (:func:`~assembler_pin.compliance.sag_and_gradient`) and the
-    optimizer's time [s] (every start) of each, and the sag's change."""
-    header = ["scenario", "force-opt max|F|", "sag [mm]", "time [s]", "sag-opt max|F|", "sag [mm]", "time [s]", "sag"]
+    optimizer's time ``t`` [s] (every start it ran) of each, and the sag's change; the text
+    is under 100 characters wide."""
+    header = ["scenario", "force-opt max|F|", "sag [mm]", "t [s]", "sag-opt max|F|", "sag [mm]", "t [s]", "sag"]
     rows = []
     for o in outcomes:
         force, sag = _sag_cells(am, o.result), _sag_cells(am, o.sag_result)
