@@ -359,9 +359,9 @@ def _report_text(am: AssemblerModel, outcomes: Sequence[ScenarioOutcome], target
         parts += [
             "## Force-optimal and sag-optimal poses",
             "",
-            "max|F| [N] and the EE's sag under its own load [mm] (legs of "
-            f"{am.config.leg.stiffness:g} N/m, linear in their compliance) of the force-optimal pose "
-            "(objective Ω) and of the sag-optimal pose (objective: the sag, every limit kept).",
+            f"max|F| [N] and the EE's sag under its own load [mm] (legs of {am.config.leg.stiffness:g} N/m,",
+            "linear in their compliance) of the force-optimal pose (objective Ω) and of the sag-optimal",
+            "pose (objective: the sag, every limit kept); t: the optimizer's time over its starts [s].",
             "",
             sag_table(am, outcomes, markdown=True),
             "",
