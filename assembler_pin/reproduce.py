@@ -265,9 +265,9 @@ def _sag_cells(am: AssemblerModel, result: SolveResult | None) -> list[str]:
     """max|F| [N], EE sag [mm] and optimizer time [s] of a solve's optimum ("—" when none)."""
     from .objective import state_sag
 
-    state = None if result is None else result.optimized
-    if state is None or not result.success:
+    if result is None or result.optimized is None or not result.success:
         return ["—", "—", "—"]
+    state = result.optimized
     return [f"{state.max_abs_force:.1f}", f"{1e3 * state_sag(am, state):.3f}", f"{result.timing_s['optimize']:.2f}"]
 
 
