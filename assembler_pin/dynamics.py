@@ -169,14 +169,13 @@ def _joint_motion(am: AssemblerModel, pose: _Pose, V: np.ndarray, A: np.ndarray)
     v[am.leg_idx_v] = np.linalg.solve(pose.jac_t.swapaxes(2, 3), rel[..., None])[..., 0]
     # accelerations: the tip's classical acceleration with the legs' own accelerations zero
     pin.forwardKinematics(model, data, pose.q, v, a)
-    tip0 = np.empty_like(top)
+    Vs, As = np.empty((*top.shape[:2], 6)), np.empty((*top.shape[:2], 6))
     for j in range(am.n):
         for i in range(6):
             jid = int(am.shaft_joint_ids[j, i])
             oMi = data.oMi[jid]
-            Vs, As = oMi.act(data.v[jid]).vector, oMi.act(data.a[jid]).vector
-            t = top[j, i]
-            tip0[j, i] = As[:3] + np.cross(As[3:], t) + np.cross(Vs[3:], Vs[:3] + np.cross(Vs[3:], t))
+            Vs[j, i], As[j, i] = oMi.act(data.v[jid]).vector, oMi.act(data.a[jid]).vector
+    tip0 = As[..., :3] + cross(As[..., 3:], top) + cross(Vs[..., 3:], _point_velocity(Vs, top))
     Vt, At = V[1:, None], A[1:, None]
     anchor = At[..., :3] + cross(At[..., 3:], top) + cross(Vt[..., 3:], _point_velocity(Vt, top))
     a[am.leg_idx_v] = np.linalg.solve(pose.jac_t.swapaxes(2, 3), (anchor - tip0)[..., None])[..., 0]
@@ -312,20 +311,25 @@ def path_force_coefficients(
     """Leg forces along a path ``L(s)`` at one point, as ``F = a s̈ + b ṡ² + c``.
 
     Args:
-        plates: the pose at the point; d_lengths, dd_lengths: (n, 6) ``L'(s)`` and ``L''(s)``.
+        plates: the pose at the point; d_lengths: (n, 6) ``L'(s)``; dd_lengths: (n, 6)
+            ``L''(s)``, or (k, n, 6) for k values of it (e.g. both one-sided values at a
+            knot of a C¹ spline).
 
     Returns:
-        (a, b, c), each (n, 6) [N]: ``c`` the statics, ``a`` the forces of ``L̈ = L'`` at rest,
-        ``b`` those of ``L̇ = L'``, ``L̈ = L''`` (both less ``c``). The forces are affine in
-        ``L̈`` and quadratic in ``L̇``, so this is exact.
+        (a, b, c) [N]: ``c`` (n, 6) the statics, ``a`` (n, 6) the forces of ``L̈ = L'`` at rest,
+        ``b`` (n, 6) or (k, n, 6) those of ``L̇ = L'``, ``L̈ = L''`` (both less ``c``). The
+        forces are affine in ``L̈`` and quadratic in ``L̇``, so this is exact.
     """
     pose = _pose(am, plates)
-    d1, d2 = _checked_rates(am, d_lengths, "d_lengths"), _checked_rates(am, dd_lengths, "dd_lengths")
+    d1 = _checked_rates(am, d_lengths, "d_lengths")
+    dd = as_float_array(dd_lengths, "dd_lengths")
+    many = dd.ndim == 3
+    d2s = [_checked_rates(am, x, "dd_lengths") for x in (dd if many else [dd])]
     zero = np.zeros(am.model.nv)
     c = _block_solve(am, pose, pin.rnea(am.model, am.data, pose.q, zero, zero))[0]
     out = []
-    for rates, accels in ((np.zeros_like(d1), d1), (d1, d2)):
+    for rates, accels in [(np.zeros_like(d1), d1)] + [(d1, d2) for d2 in d2s]:
         V, A = _spatial_from_lengths(pose, rates, accels)
         v, a = _joint_motion(am, pose, V, A)
         out.append(_block_solve(am, pose, pin.rnea(am.model, am.data, pose.q, v, a))[0] - c)
-    return out[0], out[1], c
+    return out[0], (np.array(out[1:]) if many else out[1]), c
