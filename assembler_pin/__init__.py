@@ -36,6 +36,9 @@ _LAZY: dict[str, str] = {
     "ConvergenceError": ".exceptions",
     "ee_jacobian_wrt_lengths": ".kinematics",
     "EEPath": ".motion",
+    "inverse_dynamics": ".dynamics",
+    "inverse_dynamics_from_lengths": ".dynamics",
+    "DynamicsResult": ".dynamics",
     "evaluate_constraints": ".constraints",
     "evaluate_state": ".state",
     "export_model_files": ".export",
@@ -121,6 +124,7 @@ if TYPE_CHECKING:  # for type checkers and IDEs: the same names, imported eagerl
     from .compliance import CompensatedLengths, LoadedPose, compensated_lengths, loaded_pose
     from .config import AssemblerConfig, LegConfig, PayloadConfig, PlateConfig, load_config
     from .constraints import GoalTolerance, Violation, evaluate_constraints
+    from .dynamics import DynamicsResult, inverse_dynamics, inverse_dynamics_from_lengths
     from .ee_stiffness import StiffnessResult, stiffness
     from .exceptions import (
         AssemblerError,

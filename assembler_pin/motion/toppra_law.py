@@ -5,7 +5,8 @@ On a grid of the path (``grid_per_sample`` points per planned step) TOPP-RA find
 ``ṡ²`` profile, piecewise linear in ``s`` (so ``s̈`` constant between grid points), with
 
 * every leg's speed ``|L'(s) ṡ| ≤ v_max`` (toppra's ``JointVelocityConstraint``);
-* every leg's acceleration ``|L'(s) s̈ + L''(s) ṡ²| ≤ a_max`` (``JointAccelerationConstraint``);
+* every leg's acceleration ``|L'(s) s̈ + L''(s) ṡ²| ≤ a_max`` (toppra's canonical linear
+  constraint; at a planned sample, where the PCHIP's ``L''`` jumps, with both one-sided values);
 * every leg's force ``F = a(s) s̈ + b(s) ṡ² + c(s)`` within ``[force_low, force_high]`` (a
   second-order constraint with the coefficients of
   :func:`~assembler_pin.dynamics.path_force_coefficients`),
@@ -61,7 +62,8 @@ def _path(spline, s_end: float, dof: int):
 
 
 def _force_constraint(a: np.ndarray, b: np.ndarray, c: np.ndarray, low: float, high: float):
-    """``low ≤ a s̈ + b ṡ² + c ≤ high`` row by row (arrays (N+1, k) on the grid)."""
+    """``low ≤ a s̈ + b ṡ² + c ≤ high`` row by row (arrays (N+1, k) on the grid): the force
+    limits, and the legs' accelerations (``a = L'``, ``b = L''``, ``c = 0``)."""
     toppra, Linear, to_interpolate, _ = _toppra()
 
     class _Forces(Linear):
@@ -89,7 +91,7 @@ class OptimalLaw:
 
     name = "optimal"
 
-    def __init__(self, grid_per_sample: int = 4, max_grid: int = 4000) -> None:
+    def __init__(self, grid_per_sample: int = 8, max_grid: int = 4000) -> None:
         self.grid_per_sample = grid_per_sample
         self.max_grid = max_grid
         self._cache: tuple[int, tuple] | None = None
@@ -118,9 +120,19 @@ class OptimalLaw:
         # toppra's solver works to absolute tolerances: it is given the path on σ = s / S ∈ [0, 1]
         S = float(grid[-1])
         path = _path(lambda x, order=0: problem.spline(np.asarray(x) * S, order) * S**order, 1.0, dof)
+        # the PCHIP's L'' jumps at the planned samples: both one-sided values are held there
+        d1 = problem.spline(grid, 1)
+        end = float(grid[-1])
+        left, right = problem.spline(np.clip(grid - 1e-9, 0, end), 2), problem.spline(np.clip(grid + 1e-9, 0, end), 2)
         constraints = [
             toppra.constraint.JointVelocityConstraint(np.tile([-problem.v_max, problem.v_max], (dof, 1))),
-            toppra.constraint.JointAccelerationConstraint(np.tile([-problem.a_max, problem.a_max], (dof, 1))),
+            _force_constraint(
+                np.hstack([d1, d1]) * S,
+                np.hstack([left, right]) * S**2,
+                np.zeros((len(grid), 2 * dof)),
+                -problem.a_max,
+                problem.a_max,
+            ),
         ]
         if problem.forces is not None:
             a, b, c = problem.forces(grid)
