@@ -85,6 +85,7 @@ class _Pose:
     vec: np.ndarray  # (n, 6, 3) leg vectors [m]
     lengths: np.ndarray  # (n, 6) [m]
     axis: np.ndarray  # (n, 6, 3) unit leg axes
+    leg_columns: np.ndarray  # (n, 6, 3, 6) world Jacobian columns of the legs' joints
     jac_t: np.ndarray  # (n, 6, 3, 3) leg joints × closure axes
     inverse_t: np.ndarray  # (n, 6, 6) inverse of Wᵀ (the legs' lines in each top plate's frame)
     condition: np.ndarray  # (n,)
@@ -123,7 +124,7 @@ def _pose(am: AssemblerModel, plates: PlateArrays | Sequence | np.ndarray) -> _P
     inverse_t = inverse_or_nan(lines_t)
     condition = np.abs(lines_t).sum(axis=2).max(axis=1) * np.abs(inverse_t).sum(axis=2).max(axis=1)
     world_lines = np.concatenate([axis, cross(top, axis)], axis=-1)
-    return _Pose(pa, q, top, bottom, vec, lengths, axis, jac_t, inverse_t, condition, world_lines)
+    return _Pose(pa, q, top, bottom, vec, lengths, axis, leg_columns, jac_t, inverse_t, condition, world_lines)
 
 
 def _spatial(pa: PlateArrays, twists: np.ndarray, accelerations: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -156,9 +157,8 @@ def _point_velocity(V: np.ndarray, x: np.ndarray) -> np.ndarray:
 def _joint_motion(am: AssemblerModel, pose: _Pose, V: np.ndarray, A: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Joint velocities and accelerations (nv) of the tree moving the plates by the world
     spatial motions V, A (n+1, 6) with every ball-joint loop closed."""
-    model, data = am.model, am.data
     pa, top = pose.pa, pose.top
-    v, a = np.zeros(model.nv), np.zeros(model.nv)
+    v, a = np.zeros(am.model.nv), np.zeros(am.model.nv)
     ff = am.plate_idx_v[:, None] + np.arange(6)
     dV, dA = V[1:] - V[:-1], A[1:] - A[:-1]
     v[ff[0]], a[ff[0]] = _to_local(pa, 0, V[0]), _to_local(pa, 0, A[0])
@@ -167,14 +167,15 @@ def _joint_motion(am: AssemblerModel, pose: _Pose, V: np.ndarray, A: np.ndarray)
     # legs: the tip moves with the anchor, J_leg q̇ = v_{j+1}(t) - v_j(t)
     rel = _point_velocity(dV[:, None], top)
     v[am.leg_idx_v] = np.linalg.solve(pose.jac_t.swapaxes(2, 3), rel[..., None])[..., 0]
-    # accelerations: the tip's classical acceleration with the legs' own accelerations zero
-    pin.forwardKinematics(model, data, pose.q, v, a)
-    Vs, As = np.empty((*top.shape[:2], 6)), np.empty((*top.shape[:2], 6))
-    for j in range(am.n):
-        for i in range(6):
-            jid = int(am.shaft_joint_ids[j, i])
-            oMi = data.oMi[jid]
-            Vs[j, i], As[j, i] = oMi.act(data.v[jid]).vector, oMi.act(data.a[jid]).vector
+    # accelerations: the shaft's spatial acceleration with the legs' own accelerations zero is
+    # Â_j + Σ_c V_parent(c) ×ₘ J_c q̇_c (a world column moves with its joint's parent body)
+    J = pose.leg_columns  # (n, 6, 3, 6): (ux, uy, actuator), parent to child
+    motion = J * v[am.leg_idx_v][..., None]
+    parent = V[:-1, None, None] + np.concatenate(
+        [np.zeros_like(motion[:, :, :1]), np.cumsum(motion, axis=2)[:, :, :2]], 2
+    )
+    Vs = V[:-1, None] + motion.sum(axis=2)
+    As = A[:-1, None] + _motion_cross(parent, motion).sum(axis=2)
     tip0 = As[..., :3] + cross(As[..., 3:], top) + cross(Vs[..., 3:], _point_velocity(Vs, top))
     Vt, At = V[1:, None], A[1:, None]
     anchor = At[..., :3] + cross(At[..., 3:], top) + cross(Vt[..., 3:], _point_velocity(Vt, top))
