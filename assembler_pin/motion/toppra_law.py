@@ -61,7 +61,7 @@ def _path(spline, s_end: float, dof: int):
     return _LegPath()
 
 
-def _force_constraint(a: np.ndarray, b: np.ndarray, c: np.ndarray, low: float, high: float):
+def _force_constraint(a: np.ndarray, b: np.ndarray, c: np.ndarray, low: float, high: float, interpolation: bool = True):
     """``low ≤ a s̈ + b ṡ² + c ≤ high`` row by row (arrays (N+1, k) on the grid): the force
     limits, and the legs' accelerations (``a = L'``, ``b = L''``, ``c = 0``)."""
     toppra, Linear, to_interpolate, _ = _toppra()
@@ -70,13 +70,16 @@ def _force_constraint(a: np.ndarray, b: np.ndarray, c: np.ndarray, low: float, h
         def __init__(self) -> None:
             super().__init__()
             self.identical = True
-            self.set_discretization_type(toppra.constraint.DiscretizationType.Interpolation)
+            kind = toppra.constraint.DiscretizationType
+            self.set_discretization_type(kind.Interpolation if interpolation else kind.Collocation)
 
         def compute_constraint_params(self, path, gridpoints, *args, **kwargs):
             k = a.shape[1]
             F = np.vstack([np.eye(k), -np.eye(k)])
             g = np.concatenate([np.full(k, high), np.full(k, -low)])
-            return to_interpolate(a, b, c, F, g, None, None, gridpoints, identical=True)
+            if interpolation:
+                return to_interpolate(a, b, c, F, g, None, None, gridpoints, identical=True)
+            return a, b, c, F, g, None, None
 
     return _Forces()
 
@@ -87,13 +90,16 @@ class OptimalLaw:
     Attributes:
         grid_per_sample: grid points per planned step.
         max_grid: largest grid (the grid is coarsened to it on long paths).
+        interpolation: hold the acceleration and force rows at both ends of every grid
+            interval (toppra's interpolation scheme; False: at the grid points only).
     """
 
     name = "optimal"
 
-    def __init__(self, grid_per_sample: int = 8, max_grid: int = 4000) -> None:
+    def __init__(self, grid_per_sample: int = 8, max_grid: int = 4000, interpolation: bool = True) -> None:
         self.grid_per_sample = grid_per_sample
         self.max_grid = max_grid
+        self.interpolation = interpolation
         self._cache: tuple[int, tuple] | None = None
         self.last_solve_s = math.nan
 
@@ -132,12 +138,15 @@ class OptimalLaw:
                 np.zeros((len(grid), 2 * dof)),
                 -problem.a_max,
                 problem.a_max,
+                self.interpolation,
             ),
         ]
         if problem.forces is not None:
             a, b, c = problem.forces(grid)
             _check_rest_forces(c, grid, problem)
-            constraints.append(_force_constraint(a * S, b * S**2, c, problem.force_low, problem.force_high))
+            constraints.append(
+                _force_constraint(a * S, b * S**2, c, problem.force_low, problem.force_high, self.interpolation)
+            )
         t0 = time.perf_counter()
         algo = toppra.algorithm.TOPPRA(constraints, path, gridpoints=grid / S, solver_wrapper="seidel")
         _, sd, _ = algo.compute_parameterization(0.0, 0.0)
