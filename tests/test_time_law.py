@@ -13,7 +13,7 @@ from assembler_pin.exceptions import ConfigError, TrajectoryError
 from assembler_pin.kinematics import stack_forward_kinematics
 from assembler_pin.motion import EEPath, PlanOptions, plan_path
 from assembler_pin.motion.time_law import QuinticLaw, TimingProblem, time_law
-from assembler_pin.motion.timing import plan_trajectory, time_parametrize
+from assembler_pin.motion.timing import plan_trajectory, time_parametrize, trajectory_states
 from assembler_pin.motion.trajfile import read_trajectory
 
 
@@ -107,3 +107,7 @@ def test_mujoco_servos_follow_the_optimal_law(am, plan):
     assert result.followed, result.message
     assert result.saturated.sum() == 0
     assert result.ee_error.max() < 2e-3
+    # settled at the last command: the forces within the held-pose tolerance of our statics
+    last = trajectory_states(am, traj, frames=2)[1][-1]
+    tolerance = max(0.01 * float(np.abs(last.forces).max()), 0.5)
+    assert np.abs(result.final_forces - last.forces).max() <= tolerance

@@ -31,7 +31,7 @@ from assembler_pin.motion.timing import (
     trajectory_states,
     verify_trajectory,
 )
-from assembler_pin.motion.trajfile import rows_digest
+from assembler_pin.motion.trajfile import VERSION, rows_digest
 
 HYPO = settings(max_examples=40, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
 
@@ -281,7 +281,7 @@ def _doc(traj, **changes):
     meta.update(rows=len(rows), sha256=rows_digest(rows))
     return {
         "format": "assembler-pin trajectory",
-        "version": 2,
+        "version": VERSION,
         "meta": meta,
         "columns": traj.columns(),
         "rows": rows.tolist(),
