@@ -175,6 +175,10 @@ COMMANDS: list[tuple[str, str, str]] = [
     (r"wc -c README\.md$", RUN, ""),
     (r"assembler-pin stiffness --home( --compensated --json)?$", RUN, ""),
     (r"assembler-pin support --home( --json)?$", RUN, ""),
+    (r"assembler-pin statics --home --support (ee|both) --json$", RUN, ""),
+    (r"assembler-pin view --home (--loaded( --exaggerate [\d.]+)?|--ellipsoid) --html \S+$", SLOW, ""),
+    (r"assembler-pin view --scenario \w+ --loaded --ellipsoid --ellipsoid-force [\d.]+ --html \S+$", SLOW, ""),
+    (r"assembler-pin solve --goal [-\d. ]+ --objective sag$", SLOW, ""),
     (r"grep -rc # fmt: skip assembler_pin", RUN, ""),
     (r"assembler-pin view (--home|--scenario \w+|--goal [-\d. ]+)( --force-scale \w+)? --html \S+$", SLOW, ""),
     (r"assembler-pin solve --goal [-\d. ]+ --capacity$", SLOW, ""),
@@ -200,6 +204,7 @@ COMMANDS: list[tuple[str, str, str]] = [
     (r"assembler-pin solve --goal [-\d. ]+ --carrier ur10$", "", "searches the carrier's joints (test_carrier.py)"),
     (r"assembler-pin plan --to", "", "plans a motion of 50-130 samples (tests/test_motion.py)"),
     (r"assembler-pin plan --waypoints examples/waypoints\.json", "", "plans three waypoints"),
+    (r"assembler-pin walk ", "", "plans a walk of several steps, minutes (tests/test_walk.py runs one)"),
     (r"assembler-pin simulate --trajectory", "", "needs a planned trajectory (tests/test_mujoco.py runs one)"),
 ]
 
