@@ -42,7 +42,8 @@ import numpy as np
 import pinocchio as pin
 from scipy.linalg.lapack import dgesv, dposv, dpotrf
 
-from .linalg import cross, inverse_or_nan, skew
+from . import closed_form
+from .linalg import cross, skew
 from .model import AssemblerModel
 
 __all__ = [
@@ -366,10 +367,11 @@ class Equilibrium:
 
 def line_conditions(lines: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Inverses (n, 6, 6) and 1-norm condition numbers (n,) of the platforms' leg-line matrices
-    (rows ``[u, r × u]`` per leg, world axes at the top plate's origin: ``dL/d(δp, δθ)``).
-    A singular matrix gives NaN inverses and an infinite condition number."""
-    inverse = inverse_or_nan(lines)
-    cond = np.abs(lines).sum(axis=1).max(axis=1) * np.abs(inverse).sum(axis=1).max(axis=1)
+    (rows ``[u, r × u]`` per leg, world axes at the top plate's origin: ``dL/d(δp, δθ)``), by
+    :func:`~assembler_pin.closed_form.line_conditions` (the statics' condition number, with
+    the lines in world axes). A singular matrix gives NaN inverses and an infinite condition
+    number."""
+    inverse, cond = closed_form.line_conditions(lines)
     return inverse, np.where(np.isfinite(cond), cond, np.inf)
 
 

@@ -1,8 +1,8 @@
 """A compiled kernel of the closed-form statics, for batches of stacks and single stacks.
 
-The equilibrium is the one of :func:`~assembler_pin.gradients.equilibrium` (each leg
+The equilibrium is the one of :func:`~assembler_pin.closed_form.equilibrium` (each leg
 balances its own weight; the top plate of each platform the weight above it and the six
-ball forces; module docstring of :mod:`assembler_pin.gradients`), written as plain loops
+ball forces; module docstring of :mod:`assembler_pin.closed_form`), written as plain loops
 over the stacks, platforms and legs in :mod:`~assembler_pin.statics_loops` and compiled
 here by numba (``cache=True``: compiled once per install and Python version, then loaded
 from numba's cache). Per platform it solves the 6×6 system in the top plate's own frame
@@ -11,7 +11,7 @@ inverse gives the 1-norm condition number of :func:`~assembler_pin.statics.solve
 :func:`kernel_result` gives the whole :class:`~assembler_pin.statics.StaticsResult` of one
 stack (ball forces and base wrench too).
 
-The numpy path (:func:`~assembler_pin.gradients.equilibrium`) stays the reference and the
+The numpy path (:func:`~assembler_pin.closed_form.equilibrium`) stays the reference and the
 fallback: it is used when numba is not installed, when ``ASSEMBLER_PIN_STATICS=numpy`` is
 set in the environment, or with ``backend="numpy"``. The tests hold both, and
 :func:`kernel_result`, to Pinocchio's statics (:func:`~assembler_pin.statics.solve_statics`)
@@ -32,8 +32,9 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from . import statics_loops as loops
+from .closed_form import equilibrium, is_singular, line_conditions
 from .exceptions import OptionsError
-from .linalg import cross, inverse_or_nan
+from .linalg import cross
 from .model import AssemblerModel
 
 if TYPE_CHECKING:
@@ -162,16 +163,13 @@ def _constants(am: AssemblerModel) -> np.ndarray:
 
 
 def _numpy_forces(am: AssemblerModel, R: np.ndarray, p: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """The reference path: :func:`~assembler_pin.gradients.equilibrium` and the condition
-    number of the legs' lines in each top plate's frame."""
-    from .gradients import equilibrium
+    """The reference path: :func:`~assembler_pin.closed_form.equilibrium` and the condition
+    number of the legs' lines in each top plate's frame (:func:`~assembler_pin.closed_form.line_conditions`)."""
 
     eq, _ = equilibrium(am, R, p)
     u_local = np.einsum("bjka,bjik->bjia", R[:, 1:], eq.u)
     lines_t = np.concatenate([u_local, cross(am.geometry.top_in_plate, u_local)], axis=-1)  # (B, n, legs, 6)
-    inverse_t = inverse_or_nan(lines_t)
-    condition = np.abs(lines_t).sum(axis=-1).max(axis=-1) * np.abs(inverse_t).sum(axis=-1).max(axis=-1)
-    return eq.forces, condition
+    return eq.forces, line_conditions(lines_t)[1]
 
 
 def closed_form_forces(
@@ -252,18 +250,9 @@ def kernel_result(am: AssemblerModel, pa: PlateArrays, raise_on_singular: bool =
         SingularConfigurationError: with ``raise_on_singular``, a platform's condition number
             exceeds the limit.
     """
-    from .exceptions import SingularConfigurationError
-    from .statics import CONDITION_LIMIT, StaticsResult
+    from .statics import StaticsResult
 
     forces, ball, base, condition = kernel_statics(am, pa.R[None], pa.p[None])
     condition = condition[0]
-    singular = not condition.max() <= CONDITION_LIMIT  # NaN counts as singular
-    if singular and raise_on_singular:
-        worst = int(np.argmax(np.where(np.isfinite(condition), condition, np.inf)))
-        raise SingularConfigurationError(
-            f"platform {worst} is near a singular configuration (condition number "
-            f"{condition[worst]:.3g} > {CONDITION_LIMIT:.0g}); its forces are not defined",
-            float(condition[worst]),
-            worst,
-        )
+    singular = is_singular(condition, raise_on_singular)
     return StaticsResult(forces[0], ball[0], base[0], condition, singular)
