@@ -3,14 +3,11 @@
 from __future__ import annotations
 
 import argparse
-from typing import TYPE_CHECKING
 
 from ..exceptions import CLIError
-
-if TYPE_CHECKING:
-    pass
 from .common import (
     add_carrier_arguments,
+    add_pose_source,
     carrier_from_args,
     config_from_args,
     dumps,
@@ -23,9 +20,7 @@ from .common import (
 def add_parser(add) -> None:
     """Register the ``statics`` subcommand (``add`` makes a subparser with ``--config``)."""
     p = add("statics", "actuator forces of given plate poses (tension positive, newtons)")
-    src = p.add_mutually_exclusive_group()
-    src.add_argument("--plates", metavar="FILE", help='JSON {"plates": [n+1 4x4]} file, or - for stdin')
-    src.add_argument("--home", action="store_true", help="use the home pose")
+    add_pose_source(p)
     add_carrier_arguments(p, " (the plates are then relative to the base plate)")
     p.add_argument(
         "--stiffness",
@@ -43,14 +38,17 @@ def add_parser(add) -> None:
 
 
 #: The arguments ``statics --home --json`` may carry for the fast path (any other option
-#: given, such as ``--carrier``, takes the full path).
+#: given, such as ``--carrier``, takes the full path), and the options it may carry at their
+#: defaults.
 _FAST_HOME_ARGS = frozenset({"command", "func", "verbose", "quiet", "config", "home", "json"})
+_FAST_HOME_DEFAULTS = {"support": "base"}
 
 
 def _fast_home(args: argparse.Namespace) -> bool:
     """Answer ``statics --home --json`` without Pinocchio (:mod:`~assembler_pin.home_state`)
     when no other option is given and the home pose is strictly inside every limit."""
-    if not (args.home and args.json) or any(v for k, v in vars(args).items() if k not in _FAST_HOME_ARGS):
+    others = {k: v for k, v in vars(args).items() if k not in _FAST_HOME_ARGS and v != _FAST_HOME_DEFAULTS.get(k)}
+    if not (args.home and args.json) or any(others.values()):
         return False
     from ..home_state import home_state_document
 
