@@ -66,31 +66,23 @@ ENV_VAR = "ASSEMBLER_PIN_STATICS"
 KERNEL_MIN_STACKS = 5000
 
 _kernel: Any = None  # the compiled function, once built (None: not yet; False: unavailable)
-_kernel_full: Any = None  # the compiled kernel with ball forces and base wrenches, once built
 _stack, _extras = loops._stack_py, loops._extras_py  # interpreted here; the kernels call compiled copies
+_NO_BALL, _NO_BASE = np.empty((1, 1, 1, 1)), np.empty((1, 1))  # placeholders of a forces-only call
 
 
-def _kernel_py(R, p, bottom, top, consts, forces, condition):  # pragma: no cover - compiled
+def _kernel_py(R, p, bottom, top, consts, forces, condition, ball, base, full):  # pragma: no cover - compiled
     """consts: :data:`~assembler_pin.statics_loops.CONSTANT_NAMES`. Fills forces (B, n, 6)
-    and condition (B, n), stack by stack (:func:`~assembler_pin.statics_loops._stack_py`)."""
+    and condition (B, n), stack by stack (:func:`~assembler_pin.statics_loops._stack_py`), and
+    with ``full`` the ball forces (B, n, 6, 3) and base wrenches (B, 6) too
+    (:func:`~assembler_pin.statics_loops._extras_py`; without, ``ball`` and ``base`` are not read)."""
     B, n = R.shape[0], R.shape[1] - 1
     lev_f, lev_m = np.zeros(n + 1), np.zeros((n + 1, 2))
     t, u, fp, gu = np.zeros((n, 6, 3)), np.zeros((n, 6, 3)), np.zeros((n, 6, 3)), np.zeros((n, 6))
     A, rhs, up = np.zeros((6, 12)), np.zeros(6), np.zeros(3)
     for s in range(B):
         _stack(R, p, bottom, top, consts, s, t, u, fp, gu, lev_f, lev_m, A, rhs, up, forces, condition)
-
-
-def _kernel_full_py(R, p, bottom, top, consts, forces, condition, ball, base):  # pragma: no cover - compiled
-    """:func:`_kernel_py` plus the ball forces (B, n, 6, 3) and base wrenches (B, 6)
-    (:func:`~assembler_pin.statics_loops._extras_py`)."""
-    B, n = R.shape[0], R.shape[1] - 1
-    lev_f, lev_m = np.zeros(n + 1), np.zeros((n + 1, 2))
-    t, u, fp, gu = np.zeros((n, 6, 3)), np.zeros((n, 6, 3)), np.zeros((n, 6, 3)), np.zeros((n, 6))
-    A, rhs, up = np.zeros((6, 12)), np.zeros(6), np.zeros(3)
-    for s in range(B):
-        _stack(R, p, bottom, top, consts, s, t, u, fp, gu, lev_f, lev_m, A, rhs, up, forces, condition)
-        _extras(R, p, s, consts, u, fp, gu, forces, lev_f, lev_m, ball, base)
+        if full:
+            _extras(R, p, s, consts, u, fp, gu, forces, lev_f, lev_m, ball, base)
 
 
 def _build_kernel() -> Any:
@@ -112,12 +104,9 @@ def _build_kernel() -> Any:
         ("_stack", loops._stack_py),
         ("_extras", loops._extras_py),
         ("_kernel", _kernel_py),
-        ("_kernel_full", _kernel_full_py),
     )
     for name, func in parts:  # callees first: the callers see them compiled
         scope[name] = jit(types.FunctionType(func.__code__, scope, func.__name__))
-    global _kernel_full
-    _kernel_full = scope["_kernel_full"]
     return scope["_kernel"]
 
 
@@ -194,15 +183,8 @@ def closed_form_forces(
     forces = np.empty((B, n, 6))
     condition = np.empty((B, n))
     geo = am.geometry
-    _kernel(
-        R,
-        p,
-        np.ascontiguousarray(geo.bottom_in_plate),
-        np.ascontiguousarray(geo.top_in_plate),
-        _constants(am),
-        forces,
-        condition,
-    )
+    bottom, top = np.ascontiguousarray(geo.bottom_in_plate), np.ascontiguousarray(geo.top_in_plate)
+    _kernel(R, p, bottom, top, _constants(am), forces, condition, _NO_BALL, _NO_BASE, False)
     return forces, condition
 
 
@@ -236,7 +218,7 @@ def kernel_statics(am: AssemblerModel, R: np.ndarray, p: np.ndarray) -> tuple[np
     ball, base = np.empty((B, n, 6, 3)), np.empty((B, 6))
     geo = am.geometry
     bottom, top = np.ascontiguousarray(geo.bottom_in_plate), np.ascontiguousarray(geo.top_in_plate)
-    _kernel_full(R, p, bottom, top, _constants(am), forces, condition, ball, base)
+    _kernel(R, p, bottom, top, _constants(am), forces, condition, ball, base, True)
     return forces, ball, base, condition
 
 
