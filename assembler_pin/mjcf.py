@@ -48,7 +48,7 @@ import pinocchio as pin
 from .config import AssemblerConfig
 from .geometry import DIMENSIONS, LEGS_PER_PLATFORM, LegGeometry, leg_geometry
 from .naming import names
-from .urdf import cylinder_inertia, node_points, xml_document, xml_number, xml_vector
+from .urdf import MATERIALS, cylinder_inertia, node_points, xml_document, xml_number, xml_vector
 
 __all__ = [
     "ACTUATOR_ARMATURE",
@@ -80,14 +80,6 @@ TIMESTEP = 1.0e-3
 EQUALITY_SOLREF = (2.0e-3, 1.0)
 #: Equality constraint impedance (dmin, dmax, width [m]).
 EQUALITY_SOLIMP = (0.99, 0.999, 1.0e-3)
-
-_MATERIALS = {
-    "plate": "0.55 0.6 0.7 1",
-    "motor": "0.2 0.25 0.3 1",
-    "shaft": "0.8 0.8 0.8 1",
-    "node": "0.15 0.35 0.8 1",
-    "payload": "0.85 0.55 0.1 1",
-}
 
 
 @dataclass(frozen=True)
@@ -168,7 +160,7 @@ def _mjcf_header(root: ET.Element, cfg: AssemblerConfig) -> None:
         default, "equality", solref=xml_vector(np.array(EQUALITY_SOLREF)), solimp=xml_vector(np.array(EQUALITY_SOLIMP))
     )
     asset = ET.SubElement(root, "asset")
-    for name, rgba in _MATERIALS.items():
+    for name, rgba in MATERIALS.items():
         ET.SubElement(asset, "material", name=name, rgba=rgba)
 
 

@@ -119,6 +119,7 @@ class SupportAnswer:
 
     def _shared_dict(self) -> dict:
         """The JSON-ready keys every held answer writes (NaN kept: write with ``cli.common.dumps``)."""
+        wrenches = {"base": self.base_wrench.tolist(), "ee": self.ee_wrench.tolist()}
         return {
             "success": self.success,
             "message": self.message,
@@ -126,7 +127,7 @@ class SupportAnswer:
             "forces": self.forces.tolist(),
             "max_abs_force": self.max_abs_force,
             "commanded": self.commanded.tolist(),
-            "support_wrenches": {"base": self.base_wrench.tolist(), "ee": self.ee_wrench.tolist()},
+            "support_wrenches": wrenches,
             "plates": self.plates.as_matrices().tolist(),
             "residual": self.residual,
         }

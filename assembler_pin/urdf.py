@@ -154,8 +154,8 @@ def node_points(cfg: AssemblerConfig, k: int) -> np.ndarray:
     return np.stack([r * np.cos(a), r * np.sin(a), np.zeros(3)], axis=1)
 
 
-#: Colours of the URDF's materials (RGBA).
-_MATERIALS = {
+#: Colours of the generated models' materials (RGBA), the URDF's and the MJCF's.
+MATERIALS = {
     "plate": "0.55 0.6 0.7 1",
     "motor": "0.2 0.25 0.3 1",
     "shaft": "0.8 0.8 0.8 1",
@@ -247,7 +247,7 @@ def assembler_urdf(cfg: AssemblerConfig) -> str:
     """The URDF text of the stack described by ``cfg`` (see module docstring), written in
     document order: materials, plate 0, then per platform its legs and its top plate, the payload."""
     robot = ET.Element("robot", name="assembler")
-    for name, rgba in _MATERIALS.items():
+    for name, rgba in MATERIALS.items():
         ET.SubElement(ET.SubElement(robot, "material", name=name), "color", rgba=rgba)
     _add_plate(robot, cfg, 0)
     geo = leg_geometry(cfg)
