@@ -14,95 +14,52 @@ Quick start::
 from __future__ import annotations
 
 import importlib
+import importlib.util
 from typing import TYPE_CHECKING, Any
 
 #: public name -> the module that defines it; imported on first use, so that
-#: ``import assembler_pin`` (and ``assembler-pin --help``) stays light.
+#: ``import assembler_pin`` (and ``assembler-pin --help``) stays light. These are the names a
+#: user types; everything else is one level down (``ap.kinematics.q_from_plates``,
+#: ``ap.carrier.solve_on_carrier``, ``ap.viz.StackViewer``, ``ap.exceptions.PoseError``).
 _LAZY: dict[str, str] = {
-    "assembler_urdf": ".urdf",
-    "AssemblerConfig": ".config",
-    "AssemblerError": ".exceptions",
+    # model and configuration
     "AssemblerModel": ".model",
-    "CapacityResult": ".capacity",
-    "Carrier": ".carrier",
-    "carrier_statics": ".carrier",
-    "CLIError": ".exceptions",
-    "chosen_distribution": ".support_choice",
-    "ChosenDistribution": ".support_choice",
-    "compensated_lengths": ".compliance",
-    "CompensatedLengths": ".compliance",
-    "closure_sidecar": ".urdf",
-    "ConfigError": ".exceptions",
-    "ConvergenceError": ".exceptions",
-    "ee_jacobian_wrt_lengths": ".kinematics",
-    "EEPath": ".motion",
-    "evaluate_constraints": ".constraints",
-    "evaluate_state": ".state",
-    "export_model_files": ".export",
-    "FKResult": ".kinematics",
-    "GoalTolerance": ".constraints",
-    "helper_arm_urdf": ".helper_arm",
-    "HelperArm": ".helper_arm",
-    "HelperArmOptions": ".helper_arm",
-    "home_plates": ".geometry",
-    "initial_condition": ".helper_arm",
-    "InitialConditionResult": ".helper_arm",
-    "leg_geometry": ".geometry",
-    "leg_state": ".kinematics",
-    "loaded_pose": ".compliance",
-    "LoadedPose": ".compliance",
-    "LoadError": ".exceptions",
-    "SupportError": ".exceptions",
-    "two_point_statics": ".supports",
-    "ee_held_statics": ".supports",
-    "plan_walk": ".walk",
-    "WalkOptions": ".walk",
-    "WalkResult": ".walk",
-    "turned_model": ".walk",
-    "WalkError": ".exceptions",
-    "TwoPointStatics": ".supports",
-    "LegConfig": ".config",
-    "LegState": ".kinematics",
+    "AssemblerConfig": ".config",
     "load_config": ".config",
-    "ModelFileError": ".exceptions",
-    "MotionResult": ".motion.timing",
+    # poses and state
+    "PlateArrays": ".kinematics",
+    "StackState": ".state",
+    "evaluate_state": ".state",
+    # kinematics and statics
+    "stack_forward_kinematics": ".kinematics",
+    "solve_statics": ".statics",
+    "StaticsResult": ".statics",
+    # the helper arm, the optimizer, solving
+    "initial_condition": ".helper_arm",
+    "HelperArmOptions": ".helper_arm",
     "optimize_internal_poses": ".optimize",
     "OptimizeOptions": ".optimize",
     "OptimizeResult": ".optimize",
-    "OptionsError": ".exceptions",
+    "solve": ".solver",
+    "SolveResult": ".solver",
     "payload_capacity": ".capacity",
-    "PayloadConfig": ".config",
+    # the compliant truss, two-point support, walking
+    "stiffness": ".ee_stiffness",
+    "loaded_pose": ".compliance",
+    "compensated_lengths": ".compliance",
+    "two_point_statics": ".supports",
+    "plan_walk": ".walk",
+    # motion
+    "EEPath": ".motion",
+    "PlanOptions": ".motion",
     "plan_trajectory": ".motion.timing",
-    "plate_arrays": ".kinematics",
-    "PlateArrays": ".kinematics",
-    "PlateConfig": ".config",
-    "plates_from_q": ".kinematics",
-    "PoseError": ".exceptions",
-    "q_from_plates": ".kinematics",
+    "MotionResult": ".motion.timing",
+    "Trajectory": ".motion.timing",
     "read_trajectory": ".motion.timing",
-    "Scenario": ".scenarios",
+    # scenarios and errors
     "scenario": ".scenarios",
     "SCENARIOS": ".scenarios",
-    "se3_to_taa": ".kinematics",
-    "SingularConfigurationError": ".exceptions",
-    "solve": ".solver",
-    "solve_on_carrier": ".carrier",
-    "solve_statics": ".statics",
-    "solve_statics_batch": ".statics",
-    "SolveResult": ".solver",
-    "sp_forward_kinematics": ".kinematics",
-    "stack_forward_kinematics": ".kinematics",
-    "StackFKResult": ".kinematics",
-    "StackState": ".state",
-    "StaticsResult": ".statics",
-    "stiffness": ".ee_stiffness",
-    "StiffnessResult": ".ee_stiffness",
-    "taa_to_se3": ".kinematics",
-    "to_se3": ".kinematics",
-    "Trajectory": ".motion.timing",
-    "UnknownScenarioError": ".exceptions",
-    "ViewerError": ".exceptions",
-    "Violation": ".constraints",
+    "AssemblerError": ".exceptions",
 }
 
 __all__ = sorted(_LAZY)
@@ -111,6 +68,8 @@ __all__ = sorted(_LAZY)
 def __getattr__(name: str) -> Any:
     module = _LAZY.get(name)
     if module is None:
+        if importlib.util.find_spec(f"{__name__}.{name}") is not None:  # a subpackage or module
+            return importlib.import_module(f".{name}", __name__)
         raise AttributeError(f"module 'assembler_pin' has no attribute {name!r}")
     value = getattr(importlib.import_module(module, __name__), name)
     globals()[name] = value
@@ -122,61 +81,20 @@ def __dir__() -> list[str]:
 
 
 if TYPE_CHECKING:  # for type checkers and IDEs: the same names, imported eagerly
-    from .capacity import CapacityResult, payload_capacity
-    from .carrier import Carrier, carrier_statics, solve_on_carrier
-    from .compliance import CompensatedLengths, LoadedPose, compensated_lengths, loaded_pose
-    from .config import AssemblerConfig, LegConfig, PayloadConfig, PlateConfig, load_config
-    from .constraints import GoalTolerance, Violation, evaluate_constraints
-    from .ee_stiffness import StiffnessResult, stiffness
-    from .exceptions import (
-        AssemblerError,
-        CLIError,
-        ConfigError,
-        ConvergenceError,
-        LoadError,
-        ModelFileError,
-        OptionsError,
-        PoseError,
-        SingularConfigurationError,
-        SupportError,
-        UnknownScenarioError,
-        ViewerError,
-        WalkError,
-    )
-    from .export import export_model_files
-    from .geometry import home_plates, leg_geometry
-    from .helper_arm import (
-        HelperArm,
-        HelperArmOptions,
-        InitialConditionResult,
-        helper_arm_urdf,
-        initial_condition,
-    )
-    from .kinematics import (
-        FKResult,
-        LegState,
-        PlateArrays,
-        StackFKResult,
-        ee_jacobian_wrt_lengths,
-        leg_state,
-        plate_arrays,
-        plates_from_q,
-        q_from_plates,
-        se3_to_taa,
-        sp_forward_kinematics,
-        stack_forward_kinematics,
-        taa_to_se3,
-        to_se3,
-    )
+    from .capacity import payload_capacity
+    from .compliance import compensated_lengths, loaded_pose
+    from .config import AssemblerConfig, load_config
+    from .ee_stiffness import stiffness
+    from .exceptions import AssemblerError
+    from .helper_arm import HelperArmOptions, initial_condition
+    from .kinematics import PlateArrays, stack_forward_kinematics
     from .model import AssemblerModel
-    from .motion import EEPath
+    from .motion import EEPath, PlanOptions
     from .motion.timing import MotionResult, Trajectory, plan_trajectory, read_trajectory
     from .optimize import OptimizeOptions, OptimizeResult, optimize_internal_poses
-    from .scenarios import SCENARIOS, Scenario, scenario
+    from .scenarios import SCENARIOS, scenario
     from .solver import SolveResult, solve
     from .state import StackState, evaluate_state
-    from .statics import StaticsResult, solve_statics, solve_statics_batch
-    from .support_choice import ChosenDistribution, chosen_distribution
-    from .supports import TwoPointStatics, ee_held_statics, two_point_statics
-    from .urdf import assembler_urdf, closure_sidecar
-    from .walk import WalkOptions, WalkResult, plan_walk, turned_model
+    from .statics import StaticsResult, solve_statics
+    from .supports import two_point_statics
+    from .walk import plan_walk

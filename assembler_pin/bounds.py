@@ -49,11 +49,21 @@ BOUNDS: dict[str, Bound] = {
     "plan.path_samples": Bound(2, 100_000, "", True, "planned samples along one path (its length / the step)"),
     "view.animate": Bound(0, 1000, "", True, "view --animate: leg-length steps from initial to optimized"),
     "view.frames": Bound(2, 2000, "", True, "view --frames: frames of a trajectory animation"),
+    "view.exaggerate": Bound(1e-3, 1e4, "", False, "view --exaggerate: factor on the loaded pose's displacements"),
+    "view.ellipsoid_force": Bound(
+        1e-3, 1e6, "N", False, "view --ellipsoid-force: the force whose sag the compliance ellipsoid draws"
+    ),
     "bench.repeat": Bound(1, 100_000, "", True, "bench --repeat: calls per figure"),
     "helper.max_attempts": Bound(1, 1000, "", True, "solve --max-attempts: helper-arm solves (link lengths) tried"),
     "helper.d_step": Bound(1e-4, 1.0, "m", False, "solve --d-step: helper-arm link-length scan step"),
     "helper.scan_values": Bound(1, 100_000, "", True, "solve --d-step: link lengths scanned (height range / step)"),
     "optimize.max_iterations": Bound(1, 100_000, "", True, "solve --max-iterations: optimizer iterations"),
+    "optimize.sag_weight": Bound(
+        1e-6, 1e6, "", False, "solve --sag-weight: weight of the sag in the weighted objective"
+    ),
+    "optimize.max_sag": Bound(
+        1e-9, 1.0, "m", False, "solve --max-sag: largest EE sag of the answer under its own load"
+    ),
     "carrier.blends": Bound(1, 100, "", True, "solve_on_carrier(blends=...): carrier placements tried"),
     "map.workers": Bound(0, 256, "", True, "map --workers: local worker processes (0: in this process)"),
     "map.batch_size": Bound(1, 10_000, "", True, "map --batch-size: cells per task"),

@@ -3,14 +3,22 @@
 The command line builds its ``choices`` and help texts from these tuples without loading
 Pinocchio; the modules that define what each name means check at import time that their
 tables carry exactly these names (:mod:`~assembler_pin.scenarios`,
-:mod:`~assembler_pin.carrier`, :mod:`~assembler_pin.viewer`).
+:mod:`~assembler_pin.carrier`, :mod:`~assembler_pin.viz`).
 """
 
 from __future__ import annotations
 
 from collections.abc import Iterable
 
-__all__ = ["CARRIER_NAMES", "FORCE_SCALES", "PATH_KINDS", "SCENARIO_NAMES", "SOLVE_STARTS", "check_names"]
+__all__ = [
+    "CARRIER_NAMES",
+    "FORCE_SCALES",
+    "OBJECTIVES",
+    "PATH_KINDS",
+    "SCENARIO_NAMES",
+    "SOLVE_STARTS",
+    "check_names",
+]
 
 #: The paper's scenarios (:data:`assembler_pin.scenarios.SCENARIOS`), in the paper's order.
 SCENARIO_NAMES = ("translation", "ninety_degrees", "inchworm", "vertical_lift", "orientation_transition")
@@ -26,6 +34,11 @@ FORCE_SCALES = ("auto", "limit", "max")
 #: the default first): ``first`` runs the helper arm's start, the others only when its run
 #: fails or its optimum needs them; ``all`` runs every start and keeps the best optimum.
 SOLVE_STARTS = ("first", "all")
+
+#: The optimizer's objectives (:mod:`assembler_pin.objective`, the default first): ``force``
+#: (Ω, paper eq. 10), ``sag`` (the EE's sag under its own load), ``weighted`` (Ω plus a
+#: weighted, normalized sag).
+OBJECTIVES = ("force", "sag", "weighted")
 
 #: Interpolations of an EE path on SE(3): ``screw`` (geodesic) or ``linear`` (line + slerp).
 PATH_KINDS = ("screw", "linear")

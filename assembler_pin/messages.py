@@ -18,6 +18,7 @@ torque limit        a carrier arm's joint torque beyond its effort limit
 singular            a platform whose statics is singular (condition number too large)
 goal missed         the end effector away from the goal beyond the tolerance
 motion step         a leg would move more in one motion step than allowed
+sag limit           the end effector's sag under its own load beyond ``max_sag``
 did not converge    an iterative solve (forward kinematics, optimizer, equilibrium)
                     stopped before its tolerance
 assembly mode       forward kinematics converged to another solution of the lengths
@@ -54,6 +55,7 @@ CAUSES = (
     "singular",
     "goal missed",
     "motion step",
+    "sag limit",
     "did not converge",
     "assembly mode",
 )

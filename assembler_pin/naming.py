@@ -4,7 +4,8 @@ and parsed here.
 Indices are 0-based: plate ``k`` in 0..n (plate 0 the base, plate n the EE plate),
 platform ``j`` in 0..n-1 (between plates j and j+1), leg ``i`` in 0..5 of its platform.
 The URDF, the MJCF, the meshcat scene, the trajectory CSV columns and the helper arm all use
-these names, so a name written by one surface is read back by another.
+these names, so a name written by one surface is read back by another. How a person reads
+a platform or a leg (``SP1 leg 2``, the same 0-based numbers) is :mod:`~assembler_pin.labels`.
 """
 
 from __future__ import annotations
@@ -12,7 +13,7 @@ from __future__ import annotations
 import re
 from dataclasses import dataclass
 
-__all__ = ["LEG_PARTS", "ParsedName", "leg_label", "names", "parse_name"]
+__all__ = ["LEG_PARTS", "ParsedName", "names", "parse_name"]
 
 LEG_PARTS = ("ux", "cross", "uy", "motor", "actuator", "shaft", "top", "ball")
 """The parts of a leg chain that carry names: universal-joint hinges ``ux``/``uy`` and the
@@ -65,11 +66,6 @@ class names:  # noqa: N801 - a namespace of name builders
     def plate_mount(k: int) -> str:
         """Helper-arm fixed joint that carries plate k."""
         return f"plate_{k}_mount"
-
-
-def leg_label(j: int, i: int) -> str:
-    """How a leg is named to a reader: 1-based platform and leg, as in the paper (``SP2 leg 5``)."""
-    return f"SP{j + 1} leg {i + 1}"
 
 
 @dataclass(frozen=True)

@@ -96,6 +96,14 @@ class OptimizeOptions:
             optimizer keeps the legs (default :data:`GEOMETRIC_MARGIN`; a motion plan keeps
             more, so that the legs stay inside between its samples).
         goal_tolerance: tolerance the final state is checked against when the EE is fixed.
+        objective: what is minimized (:data:`~assembler_pin.choices.OBJECTIVES`,
+            :mod:`assembler_pin.objective`): ``"force"`` Ω (paper eq. 10), ``"sag"`` the EE's
+            sag under its own load, ``"weighted"`` Ω plus ``sag_weight`` times the normalized
+            sag; ``"sag"`` and ``"weighted"`` need method ``"slsqp"``.
+        sag_weight: the weight w of the sag in the weighted objective (bounds key
+            ``optimize.sag_weight``, no unit).
+        max_sag: largest EE sag [m] of the answer (bounds key ``optimize.max_sag``), None for
+            no limit; needs method ``"slsqp"``.
     """
 
     method: str = "slsqp"
@@ -107,10 +115,14 @@ class OptimizeOptions:
     rise_margin: float = 1e-3
     limit_margin: float = GEOMETRIC_MARGIN
     goal_tolerance: GoalTolerance = field(default_factory=lambda: GoalTolerance(1e-9, 1e-9))
+    objective: str = "force"
+    sag_weight: float = 1.0
+    max_sag: float | None = None
 
     def __post_init__(self) -> None:
         if not isinstance(self.method, str) or self.method not in METHODS:
             raise OptionsError(f"method must be one of {', '.join(METHODS)}, got {short_repr(self.method)}")
+        self._check_sag_options()
         for name, positive in (
             ("w1", False),
             ("w2", False),
@@ -140,6 +152,22 @@ class OptimizeOptions:
             ):
                 shown = short_repr(tol)
                 raise OptionsError(f"{name} must be a GoalTolerance of two finite numbers > 0 (m, rad), got {shown}")
+
+    def _check_sag_options(self) -> None:
+        """``objective`` one of :data:`~assembler_pin.choices.OBJECTIVES`, ``sag_weight`` and
+        ``max_sag`` within their bounds rows, and the sag needing the smooth method."""
+        from .choices import OBJECTIVES
+
+        if not isinstance(self.objective, str) or self.objective not in OBJECTIVES:
+            raise OptionsError(f"objective must be one of {', '.join(OBJECTIVES)}, got {short_repr(self.objective)}")
+        check_bound("optimize.sag_weight", self.sag_weight, "sag_weight")
+        if self.max_sag is not None:
+            check_bound("optimize.max_sag", self.max_sag, "max_sag [m]")
+        if self.method != "slsqp" and (self.objective != "force" or self.max_sag is not None):
+            raise OptionsError(
+                f"objective {self.objective!r} and max_sag need method 'slsqp' (the analytic gradients), "
+                f"got method {self.method!r}"
+            )
 
 
 @dataclass

@@ -1,7 +1,7 @@
 """The package's one colour language: every colour a figure, page or viewer scene draws with.
 
 One meaning per colour, the same in the matplotlib figures (:mod:`~assembler_pin.plots`),
-the Meshcat pages (:mod:`~assembler_pin.viewer`) and the maps:
+the Meshcat pages (:mod:`~assembler_pin.viz`) and the maps:
 
 ==========================  ===========  =====================================================
 what                        colour       where
@@ -14,6 +14,8 @@ optimized pose              charcoal     pose views (legs and plates); never red
 helper arm                  violet       links; dark violet joint clusters
 carrier arm                 slate        viewer; a darker, bluish grey than zero force
 payload                     orange       cube and rod in the viewer
+loaded pose (exaggerated)   teal         translucent ghost in the viewer (``view --loaded``)
+EE compliance ellipsoid     magenta      translucent ellipsoid at the EE (``view --ellipsoid``)
 violation / at a bound      yellow       viewer balls, figure frames and rings
 EE goal                     gold star    pose views
 capacity (maps)             viridis      dark purple = low, yellow = high, in PNG and HTML alike
@@ -35,8 +37,11 @@ from __future__ import annotations
 __all__ = [
     "ARM",
     "ARM_JOINT",
+    "BACKGROUND_BOTTOM",
+    "BACKGROUND_TOP",
     "CAPACITY_CMAP",
     "CARRIER",
+    "COMPLIANCE",
     "COMPRESSION",
     "FLOOR",
     "FORCE_MAGNITUDE_CMAP",
@@ -46,6 +51,7 @@ __all__ = [
     "INITIAL",
     "LEG_CYCLE",
     "LIMIT",
+    "LOADED",
     "NEUTRAL",
     "OPTIMIZED",
     "OUTSIDE_GRID",
@@ -93,6 +99,14 @@ CARRIER: RGB = (0.33, 0.37, 0.43)
 """Slate: a carrier arm (darker and bluer than the zero-force grey)."""
 PAYLOAD: RGB = (0.85, 0.55, 0.10)
 """Orange: the payload cube and its rod."""
+LOADED: RGB = (0.0, 0.58, 0.60)
+"""Teal: the loaded pose (the legs' elastic equilibrium, displacements exaggerated), a ghost."""
+COMPLIANCE: RGB = (0.85, 0.25, 0.60)
+"""Magenta: the EE's compliance ellipsoid (semi-axes the sag under a stated force)."""
+BACKGROUND_TOP: RGB = (0.97, 0.97, 0.96)
+"""The viewer's neutral background, top."""
+BACKGROUND_BOTTOM: RGB = (0.86, 0.87, 0.88)
+"""The viewer's neutral background, bottom."""
 
 VIOLATION: RGB = (1.0, 0.85, 0.0)
 """Yellow: a leg violating a limit (viewer), a state violating one (figures)."""

@@ -5,12 +5,15 @@ force optimization) and :func:`write_report` writes a markdown report with PNG f
 side and top views of the initial (green) and optimized poses, per-actuator force bars,
 force heatmaps. :func:`summary_table` and :func:`force_tables` give the text the
 ``assembler-pin reproduce`` command prints — the summary the paper gives in prose and
-its Tables I–II layout — beside the paper's own figures.
+its Tables I–II layout — beside the paper's own figures. :func:`sag_table` sets the
+force-optimal pose beside the sag-optimal one (``OptimizeOptions(objective="sag")``): max|F|
+and the EE's sag under its own load of each, the trade-off a user chooses from.
 """
 
 from __future__ import annotations
 
 import contextlib
+import dataclasses
 import logging
 from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass
@@ -33,7 +36,7 @@ if TYPE_CHECKING:
 
     from .config import LegConfig
 
-__all__ = ["ScenarioOutcome", "force_tables", "run_scenarios", "summary_table", "write_report"]
+__all__ = ["ScenarioOutcome", "force_tables", "run_scenarios", "sag_table", "summary_table", "write_report"]
 
 logger = logging.getLogger(__name__)
 
@@ -75,6 +78,8 @@ class ScenarioOutcome:
     stroke: tuple[float, float]
     """(min_length, max_length) of the legs [m]."""
     reference: Reference | None = None
+    sag_result: SolveResult | None = None
+    """The same goal solved with the sag objective (None when not asked for)."""
 
     @property
     def initial(self) -> StackState | None:
@@ -97,17 +102,24 @@ def run_scenarios(
     names: Sequence[str] | None = None,
     options: OptimizeOptions | None = None,
     progress: ProgressCallback | None = None,
+    sag: bool = True,
 ) -> list[ScenarioOutcome]:
-    """Solve the named scenarios (default: all, in the paper's order); ``progress`` is
-    called ``(done, total, scenario name)`` after each."""
+    """Solve the named scenarios (default: all, in the paper's order) with the force
+    objective and, with ``sag``, with the sag objective too (the same options otherwise);
+    ``progress`` is called ``(done, total, scenario name)`` after each."""
     chosen = list(SCENARIOS) if names is None else list(names)
+    base = options if options is not None else OptimizeOptions()
+    force_options = dataclasses.replace(base, objective="force")
     outcomes = []
     for name in chosen:
         scn = SCENARIOS[name]
-        result = solve(am, scn.goal, optimize=True, options=options)
+        result = solve(am, scn.goal, optimize=True, options=force_options)
         logger.info("scenario %s: %s", name, result.message)
-        ref = reference(am, result, options) if result.initial is not None and result.optimized is not None else None
-        outcomes.append(ScenarioOutcome(scn, result, (am.config.leg.min_length, am.config.leg.max_length), ref))
+        solved = result.initial is not None and result.optimized is not None
+        ref = reference(am, result, force_options) if solved else None
+        stroke = (am.config.leg.min_length, am.config.leg.max_length)
+        sag_result = solve(am, scn.goal, options=dataclasses.replace(base, objective="sag")) if sag else None
+        outcomes.append(ScenarioOutcome(scn, result, stroke, ref, sag_result))
         if progress is not None:
             progress(len(outcomes), len(chosen), name)
     return outcomes
@@ -249,6 +261,33 @@ def _reference_cells(o: ScenarioOutcome) -> list[str]:
     return [vs, f"{100 * (ours / ref.multistart_best - 1):+.1f}%"]
 
 
+def _sag_cells(am: AssemblerModel, result: SolveResult | None) -> list[str]:
+    """max|F| [N], EE sag [mm] and optimizer time [s] of a solve's optimum ("—" when none)."""
+    from .objective import state_sag
+
+    if result is None or result.optimized is None or not result.success:
+        return ["—", "—", "—"]
+    state = result.optimized
+    return [f"{state.max_abs_force:.1f}", f"{1e3 * state_sag(am, state):.3f}", f"{result.timing_s['optimize']:.2f}"]
+
+
+def sag_table(am: AssemblerModel, outcomes: Sequence[ScenarioOutcome], markdown: bool = False) -> str:
+    """The force-optimal and the sag-optimal pose side by side: max|F| [N], the EE's linear
+    sag under its own load [mm] (:func:`~assembler_pin.compliance.sag_and_gradient`) and the
+    optimizer's time ``t`` [s] (every start it ran) of each, and the sag's change; the text
+    is under 100 characters wide."""
+    header = ["scenario", "force-opt max|F|", "sag [mm]", "t [s]", "sag-opt max|F|", "sag [mm]", "t [s]", "sag"]
+    rows = []
+    for o in outcomes:
+        force, sag = _sag_cells(am, o.result), _sag_cells(am, o.sag_result)
+        change = "—" if "—" in (force[1], sag[1]) else f"{100 * (float(sag[1]) / float(force[1]) - 1):+.0f}%"
+        rows.append([o.scenario.name, *force, *sag, change])
+    if markdown:
+        lines = ["| " + " | ".join(header).replace("max|F|", "max\\|F\\|") + " |", "|" + "---|" * len(header)]
+        return "\n".join(lines + ["| " + " | ".join(r) + " |" for r in rows])
+    return _text_table(header, rows, range(len(header)))
+
+
 def force_tables(outcome: ScenarioOutcome, markdown: bool = False) -> str:
     """The 6×n initial and optimized force tables side by side (paper Tables I–II) [N].
 
@@ -316,6 +355,17 @@ def _report_text(am: AssemblerModel, outcomes: Sequence[ScenarioOutcome], target
         summary_table(outcomes, markdown=True),
         "",
     ]
+    if any(o.sag_result is not None for o in outcomes):
+        parts += [
+            "## Force-optimal and sag-optimal poses",
+            "",
+            f"max|F| [N] and the EE's sag under its own load [mm] (legs of {am.config.leg.stiffness:g} N/m,",
+            "linear in their compliance) of the force-optimal pose (objective Ω) and of the sag-optimal",
+            "pose (objective: the sag, every limit kept); t: the optimizer's time over its starts [s].",
+            "",
+            sag_table(am, outcomes, markdown=True),
+            "",
+        ]
     for o in outcomes:
         s = o.scenario
         parts += [f"## {s.title}", "", s.description, ""]

@@ -38,8 +38,8 @@ def test_solve_out_is_a_plate_file_of_the_solved_pose(am, tmp_path):
     answer = json.loads(out)
     assert status == 0 and answer["success"] and answer["out"] == str(path)
     doc = statics_of(path)
-    plates = ap.plate_arrays(am, [np.array(m) for m in doc["plates"]])
-    goal = ap.taa_to_se3([float(x) for x in GOAL])
+    plates = ap.kinematics.plate_arrays(am, [np.array(m) for m in doc["plates"]])
+    goal = ap.kinematics.taa_to_se3([float(x) for x in GOAL])
     assert design_problems(am.config, plates, goal, tol=1e-6) == []
     np.testing.assert_allclose(doc["forces"], design_forces(am.config, plates), atol=1e-8)
     np.testing.assert_allclose(doc["plates"], answer["initial"]["plates"], atol=0)
@@ -53,7 +53,7 @@ def test_solve_json_is_accepted_by_plates(am, tmp_path):
     doc = statics_of(path)
     answer = json.loads(out)
     np.testing.assert_allclose(doc["plates"], answer["optimized"]["plates"], atol=0)
-    plates = ap.plate_arrays(am, [np.array(m) for m in doc["plates"]])
+    plates = ap.kinematics.plate_arrays(am, [np.array(m) for m in doc["plates"]])
     np.testing.assert_allclose(doc["forces"], design_forces(am.config, plates), atol=1e-8)
     ee = pin.SE3(np.array(doc["plates"][-1]))
     assert np.linalg.norm(ee.translation - np.array([0.3, 0.0, 0.75])) < 1e-6

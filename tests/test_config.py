@@ -6,7 +6,8 @@ import math
 
 import pytest
 
-from assembler_pin import AssemblerConfig, ConfigError, load_config
+from assembler_pin import AssemblerConfig, load_config
+from assembler_pin.exceptions import ConfigError
 
 
 def test_defaults_match_design_notes():

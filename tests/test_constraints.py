@@ -5,7 +5,8 @@ from __future__ import annotations
 import numpy as np
 import pinocchio as pin
 
-from assembler_pin import AssemblerModel, GoalTolerance, evaluate_state, load_config
+from assembler_pin import AssemblerModel, evaluate_state, load_config
+from assembler_pin.constraints import GoalTolerance
 from assembler_pin.kinematics import PlateArrays, plate_arrays
 
 

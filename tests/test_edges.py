@@ -11,8 +11,9 @@ import pytest
 from checks import assert_feasible
 
 import assembler_pin.optimize.problem as problem_module
-from assembler_pin import AssemblerModel, solve_statics, taa_to_se3
+from assembler_pin import AssemblerModel, solve_statics
 from assembler_pin.cli import main
+from assembler_pin.kinematics import taa_to_se3
 from assembler_pin.optimize import OptimizeOptions, optimize_internal_poses
 from assembler_pin.solver import STARTS, solve
 

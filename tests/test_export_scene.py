@@ -14,7 +14,9 @@ import pytest
 import trimesh
 import yourdfpy
 
-from assembler_pin import export_model_files, q_from_plates, stack_forward_kinematics
+from assembler_pin import stack_forward_kinematics
+from assembler_pin.export import export_model_files
+from assembler_pin.kinematics import q_from_plates
 from assembler_pin.naming import names
 
 

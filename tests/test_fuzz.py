@@ -113,7 +113,7 @@ def test_config_mappings_raise_only_config_errors(doc):
     try:
         ap.load_config(doc)
     except ap.AssemblerError as exc:
-        assert isinstance(exc, ap.ConfigError) and str(exc)
+        assert isinstance(exc, ap.exceptions.ConfigError) and str(exc)
 
 
 matrix_entries = st.one_of(
@@ -215,10 +215,10 @@ def test_api_entry_points_raise_only_assembler_errors(am, value):
     calls = [
         lambda: ap.evaluate_state(am, value),
         lambda: ap.solve_statics(am, value),
-        lambda: ap.taa_to_se3(value),
-        lambda: ap.to_se3(value),
+        lambda: ap.kinematics.taa_to_se3(value),
+        lambda: ap.kinematics.to_se3(value),
         lambda: ap.stack_forward_kinematics(am, value),
-        lambda: ap.leg_state(am, value),
+        lambda: ap.kinematics.leg_state(am, value),
     ]
     for call in calls:
         try:

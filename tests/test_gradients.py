@@ -7,9 +7,9 @@ import numpy as np
 import pinocchio as pin
 import pytest
 
-from assembler_pin import leg_state, solve_statics
+from assembler_pin import solve_statics
 from assembler_pin.gradients import pose_derivatives
-from assembler_pin.kinematics import PlateArrays
+from assembler_pin.kinematics import PlateArrays, leg_state
 
 
 def _perturbed(pa: PlateArrays, column: int, h: float) -> PlateArrays:

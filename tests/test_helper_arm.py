@@ -16,19 +16,19 @@ import pinocchio as pin
 import pytest
 from checks import design_anchors, kinematic_problems, sp_legs
 
-from assembler_pin import (
-    HelperArm,
-    HelperArmOptions,
-    PoseError,
-    helper_arm_urdf,
-    initial_condition,
-    leg_state,
-    stack_forward_kinematics,
-)
+from assembler_pin import HelperArmOptions, initial_condition, stack_forward_kinematics
 from assembler_pin.cli import main
-from assembler_pin.helper_arm import cluster_limits, height_range, perturbed_plates, repair_stack
+from assembler_pin.exceptions import PoseError
+from assembler_pin.helper_arm import (
+    HelperArm,
+    cluster_limits,
+    height_range,
+    helper_arm_urdf,
+    perturbed_plates,
+    repair_stack,
+)
 from assembler_pin.helper_arm.initial import CHEAP_SCAN
-from assembler_pin.kinematics import PlateArrays
+from assembler_pin.kinematics import PlateArrays, leg_state
 
 
 # ---------------------------------------------------------------------- independent references

@@ -8,18 +8,17 @@ import pytest
 from checks import design_anchors, sp_legs
 from conftest import random_se3
 
-from assembler_pin import (
-    ConvergenceError,
-    PoseError,
+from assembler_pin import stack_forward_kinematics
+from assembler_pin.exceptions import ConvergenceError, PoseError
+from assembler_pin.kinematics import (
+    PlateArrays,
     ee_jacobian_wrt_lengths,
     leg_state,
     plate_arrays,
     plates_from_q,
     q_from_plates,
     sp_forward_kinematics,
-    stack_forward_kinematics,
 )
-from assembler_pin.kinematics import PlateArrays
 
 
 def _closure_residuals(am, q) -> np.ndarray:
@@ -176,7 +175,7 @@ def test_bad_plate_input(am, plates, needle):
 
 
 def test_taa_round_trip_and_errors():
-    from assembler_pin import se3_to_taa, taa_to_se3
+    from assembler_pin.kinematics import se3_to_taa, taa_to_se3
 
     x = np.array([0.1, -0.2, 0.9, 0.3, -0.4, 0.5])
     M = taa_to_se3(x)

@@ -107,7 +107,7 @@ def test_figure_labels(state):
 
 
 def test_viewer_marks_the_leg_by_the_same_numbers(am, state):
-    from assembler_pin.viewer import StackViewer
+    from assembler_pin.viz import StackViewer
 
     assert StackViewer.violating_legs(state) == [(J, I)]
     with StackViewer(am) as v:

@@ -47,7 +47,7 @@ def test_capacity_matches_a_bisection_with_the_ordinary_solve(am):
         ap.AssemblerModel.from_config({"payload": {"mass": result.capacity_kg}}),
         result.plates,
         goal=goal,
-        tolerance=ap.GoalTolerance(1e-6, 1e-6),
+        tolerance=ap.constraints.GoalTolerance(1e-6, 1e-6),
     )
     assert at_cap.feasible or all(v.kind in ("tension", "compression") for v in at_cap.violations)
     peak = max(at_cap.forces.max() / leg.max_tension, -at_cap.forces.min() / leg.max_compression)

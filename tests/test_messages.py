@@ -101,7 +101,7 @@ def test_a_non_converging_fk_through_the_api(am):
     fk = stack_forward_kinematics(am, lengths)
     assert not fk.success
     assert_readable(fk.message, "did not converge")
-    assert "SP1" in fk.message and "mm after 30 iterations" in fk.message
+    assert "SP0" in fk.message and "mm after 30 iterations" in fk.message
 
 
 @pytest.mark.parametrize(

@@ -5,7 +5,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from assembler_pin import AssemblerModel, ModelFileError, export_model_files, load_config
+from assembler_pin import AssemblerModel, load_config
+from assembler_pin.exceptions import ModelFileError
+from assembler_pin.export import export_model_files
 
 
 def test_model_structure(am):

@@ -31,7 +31,7 @@ from assembler_pin.motion.timing import (
     verify_trajectory,
 )
 from assembler_pin.plots import trajectory_plot
-from assembler_pin.viewer import FORCE_BAND_LEVELS
+from assembler_pin.viz import FORCE_BAND_LEVELS
 
 
 @pytest.fixture(scope="module")

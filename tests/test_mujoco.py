@@ -21,14 +21,14 @@ import pytest
 from assembler_pin import (
     SCENARIOS,
     AssemblerModel,
-    export_model_files,
-    leg_state,
     load_config,
     scenario,
     solve,
     solve_statics,
     stack_forward_kinematics,
 )
+from assembler_pin.export import export_model_files
+from assembler_pin.kinematics import leg_state
 from assembler_pin.mjcf import MJCF_FILENAME, assembler_mjcf
 from assembler_pin.simulate import MujocoStack, SimulationError, hold_pose, mujoco_statics
 

@@ -7,7 +7,8 @@ import numpy as np
 import pytest
 from checks import assert_feasible, design_objective, design_problems
 
-from assembler_pin import AssemblerModel, GoalTolerance, load_config
+from assembler_pin import AssemblerModel, load_config
+from assembler_pin.constraints import GoalTolerance
 from assembler_pin.optimize import OptimizeOptions, optimize_internal_poses
 
 

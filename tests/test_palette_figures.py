@@ -27,7 +27,7 @@ from matplotlib.colors import to_rgb
 from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 
-from assembler_pin import evaluate_state, palette, plots, scenario, stack_forward_kinematics, viewer
+from assembler_pin import evaluate_state, palette, plots, scenario, stack_forward_kinematics, viz
 from assembler_pin.labels import leg_label
 from assembler_pin.motion.trajfile import MARGIN_KINDS, Trajectory
 
@@ -142,7 +142,7 @@ def test_one_force_scale_in_figures_and_viewer(am):
     image = plots.force_heatmaps(evaluate_state(am, am.home), limit=150.0).axes[0].images[0]
     f = np.linspace(-150.0, 150.0, 301)
     figure = np.array(image.cmap(image.norm(f)))[:, :3]
-    page = viewer.force_color(f, 150.0, 150.0)
+    page = viz.force_color(f, 150.0, 150.0)
     np.testing.assert_allclose(figure, page, atol=2.5 / 255)
     assert reddish(figure[-1]) and not reddish(figure[0]) and figure[0, 2] > figure[0, 0]  # + red, − blue
 
@@ -266,7 +266,7 @@ def test_viewer_payload_stays_orange_beside_the_ghost(am, bent_plates, tmp_path)
     by tests/test_viewer.py where installed.)"""
     from assembler_pin.carrier import Carrier
 
-    with viewer.StackViewer(am) as v:
+    with viz.StackViewer(am) as v:
         v.display(bent_plates)
         v.show_ghost(am.home)
         carrier = Carrier("ur3")
@@ -454,7 +454,7 @@ def test_map_page_in_a_real_browser(am, tmp_path):
     from matplotlib import colormaps
 
     from assembler_pin.maps import pictures
-    from assembler_pin.viewer import StackViewer
+    from assembler_pin.viz import StackViewer
 
     page = tmp_path / "map.html"
     with StackViewer(am) as v:

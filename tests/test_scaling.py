@@ -17,7 +17,7 @@ def whole_stack_forces(am: ap.AssemblerModel, plates) -> np.ndarray:
     own constraint Jacobian of the 6n ball joints, solved as one dense system (rows of every
     joint but the root). Tension positive."""
     model, data = am.model, am.data
-    q = ap.q_from_plates(am, plates)
+    q = ap.kinematics.q_from_plates(am, plates)
     g = pin.computeGeneralizedGravity(model, data, q)
     pin.computeJointJacobians(model, data, q)
     for cm, cd in zip(am.constraint_models, am.constraint_datas, strict=True):
@@ -69,8 +69,8 @@ def test_a_64_platform_stack_builds_and_holds_its_weight():
     legs = (cfg.leg.motor_mass + cfg.leg.shaft_mass) * cfg.gravity / axial_z
     assert np.all(result.forces.max(axis=1) <= low + 1e-9) and np.all(result.forces.min(axis=1) >= low - legs)
     # and exactly: free bodies of the legs and plates (checks.py)
-    np.testing.assert_allclose(result.forces, design_forces(cfg, ap.plate_arrays(am, am.home)), atol=1e-9)
-    with pytest.raises(ap.ConfigError, match="gigabytes"):
+    np.testing.assert_allclose(result.forces, design_forces(cfg, ap.kinematics.plate_arrays(am, am.home)), atol=1e-9)
+    with pytest.raises(ap.exceptions.ConfigError, match="gigabytes"):
         _ = am.data
 
 
@@ -96,9 +96,9 @@ def test_batched_statics_equal_the_single_path(am):
     rng = np.random.default_rng(3)
     stacks = [random_reachable_plates(am, rng)[1] for _ in range(5)]
     batch = np.array([s.as_matrices() for s in stacks])
-    forces = ap.solve_statics_batch(am, batch)
+    forces = ap.statics.solve_statics_batch(am, batch)
     assert forces.shape == (5, am.n, 6)
     for b, plates in enumerate(stacks):
         np.testing.assert_allclose(forces[b], whole_stack_forces(am, plates), atol=1e-9)
-    with pytest.raises(ap.PoseError, match="shape"):
-        ap.solve_statics_batch(am, batch[:, :-1])
+    with pytest.raises(ap.exceptions.PoseError, match="shape"):
+        ap.statics.solve_statics_batch(am, batch[:, :-1])

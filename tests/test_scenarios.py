@@ -11,7 +11,8 @@ import pinocchio as pin
 import pytest
 from test_helper_arm import check_result
 
-from assembler_pin import SCENARIOS, AssemblerError, Scenario, initial_condition, scenario
+from assembler_pin import SCENARIOS, AssemblerError, initial_condition, scenario
+from assembler_pin.scenarios import Scenario
 
 PAPER = {  # §V: initial -> optimized, max |F| and mean |F| [N]
     "translation": (145.6, 43.8, 50.0, 27.0),

@@ -34,7 +34,7 @@ def test_forces_equal_the_free_body_statics(am, random_poses):
 def test_feasible_exactly_when_the_design_checks_pass(random_poses, limits):
     """`feasible` against every constraint recomputed from the design (forces included)."""
     am = ap.AssemblerModel.from_config(ap.load_config(_TIGHT[limits]))
-    tol = ap.GoalTolerance()
+    tol = ap.constraints.GoalTolerance()
     assert tol.position == tol.rotation
     verdicts = []
     for k, (_, plates) in enumerate(random_poses):

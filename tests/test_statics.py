@@ -8,8 +8,8 @@ import pytest
 from checks import design_anchors, design_forces
 from conftest import potential_energy, random_se3
 
-from assembler_pin import AssemblerModel, SingularConfigurationError, solve_statics, stack_forward_kinematics
-from assembler_pin.exceptions import ArgumentError
+from assembler_pin import AssemblerModel, solve_statics, stack_forward_kinematics
+from assembler_pin.exceptions import ArgumentError, SingularConfigurationError
 from assembler_pin.kinematics import PlateArrays, q_from_plates
 from assembler_pin.statics import closure_jacobian_blocks
 

@@ -158,7 +158,7 @@ def _scaled_error(A: np.ndarray, B: np.ndarray, scale: float) -> float:
 
 def _pose(am, kind: str):
     if kind == "home":
-        return ap.plate_arrays(am, am.home)
+        return ap.kinematics.plate_arrays(am, am.home)
     rng = np.random.default_rng(7 + am.n)
     leg = am.config.leg
     while True:
@@ -250,7 +250,7 @@ def test_one_weightless_platform_is_jt_k_j():
     for kind in ("home", "random"):
         pa = _pose(am, kind)
         result = stiffness(am, pa)
-        J = np.linalg.inv(ap.ee_jacobian_wrt_lengths(am, pa))
+        J = np.linalg.inv(ap.kinematics.ee_jacobian_wrt_lengths(am, pa))
         K = k * J.T @ J
         np.testing.assert_allclose(result.stiffness, K, rtol=0, atol=1e-9 * np.abs(K).max())
         assert np.abs(result.geometric).max() < 1e-9 * np.abs(K).max()
@@ -262,7 +262,7 @@ def test_weightless_stack_compliance_is_the_serial_sum():
     am = _model({"platforms": 4, "gravity": 0.0})
     pa = _pose(am, "random")
     result = stiffness(am, pa)
-    J = ap.ee_jacobian_wrt_lengths(am, pa)
+    J = ap.kinematics.ee_jacobian_wrt_lengths(am, pa)
     C = J @ J.T / am.config.leg.stiffness
     np.testing.assert_allclose(result.compliance, C, rtol=0, atol=1e-9 * np.abs(C).max())
     np.testing.assert_allclose(result.platform_compliance.sum(axis=0), C, rtol=0, atol=1e-9 * np.abs(C).max())
@@ -317,7 +317,7 @@ def test_sag_is_linear_in_small_loads():
         sags.append(stiffness(am, _pose(am, "random")).sag_translation)
     np.testing.assert_allclose(sags[1], 2 * sags[0], rtol=0, atol=0.01 * np.linalg.norm(sags[1]))
     am = _model({})
-    lengths = ap.leg_state(am, am.home).lengths
+    lengths = ap.kinematics.leg_state(am, am.home).lengths
     base = loaded_pose(am, lengths).translation
     w = np.array([2.0, 1.0, -3.0, 0.1, 0.0, 0.2])
     one, two = (loaded_pose(am, lengths, wrench=s * w).translation - base for s in (1, 2))
@@ -328,7 +328,7 @@ def test_sag_is_linear_in_small_loads():
 
 # ---------------------------------------------------------------------- compensation
 def test_compensated_lengths_hold_the_pose_in_an_independent_equilibrium(am, random_poses):
-    for _, plates in [(None, ap.plate_arrays(am, am.home)), *random_poses[:3]]:
+    for _, plates in [(None, ap.kinematics.plate_arrays(am, am.home)), *random_poses[:3]]:
         comp = compensated_lengths(am, plates)
         assert comp.success, comp.message
         assert comp.error <= 1e-9
@@ -345,7 +345,7 @@ def test_compensated_lengths_hold_the_pose_in_an_independent_equilibrium(am, ran
 # ---------------------------------------------------------------------- bad input
 @pytest.mark.parametrize("value", [0.0, -1e6, float("nan"), float("inf"), 1e12, 10.0, "stiff", True])
 def test_bad_leg_stiffness_is_refused_naming_the_key(value):
-    with pytest.raises(ap.ConfigError, match=r"leg\.stiffness"):
+    with pytest.raises(ap.exceptions.ConfigError, match=r"leg\.stiffness"):
         ap.load_config({"leg": {"stiffness": value}})
 
 
@@ -356,7 +356,7 @@ def test_bad_wrenches_are_refused(am, wrench):
     from assembler_pin.exceptions import LoadError
 
     with pytest.raises(LoadError, match="wrench"):
-        loaded_pose(am, ap.leg_state(am, am.home).lengths, wrench=wrench)
+        loaded_pose(am, ap.kinematics.leg_state(am, am.home).lengths, wrench=wrench)
 
 
 def test_a_singular_pose_is_reported_not_answered(am):
@@ -369,9 +369,9 @@ def test_a_singular_pose_is_reported_not_answered(am):
     assert not result.success and "singular" in result.message
     assert np.all(np.isnan(result.stiffness)) and np.all(np.isnan(result.sag_translation))
     assert "null" in __import__("assembler_pin.cli.common", fromlist=["dumps"]).dumps(result.to_dict())
-    with pytest.raises(ap.SingularConfigurationError):
+    with pytest.raises(ap.exceptions.SingularConfigurationError):
         compensated_lengths(am, plates)
-    with pytest.raises(ap.PoseError):
+    with pytest.raises(ap.exceptions.PoseError):
         stiffness(am, am.home, lengths=np.full((am.n, 6), np.nan))
 
 
@@ -379,10 +379,10 @@ def test_a_load_the_legs_cannot_carry_is_not_marked_converged():
     """Soft legs under the payload buckle (an inverted pendulum: the load's part is negative);
     huge wrenches give either no answer or a true equilibrium, however large the sag."""
     soft = _model({"leg": {"stiffness": 1e3}})
-    for result in (stiffness(soft, soft.home), loaded_pose(soft, ap.leg_state(soft, soft.home).lengths)):
+    for result in (stiffness(soft, soft.home), loaded_pose(soft, ap.kinematics.leg_state(soft, soft.home).lengths)):
         assert not result.success and "stable" in result.message
     am = _model({})
-    lengths = ap.leg_state(am, am.home).lengths
+    lengths = ap.kinematics.leg_state(am, am.home).lengths
     outcomes = set()
     for wrench in ([0, 0, -5e4, 0, 0, 0], [3e3, 0, 0, 0, 0, 0], [0, 0, 0, 0, 0, 500.0]):
         loaded = loaded_pose(am, lengths, wrench=wrench)
@@ -449,8 +449,8 @@ def test_mjcf_servo_gain_is_the_leg_stiffness():
 def test_mujoco_servos_sag_as_loaded_pose_says(n, k, pose, request):
     """MuJoCo holding the lengths of a pose sags where loaded_pose puts the EE (5% or 0.02 mm)."""
     am = _model({"platforms": n, "leg": {"stiffness": k}})
-    plates = ap.plate_arrays(am, request.getfixturevalue(pose) if pose != "home" else am.home)
-    lengths = ap.leg_state(am, plates).lengths
+    plates = ap.kinematics.plate_arrays(am, request.getfixturevalue(pose) if pose != "home" else am.home)
+    lengths = ap.kinematics.leg_state(am, plates).lengths
     ours = loaded_pose(am, lengths)
     assert ours.success
     settled = _settle(_stiff_mujoco(am), plates, lengths)
@@ -467,7 +467,7 @@ def test_compensated_lengths_held_by_mujoco_put_the_ee_at_the_goal(am, random_po
     plates = {"home": lambda: am.home, "random": lambda: random_poses[2][1]}.get(
         pose, lambda: request.getfixturevalue(pose)
     )()
-    plates = ap.plate_arrays(am, plates)
+    plates = ap.kinematics.plate_arrays(am, plates)
     comp = compensated_lengths(am, plates)
     assert comp.success, comp.message
     off = np.linalg.norm(_settle(_stiff_mujoco(am), plates, comp.lengths).p[-1] - plates.p[-1])
@@ -493,7 +493,7 @@ def test_top_level_names_stay_the_functions_whatever_was_imported():
     code = (
         "import assembler_pin as ap, assembler_pin.compliance, assembler_pin.cli.stiffness; "
         "assert callable(ap.stiffness) and callable(ap.loaded_pose) and callable(ap.compensated_lengths); "
-        "assert ap.StiffnessResult.__name__ == 'StiffnessResult'"
+        "assert ap.ee_stiffness.StiffnessResult.__name__ == 'StiffnessResult'"
     )
     assert subprocess.run([sys.executable, "-c", code], capture_output=True).returncode == 0
 
@@ -543,7 +543,7 @@ def test_the_block_sweep_of_long_stacks_equals_the_dense_solve(monkeypatch):
 
     am = _model({"platforms": 4})
     pa = _pose(am, "random")
-    lengths = ap.leg_state(am, pa).lengths
+    lengths = ap.kinematics.leg_state(am, pa).lengths
     wrench = np.array([5.0, -3.0, 2.0, 0.4, -0.2, 0.3])
     dense = stiffness(am, pa), loaded_pose(am, lengths, wrench=wrench)
     monkeypatch.setattr(elastic, "DENSE_MAX_PLATFORMS", 0)

@@ -129,7 +129,7 @@ def _model(n: int) -> ap.AssemblerModel:
 
 def _pose(am, kind: str) -> ap.PlateArrays:
     if kind == "home":
-        return ap.plate_arrays(am, am.home)
+        return ap.kinematics.plate_arrays(am, am.home)
     rng = np.random.default_rng(11 + am.n)
     leg = am.config.leg
     while True:
@@ -145,7 +145,7 @@ def optimized(am) -> dict:
     for name in ("inchworm", "vertical_lift"):
         result = ap.solve(am, ap.scenario(name).goal)
         assert result.success, result.message
-        out[name] = ap.plate_arrays(am, result.optimized.plates)
+        out[name] = ap.kinematics.plate_arrays(am, result.optimized.plates)
     return out
 
 
@@ -156,7 +156,7 @@ def test_elastic_forces_are_the_independent_minimum_with_both_ends_fixed(n, kind
     am = _model(n)
     pa = _pose(am, kind)
     rng = np.random.default_rng(n)
-    rest = ap.leg_state(am, pa).lengths + rng.uniform(-2e-5, 2e-5, (n, 6))  # commanded off the pose
+    rest = ap.kinematics.leg_state(am, pa).lengths + rng.uniform(-2e-5, 2e-5, (n, 6))  # commanded off the pose
     ours = two_point_statics(am, pa, rest)
     assert ours.success, ours.message
     ref = HeldStack(am.config, pa.R, pa.p, rest)
@@ -189,7 +189,7 @@ def _reference_minmax(am, pa, rest_at: np.ndarray) -> float:
     1..n−1 free), within the force limits and the stroke: an LP over the forces themselves, its
     equilibrium matrix from the reference gradient's dependence on the commanded lengths."""
     n, k, leg = am.n, am.config.leg.stiffness, am.config.leg
-    L = ap.leg_state(am, pa).lengths
+    L = ap.kinematics.leg_state(am, pa).lengths
     g0 = HeldStack(am.config, pa.R, pa.p, L).gradient(np.zeros(6 * (n - 1)))  # slack legs
     cols = []
     for e in np.eye(6 * n):  # ∂grad/∂F: commanded L − F/k for a unit force
@@ -222,14 +222,14 @@ def _check_chosen(am, pa) -> None:
     grad = HeldStack(am.config, chosen.plates.R, chosen.plates.p, chosen.commanded).gradient(np.zeros(6 * (am.n - 1)))
     assert np.abs(grad.reshape(-1, 6)[:, :3]).max() <= 1e-9 and np.abs(grad.reshape(-1, 6)[:, 3:]).max() <= 2e-9
     # the offsets, applied through the elastic solve from the pose, give the chosen forces back
-    applied = two_point_statics(am, pa, ap.leg_state(am, pa).lengths + chosen.length_offsets)
+    applied = two_point_statics(am, pa, ap.kinematics.leg_state(am, pa).lengths + chosen.length_offsets)
     assert applied.success and np.abs(applied.forces - chosen.forces).max() <= 1e-6
     # and no balanced distribution does better (an LP over the forces, not the null space)
     assert chosen.max_abs_force == pytest.approx(_reference_minmax(am, chosen.plates, chosen.commanded), abs=1e-6)
 
 
 def test_chosen_distribution_at_home_and_the_optimized_inchworm_and_vertical_lift(am, optimized):
-    for pa in (ap.plate_arrays(am, am.home), *optimized.values()):
+    for pa in (ap.kinematics.plate_arrays(am, am.home), *optimized.values()):
         _check_chosen(am, pa)
     # the optimized poses have legs at their stroke ends: the chosen one stays commandable
     for pa in optimized.values():
@@ -243,7 +243,7 @@ def test_chosen_distribution_on_every_scenario(am):
         result = ap.solve(am, ap.scenario(name).goal)
         assert result.success, result.message
         for plates in (result.initial.plates, result.optimized.plates):
-            _check_chosen(am, ap.plate_arrays(am, plates))
+            _check_chosen(am, ap.kinematics.plate_arrays(am, plates))
 
 
 def test_one_end_held_the_forces_are_the_statics_of_that_end(am):
@@ -290,7 +290,7 @@ def _settle_welded(stack, pa, ctrl, seconds: float = 0.3) -> np.ndarray:
 
 @pytest.mark.parametrize("pose", ["home", "inchworm", "vertical_lift"])
 def test_mujoco_welded_at_both_ends_settles_at_both_distributions(am, optimized, pose):
-    pa = ap.plate_arrays(am, am.home) if pose == "home" else optimized[pose]
+    pa = ap.kinematics.plate_arrays(am, am.home) if pose == "home" else optimized[pose]
     stack = _welded_mujoco(am)
     elastic = two_point_statics(am, pa)
     chosen = chosen_distribution(am, pa)
@@ -302,13 +302,13 @@ def test_mujoco_welded_at_both_ends_settles_at_both_distributions(am, optimized,
 
 # ---------------------------------------------------------------------- bad input, CLI, speed
 def test_bad_supports_lengths_and_poses(am):
-    with pytest.raises(ap.SupportError):
+    with pytest.raises(ap.exceptions.SupportError):
         held_plates(am, "middle")
-    with pytest.raises(ap.SupportError):
+    with pytest.raises(ap.exceptions.SupportError):
         chosen_distribution(am, am.home, "plate 2")
     free = chosen_distribution(am, am.home, "none")
     assert not free.success and "mechanism" in free.message and np.all(np.isnan(free.forces))
-    with pytest.raises(ap.PoseError):
+    with pytest.raises(ap.exceptions.PoseError):
         two_point_statics(am, am.home, np.full((am.n, 6), np.nan))
     turned = [pin.SE3.Identity()]
     for _ in range(am.n):
@@ -353,7 +353,7 @@ def _ee_held_reference(am, pa) -> np.ndarray:
     the reference potential's gradient over the free plates is affine in the forces (commanded
     L − F/k), so equilibrium is a 6n × 6n linear system (nothing of the package's statics)."""
     n, k = am.n, am.config.leg.stiffness
-    L = ap.leg_state(am, pa).lengths
+    L = ap.kinematics.leg_state(am, pa).lengths
     zero = np.zeros(6 * n)
     g0 = HeldStack(am.config, pa.R, pa.p, L, free=slice(0, n)).gradient(zero)
     A = np.array(
@@ -393,8 +393,8 @@ def test_turned_model_is_the_same_stack_held_at_both_ends(n):
     tm = turned_model(am)
     pa = _pose(am, "random")
     ta = tm.plates(pa)
-    b, t = ap.leg_state(am, pa).bottom_points, ap.leg_state(am, pa).top_points
-    tb, tt = ap.leg_state(tm.model, ta).bottom_points, ap.leg_state(tm.model, ta).top_points
+    b, t = ap.kinematics.leg_state(am, pa).bottom_points, ap.kinematics.leg_state(am, pa).top_points
+    tb, tt = ap.kinematics.leg_state(tm.model, ta).bottom_points, ap.kinematics.leg_state(tm.model, ta).top_points
     for jp in range(n):  # turned bottoms are the original tops, leg for leg
         np.testing.assert_allclose(tb[jp], t[n - 1 - jp][tm.permutation[jp]], atol=1e-12)
         np.testing.assert_allclose(tt[jp], b[n - 1 - jp][tm.permutation[jp]], atol=1e-12)
@@ -413,7 +413,7 @@ def test_mujoco_holding_the_ee_plate_gives_the_ee_held_forces(am):
     from assembler_pin.walk import turned_model
 
     tm = turned_model(am)
-    for pa in (ap.plate_arrays(am, am.home), _pose(am, "random")):
+    for pa in (ap.kinematics.plate_arrays(am, am.home), _pose(am, "random")):
         got = tm.original_legs(mujoco_statics(tm.model, tm.plates(pa)).forces)
         ours = ee_held_statics(am, pa).forces
         assert np.abs(got - ours).max() <= 1e-6, np.abs(got - ours).max()
@@ -435,7 +435,9 @@ def test_cli_statics_support_ee_and_both(capsys, am):
 
     assert main(["statics", "--home", "--support", "ee", "--json"]) == 0
     doc = json.loads(capsys.readouterr().out)
-    np.testing.assert_allclose(doc["forces"], _ee_held_reference(am, ap.plate_arrays(am, am.home)), atol=1e-9)
+    np.testing.assert_allclose(
+        doc["forces"], _ee_held_reference(am, ap.kinematics.plate_arrays(am, am.home)), atol=1e-9
+    )
     assert doc["support"] == "ee" and doc["feasible"] is True
     assert np.allclose(doc["forces"], ee_held_statics(am, am.home).forces)
     assert main(["statics", "--home", "--support", "both", "--json"]) == 0

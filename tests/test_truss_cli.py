@@ -69,7 +69,7 @@ def test_stiffness_scaling_json_and_figure_are_the_full_models_stiffness(capsys,
         assert doc["elastic"]["lateral"][i] == pytest.approx(1 / C_el[0, 0], rel=1e-12)
     # one platform's springs alone: the closed form (Jᵀ k J)⁻¹ of the kinematics' EE Jacobian
     am = ap.AssemblerModel.from_config({"platforms": 1})
-    J = ap.ee_jacobian_wrt_lengths(am, am.home)
+    J = ap.kinematics.ee_jacobian_wrt_lengths(am, am.home)
     assert doc["elastic"]["axial"][0] == pytest.approx(am.config.leg.stiffness / (J @ J.T)[2, 2], rel=1e-9)
     assert main(["stiffness", "--scaling", "--max-platforms", "2"]) == 0
     text = capsys.readouterr().out

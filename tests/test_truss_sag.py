@@ -49,7 +49,7 @@ def test_sag_is_the_ee_jacobian_times_the_legs_stretch(am, random_poses):
     for _, pa in random_poses[:3]:
         result = sag_and_gradient(am, pa)
         forces = ap.solve_statics(am, pa).forces
-        twist = ap.ee_jacobian_wrt_lengths(am, pa) @ forces.ravel() / am.config.leg.stiffness
+        twist = ap.kinematics.ee_jacobian_wrt_lengths(am, pa) @ forces.ravel() / am.config.leg.stiffness
         np.testing.assert_allclose(result.translation, twist[:3], rtol=0, atol=1e-12)
         assert result.sag == pytest.approx(np.linalg.norm(twist[:3]), rel=1e-12)
 
@@ -81,7 +81,7 @@ def test_a_singular_pose_has_no_sag(am):
     turned = [pin.SE3.Identity()]
     for _ in range(am.n):
         turned.append(turned[-1] * pin.SE3(pin.exp3(np.array([0, 0, np.pi / 2])), np.array([0, 0, 0.24])))
-    with pytest.raises(ap.SingularConfigurationError, match="platform 0"):
+    with pytest.raises(ap.exceptions.SingularConfigurationError, match="platform 0"):
         sag_and_gradient(am, turned)
 
 

@@ -50,7 +50,7 @@ def am1() -> ap.AssemblerModel:
 @pytest.fixture()
 def files(tmp_path):
     """An exported 2-platform model: (directory, URDF text, sidecar text)."""
-    ap.export_model_files(ap.load_config({"platforms": 2}), tmp_path)
+    ap.export.export_model_files(ap.load_config({"platforms": 2}), tmp_path)
     return tmp_path, (tmp_path / "assembler.urdf").read_text(), (tmp_path / "assembler.yaml").read_text()
 
 
@@ -99,7 +99,7 @@ def test_agreeing_model_files_give_the_sidecar_forces(files):
     payload's weight on the base equals total mass x g (independent sum of the masses)."""
     directory, _, sidecar = files
     side = sidecar.replace("mass: 5.0", "mass: 50.0")
-    _write(directory, ap.assembler_urdf(ap.load_config({"platforms": 2, "payload": {"mass": 50.0}})), side)
+    _write(directory, ap.urdf.assembler_urdf(ap.load_config({"platforms": 2, "payload": {"mass": 50.0}})), side)
     am = ap.AssemblerModel.from_files(directory)
     cfg = am.config
     expected_mass = 3 * cfg.plate.mass + 12 * (cfg.leg.motor_mass + cfg.leg.shaft_mass) + 50.0
@@ -206,7 +206,9 @@ def test_platform_fk_from_far_guesses_succeeds_only_in_the_mechanism_mode(am):
     for _ in range(1200):
         j = int(rng.integers(am.n))
         lengths = rng.uniform(cfg.leg.min_length, cfg.leg.max_length, 6)
-        res = ap.sp_forward_kinematics(am, j, lengths, guess=_far_guess(rng, am.plate_joint_placement[j + 1]))
+        res = ap.kinematics.sp_forward_kinematics(
+            am, j, lengths, guess=_far_guess(rng, am.plate_joint_placement[j + 1])
+        )
         if not res.success:
             assert res.message != "converged"
             continue
@@ -214,7 +216,7 @@ def test_platform_fk_from_far_guesses_succeeds_only_in_the_mechanism_mode(am):
         assert _in_mechanism_mode(cfg, j, res.pose) == [], res
         got = sp_legs(cfg, j, np.eye(3), np.zeros(3), res.pose.rotation, res.pose.translation)[0]
         np.testing.assert_allclose(got, lengths, atol=1e-9)
-        ref = ap.sp_forward_kinematics(am, j, lengths)
+        ref = ap.kinematics.sp_forward_kinematics(am, j, lengths)
         if ref.success:
             compared += 1
             assert _in_mechanism_mode(cfg, j, ref.pose) == []
@@ -259,10 +261,10 @@ def test_a_foreign_mode_is_named(am):
     flipped = pin.SE3(pin.rpy.rpyToMatrix(math.pi, 0.0, 0.0), home.translation)
     bottom, top = design_anchors(am.config, 0)
     lengths = np.linalg.norm(top @ flipped.rotation.T + flipped.translation - bottom, axis=1)
-    res = ap.sp_forward_kinematics(am, 0, lengths, guess=flipped)
+    res = ap.kinematics.sp_forward_kinematics(am, 0, lengths, guess=flipped)
     assert res.residual <= 1e-12 and not res.success
     assert "another assembly mode" in res.message
-    with pytest.raises(ap.ConvergenceError, match="assembly mode"):
+    with pytest.raises(ap.exceptions.ConvergenceError, match="assembly mode"):
         res.raise_if_failed()
 
 
@@ -359,7 +361,7 @@ def test_a_rotation_off_by_more_than_1e9_is_refused_not_projected(am, tmp_path, 
     assert f"plate {plate}" in _one_line(info.value, 200)
     matrices = np.array(doc)
     with pytest.raises(PoseError, match=f"plate {plate}"):
-        ap.plate_arrays(am, matrices)  # the API's conversion refuses it too
+        ap.kinematics.plate_arrays(am, matrices)  # the API's conversion refuses it too
     doc[plate][0][:3] = good[0].tolist()
     doc[plate][1][:3] = good[1].tolist()
     doc[plate][2][:3] = good[2].tolist()
@@ -378,7 +380,7 @@ def test_a_rotation_off_by_more_than_1e9_is_refused_not_projected(am, tmp_path, 
 )
 def test_api_plate_conversion_refuses_non_real_numbers(am1, value):
     with pytest.raises(PoseError, match="real numbers"):
-        ap.plate_arrays(am1, value)
+        ap.kinematics.plate_arrays(am1, value)
 
 
 # ---------------------------------------------------------------------- item 8: configs
@@ -503,15 +505,15 @@ def test_config_fuzz_answers_or_refuses_in_one_short_line(tmp_path, doc):
 def test_goal_tolerance_refuses_nan_inf_negative():
     for bad in (math.nan, math.inf, -1e-3, "1e-6", True, None):
         with pytest.raises(OptionsError, match="GoalTolerance"):
-            ap.GoalTolerance(position=bad)
+            ap.constraints.GoalTolerance(position=bad)
         with pytest.raises(OptionsError, match="GoalTolerance"):
-            ap.GoalTolerance(rotation=bad)
+            ap.constraints.GoalTolerance(rotation=bad)
 
 
 def test_a_nan_tolerance_never_passes_a_pose_off_its_goal(am):
     """Even a tolerance forced to NaN past its checks calls a pose 0.3 m off the goal infeasible."""
     goal = am.home[-1] * pin.SE3(np.eye(3), np.array([0.3, 0.0, 0.0]))
-    tol = ap.GoalTolerance()
+    tol = ap.constraints.GoalTolerance()
     object.__setattr__(tol, "position", math.nan)
     object.__setattr__(tol, "rotation", math.nan)
     state = ap.evaluate_state(am, am.home, goal=goal, tolerance=tol)
@@ -552,13 +554,13 @@ def test_plate_arrays_that_are_not_rotations(am):
     R = pa.R.copy()
     R[1] = np.diag([1.0, 1.0, -1.0])  # orthonormal, det -1
     with pytest.raises(PoseError, match=r"R\[1\] is not a rotation"):
-        ap.leg_state(am, PlateArrays(R, pa.p.copy()))
+        ap.kinematics.leg_state(am, PlateArrays(R, pa.p.copy()))
     p = pa.p.copy()
     p[3, 0] = math.inf
     with pytest.raises(PoseError, match="plate 3"):
         ap.solve_statics(am, PlateArrays(pa.R.copy(), p))
     with pytest.raises(PoseError, match="expected 5 plate poses"):
-        ap.leg_state(am, PlateArrays(pa.R[:3].copy(), pa.p[:3].copy()))
+        ap.kinematics.leg_state(am, PlateArrays(pa.R[:3].copy(), pa.p[:3].copy()))
 
 
 def test_quaternions_in_q(am):

@@ -72,7 +72,7 @@ def test_another_grid_in_the_same_directory_is_refused(tmp_path):
 
 def test_an_edited_config_in_the_same_directory_is_refused(tmp_path):
     _run(tmp_path / "m")
-    heavier = ap.load_config().replace(payload=ap.PayloadConfig(mass=40.0))
+    heavier = ap.load_config().replace(payload=ap.config.PayloadConfig(mass=40.0))
     with pytest.raises(MapError) as exc:
         _run(tmp_path / "m", cfg=heavier)
     assert "configuration 'default' content" in _one_line(exc)
@@ -87,7 +87,7 @@ def test_other_solver_settings_in_the_same_directory_are_refused(tmp_path, monke
 
 
 def test_a_row_of_another_map_copied_in_is_refused(tmp_path):
-    _run(tmp_path / "a", cfg=ap.load_config().replace(payload=ap.PayloadConfig(mass=40.0)))
+    _run(tmp_path / "a", cfg=ap.load_config().replace(payload=ap.config.PayloadConfig(mass=40.0)))
     _run(tmp_path / "b")
     for part in (tmp_path / "b").glob("part-*.parquet"):
         if pq.read_table(part).column("cell").to_pylist() == [1]:

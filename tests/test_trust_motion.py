@@ -112,7 +112,7 @@ def test_a_failed_plan_keeps_its_valid_prefix_and_says_so(am, tmp_path):
         am,
         EEPath.between(am.home[-1], goal),
         start=am.home,
-        options=PlanOptions(position_step=0.05, max_refinements=1),
+        options=PlanOptions(position_step=0.02, max_refinements=1),
         rate=20.0,
     )
     took = time.perf_counter() - t0
@@ -132,7 +132,7 @@ def test_a_failed_plan_keeps_its_valid_prefix_and_says_so(am, tmp_path):
 def test_cli_plan_exits_1_on_a_failed_plan_with_the_prefix_written(am, tmp_path, monkeypatch, capsys):
     import assembler_pin.motion as motion_pkg
 
-    cheap = lambda w3: PlanOptions(w3=w3, position_step=0.05, max_refinements=1)  # noqa: E731
+    cheap = lambda w3: PlanOptions(w3=w3, position_step=0.02, max_refinements=1)  # noqa: E731
     monkeypatch.setattr(motion_pkg, "PlanOptions", cheap)
     out = tmp_path / "t.json"
     code = main(["plan", "--to", "0", "0", "1.6", "0", "0", "0", "--rate", "10", "--out", str(out), "--json"])

@@ -96,7 +96,7 @@ def test_cli_plan_refuses_timed_waypoints_away_from_the_from_pose(tmp_path, caps
 
 @pytest.fixture(scope="module")
 def ur5():
-    return ap.Carrier("ur5")
+    return ap.carrier.Carrier("ur5")
 
 
 def test_carrier_refuses_string_angles_and_negative_ik_iterations(ur5):
@@ -113,7 +113,7 @@ def test_carrier_statics_refuses_a_carrier_name(am):
     from assembler_pin.exceptions import OptionsError
 
     with pytest.raises(OptionsError, match="Carrier"):
-        ap.carrier_statics(am, "ur5", np.zeros(6), am.home)
+        ap.carrier.carrier_statics(am, "ur5", np.zeros(6), am.home)
 
 
 def test_solve_on_carrier_refuses_a_nan_carrier_weight(am, ur5):
@@ -123,7 +123,7 @@ def test_solve_on_carrier_refuses_a_nan_carrier_weight(am, ur5):
 
     goal = pin.SE3(np.eye(3), np.array([0.3, 0.2, 1.4]))
     with pytest.raises(OptionsError, match="w_carrier"):
-        ap.solve_on_carrier(am, ur5, goal, w_carrier=np.nan)
+        ap.carrier.solve_on_carrier(am, ur5, goal, w_carrier=np.nan)
 
 
 def test_stack_fk_refuses_astronomic_lengths_without_a_numpy_warning(am):

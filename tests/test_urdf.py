@@ -10,8 +10,10 @@ import pytest
 import yaml
 import yourdfpy
 
-from assembler_pin import AssemblerModel, export_model_files, load_config, q_from_plates
+from assembler_pin import AssemblerModel, load_config
 from assembler_pin.cli import main
+from assembler_pin.export import export_model_files
+from assembler_pin.kinematics import q_from_plates
 
 REPO_URDF = Path(__file__).resolve().parents[1] / "urdf"
 

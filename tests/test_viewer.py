@@ -29,7 +29,7 @@ from assembler_pin import evaluate_state, stack_forward_kinematics
 from assembler_pin.exceptions import AssemblerError, ConvergenceError, ViewerError
 from assembler_pin.kinematics import StackFKResult
 from assembler_pin.model import WHOLE_DATA_MAX_PLATFORMS
-from assembler_pin.viewer import (
+from assembler_pin.viz import (
     ARM_LINK_RGBA,
     CAMERA_FOV_DEG,
     COMPRESSION_RGB,
@@ -39,6 +39,7 @@ from assembler_pin.viewer import (
     camera_for_points,
     force_color,
     interpolate_states,
+    placements,
 )
 
 WIDTH, HEIGHT = 800, 600
@@ -132,9 +133,9 @@ def test_interpolation_runs_stack_fk_each_step(am, bent):
 
 
 def test_interpolation_stops_on_fk_failure(am, bent, monkeypatch):
-    import assembler_pin.viewer as viewer_mod
+    import assembler_pin.viz.animation as animation_mod
 
-    real = viewer_mod.stack_forward_kinematics
+    real = animation_mod.stack_forward_kinematics
     calls = {"n": 0}
 
     def failing(*args, **kwargs):
@@ -144,7 +145,7 @@ def test_interpolation_stops_on_fk_failure(am, bent, monkeypatch):
             return StackFKResult(res.plates, False, res.platforms, "did not converge (test)")
         return res
 
-    monkeypatch.setattr(viewer_mod, "stack_forward_kinematics", failing)
+    monkeypatch.setattr(animation_mod, "stack_forward_kinematics", failing)
     with pytest.raises(ConvergenceError, match=r"animation step 3/9 .*did not converge \(test\)"):
         interpolate_states(am, am.home, bent, steps=10)
     with pytest.raises(AssemblerError):
@@ -255,7 +256,7 @@ def test_cli_view_errors(tmp_path):
 
 def test_server_host_and_port_checked():
     from assembler_pin.exceptions import ViewerError
-    from assembler_pin.meshcat_server import start_server
+    from assembler_pin.viz.server import start_server
 
     for host, port in (("", None), ("8.8.8.8", None), ("127.0.0.1", 0), ("127.0.0.1", 70000), ("127.0.0.1", "80")):
         with pytest.raises(ViewerError, match=r"viewer (host|port)"):
@@ -366,11 +367,10 @@ def test_cli_view_server_stops_with_the_command(sig):
 def test_cli_view_stopped_before_it_is_ready(monkeypatch, capsys):
     """A SIGTERM while the pose is being computed ends ``view`` with one line and status
     128 + 15, its server stopped and reaped, the previous signal handlers back."""
-    import assembler_pin.viewer as viewer_mod
     from assembler_pin.cli import main
 
     servers = []
-    real_display = viewer_mod.StackViewer.display
+    real_display = StackViewer.display
 
     def display_then_terminated(self, *args, **kwargs):
         servers.append(self.server)
@@ -379,7 +379,7 @@ def test_cli_view_stopped_before_it_is_ready(monkeypatch, capsys):
         return real_display(self, *args, **kwargs)
 
     before = {sig: signal.getsignal(sig) for sig in (signal.SIGTERM, signal.SIGHUP)}
-    monkeypatch.setattr(viewer_mod.StackViewer, "display", display_then_terminated)
+    monkeypatch.setattr(StackViewer, "display", display_then_terminated)
     assert main(["view", "--home"]) == 128 + signal.SIGTERM
     assert capsys.readouterr().err.splitlines() == ["assembler-pin view: stopped by SIGTERM before the view was ready"]
     assert len(servers) == 1 and servers[0].process.returncode is not None  # stopped and reaped
@@ -495,7 +495,7 @@ def test_html_page_draws_the_stack_in_a_real_browser(am, bent, tmp_path):
         for root in v._roots:
             v.meshcat[root].set_property("visible", False)
         v.static_html(tmp_path / "background.html", frame=False)
-        stack_points = v._stack_points(evaluate_state(am, am.home))
+        stack_points = placements.stack_points(am, evaluate_state(am, am.home))
 
     home = screenshot(pages["home"], tmp_path)
     bent_img = screenshot(pages["bent"], tmp_path)

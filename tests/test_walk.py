@@ -32,7 +32,7 @@ def _weight(cfg) -> float:
 def _base_held_reference(am, pa) -> np.ndarray:
     """Leg forces (n, 6) [N] balancing plates 1..n with plate 0 held (virtual work)."""
     n, k = am.n, am.config.leg.stiffness
-    L = ap.leg_state(am, pa).lengths
+    L = ap.kinematics.leg_state(am, pa).lengths
     zero = np.zeros(6 * n)
     free = slice(1, None)
     g0 = HeldStack(am.config, pa.R, pa.p, L, free=free).gradient(zero)
@@ -64,7 +64,7 @@ def landed(am) -> ap.PlateArrays:
     goal = plate_target(pin.SE3(np.eye(3), np.array([0.5, 0.0, 0.0])), "ee")
     result = ap.solve(am, goal, options=ap.OptimizeOptions(limit_margin=2e-3))
     assert result.success, result.message
-    return ap.plate_arrays(am, result.optimized.plates)
+    return ap.kinematics.plate_arrays(am, result.optimized.plates)
 
 
 # ---------------------------------------------------------------------- footholds
@@ -81,15 +81,15 @@ def test_footholds_refused_in_one_line_before_any_planning(am):
         "text": "0 0 0",
     }
     for name, feet in bad.items():
-        with pytest.raises(ap.WalkError) as err:
+        with pytest.raises(ap.exceptions.WalkError) as err:
             checked_footholds(am, feet, floor_z=0.0)
         assert "\n" not in str(err.value), name
     for step, count in ((0.0, 3), (0.5, 1), (0.5, 101), (math.nan, 3), (0.5, 2.5), (True, 3)):
-        with pytest.raises(ap.WalkError):
+        with pytest.raises(ap.exceptions.WalkError):
             floor_footholds(step, count)
-    with pytest.raises(ap.WalkError):
+    with pytest.raises(ap.exceptions.WalkError):
         WalkOptions(clearance=-0.01)
-    with pytest.raises(ap.WalkError):
+    with pytest.raises(ap.exceptions.WalkError):
         plan_walk(am, good, start=[pin.SE3(np.eye(3), np.array([0.0, 0.0, 0.1])) * p for p in am.home])
 
 
@@ -232,7 +232,7 @@ def _ring(am, count: int = 6, radius: float = 1.0) -> list:
     out = []
     for a in np.arange(count) * 2 * np.pi / count:
         foot = pin.SE3(pin.exp3(np.array([0.0, 0.0, a])), np.array([radius * np.cos(a), radius * np.sin(a), 0.0]))
-        out.append(ap.plate_arrays(am, [foot * p for p in am.home]))
+        out.append(ap.kinematics.plate_arrays(am, [foot * p for p in am.home]))
     return out
 
 
@@ -241,7 +241,7 @@ def test_one_stack_carrying_a_body_is_the_stack_with_that_payload(am):
     the payload and the body together (their combined centre of mass)."""
     from assembler_pin.walk import macro_capacity, macro_statics
 
-    home, pay = ap.plate_arrays(am, am.home), am.config.payload
+    home, pay = ap.kinematics.plate_arrays(am, am.home), am.config.payload
     mass, offset = 3.0, 0.1
     got = macro_statics(am, [home], mass, home.p[-1] + [0, 0, offset])
     combined = {"mass": pay.mass + mass, "offset": (pay.mass * pay.offset + mass * offset) / (pay.mass + mass)}
@@ -269,7 +269,7 @@ def test_six_stacks_carry_a_body_and_its_capacity(am):
     # each stack, commanded its offsets and loaded by its body wrench, stands at its pose with these forces
     k = am.config.leg.stiffness
     for pa, F, u in zip(stacks, got.forces, got.body_wrenches, strict=True):
-        lp = loaded_pose(am, ap.leg_state(am, pa).lengths - F / k, wrench=u, base=pa.se3(0))
+        lp = loaded_pose(am, ap.kinematics.leg_state(am, pa).lengths - F / k, wrench=u, base=pa.se3(0))
         assert lp.success and np.abs(lp.forces - F).max() <= 1e-6
         assert np.abs(lp.plates.p - pa.p).max() <= 1e-9
     # no worse than an even share of the weight as pure forces at the EE origins (balanced here):
@@ -282,5 +282,5 @@ def test_six_stacks_carry_a_body_and_its_capacity(am):
     assert capacity > mass, note
     assert macro_statics(am, stacks, 0.999 * capacity, com).success
     assert not macro_statics(am, stacks, 1.01 * capacity, com).success
-    with pytest.raises(ap.WalkError):
+    with pytest.raises(ap.exceptions.WalkError):
         macro_statics(am, stacks, math.nan, com)

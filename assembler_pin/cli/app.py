@@ -16,7 +16,7 @@ import warnings
 from collections.abc import Sequence
 from typing import NoReturn
 
-from ..exceptions import AssemblerError, CLIError
+from ..exceptions import AssemblerError, CLIError, _SkipSubcommandError
 from . import bench, export, map, plan, reproduce, simulate, solve, statics, stiffness, support, view, walk
 
 logger = logging.getLogger("assembler_pin")
@@ -35,10 +35,6 @@ class _Parser(argparse.ArgumentParser):
 
     def error(self, message: str) -> NoReturn:
         raise CLIError(f"{message} (see '{self.prog} --help')")
-
-
-class _SkipSubcommandError(Exception):
-    """Raised by ``add`` to stop building the arguments of a subcommand this run does not use."""
 
 
 def build_parser(only: str | None = None) -> argparse.ArgumentParser:

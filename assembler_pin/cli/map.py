@@ -91,7 +91,7 @@ def _pictures(args: argparse.Namespace, table, configs: list, doc: dict) -> None
         doc["png"] = str(save(map_heatmaps(table, am, configs[0][0]), args.png))
     if args.html:
         from ..maps.pictures import write_map_page
-        from ..viewer import StackViewer
+        from ..viz import StackViewer
 
         with StackViewer(am) as viewer:
             viewer.display(am.home)

@@ -23,6 +23,11 @@ def add_parser(add) -> None:
     p = add("reproduce", "the paper's scenarios: initial vs optimized forces, tables, report with figures")
     p.add_argument("--out", metavar="DIR", help="write report.md and PNG figures into DIR")
     p.add_argument("--scenario", action="append", metavar="NAME", help="only this scenario (repeatable)")
+    p.add_argument(
+        "--no-sag",
+        action="store_true",
+        help="skip the sag-optimal solve of each scenario (its table beside the force-optimal pose)",
+    )
     add_optimize_arguments(p)
     p.set_defaults(func=run)
 
@@ -35,7 +40,7 @@ def run(args: argparse.Namespace) -> int:
     """
     from ..bounds import check_bound
     from ..model import AssemblerModel
-    from ..reproduce import force_tables, run_scenarios, summary_table, write_report
+    from ..reproduce import force_tables, run_scenarios, sag_table, summary_table, write_report
     from ..scenarios import SCENARIOS
 
     names = args.scenario or list(SCENARIOS)
@@ -48,16 +53,23 @@ def run(args: argparse.Namespace) -> int:
     options = optimize_options(args)
     am = AssemblerModel.from_config(config_from_args(args))
     with progress_for(args, "reproduce") as prog:
-        outcomes = run_scenarios(am, names, options, progress=prog)
+        outcomes = run_scenarios(am, names, options, progress=prog, sag=not args.no_sag)
     print(
         f"The paper's scenarios on {am.n} platforms, payload {am.config.payload.mass:g} kg "
         f"at {am.config.payload.offset:g} m (forces in N, tension positive)\n"
     )
     print(summary_table(outcomes))
+    if not args.no_sag:
+        print(
+            "\nForce-optimal and sag-optimal poses: max|F| [N], EE sag under its own load [mm] "
+            f"(legs {am.config.leg.stiffness:g} N/m)\n"
+        )
+        print(sag_table(am, outcomes))
     for outcome in outcomes:
         print()
         print(force_tables(outcome))
     if args.out:
         path = write_report(am, outcomes, args.out)
         print(f"\nwrote report: {path}")
-    return 0 if all(o.result.success for o in outcomes) else 1
+    solved = all(o.result.success and (o.sag_result is None or o.sag_result.success) for o in outcomes)
+    return 0 if solved else 1

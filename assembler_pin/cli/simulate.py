@@ -86,7 +86,7 @@ def run(args: argparse.Namespace) -> int:
         )
         print(f"held: {'yes' if result.held else 'NO'} — {result.message}")
     if args.html:
-        from ..viewer import StackViewer
+        from ..viz import StackViewer
 
         with StackViewer(am) as viewer:
             viewer.animate([evaluate_state(am, pa) for pa in result.samples])

@@ -34,6 +34,7 @@ def add_parser(add) -> None:
     p.add_argument("--no-optimize", action="store_true", help="only the helper-arm initial condition")
     add_helper_arm_arguments(p)
     add_optimize_arguments(p)
+    add_sag_arguments(p)
     _add_starts_argument(p)
     add_carrier_arguments(p, " (the goal is then in the world; the carrier's joints join the search)")
     p.add_argument("--fixed-carrier", action="store_true", help="with --carrier: hold it at --carrier-q")
@@ -64,6 +65,81 @@ def _add_starts_argument(p: argparse.ArgumentParser) -> None:
     )
 
 
+def add_sag_arguments(p: argparse.ArgumentParser) -> None:
+    """``--objective``, ``--sag-weight`` and ``--max-sag`` (:class:`~assembler_pin.options.OptimizeOptions`)."""
+    from ..choices import OBJECTIVES
+    from ..options import OptimizeOptions
+
+    d = OptimizeOptions()
+    p.add_argument(
+        "--objective",
+        choices=OBJECTIVES,
+        help="what the optimizer minimizes: force: Ω = w1·max|F| + w2·sqrt(Σλ²) (default); sag: the EE's "
+        "sag under its own load (legs of stiffness leg.stiffness), every limit kept; weighted: "
+        "Ω + W·sag/sag_home (sag_home: the home pose's sag)",
+    )
+    p.add_argument(
+        "--sag-weight",
+        type=float,
+        metavar="W",
+        help=f"weight W of the sag in --objective weighted (default {d.sag_weight:g})",
+    )
+    p.add_argument(
+        "--max-sag",
+        type=float,
+        metavar="M",
+        help="largest EE sag of the answer [m] (a constraint; success false with 'sag limit' when not met)",
+    )
+
+
+def sag_options(args: argparse.Namespace, options):
+    """``options`` with ``--objective``, ``--sag-weight`` and ``--max-sag``, each checked
+    (one line naming the option when refused)."""
+    import dataclasses
+
+    from ..bounds import check_bound
+    from ..exceptions import OptionsError
+
+    if args.sag_weight is not None:
+        check_bound("optimize.sag_weight", args.sag_weight, "--sag-weight", CLIError)
+        if args.objective != "weighted":
+            raise CLIError("--sag-weight weighs the sag in --objective weighted; give --objective weighted")
+    if args.max_sag is not None:
+        check_bound("optimize.max_sag", args.max_sag, "--max-sag [m]", CLIError)
+    changes = {"objective": args.objective, "sag_weight": args.sag_weight, "max_sag": args.max_sag}
+    changes = {k: v for k, v in changes.items() if v is not None}
+    if not changes:
+        return options
+    try:
+        return dataclasses.replace(options, **changes)
+    except OptionsError as exc:
+        raise CLIError(str(exc)) from None
+
+
+def _sag_block(am: AssemblerModel, result, options) -> dict:
+    """The ``sag`` block of the JSON answer: the objective, the limit and the EE's linear sag
+    [m] of the returned pose (world axes), and of the helper arm's pose."""
+    from ..compliance import sag_and_gradient
+    from ..exceptions import SingularConfigurationError
+
+    def of(state) -> dict | None:
+        if state is None:
+            return None
+        try:
+            s = sag_and_gradient(am, state.plates)
+        except SingularConfigurationError as exc:
+            return {"sag_m": None, "translation_m": None, "message": str(exc)}
+        return {"sag_m": s.sag, "translation_m": s.translation.tolist()}
+
+    return {
+        "objective": options.objective if options is not None else None,
+        "max_sag_m": options.max_sag if options is not None else None,
+        "stiffness_n_per_m": float(am.config.leg.stiffness),
+        "initial": of(result.initial),
+        "answer": of(result.best),
+    }
+
+
 def run(args: argparse.Namespace) -> int:
     """Internal poses for an EE goal: helper-arm initial condition, then (by default) the
     force optimization. Exit 0 when solved; an unreachable goal is an answer too (printed,
@@ -79,7 +155,7 @@ def run(args: argparse.Namespace) -> int:
         writable_parent(args.out, "--out file")
     check_bound("optimize.max_iterations", args.max_iterations, "--max-iterations", CLIError)
     helper = helper_options(args)
-    options = None if args.no_optimize else optimize_options(args)
+    options = None if args.no_optimize else sag_options(args, optimize_options(args))
     am = AssemblerModel.from_config(config_from_args(args))
     _check_scan_length(am, helper)
     carrier, q = carrier_from_args(args)
@@ -96,6 +172,7 @@ def run(args: argparse.Namespace) -> int:
     written = _write_plates(args.out, result) if args.out else None
     if args.json:
         doc = result.to_dict()
+        doc["sag"] = _sag_block(am, result, options)
         if capacity is not None:
             doc["capacity"] = capacity.to_dict()
         if args.out:
@@ -103,6 +180,7 @@ def run(args: argparse.Namespace) -> int:
         print(dumps(doc))
     else:
         _print_result(args, result, capacity)
+        _print_sag(_sag_block(am, result, options))
         if args.out:
             print(f"wrote {written}" if written else f"no pose to write to {args.out}: the goal was not solved")
     return 0 if result.success and (capacity is None or capacity.success) else 1
@@ -151,6 +229,12 @@ def _refuse_carrier_options(args: argparse.Namespace) -> None:
         raise CLIError("--fixed-carrier needs --carrier NAME")
     if args.carrier and args.starts:
         raise CLIError("--starts chooses the starts of the fixed-base solve and is not available with --carrier")
+    sag_given = [name for name in ("objective", "sag_weight", "max_sag") if getattr(args, name) is not None]
+    if sag_given and (args.carrier or args.no_optimize):
+        flag = "--" + sag_given[0].replace("_", "-")
+        raise CLIError(
+            f"{flag} sets the fixed-base optimizer's objective and is not available with --carrier or --no-optimize"
+        )
     if args.carrier and args.out:
         raise CLIError("--out writes a fixed-base plate file and is not available with --carrier")
     if args.carrier and args.capacity:
@@ -190,8 +274,9 @@ def _print_result(args: argparse.Namespace, result, capacity) -> None:
             for name, r in result.runs.items()
         )
         print(wrapped(f"starts (max|F| reached): {starts}; kept: {result.start}"))
+        what = {"force": "Ω = w1·max|F| + w2·sqrt(Σλ²)", "sag": "sag/sag_home", "weighted": "Ω + W·sag/sag_home"}
         print(
-            f"objective Ω = w1·max|F| + w2·sqrt(Σλ²): {opt.objective_initial:.3f} (start) -> "
+            f"objective {what.get(opt.objective, opt.objective)}: {opt.objective_initial:.3f} (start) -> "
             f"{opt.objective_optimized:.3f}"
         )
         print(format_state_table(opt.optimized, "Optimized"))
@@ -205,6 +290,22 @@ def _print_result(args: argparse.Namespace, result, capacity) -> None:
             )
         else:
             print("\n" + wrapped(f"payload capacity: none — {capacity.message}"))
+
+
+def _print_sag(block: dict) -> None:
+    """One line: the EE's linear sag of the answer (and of the helper arm's pose)."""
+
+    def mm(entry: dict | None) -> str:
+        return "—" if entry is None or entry["sag_m"] is None else f"{1e3 * entry['sag_m']:.4g} mm"
+
+    limit = f", limit {1e3 * block['max_sag_m']:.4g} mm" if block["max_sag_m"] is not None else ""
+    print(
+        "\n"
+        + wrapped(
+            f"EE sag under its own load (legs {block['stiffness_n_per_m']:g} N/m, objective "
+            f"{block['objective'] or '—'}{limit}): initial {mm(block['initial'])} -> answer {mm(block['answer'])}"
+        )
+    )
 
 
 def _solve_on_carrier(args: argparse.Namespace, am: AssemblerModel, carrier, q, goal, helper) -> int:

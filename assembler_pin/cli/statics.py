@@ -38,17 +38,17 @@ def add_parser(add) -> None:
 
 
 #: The arguments ``statics --home --json`` may carry for the fast path (any other option
-#: given, such as ``--carrier``, takes the full path), and the options it may carry at their
-#: defaults.
+#: given, such as ``--carrier``, takes the full path).
 _FAST_HOME_ARGS = frozenset({"command", "func", "verbose", "quiet", "config", "home", "json"})
+#: options whose default leaves the fast path open (their value when not given)
 _FAST_HOME_DEFAULTS = {"support": "base"}
 
 
 def _fast_home(args: argparse.Namespace) -> bool:
     """Answer ``statics --home --json`` without Pinocchio (:mod:`~assembler_pin.home_state`)
     when no other option is given and the home pose is strictly inside every limit."""
-    others = {k: v for k, v in vars(args).items() if k not in _FAST_HOME_ARGS and v != _FAST_HOME_DEFAULTS.get(k)}
-    if not (args.home and args.json) or any(others.values()):
+    given = {k: v for k, v in vars(args).items() if k not in _FAST_HOME_ARGS and v and v != _FAST_HOME_DEFAULTS.get(k)}
+    if not (args.home and args.json) or given:
         return False
     from ..home_state import home_state_document
 

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import math
 import sys
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -56,12 +57,41 @@ def add_parser(add) -> None:
         help="with --goal: animate initial -> optimized in STEPS leg-length steps",
     )
     p.add_argument("--no-arm", action="store_true", help="with --goal: do not draw the helper arm")
+    _add_compliance_arguments(p)
     p.add_argument(
         "--host",
         default="127.0.0.1",
         help="interface the live page listens on (default 127.0.0.1: this machine only; 0.0.0.0: every interface)",
     )
     p.set_defaults(func=run)
+
+
+def _add_compliance_arguments(p: argparse.ArgumentParser) -> None:
+    """``--loaded [--exaggerate F]`` and ``--ellipsoid [--ellipsoid-force N]``."""
+    p.add_argument(
+        "--loaded",
+        action="store_true",
+        help="also draw the loaded pose: the legs as springs (leg.stiffness) under gravity and payload, "
+        "commanded to the shown pose's lengths; a teal ghost with every displacement exaggerated",
+    )
+    p.add_argument(
+        "--exaggerate",
+        type=float,
+        metavar="F",
+        help="with --loaded: draw each plate F times its displacement from the rigid pose "
+        "(default: a 1-2-5 factor drawing the largest about 5 cm; the factor is in the legend)",
+    )
+    p.add_argument(
+        "--ellipsoid",
+        action="store_true",
+        help="also draw the EE's compliance ellipsoid (principal axes of the translational compliance)",
+    )
+    p.add_argument(
+        "--ellipsoid-force",
+        type=float,
+        metavar="N",
+        help="with --ellipsoid: each semi-axis is the EE's sag under N newtons along it (default 100)",
+    )
 
 
 def _view_on_carrier(args: argparse.Namespace, am: AssemblerModel, viewer, carrier, q) -> StackState:
@@ -88,7 +118,6 @@ def _view_on_carrier(args: argparse.Namespace, am: AssemblerModel, viewer, carri
         f"On {carrier.name}: max|F| {shown.max_abs_force:.1f} N, carrier torque up to "
         f"{100 * statics.carrier_ratio:.0f} % of its effort limit ({statics.binding} binds)"
     )
-    viewer.frame()
     return shown
 
 
@@ -111,10 +140,8 @@ def _view_title(args: argparse.Namespace, result) -> str:
 
 def _animate_trajectory(viewer, am: AssemblerModel, path: str, frames: int) -> StackState:
     """Store a trajectory file's motion in the viewer, in real time; returns its peak state."""
-    from ..bounds import check_bound
     from ..motion.timing import read_trajectory, trajectory_states
 
-    check_bound("view.frames", frames, "--frames", CLIError)
     traj = read_trajectory(path)
     _, states = trajectory_states(am, traj, frames)  # every row held to stack FK of its lengths
     viewer.animate(states, fps=max(1.0, (len(states) - 1) / max(traj.duration, 1e-9)), color_forces=True)
@@ -127,86 +154,138 @@ def _animate_trajectory(viewer, am: AssemblerModel, path: str, frames: int) -> S
     return max(states, key=lambda st: st.max_abs_force)
 
 
-def run(args: argparse.Namespace) -> int:
-    """Show a pose in Meshcat: write a standalone page (--html) or serve until Ctrl-C."""
-    # Long by design: the live server's start, signal handling and serving loop read as one flow.
-    import time
-    import webbrowser
+DEFAULT_ELLIPSOID_FORCE = 100.0
+"""``view --ellipsoid``: the force [N] whose sag the ellipsoid's semi-axes are, by default."""
 
+
+def _check_options(args: argparse.Namespace) -> None:
+    """Refuse, before anything is computed, counts and factors out of their bounds and
+    options given without the one they qualify (CLIError: one line, exit 2)."""
     from ..bounds import check_bound
-    from ..model import AssemblerModel
-    from ..signals import forget_interrupt
-    from ..viewer import StackViewer, interrupt_on_signals
 
     check_bound("view.animate", args.animate, "--animate", CLIError)
     check_bound("view.frames", args.frames, "--frames", CLIError)
+    if args.exaggerate is not None:
+        if not args.loaded:
+            raise CLIError("--exaggerate needs --loaded (it scales the loaded pose's displacements)")
+        check_bound("view.exaggerate", args.exaggerate, "--exaggerate", CLIError)
+    if args.ellipsoid_force is not None:
+        if not args.ellipsoid:
+            raise CLIError("--ellipsoid-force needs --ellipsoid (it sizes the compliance ellipsoid)")
+        check_bound("view.ellipsoid_force", args.ellipsoid_force, "--ellipsoid-force", CLIError)
+    if (args.loaded or args.ellipsoid) and args.trajectory:
+        raise CLIError("--loaded and --ellipsoid draw one pose: give --home, --plates, --goal or --scenario")
     if args.html:
         writable_parent(args.html, "--html file")
+
+
+def _view_goal(args: argparse.Namespace, am: AssemblerModel, viewer) -> StackState:
+    """``view --goal/--scenario``: solve, show initial (ghost) and optimized, maybe animate."""
+    try:
+        from ..solver import solve  # lazy: the solver is only needed for --goal
+    except ImportError as exc:
+        raise CLIError(f"--goal needs assembler_pin.solver, which cannot be imported: {exc}") from None
+    if args.scenario:
+        from ..kinematics import se3_to_taa
+        from ..scenarios import scenario
+
+        args.goal = list(se3_to_taa(scenario(args.scenario).goal))
+    result = solve(am, goal_from_args(args))
+    if result.initial is None and result.optimized is None:
+        raise CLIError(f"no pose to show: {result.message}")
+    arm = getattr(getattr(result, "initial_result", None), "arm_points", None)
+    viewer.show_comparison(result.initial, result.optimized, None if args.no_arm else arm)
+    viewer.set_title(_view_title(args, result))
+    if args.animate and result.initial is not None and result.optimized is not None:
+        from ..viz import interpolate_states
+
+        viewer.animate(interpolate_states(am, result.initial, result.optimized, args.animate))
+    print(f"solve: {'success' if result.success else 'FAILED'} — {result.message}", file=sys.stderr)
+    best = result.optimized if result.optimized is not None else result.initial
+    assert best is not None  # refused above when both are None
+    return best
+
+
+def _view_plates(args: argparse.Namespace, am: AssemblerModel, viewer) -> StackState:
+    """``view --home/--plates``: the pose, legs colored by force."""
+    plates = plates_from_args(args, am, "give one of --goal, --goal-deg, --plates FILE or --home")
+    shown = viewer.display(plates)
+    verdict = "" if shown.feasible else " (VIOLATES limits)"
+    name = "Home pose" if args.home else Path(args.plates).name
+    viewer.set_title(f"{name} — max|F| {shown.max_abs_force:.1f} N{verdict}")
+    return shown
+
+
+def _draw(args: argparse.Namespace, am: AssemblerModel, viewer) -> StackState:
+    """Draw what the options ask for; returns the state whose numbers are reported."""
+    carrier, carrier_q = carrier_from_args(args)
+    if carrier is not None:
+        shown = _view_on_carrier(args, am, viewer, carrier, carrier_q)
+    elif args.scenario or args.goal is not None or args.goal_deg is not None:
+        shown = _view_goal(args, am, viewer)
+    elif args.trajectory:
+        shown = _animate_trajectory(viewer, am, args.trajectory, args.frames)
+    else:
+        shown = _view_plates(args, am, viewer)
+    _draw_compliance(args, viewer, shown)
+    viewer.frame()
+    return shown
+
+
+def _draw_compliance(args: argparse.Namespace, viewer, shown: StackState) -> None:
+    """``--loaded`` and ``--ellipsoid``: the compliant truss at the shown pose."""
+    if args.loaded:
+        view = viewer.show_loaded(shown.plates, args.exaggerate)
+        sag = 1e3 * math.hypot(*view.loaded.translation)
+        print(f"loaded pose: EE sag {sag:.4f} mm, drawn with displacements × {view.factor:g}", file=sys.stderr)
+    if args.ellipsoid:
+        force = DEFAULT_ELLIPSOID_FORCE if args.ellipsoid_force is None else args.ellipsoid_force
+        ell = viewer.show_ellipsoid(shown.plates, force)
+        axes = ", ".join(f"{1e3 * a:.4g}" for a in ell.semi_axes)
+        print(f"compliance ellipsoid: semi-axes {axes} mm (sag under {force:g} N)", file=sys.stderr)
+
+
+def _serve(args: argparse.Namespace, viewer) -> int:
+    """Write the standalone page (--html) or serve the live one until stopped."""
+    import time
+    import webbrowser
+
+    from ..signals import forget_interrupt
+
+    if args.html:
+        path = Path(args.html).resolve()
+        viewer.static_html(path)
+        print(f"wrote {path}")
+        if args.open:
+            webbrowser.open(path.as_uri())
+        return 0
+    try:
+        print(viewer.url, flush=True)
+        if args.open:
+            webbrowser.open(viewer.url)
+        while True:
+            time.sleep(0.5)
+    except KeyboardInterrupt:
+        forget_interrupt()
+        return 0  # serving until stopped: stopping is the normal end
+
+
+def run(args: argparse.Namespace) -> int:
+    """Show a pose in Meshcat: write a standalone page (--html) or serve until Ctrl-C."""
+    from ..model import AssemblerModel
+    from ..signals import forget_interrupt, interrupt_on_signals
+    from ..viz import StackViewer
+
+    _check_options(args)
     am = AssemblerModel.from_config(config_from_args(args))
     restore_signals = interrupt_on_signals()  # kill / a closed terminal stop it as Ctrl-C does
     viewer = None
     try:
         viewer = StackViewer(am, host=args.host, force_scale=args.force_scale)
-        carrier, carrier_q = carrier_from_args(args)
-        if carrier is not None:
-            shown = _view_on_carrier(args, am, viewer, carrier, carrier_q)
-        elif args.scenario:
-            from ..kinematics import se3_to_taa
-            from ..scenarios import scenario
-
-            args.goal = list(se3_to_taa(scenario(args.scenario).goal))
-        if carrier is not None:
-            pass
-        elif args.goal is not None or args.goal_deg is not None:
-            try:
-                from ..solver import solve  # lazy: the solver is only needed for --goal
-            except ImportError as exc:
-                raise CLIError(f"--goal needs assembler_pin.solver, which cannot be imported: {exc}") from None
-
-            result = solve(am, goal_from_args(args))
-            if result.initial is None and result.optimized is None:
-                raise CLIError(f"no pose to show: {result.message}")
-            arm = getattr(getattr(result, "initial_result", None), "arm_points", None)
-            viewer.show_comparison(result.initial, result.optimized, None if args.no_arm else arm)
-            viewer.set_title(_view_title(args, result))
-            best = result.optimized if result.optimized is not None else result.initial
-            assert best is not None  # refused above when both are None
-            shown = best
-            if args.animate and result.initial is not None and result.optimized is not None:
-                from ..viewer import interpolate_states
-
-                viewer.animate(interpolate_states(am, result.initial, result.optimized, args.animate))
-            print(f"solve: {'success' if result.success else 'FAILED'} — {result.message}", file=sys.stderr)
-        elif args.trajectory:
-            shown = _animate_trajectory(viewer, am, args.trajectory, args.frames)
-        else:
-            plates = plates_from_args(args, am, "give one of --goal, --goal-deg, --plates FILE or --home")
-            shown = viewer.display(plates)
-            verdict = "" if shown.feasible else " (VIOLATES limits)"
-            name = "Home pose" if args.home else Path(args.plates).name
-            viewer.set_title(f"{name} — max|F| {shown.max_abs_force:.1f} N{verdict}")
-            viewer.frame()
-        print(
-            f"max |F| = {shown.max_abs_force:.3f} N, feasible: {'yes' if shown.feasible else 'NO'}",
-            file=sys.stderr,
-        )
-        if args.html:
-            path = Path(args.html).resolve()
-            viewer.static_html(path)
-            print(f"wrote {path}")
-            if args.open:
-                webbrowser.open(path.as_uri())
-            return 0
-        viewer.frame()
-        try:
-            print(viewer.url, flush=True)
-            if args.open:
-                webbrowser.open(viewer.url)
-            while True:
-                time.sleep(0.5)
-        except KeyboardInterrupt:
-            forget_interrupt()
-            return 0  # serving until stopped: stopping is the normal end
+        shown = _draw(args, am, viewer)
+        feasible = "yes" if shown.feasible else "NO"
+        print(f"max |F| = {shown.max_abs_force:.3f} N, feasible: {feasible}", file=sys.stderr)
+        return _serve(args, viewer)
     except KeyboardInterrupt as stop:  # stopped before the view was ready
         forget_interrupt()
         print(f"assembler-pin view: {stop or 'interrupted'} before the view was ready", file=sys.stderr)

@@ -150,7 +150,7 @@ def _platform_fk(
         # ξ solves 2 [v_i, b_i × v_i] ξ = f
         _, _, step, info = dgesv(jacobian_map.dot(vec.ravel()).reshape(6, 6), err)
         if info != 0 or not math.isfinite(step.dot(step)):  # a step beyond 1e154 counts as divergence
-            failure = f"did not converge: SP{j + 1} forward kinematics diverged (singular Jacobian)"
+            failure = f"did not converge: SP{j} forward kinematics diverged (singular Jacobian)"
             break
         pose = pin.exp6(step) * pose
     # the loop always leaves right after evaluating vec at the current pose
@@ -159,7 +159,7 @@ def _platform_fk(
     if message is None and not residual <= tol:
         off = f"{1e3 * residual:.3g} mm" if math.isfinite(residual) else "not finite"
         message = (
-            f"did not converge: SP{j + 1} forward kinematics, length residual {off} after {max_iterations} "
+            f"did not converge: SP{j} forward kinematics, length residual {off} after {max_iterations} "
             f"iterations (tolerance {tol:.1g} m)"
         )
     elif message is None:
@@ -205,7 +205,7 @@ def _foreign_mode(am: AssemblerModel, j: int, pose: pin.SE3, vec: np.ndarray) ->
         why = "a leg deflected 90° or more from its home direction"
     if why is None:
         return None
-    return f"assembly mode: SP{j + 1} forward kinematics converged to another assembly mode ({why})"
+    return f"assembly mode: SP{j} forward kinematics converged to another assembly mode ({why})"
 
 
 @dataclass

@@ -190,7 +190,7 @@ def point_size(points: np.ndarray) -> float:
 
 
 def show_map_points(viewer, table, size: float | None = None, config: str | None = None) -> tuple[float, float]:
-    """Draw a map's cells as a point cloud in a :class:`~assembler_pin.viewer.StackViewer`,
+    """Draw a map's cells as a point cloud in a :class:`~assembler_pin.viz.StackViewer`,
     colored by payload capacity on :data:`~assembler_pin.palette.CAPACITY_CMAP` (dark = low,
     yellow = high, the PNG's scale); unreached cells :data:`~assembler_pin.palette.UNREACHABLE`.
 

@@ -11,6 +11,12 @@ Objective (paper eq. 10): ``Ω = w1·max|F| + w2·sqrt(Σ λ_k²)``, with λ_k t
 ``p_k - p_{k-1}`` and the rest direction of plate k on plate k-1 (eq. 9); written once, in
 :mod:`assembler_pin.objective`.
 
+Other objectives (``OptimizeOptions.objective``, slsqp only): ``"sag"`` minimizes the EE's
+sag under its own load (legs stretched by F/k, :func:`~assembler_pin.compliance.sag_and_gradient`)
+over the home pose's sag, every constraint kept (the force limits then are not capped by the
+start's max|F|); ``"weighted"`` minimizes ``Ω + w·sag/sag_home``. ``max_sag`` adds the row
+``sag <= max_sag`` (:class:`.rows.SagRows`). The sag's gradient is the exact adjoint one.
+
 Methods:
 
 * ``"slsqp"`` (default, :mod:`.smooth`): max|F| through an epigraph variable ``s``

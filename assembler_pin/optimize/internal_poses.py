@@ -16,8 +16,9 @@ import pinocchio as pin
 
 from ..exceptions import OptionsError, _SingularIterateError
 from ..kinematics import PlateArrays, checked_goal, plate_arrays
+from ..messages import one_line
 from ..model import AssemblerModel, checked_model
-from ..objective import objective_value
+from ..objective import SagObjective, state_sag, state_score
 from ..options import GoalTolerance, OptimizeOptions, checked_options
 from ..state import StackState, evaluate_state
 from ..threads import one_blas_thread
@@ -56,19 +57,20 @@ def optimize_internal_poses(
             chosen state then also keeps every leg within ``max_step`` of it.
     """
     opts, start, goal = _checked_inputs(am, initial, goal, options, motion)
-    check = _Check(am, goal, opts.ee_tolerance or opts.goal_tolerance, opts, motion)
-    initial_state = evaluate_state(am, start, goal=goal, tolerance=check.tolerance)
-    omega0 = objective_value(am, initial_state, opts.w1, opts.w2)
+    tolerance = opts.ee_tolerance or opts.goal_tolerance
+    initial_state = evaluate_state(am, start, goal=goal, tolerance=tolerance)
     problem = Problem(am, start, goal, opts, initial_state.feasible, motion)
+    check = _Check(am, goal, tolerance, opts, motion, problem.objective)
+    omega0 = check.score(initial_state)
     if problem.nx_pose == 0:
-        return nothing_to_optimize(initial_state, omega0, opts.method)
+        return _sag_checked(check, nothing_to_optimize(initial_state, omega0, opts.method), initial_state)
     t0 = time.perf_counter()
     res, x_final, singular = _run_solver(problem, initial_state)
     elapsed = time.perf_counter() - t0
     chosen, omega_chosen, success, message = _outcome(check, problem, res, x_final, singular, initial_state)
     logger.info(
-        "optimize[%s]: %s, Ω %.4g -> %.4g in %.3f s, %d iterations",
-        *(opts.method, message, omega0, omega_chosen, elapsed, res.nit),
+        "optimize[%s, %s]: %s, objective %.4g -> %.4g in %.3f s, %d iterations",
+        *(opts.method, opts.objective, message, omega0, omega_chosen, elapsed, res.nit),
     )
     return OptimizeResult(
         success=success,
@@ -84,6 +86,9 @@ def optimize_internal_poses(
         objective_initial=omega0,
         objective_optimized=omega_chosen,
         method=opts.method,
+        objective=opts.objective,
+        sag_initial=state_sag(am, initial_state),
+        sag_optimized=state_sag(am, chosen),
     )
 
 
@@ -104,7 +109,41 @@ def _outcome(
             f"motion step: the converged point moves a leg more than {1e3 * check.motion.max_step:.3g} mm",
         )
     success, message = verdict(res, singular, converged, final_state, chosen, initial_state)
+    success, message = _sag_verdict(check, success, message, converged, final_state, chosen)
     return chosen, omega_chosen, success, message
+
+
+def _sag_verdict(
+    check: _Check, success: bool, message: str, converged: bool, final: StackState, chosen: StackState
+) -> tuple[bool, str]:
+    """(success, message) with the sag limit: a returned state above ``max_sag`` (or a
+    converged point above it while another state is returned) is no success, and its
+    message starts ``sag limit:``."""
+    limit = check.opts.max_sag
+    if limit is None:
+        return success, message
+    mm = f"{1e3 * limit:.4g} mm"
+    sag = state_sag(check.am, chosen)
+    if sag > limit:
+        why = message if not success else "no state within it met"
+        return False, one_line(f"sag limit: EE sag {1e3 * sag:.4g} mm, limit {mm}; {why}")
+    if converged and final is not chosen and final.feasible and state_sag(check.am, final) > limit:
+        return False, one_line(
+            f"sag limit: the converged point sags {1e3 * state_sag(check.am, final):.4g} mm, limit {mm}; "
+            "the best state within it is returned"
+        )
+    return success, message
+
+
+def _sag_checked(check: _Check, result: OptimizeResult, state: StackState) -> OptimizeResult:
+    """A result without a solve (nothing to optimize) with the sag limit and the sags."""
+    import dataclasses
+
+    success, message = _sag_verdict(check, result.success, result.message, False, state, state)
+    sag = state_sag(check.am, state)
+    return dataclasses.replace(
+        result, success=success, message=message, objective=check.opts.objective, sag_initial=sag, sag_optimized=sag
+    )
 
 
 def _checked_inputs(
@@ -133,23 +172,29 @@ def _checked_inputs(
 @dataclass(frozen=True)
 class _Check:
     """The Pinocchio re-check of candidate points: their states, whether they may be
-    returned, and their Ω (with the motion term)."""
+    returned, and their objective (with the motion term)."""
 
     am: AssemblerModel
     goal: pin.SE3
     tolerance: GoalTolerance
     opts: OptimizeOptions
     motion: MotionTerm | None
+    objective: SagObjective
 
     def state_at(self, problem: Problem, x_pose: np.ndarray) -> StackState:
         return evaluate_state(self.am, problem.chart.plates(x_pose), goal=self.goal, tolerance=self.tolerance)
 
     def acceptable(self, state: StackState) -> bool:
-        """Feasible, and within the motion step of the previous sample."""
-        return state.feasible and (self.motion is None or bool(np.all(self.motion.margins(state.leg_lengths) >= 0)))
+        """Feasible, within the motion step of the previous sample and within the sag limit."""
+        if not state.feasible:
+            return False
+        if self.motion is not None and not bool(np.all(self.motion.margins(state.leg_lengths) >= 0)):
+            return False
+        return self.opts.max_sag is None or state_sag(self.am, state) <= self.opts.max_sag
 
     def score(self, state: StackState) -> float:
-        return objective_value(self.am, state, self.opts.w1, self.opts.w2, self.motion)
+        """The objective of the state (:func:`~assembler_pin.objective.state_score`)."""
+        return state_score(self.am, state, self.objective, self.opts.w1, self.opts.w2, self.motion)
 
 
 def _run_solver(problem: Problem, initial_state: StackState) -> tuple[SolverResult, np.ndarray, str]:
@@ -195,13 +240,18 @@ def _pulled_inside(check: _Check, problem: Problem, x_final: np.ndarray, final_s
 def _chosen(
     check: _Check, problem: Problem, final_state: StackState, initial_state: StackState
 ) -> tuple[StackState, float]:
-    """The state returned and its Ω: the acceptable one of (final, best met, start) with the
-    lowest Ω whose max|F| is no worse than a feasible start's."""
+    """The state returned and its objective: the acceptable one of (final, best met, start)
+    with the lowest objective (for the force objective: whose max|F| is no worse than a
+    feasible start's)."""
     candidates = [final_state] + ([check.state_at(problem, problem.best[1])] if problem.best is not None else [])
     chosen, omega_chosen = initial_state, check.score(initial_state)
     for state in candidates:
         value = check.score(state)
-        no_worse = not initial_state.feasible or state.max_abs_force <= initial_state.max_abs_force + 1e-9
+        no_worse = (
+            check.opts.objective != "force"
+            or not initial_state.feasible
+            or state.max_abs_force <= initial_state.max_abs_force + 1e-9
+        )
         if check.acceptable(state) and (not check.acceptable(chosen) or (value < omega_chosen and no_worse)):
             chosen, omega_chosen = state, value
     return chosen, omega_chosen

@@ -4,8 +4,11 @@ and the evaluation of a chart point.
 Every iterate is evaluated by ONE closed-form pass (:func:`~assembler_pin.gradients.pose_values`):
 forces, lengths, deflection cosines, rise and plate angles. Where the solver asks for
 derivatives at that point, :func:`~assembler_pin.gradients.pose_derivatives` extends the
-same pass. The Pinocchio statics are not used here: they re-check the returned state
-(:func:`~assembler_pin.state.evaluate_state` in :mod:`.internal_poses`), an independent path.
+same pass. The sag objectives and the sag limit read the EE's linear sag of the same pass
+(:func:`.sag.linear_sag`) and, with the derivatives, its adjoint gradient
+(:func:`~assembler_pin.compliance.sag_and_gradient`). The Pinocchio statics are not used
+here: they re-check the returned state (:func:`~assembler_pin.state.evaluate_state` in
+:mod:`.internal_poses`), an independent path.
 """
 
 from __future__ import annotations
@@ -17,17 +20,22 @@ from ..exceptions import SingularConfigurationError, _SingularIterateError
 from ..gradients import pose_derivatives, pose_values
 from ..kinematics import PlateArrays
 from ..model import AssemblerModel
-from ..objective import motion_cost, omega
+from ..objective import SagObjective, motion_cost, omega, sag_reference
 from ..options import OptimizeOptions
 from .charts import LocalChart, TaaChart
 from .options import MotionTerm
 from .point import ChartDerivatives, Point
-from .rows import EETolerance, ForceLimitRows, LegLimitRows, MotionRows
+from .rows import EETolerance, ForceLimitRows, LegLimitRows, MotionRows, SagRows
+from .sag import linear_sag
 
 __all__ = ["Problem", "finite_rows"]
 
 #: What a non-finite constraint row (a degenerate trial point) is replaced by: infeasible.
 _NON_FINITE_ROW = -1e6
+
+#: The sag [m] standing in where none is defined (a singular trial point): finite, far
+#: above any limit.
+SINGULAR_SAG = 1e3
 
 
 def finite_rows(rows: np.ndarray) -> np.ndarray:
@@ -42,8 +50,9 @@ class Problem:
     Args:
         start: world poses of plates 0..n to start from.
         goal: the EE goal (plate n's reference pose).
-        start_feasible: the start meets every constraint (then, for the smooth method, both
-            force limits are capped by its max|F|: max|F| never increases).
+        start_feasible: the start meets every constraint (then, for the smooth method and
+            the force objective, both force limits are capped by its max|F|: max|F| never
+            increases).
         motion: continuity with a previous sample (smooth method only).
     """
 
@@ -65,11 +74,19 @@ class Problem:
         self.nx_pose = self.chart.size
         leg = am.config.leg
         self.start_max_force = Point(np.zeros(0), pose_values(am, start)).max_abs_force
-        cap = self.start_max_force if opts.method == "slsqp" and start_feasible else np.inf
+        self.objective = SagObjective(
+            opts.objective, opts.sag_weight, sag_reference(am) if opts.objective != "force" else 1.0
+        )
+        force_objective = opts.objective == "force"
+        cap = self.start_max_force if opts.method == "slsqp" and start_feasible and force_objective else np.inf
         self.force_limits = ForceLimitRows(min(leg.max_tension, cap) - 1e-6, min(leg.max_compression, cap) - 1e-6)
         self.leg_limits = LegLimitRows(leg, opts.limit_margin, opts.rise_margin)
         self.ee = EETolerance(goal, opts.ee_tolerance, self.chart) if opts.ee_tolerance is not None else None
         self.motion_rows = MotionRows(motion) if motion is not None else None
+        self.sag_rows = SagRows(opts.max_sag) if opts.max_sag is not None else None
+        self.reads_sag = self.objective.needs_sag or self.sag_rows is not None
+        self._sag: tuple[Point, float] | None = None
+        self._sag_grad: tuple[ChartDerivatives, np.ndarray] | None = None
         self.best: tuple[float, np.ndarray] | None = None
         self.evaluations = 0
         self.gradient_evaluations = 0
@@ -88,7 +105,7 @@ class Problem:
         self._point = p
         self.evaluations += 1
         if self.feasible(p):
-            value = self.omega(p)
+            value = self.score(p)
             if self.best is None or value < self.best[0]:
                 self.best = (value, x.copy())
         return p
@@ -116,13 +133,42 @@ class Problem:
         self.gradient_evaluations += 1
         return d
 
-    def omega(self, p: Point) -> float:
-        """Ω at the point, with the motion term (:mod:`assembler_pin.objective`)."""
-        return omega(p.max_abs_force, p.plate_angles, self.opts.w1, self.opts.w2) + motion_cost(p.lengths, self.motion)
+    def score(self, p: Point) -> float:
+        """The objective at the point (Ω, the sag or both, :mod:`assembler_pin.objective`),
+        with the motion term."""
+        omega_value = omega(p.max_abs_force, p.plate_angles, self.opts.w1, self.opts.w2)
+        sag = self.sag(p) if self.objective.needs_sag else 0.0
+        return self.objective.value(omega_value, sag) + motion_cost(p.lengths, self.motion)
+
+    def sag(self, p: Point) -> float:
+        """The EE's linear sag at the point [m] (:data:`SINGULAR_SAG` where it is not
+        defined), computed once per point."""
+        if self._sag is None or self._sag[0] is not p:
+            sag = SINGULAR_SAG if p.singular else linear_sag(p.values, float(self.am.config.leg.stiffness))[0]
+            self._sag = (p, sag if np.isfinite(sag) else SINGULAR_SAG)
+        return self._sag[1]
+
+    def sag_gradient(self, x_pose: np.ndarray) -> np.ndarray:
+        """(m,) the sag's gradient in chart coordinates [m per chart unit]: the adjoint
+        gradient per world twist times the chart's ``B``, from the point's derivatives.
+
+        Raises:
+            _SingularIterateError: the pose is singular there.
+        """
+        from ..compliance import sag_and_gradient
+
+        p, d = self.point(x_pose), self.derivatives(x_pose)
+        if self._sag_grad is None or self._sag_grad[0] is not d:
+            try:
+                world = sag_and_gradient(self.am, p.plates, chart="world", derivatives=d.pose).gradient
+            except (np.linalg.LinAlgError, SingularConfigurationError) as exc:
+                raise _SingularIterateError(str(exc)) from None
+            self._sag_grad = (d, world @ d.B)
+        return self._sag_grad[1]
 
     def rows(self, p: Point) -> dict[str, np.ndarray]:
         """The rows of every family at the point (>= 0 when it holds), computed once per
-        point: ``leg``, ``force`` and, where they apply, ``ee`` and ``motion``."""
+        point: ``leg``, ``force`` and, where they apply, ``ee``, ``motion`` and ``sag``."""
         if self._rows is not None and self._rows[0] is p:
             return self._rows[1]
         rows = {"leg": self.leg_limits.values(p), "force": self.force_limits.values(p)}
@@ -130,13 +176,15 @@ class Problem:
             rows["ee"] = self.ee.values(p)
         if self.motion_rows is not None:
             rows["motion"] = self.motion_rows.values(p)
+        if self.sag_rows is not None:
+            rows["sag"] = self.sag_rows.values(self.sag(p))
         self._rows = (p, rows)
         return rows
 
     def optional_rows(self, p: Point) -> list[np.ndarray]:
-        """The EE-tolerance and motion rows where they apply."""
+        """The EE-tolerance, motion and sag rows where they apply."""
         rows = self.rows(p)
-        return [rows[k] for k in ("ee", "motion") if k in rows]
+        return [rows[k] for k in ("ee", "motion", "sag") if k in rows]
 
     def feasible(self, p: Point) -> bool:
         """Every row of the problem holds at the point."""

@@ -26,8 +26,12 @@ class OptimizeResult:
         time_s: wall time of the optimization [s].
         initial, optimized: the starting state and the best feasible state found (the
             initial one when nothing better was found).
-        objective_initial, objective_optimized: Ω of both states.
-        method: the method used.
+        objective_initial, objective_optimized: the objective of both states (Ω for the
+            force objective, :mod:`assembler_pin.objective`).
+        method: the method used; objective: the objective minimized
+            (``OptimizeOptions.objective``).
+        sag_initial, sag_optimized: the EE's linear sag of both states [m]
+            (:func:`~assembler_pin.compliance.sag_and_gradient`; inf where a platform is singular).
     """
 
     success: bool
@@ -43,6 +47,9 @@ class OptimizeResult:
     objective_initial: float
     objective_optimized: float
     method: str
+    objective: str = "force"
+    sag_initial: float | None = None
+    sag_optimized: float | None = None
 
     def __repr__(self) -> str:
         return (

@@ -9,7 +9,8 @@ derivatives in chart coordinates (``jacobian``), in the same order:
 * :class:`EpigraphRows` — ``s - F >= 0`` and ``s + F >= 0`` (the smooth method's bound
   ``s`` on max|F|);
 * :class:`EETolerance` — the EE within its position and rotation tolerance (squared norms);
-* :class:`MotionRows` — ``|L_i - L_i^prev| <= max_step`` along a motion.
+* :class:`MotionRows` — ``|L_i - L_i^prev| <= max_step`` along a motion;
+* :class:`SagRows` — the EE's linear sag within ``max_sag``.
 """
 
 from __future__ import annotations
@@ -24,7 +25,7 @@ from .charts import LocalChart, TaaChart
 from .options import MotionTerm
 from .point import ChartDerivatives, Point
 
-__all__ = ["EETolerance", "EpigraphRows", "ForceLimitRows", "LegLimitRows", "MotionRows"]
+__all__ = ["EETolerance", "EpigraphRows", "ForceLimitRows", "LegLimitRows", "MotionRows", "SagRows"]
 
 
 class LegLimitRows:
@@ -124,3 +125,22 @@ class MotionRows:
     def jacobian(self, d: ChartDerivatives) -> np.ndarray:
         """(2·6n, m)."""
         return np.vstack([-d.lengths, d.lengths])
+
+
+class SagRows:
+    """``(0.999999·max_sag - sag) / max_sag >= 0``: the EE's linear sag
+    (:func:`~assembler_pin.compliance.sag_and_gradient`) within ``max_sag`` [m], one
+    dimensionless row (slightly inside the limit the final check applies)."""
+
+    SHRINK = 1.0 - 1e-6
+
+    def __init__(self, max_sag: float) -> None:
+        self.max_sag = float(max_sag)
+
+    def values(self, sag: float) -> np.ndarray:
+        """(1,) from the sag [m] at the point."""
+        return np.array([(self.SHRINK * self.max_sag - sag) / self.max_sag])
+
+    def jacobian(self, d_sag: np.ndarray) -> np.ndarray:
+        """(1, m) from the sag's chart gradient (m,) [m per chart unit]."""
+        return -d_sag[None, :] / self.max_sag

@@ -1,8 +1,9 @@
 """The smooth method (``"slsqp"``): max|F| through an epigraph variable ``s``.
 
-x = [poses in the local chart, s]; minimize ``w1·s + w2·sqrt(Σ λ_k²) (+ w3·Σ ΔL²)`` subject
-to ``-s <= F_i <= s``, the force limits (on ``s`` alone when they are equal), every leg
-limit, the EE tolerance and the motion step. Smooth, so SLSQP gets exact gradients
+x = [poses in the local chart, s]; minimize ``w1·s + w2·sqrt(Σ λ_k²) (+ w3·Σ ΔL²)`` (the
+force objective; the sag objectives replace or extend it, :class:`~assembler_pin.objective.SagObjective`)
+subject to ``-s <= F_i <= s``, the force limits (on ``s`` alone when they are equal), every
+leg limit, the EE tolerance, the motion step and the sag limit. Smooth, so SLSQP gets exact gradients
 (:mod:`assembler_pin.gradients`), all from the closed-form pass of each point.
 """
 
@@ -32,23 +33,27 @@ class SmoothForm:
         return x0
 
     def fun(self, x: np.ndarray) -> float:
-        """``w1·s + w2·sqrt(Σ λ²) + w3·Σ ΔL²``."""
+        """The objective with ``s`` for max|F|: ``w1·s + w2·sqrt(Σ λ²)``, the sag term, ``w3·Σ ΔL²``."""
         pr = self.problem
         p = pr.point(x[:-1])
-        return omega(x[-1], p.plate_angles, pr.opts.w1, pr.opts.w2) + motion_cost(p.lengths, pr.motion)
+        omega_value = omega(x[-1], p.plate_angles, pr.opts.w1, pr.opts.w2)
+        sag = pr.sag(p) if pr.objective.needs_sag else 0.0
+        return pr.objective.value(omega_value, sag) + motion_cost(p.lengths, pr.motion)
 
     def grad(self, x: np.ndarray) -> np.ndarray:
         """Gradient of :meth:`fun`."""
         pr = self.problem
         p, d = pr.point(x[:-1]), pr.derivatives(x[:-1])
-        grad = np.zeros_like(x)
-        grad[:-1] = pr.opts.w2 * deviation_term_gradient(p.plate_angles, d.plate_angles_sq)
+        d_omega = np.zeros_like(x)
+        d_omega[:-1] = pr.opts.w2 * deviation_term_gradient(p.plate_angles, d.plate_angles_sq)
+        d_omega[-1] = pr.opts.w1
+        d_sag = np.append(pr.sag_gradient(x[:-1]), 0.0) if pr.objective.needs_sag else None
+        grad = pr.objective.gradient(d_omega, d_sag)
         grad[:-1] += motion_cost_gradient(p.lengths, d.lengths, pr.motion)
-        grad[-1] = pr.opts.w1
         return grad
 
     def cons(self, x: np.ndarray) -> np.ndarray:
-        """Rows >= 0: ``s ∓ F``, the force limits, the leg limits, EE tolerance, motion step."""
+        """Rows >= 0: ``s ∓ F``, the force limits, the leg limits, EE tolerance, motion step, sag."""
         pr = self.problem
         p, s = pr.point(x[:-1]), x[-1]
         fl = pr.force_limits
@@ -75,4 +80,6 @@ class SmoothForm:
             rows.append(with_s(pr.ee.jacobian(p, d)))
         if pr.motion_rows is not None:
             rows.append(with_s(pr.motion_rows.jacobian(d)))
+        if pr.sag_rows is not None:
+            rows.append(with_s(pr.sag_rows.jacobian(pr.sag_gradient(x[:-1]))))
         return np.vstack(rows)

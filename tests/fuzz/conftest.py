@@ -38,7 +38,7 @@ def ws(tmp_path_factory, am):
     root = tmp_path_factory.mktemp("fuzz")
 
     def plan() -> tuple[str, str]:
-        goal = ap.taa_to_se3([float(v) for v in NEAR_HOME.split()])
+        goal = ap.kinematics.taa_to_se3([float(v) for v in NEAR_HOME.split()])
         motion = ap.plan_trajectory(am, ap.EEPath((am.home[-1], goal)), am.home)
         assert motion.trajectory is not None, motion.reason
         csv_path = motion.trajectory.write(root / "planned.csv")

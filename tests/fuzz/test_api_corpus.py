@@ -25,7 +25,7 @@ def judge_result(case: ApiCase, am, result) -> None:
             fail("wrong-answer", f"{case.id}: returned {case.verdict} true: {str(result)[:200]}")
     if isinstance(result, ap.StackState) and result.feasible:
         answers.check_state_doc(am, result.to_dict(), case.id)
-    if isinstance(result, ap.StackFKResult) and result.success:
+    if isinstance(result, ap.kinematics.StackFKResult) and result.success:
         answers.check_fk_result(am, result, case.id, case.fk_lengths)
 
 

@@ -70,7 +70,7 @@ def test_footholds_files_are_read_as_written(tmp_path_factory, doc):
         return
     got = called.result
     for k, (pose, row) in enumerate(zip(got.footholds, doc["footholds"], strict=True)):
-        want = ap.taa_to_se3(row, degrees=doc.get("degrees", False))
+        want = ap.kinematics.taa_to_se3(row, degrees=doc.get("degrees", False))
         if not np.allclose(pose.homogeneous, want.homogeneous, atol=1e-12):
             fail("accepted", f"read_footholds({doc}): foothold {k} read as another pose")
     if got.floor_z != doc.get("floor_z"):
@@ -101,17 +101,17 @@ def test_footholds_files_are_read_as_written(tmp_path_factory, doc):
 def test_malformed_footholds_files_are_refused_in_one_line(tmp_path, text):
     path = tmp_path / "footholds.json"
     path.write_bytes(text.encode("utf-8", "surrogateescape"))
-    with pytest.raises(ap.WalkError) as err:
+    with pytest.raises(ap.exceptions.WalkError) as err:
         read_footholds(path)
     assert "\n" not in str(err.value) and len(str(err.value)) < 300
 
 
 def test_a_4x4_foothold_file_reads_back_and_an_oversized_file_is_refused(tmp_path):
     path = tmp_path / "footholds.json"
-    pose = ap.taa_to_se3([0.5, 0.1, 0.0, 0.0, 0.0, 0.3])
+    pose = ap.kinematics.taa_to_se3([0.5, 0.1, 0.0, 0.0, 0.0, 0.3])
     path.write_text(json.dumps({"footholds": [np.eye(4).tolist(), pose.homogeneous.tolist()], "floor_z": 0}))
     got = read_footholds(path)
     assert np.allclose(got.footholds[1].homogeneous, pose.homogeneous, atol=1e-15) and got.floor_z == 0.0
     path.write_text(" " * (1 << 20) + json.dumps({"footholds": GOOD}))
-    with pytest.raises(ap.WalkError, match="size"):
+    with pytest.raises(ap.exceptions.WalkError, match="size"):
         read_footholds(path)

@@ -152,7 +152,7 @@ def test_waypoint_files_are_read_as_written(tmp_path_factory, doc):
         return
     path_ = called.result
     for k, (pose, row) in enumerate(zip(path_.waypoints, rows, strict=True)):
-        want = ap.taa_to_se3(row, degrees=degrees)
+        want = ap.kinematics.taa_to_se3(row, degrees=degrees)
         if not np.allclose(pose.homogeneous, want.homogeneous, atol=1e-12):
             fail("accepted", f"read_waypoints({doc}): waypoint {k} read as another pose")
     if times is not None and (path_.times is None or not np.allclose(path_.times, times)):

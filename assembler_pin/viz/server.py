@@ -37,7 +37,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass, field
 from typing import IO
 
-__all__ = ["DEFAULT_HOST", "SET_OVERLAY", "ServerProcess", "main", "start_server"]
+__all__ = ["DEFAULT_HOST", "SET_OVERLAY", "ServerProcess", "connect", "main", "start_server"]
 
 DEFAULT_HOST = "127.0.0.1"
 """Interface the web server listens on unless asked otherwise: this machine only."""
@@ -107,6 +107,22 @@ class ServerProcess:
                     stream.close()
 
 
+def connect(host: str = DEFAULT_HOST, port: int | None = None):
+    """Start a server (:func:`start_server`) and a ``meshcat.Visualizer`` talking to it; the
+    server is stopped again if the visualizer cannot be made. Returns (server, visualizer)."""
+    import io
+
+    import meshcat
+
+    server = start_server(host, port)
+    try:
+        with contextlib.redirect_stdout(io.StringIO()):  # meshcat prints its URL
+            return server, meshcat.Visualizer(zmq_url=server.zmq_url)
+    except BaseException:
+        server.stop()
+        raise
+
+
 def _url_host(host: str) -> str:
     """``host`` as written in a URL: IPv6 addresses in brackets."""
     return f"[{host}]" if ":" in host and not host.startswith("[") else host
@@ -155,7 +171,7 @@ def start_server(host: str = DEFAULT_HOST, port: int | None = None, timeout: flo
         server.stop()
         raise
     if "zmq_url" not in urls or "web_url" not in urls:
-        from .exceptions import ViewerError
+        from ..exceptions import ViewerError
 
         server._stderr = None  # read it once the server has ended, then close it here
         server.stop()
@@ -171,7 +187,7 @@ def start_server(host: str = DEFAULT_HOST, port: int | None = None, timeout: flo
 
 def _check_host_and_port(host: str, port: int | None) -> None:
     """Refuse a host this machine cannot listen on, or a port out of range (ViewerError)."""
-    from .exceptions import ViewerError
+    from ..exceptions import ViewerError
 
     allowed = "e.g. 127.0.0.1 (this machine only) or 0.0.0.0 (every interface)"
     if port is not None:
