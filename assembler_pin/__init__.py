@@ -43,6 +43,8 @@ _LAZY: dict[str, str] = {
     "solve": ".solver",
     "SolveResult": ".solver",
     "payload_capacity": ".capacity",
+    # dynamics
+    "inverse_dynamics": ".dynamics",
     # the compliant truss, two-point support, walking
     "stiffness": ".ee_stiffness",
     "loaded_pose": ".compliance",
@@ -84,6 +86,7 @@ if TYPE_CHECKING:  # for type checkers and IDEs: the same names, imported eagerl
     from .capacity import payload_capacity
     from .compliance import compensated_lengths, loaded_pose
     from .config import AssemblerConfig, load_config
+    from .dynamics import inverse_dynamics
     from .ee_stiffness import stiffness
     from .exceptions import AssemblerError
     from .helper_arm import HelperArmOptions, initial_condition

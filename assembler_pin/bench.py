@@ -448,3 +448,74 @@ def format_maps(result: dict[str, Any]) -> str:
         f"efficiency: ~{result['estimate_64_cores_cells_per_s']:.0f} cells/s"
     )
     return "\n".join(lines)
+
+
+#: The README's three paths (from the home pose).
+COMPARE_PATHS = ("translation", "vertical_lift", "orientation_transition")
+
+
+def benchmark_time_laws(am: AssemblerModel, names: tuple[str, ...] = COMPARE_PATHS) -> list[dict]:
+    """Durations of the quintic and the optimal (TOPP-RA) time law on the paths from the home
+    pose to the scenarios' goals, and the optimal law's time on a grid of ~1,000 points."""
+    import dataclasses
+
+    from scipy.interpolate import PchipInterpolator
+
+    from .motion import EEPath, plan_path
+    from .motion.timing import _law_duration, _problem
+    from .motion.toppra_law import OptimalLaw
+    from .scenarios import scenario
+
+    rows = []
+    leg = am.config.leg
+    for name in names:
+        plan = plan_path(am, EEPath((am.home[-1], scenario(name).goal)), am.home)
+        quintic = _law_duration(am, plan, "quintic")
+        optimal = _law_duration(am, plan, "optimal")
+        L = plan.lengths.reshape(len(plan.states), -1)
+        spline = PchipInterpolator(np.arange(len(L), dtype=float), L, axis=0)
+        problem = _problem(am, plan, spline, 0.95 * leg.max_speed, 0.95 * leg.max_acceleration, 16, "optimal")
+        problem = dataclasses.replace(problem, forces=_cached_forces(problem.forces))
+        law = OptimalLaw(grid_per_sample=max(1, -(-1000 // (len(L) - 1))), max_grid=1000)
+        grid = law.grid(problem)
+        problem.forces(grid)  # the force coefficients at the samples, computed once
+        t0 = time.perf_counter()
+        law.profile(problem, grid)
+        rows.append(
+            {
+                "path": name,
+                "samples": len(L),
+                "quintic_s": quintic,
+                "optimal_s": optimal,
+                "shorter_pct": 100.0 * (1.0 - optimal / quintic),
+                "grid_points": len(grid),
+                "toppra_s": law.last_solve_s,
+                "law_s": time.perf_counter() - t0,
+            }
+        )
+    return rows
+
+
+def _cached_forces(forces: Callable) -> Callable:
+    """``forces(grid)`` with the samples' coefficients computed on first use (they are the
+    planner's poses, not the time law's work)."""
+    cache: dict[int, tuple] = {}
+
+    def wrapped(grid: np.ndarray) -> tuple:
+        key = hash(grid.tobytes())
+        if key not in cache:
+            cache[key] = forces(grid)
+        return cache[key]
+
+    return wrapped
+
+
+def format_time_laws(rows: list[dict]) -> str:
+    """The table of :func:`benchmark_time_laws`."""
+    lines = [f"{'path':<24}{'samples':>8}{'quintic s':>10}{'optimal s':>10}{'shorter':>9}{'grid':>6}{'TOPP-RA s':>10}"]
+    for r in rows:
+        lines.append(
+            f"{r['path']:<24}{r['samples']:8d}{r['quintic_s']:10.2f}{r['optimal_s']:10.2f}{r['shorter_pct']:8.1f}%"
+            f"{r['grid_points']:6d}{r['toppra_s']:10.3f}"
+        )
+    return "\n".join(lines)

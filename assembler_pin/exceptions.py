@@ -129,6 +129,6 @@ class MapError(AssemblerError, ValueError):
     """A capability map that cannot be run, resumed or read (arguments, directory, parts, cluster)."""
 
 
-class _SkipSubcommandError(Exception):
+class _SkipSubcommandError(AssemblerError):
     """Raised while building the parser to stop building the arguments of a subcommand this
     run does not use (internal to :func:`assembler_pin.cli.app.build_parser`)."""

@@ -53,6 +53,12 @@ class names:  # noqa: N801 - a namespace of name builders
         return f"L_sp{j}_leg{i}"
 
     @staticmethod
+    def force_column(j: int, i: int) -> str:
+        """Trajectory CSV column of the axial force of leg i of platform j with the motion's
+        own part (static + inertial) [N], tension positive."""
+        return f"F_sp{j}_leg{i}"
+
+    @staticmethod
     def helper_joint(j: int, axis: str) -> str:
         """Helper-arm cluster j's revolute joint about ``axis`` in {x, y, z}."""
         return f"sp{j}_r{axis}"

@@ -80,7 +80,8 @@ def _quantity_panel(ax, q: _Quantity, j: int) -> None:
 
 
 def _trajectory_quantities(am: AssemblerModel, traj, states, state_times) -> list[_Quantity]:
-    """The four columns of :func:`trajectory_plot`: length, speed, acceleration, force."""
+    """The columns of :func:`trajectory_plot`: length, speed, acceleration, force (statics)
+    and, when the trajectory has them, the forces with the motion's own part."""
     leg = am.config.leg
     t = np.asarray(traj.times, dtype=float)
     mid = 0.5 * (t[1:] + t[:-1])
@@ -110,7 +111,21 @@ def _trajectory_quantities(am: AssemblerModel, traj, states, state_times) -> lis
             leg.max_tension,
             (hex_color(palette.COMPRESSION), hex_color(palette.TENSION)),
         ),
-    ]
+    ] + (
+        []
+        if traj.dynamic_forces is None
+        else [
+            _Quantity(
+                "force static+dynamic",
+                "N",
+                t,
+                traj.dynamic_forces,
+                -leg.max_compression,
+                leg.max_tension,
+                (hex_color(palette.COMPRESSION), hex_color(palette.TENSION)),
+            )
+        ]
+    )
 
 
 def trajectory_plot(
@@ -120,7 +135,8 @@ def trajectory_plot(
     state_times: npt.ArrayLike | None = None,
     title: str = "Planned motion",
 ) -> Figure:
-    """Leg lengths, speeds, accelerations and actuator forces of a trajectory over time.
+    """Leg lengths, speeds, accelerations and actuator forces of a trajectory over time: the
+    static forces and (last column, every row) the forces with the motion's own part.
 
     One row of panels per platform (``SPj``), one column per quantity; in each panel the
     platform's six legs, one colour each, named ``SPj leg i`` in the row's legend (right of
@@ -154,11 +170,16 @@ def trajectory_plot(
         outside = {"loc": "center left", "bbox_to_anchor": (1.02, 0.5), "fontsize": 7, "frameon": False}
         axes[j, -1].legend(handles, labels, **outside)
     if not states:
-        _max_force_panel(axes[:, -1], t, traj.max_abs_force, am.config.leg)
+        _max_force_panel(axes[:, 3], t, traj.max_abs_force, am.config.leg)
     for ax in axes[-1]:
         ax.set_xlabel("time [s]")
     verdict = "every sample valid" if not infeasible.any() else f"{int(infeasible.sum())} samples INVALID (yellow)"
-    fig.suptitle(f"{title}: {traj.duration:.1f} s, peak max|F| {np.nanmax(traj.max_abs_force):.1f} N, {verdict}")
+    law = traj.meta.get("time_law", "quintic")
+    dynamic = "" if traj.dynamic_forces is None else f" ({np.nanmax(traj.max_abs_dynamic_force):.1f} N with the motion)"
+    fig.suptitle(
+        f"{title}: {law} time law, {traj.duration:.1f} s, peak max|F| {np.nanmax(traj.max_abs_force):.1f} N"
+        f"{dynamic}, {verdict}"
+    )
     return fig
 
 

@@ -31,7 +31,7 @@ from assembler_pin.motion.timing import (
     trajectory_states,
     verify_trajectory,
 )
-from assembler_pin.motion.trajfile import rows_digest
+from assembler_pin.motion.trajfile import VERSION, rows_digest
 
 HYPO = settings(max_examples=40, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
 
@@ -281,7 +281,7 @@ def _doc(traj, **changes):
     meta.update(rows=len(rows), sha256=rows_digest(rows))
     return {
         "format": "assembler-pin trajectory",
-        "version": 2,
+        "version": VERSION,
         "meta": meta,
         "columns": traj.columns(),
         "rows": rows.tolist(),
@@ -584,3 +584,14 @@ def test_random_waypoint_documents_are_refused_or_read_exactly(tmp_path, doc, ro
     for pose, row in zip(read.waypoints, doc["waypoints"], strict=True):
         np.testing.assert_array_equal(pose.translation, np.array(row[:3], dtype=float))
     assert read.times is None if doc.get("times") is None else list(read.times) == [float(t) for t in doc["times"]]
+
+
+def test_version_2_files_are_refused_with_a_way_out(tmp_path):
+    """Version 3 added the time law and the forces with the motion's part: a v2 file is refused."""
+    (tmp_path / "v2.csv").write_text("# assembler-pin trajectory v2\n# meta: {}\nt\n# end: 0 rows\n")
+    with pytest.raises(TrajectoryError, match=r"not v3.*plan it again"):
+        read_trajectory(tmp_path / "v2.csv")
+    doc = {"format": "assembler-pin trajectory", "version": 2, "meta": {}, "columns": [], "rows": []}
+    (tmp_path / "v2.json").write_text(json.dumps(doc))
+    with pytest.raises(TrajectoryError, match=r"version 2 is not 3.*plan it again"):
+        read_trajectory(tmp_path / "v2.json")

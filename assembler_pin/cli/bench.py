@@ -37,6 +37,11 @@ def add_parser(add) -> None:
         "--mujoco", action="store_true", help="only MuJoCo against our statics: inverse statics and held poses (~15 s)"
     )
     p.add_argument(
+        "--time-laws",
+        action="store_true",
+        help="only the quintic against the optimal time law on the README's three paths (~1 min)",
+    )
+    p.add_argument(
         "--truss",
         action="store_true",
         help="only the compliant truss: stiffness, loaded pose, compensated lengths, two-point support",
@@ -73,6 +78,12 @@ def run(args: argparse.Namespace) -> int:
     am = AssemblerModel.from_config(config_from_args(args))
     if args.truss or args.speed:
         return _extra_figures(args, am)
+    if args.time_laws:
+        from ..bench import benchmark_time_laws, format_time_laws
+
+        rows = benchmark_time_laws(am)
+        print(dumps(rows) if args.json else format_time_laws(rows))
+        return 0
     if args.mujoco:
         from ..bench import benchmark_mujoco, format_mujoco
 

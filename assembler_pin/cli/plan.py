@@ -48,6 +48,14 @@ def add_parser(add) -> None:
         default="screw",
         help="interpolation on SE(3): screw (geodesic, default) or linear (line + slerp)",
     )
+    p.add_argument(
+        "--time-law",
+        choices=("auto", "quintic", "optimal"),
+        default="auto",
+        help="time law: quintic (one smooth rest-to-rest law), optimal (TOPP-RA: fastest within the legs' "
+        "speed, acceleration and force limits, forces with the motion's part), auto (default: the faster "
+        "one whose every row is valid)",
+    )
     p.add_argument("--rate", type=float, default=50.0, help="output samples per second, 1..1000 (default 50)")
     p.add_argument("--w3", type=float, default=100.0, help="weight of the motion term Σ ΔL² [1/m²] (default 100)")
     p.add_argument("--out", metavar="FILE", help="write the trajectory (.csv, or JSON for any other suffix)")
@@ -131,7 +139,7 @@ def run(args: argparse.Namespace) -> int:
     path, start = _plan_path(args, am)
     prog = progress_for(args, "plan")
     try:
-        motion = plan_trajectory(am, path, start, options, rate=args.rate, progress=prog)
+        motion = plan_trajectory(am, path, start, options, rate=args.rate, progress=prog, time_law=args.time_law)
         doc = _write_outputs(args, am, motion, prog)
         doc["start"] = "home" if args.from_ is None else "from"  # where the path starts (as --to)
     finally:
@@ -184,6 +192,11 @@ def _print_summary(args: argparse.Namespace, motion, doc: dict) -> None:
                 f"trajectory: {traj.duration:.2f} s at {args.rate:g} Hz ({len(traj.times)} samples, every one "
                 f"valid), {extent}"
             )
+        )
+        laws = ", ".join(f"{k} {v:.2f} s" for k, v in motion.law_durations.items())
+        print(
+            f"time law: {motion.time_law} ({laws}); peak max|F| with the motion's part "
+            f"{doc['peak_max_abs_dynamic_force']:.2f} N"
         )
     elif args.out:
         print(f"no valid trajectory: {args.out} not written")

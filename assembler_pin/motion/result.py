@@ -4,7 +4,7 @@ timed trajectory against the legs' limits."""
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -60,6 +60,8 @@ class MotionResult:
             ``success``, else the valid prefix (None when no prefix of 2 rows is valid).
         problems: what the trajectory check found (empty when nothing).
         time_s: wall time of planning, timing and checking [s].
+        law_durations: the duration [s] each time law tried reached on the plan
+            (:mod:`~assembler_pin.motion.time_law`).
     """
 
     success: bool
@@ -68,6 +70,12 @@ class MotionResult:
     trajectory: Trajectory | None
     problems: list[str]
     time_s: float
+    law_durations: dict[str, float] = field(default_factory=dict)
+
+    @property
+    def time_law(self) -> str | None:
+        """The time law of the trajectory (None without one)."""
+        return None if self.trajectory is None else self.trajectory.meta.get("time_law")
 
     @property
     def complete(self) -> bool:
@@ -106,6 +114,11 @@ class MotionResult:
             "peak_max_abs_force": self.peak_max_abs_force if self.plan.states else None,
             "total_leg_travel_m": self.total_leg_travel,
             "duration_s": self.duration if self.trajectory is not None else None,
+            "time_law": self.time_law,
+            "law_durations_s": dict(self.law_durations),
+            "peak_max_abs_dynamic_force": (
+                float(np.nanmax(self.trajectory.max_abs_dynamic_force)) if self.trajectory is not None else None
+            ),
             "complete": self.complete,
             "rows": len(self.trajectory.times) if self.trajectory is not None else 0,
             "path_reached": float(self.plan.parameters[-1]) if self.plan.states else None,

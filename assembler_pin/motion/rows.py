@@ -1,7 +1,8 @@
 """A trajectory's rows against the model: what each commanded set of leg lengths does.
 
-* :func:`evaluate_rows` — stack FK, statics and every constraint margin at each row of a
-  timed plan (how :func:`~assembler_pin.motion.timing.time_parametrize` fills a trajectory).
+* :func:`evaluate_rows` — stack FK, statics, the forces with the motion's own part
+  (:mod:`assembler_pin.dynamics`) and every constraint margin at each row of a timed plan
+  (how :func:`~assembler_pin.motion.timing.time_parametrize` fills a trajectory).
 * :func:`check_trajectory` — hold every row of a trajectory (e.g. one read from a file) to
   the model: stroke, speeds and accelerations within the config's limits, and the EE
   written in the row equal to stack FK of its lengths.
@@ -37,17 +38,25 @@ def evaluate_rows(
     meta: dict,
     strict: bool = True,
     progress: ProgressCallback | None = None,
+    rates: np.ndarray | None = None,
+    accels: np.ndarray | None = None,
 ) -> Trajectory:
-    """Stack FK, statics and every constraint margin at each row.
+    """Stack FK, statics, the forces with the motion's own part and every constraint margin
+    at each row.
 
     Args:
         plan: the :class:`~assembler_pin.motion.planner.PlanResult` the rows follow.
         times: (T,) [s]; lengths: (T, n, 6) [m]; u: (T,) path parameter of each row.
         strict: raise when FK fails at a row; otherwise mark it infeasible (NaN pose).
+        rates, accels: (T, n, 6) the legs' length rates [m/s] and accelerations [m/s²] of the
+            time law at each row (default: at rest, the dynamic forces are the statics).
     """
+    from ..dynamics import inverse_dynamics_from_lengths
+
     tol: GoalTolerance = plan.path_tolerance
     T = len(times)
     ee, force, feasible = np.full((T, 6), np.nan), np.full(T, np.nan), np.zeros(T, dtype=bool)
+    dynamic = np.full((T, am.n, 6), np.nan)
     margins = {k: np.full(T, np.nan) for k in MARGIN_KINDS}
     base = plan.states[0].plates.se3(0)
     knots = plan.parameters
@@ -66,17 +75,29 @@ def evaluate_rows(
         guess = fk.plates
         target = plan.path.at(u[k])
         state = evaluate_state(am, fk.plates, goal=target, tolerance=tol)
-        _row_margins(am, state, target, tol, margins, k)
-        ee[k], force[k], feasible[k] = se3_to_taa(fk.plates.se3(am.n)), state.max_abs_force, state.feasible
+        if rates is not None and accels is not None and (np.any(rates[k]) or np.any(accels[k])):
+            dynamic[k] = inverse_dynamics_from_lengths(am, fk.plates, rates[k], accels[k]).forces
+        else:
+            dynamic[k] = state.forces
+        _row_margins(am, state, target, tol, margins, k, dynamic[k])
+        ee[k], force[k] = se3_to_taa(fk.plates.se3(am.n)), state.max_abs_force
+        feasible[k] = state.feasible and margins["force_dynamic"][k] >= 0
     if progress is not None:
         progress(T, T, "checked output samples")
-    return Trajectory(times, lengths, ee, force, margins, feasible, am.n, meta)
+    return Trajectory(times, lengths, ee, force, margins, feasible, am.n, meta, dynamic)
 
 
 def _row_margins(
-    am: AssemblerModel, state: StackState, target: pin.SE3, tol: GoalTolerance, margins: dict, k: int
+    am: AssemblerModel,
+    state: StackState,
+    target: pin.SE3,
+    tol: GoalTolerance,
+    margins: dict,
+    k: int,
+    dynamic: np.ndarray,
 ) -> None:
-    """Fill row ``k`` of every margin kind from the row's state (see :class:`Trajectory`)."""
+    """Fill row ``k`` of every margin kind from the row's state and its forces with the
+    motion's part (see :class:`Trajectory`)."""
     leg = am.config.leg
     rows = leg_limit_margins(leg, state.legs.lengths, np.cos(state.legs.deflection), state.legs.rise, 0.0)
     pose = state.plates.se3(am.n)
@@ -84,6 +105,7 @@ def _row_margins(
     margins["deflection"][k] = leg.max_deflection - state.legs.deflection.max()  # [rad], not the cosine rows
     margins["rise"][k] = rows[4].min()
     margins["force"][k] = min(leg.max_tension - state.forces.max(), leg.max_compression + state.forces.min())
+    margins["force_dynamic"][k] = min(leg.max_tension - dynamic.max(), leg.max_compression + dynamic.min())
     margins["path_position"][k] = tol.position - np.linalg.norm(pose.translation - target.translation)
     margins["path_rotation"][k] = tol.rotation - np.linalg.norm(pin.log3(target.rotation.T @ pose.rotation))
 

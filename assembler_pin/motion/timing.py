@@ -23,12 +23,11 @@ Files: :mod:`.trajfile` (format, atomic writer, strict reader); rows against the
 from __future__ import annotations
 
 import dataclasses
-import math
 import time
 
 import numpy as np
 
-from ..bounds import BOUNDS, check_bound
+from ..bounds import check_bound
 from ..exceptions import PathError, TrajectoryError
 from ..messages import one_line
 from ..model import AssemblerModel
@@ -39,6 +38,7 @@ from .paths import EEPath
 from .planner import PlanResult
 from .result import MotionResult, first_bad_row, verify_trajectory
 from .rows import check_trajectory, trajectory_states
+from .time_law import TIME_LAWS, TimingProblem, time_law
 from .trajfile import Trajectory, read_trajectory
 
 __all__ = [
@@ -52,31 +52,6 @@ __all__ = [
     "trajectory_states",
     "verify_trajectory",
 ]
-
-
-def _quintic(tau: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """σ(τ) = 10τ³ − 15τ⁴ + 6τ⁵ and its first two derivatives: rest to rest on [0, 1]."""
-    return (
-        tau**3 * (10 - 15 * tau + 6 * tau**2),
-        30 * tau**2 * (1 - tau) ** 2,
-        60 * tau * (1 - tau) * (1 - 2 * tau),
-    )
-
-
-def _shortest_duration(spline, s0: float, s1: float, v_max: float, a_max: float, grid: int) -> float:
-    """Smallest T such that ``L(s0 + (s1 − s0)·σ(t/T))`` keeps every leg within the limits.
-
-    Speed is ``L'·span·σ'/T`` and acceleration ``(L''·span²·σ'² + L'·span·σ'')/T²``: both
-    scale with T, so T follows from their largest values on a dense grid of τ.
-    """
-    span = s1 - s0
-    tau = np.linspace(0.0, 1.0, grid)
-    sigma, d_sigma, dd_sigma = _quintic(tau)
-    s = s0 + span * sigma
-    d1, d2 = spline(s, 1), spline(s, 2)
-    speed = np.abs(d1 * (span * d_sigma)[:, None]).max()
-    accel = np.abs(d2 * ((span * d_sigma) ** 2)[:, None] + d1 * (span * dd_sigma)[:, None]).max()
-    return max(speed / v_max, np.sqrt(accel / a_max), 1e-9)
 
 
 def _pieces(plan: PlanResult) -> list[tuple[int, int, float | None]]:
@@ -99,43 +74,55 @@ def _pieces(plan: PlanResult) -> list[tuple[int, int, float | None]]:
     return out
 
 
-def _time_grid(
-    spline, plan: PlanResult, rate: float, v_max: float, a_max: float, grid_per_sample: int
-) -> tuple[np.ndarray, np.ndarray]:
-    """(times [s], s of each time) of the time law (see the module docstring), after checking
-    its duration and row count against the bounds table, before allocating the rows."""
-    pieces = []
-    for i0, i1, given in _pieces(plan):
-        shortest = _shortest_duration(spline, i0, i1, v_max, a_max, grid_per_sample * (i1 - i0 + 1) + 1)
-        if given is not None and shortest > given * (1 + 1e-9):
-            u0, u1 = plan.parameters[i0], plan.parameters[i1]
-            raise TrajectoryError(
-                f"waypoint times: the segment u = {u0:g} → {u1:g} needs at least {shortest:.4g} s "
-                f"at the legs' limits (x safety), the path gives {given:.4g} s"
-            )
-        pieces.append((i0, i1, shortest if given is None else given))
-    total = sum(d for *_, d in pieces)
-    limit = BOUNDS["plan.duration"].high
-    if not total <= limit:
-        raise TrajectoryError(
-            f"the motion would take {total:.4g} s (leg.max_speed, leg.max_acceleration, waypoint times), "
-            f"over the {limit:g} s a planned motion may last (plan.duration)"
-        )
-    counts = [max(1, math.ceil(d * rate - 1e-9)) for *_, d in pieces]
-    rows = sum(counts) + 1
-    if rows > BOUNDS["plan.samples"].high:
-        raise TrajectoryError(
-            f"{rows} output samples ({rate:g} Hz x {total:.4g} s) is over the "
-            f"{BOUNDS['plan.samples'].high:,.0f} a trajectory may hold: lower the rate"
-        )
-    times, s = [np.zeros(1)], [np.zeros(1)]
-    start = 0.0
-    for (i0, i1, d), c in zip(pieces, counts, strict=True):
-        tau = np.arange(1, c + 1) / c
-        times.append(start + d * tau)
-        s.append(i0 + (i1 - i0) * _quintic(tau)[0])
-        start += d
-    return np.concatenate(times), np.concatenate(s)
+#: How far inside the force limits the optimal law plans [N] (its force constraints hold on
+#: its grid; every output row is then checked against the limits themselves).
+FORCE_MARGIN = 1.0
+
+
+def _force_terms(am: AssemblerModel, plan: PlanResult, spline):
+    """``forces(grid)`` of :class:`~.time_law.TimingProblem`: the coefficients ``a, b, c`` of
+    every leg's force at the planned samples (their poses known), linear in between; at a
+    sample the two one-sided ``L''`` of the PCHIP give two rows of ``b`` (a and c repeated)."""
+    from ..dynamics import path_force_coefficients
+
+    m = len(plan.states)
+    knots = np.arange(m, dtype=float)
+    d1 = spline(knots, 1)
+    left, right = spline(np.clip(knots - 1e-9, 0, m - 1), 2), spline(np.clip(knots + 1e-9, 0, m - 1), 2)
+    A, BL, BR, C = (np.empty((m, d1.shape[1])) for _ in range(4))
+    for k, state in enumerate(plan.states):
+        a, b, c = path_force_coefficients(am, state.plates, d1[k], np.stack([left[k], right[k]]).reshape(2, am.n, 6))
+        A[k], BL[k], BR[k], C[k] = a.ravel(), b[0].ravel(), b[1].ravel(), c.ravel()
+
+    def forces(grid: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        k0 = np.clip(np.floor(grid).astype(int), 0, m - 2)
+        f = (grid - k0)[:, None]
+        a, c = (1 - f) * A[k0] + f * A[k0 + 1], (1 - f) * C[k0] + f * C[k0 + 1]
+        inner = (1 - f) * BR[k0] + f * BL[k0 + 1]
+        at = np.isclose(grid, np.round(grid), rtol=0, atol=1e-12)
+        kr = np.clip(np.round(grid).astype(int), 0, m - 1)
+        b1 = np.where(at[:, None], BL[kr], inner)
+        b2 = np.where(at[:, None], BR[kr], inner)
+        return np.hstack([a, a]), np.hstack([b1, b2]), np.hstack([c, c])
+
+    return forces
+
+
+def _problem(
+    am: AssemblerModel, plan: PlanResult, spline, v_max: float, a_max: float, grid_per_sample: int, law: str
+) -> TimingProblem:
+    leg = am.config.leg
+    return TimingProblem(
+        spline,
+        len(plan.states),
+        _pieces(plan),
+        v_max,
+        a_max,
+        -leg.max_compression + FORCE_MARGIN,
+        leg.max_tension - FORCE_MARGIN,
+        _force_terms(am, plan, spline) if law == "optimal" else None,
+        grid_per_sample,
+    )
 
 
 def time_parametrize(
@@ -148,6 +135,7 @@ def time_parametrize(
     grid_per_sample: int = 16,
     strict: bool = True,
     progress: ProgressCallback | None = None,
+    time_law: str = "quintic",
 ) -> Trajectory:
     """The trajectory of a plan: time law within the leg limits, resampled at ``rate``.
 
@@ -160,13 +148,15 @@ def time_parametrize(
         strict: raise when stack FK fails at an output sample; otherwise mark that sample
             infeasible (its pose and margins NaN) — for comparing plans that may be invalid.
         progress: called as ``(rows done, rows, note)`` while the rows are checked.
+        time_law: ``quintic`` or ``optimal`` (:mod:`.time_law`).
 
     Raises:
         TrajectoryError: fewer than 2 samples, settings out of their bounds, a motion that
             would last over ``plan.duration`` or hold over ``plan.samples`` rows, waypoint
-            times too short for the limits, or (strict) a failed FK.
+            times too short for the limits, limits that allow no motion (optimal law), or
+            (strict) a failed FK.
     """
-    return _timed(am, plan, rate, max_speed, max_acceleration, safety, grid_per_sample, strict, progress)[0]
+    return _timed(am, plan, rate, max_speed, max_acceleration, safety, grid_per_sample, strict, progress, time_law)[0]
 
 
 def _timed(
@@ -179,6 +169,7 @@ def _timed(
     grid_per_sample: int = 16,
     strict: bool = True,
     progress: ProgressCallback | None = None,
+    law: str = "quintic",
 ) -> tuple[Trajectory, np.ndarray]:
     """:func:`time_parametrize`, and the path sample index ``s`` of each row."""
     from scipy.interpolate import PchipInterpolator
@@ -197,8 +188,13 @@ def _timed(
         raise TrajectoryError("a trajectory needs a plan with at least 2 samples")
     L = plan.lengths.reshape(len(plan.states), -1)
     spline = PchipInterpolator(np.arange(len(L), dtype=float), L, axis=0)
-    times, s = _time_grid(spline, plan, rate, safety * v_max, safety * a_max, grid_per_sample)
+    problem = _problem(am, plan, spline, safety * v_max, safety * a_max, grid_per_sample, law)
+    schedule = time_law(law).schedule(problem, rate)
+    times, s, sd, sdd = schedule.times, schedule.s, schedule.s_dot[:, None], schedule.s_ddot[:, None]
     lengths = spline(s).reshape(len(times), am.n, 6)
+    d1 = spline(s, 1)
+    rates = (d1 * sd).reshape(lengths.shape)
+    accels = (spline(s, 2) * sd**2 + d1 * sdd).reshape(lengths.shape)
     u_of_s = np.interp(s, np.arange(len(L), dtype=float), plan.parameters)
     meta = {
         "complete": plan.success,
@@ -209,8 +205,9 @@ def _timed(
         "path_kind": plan.path.kind,
         "base": plan.states[0].plates.se3(0).homogeneous.tolist(),
         "waypoint_times": None if plan.path.times is None else [float(t) for t in plan.path.times],
+        "time_law": law,
     }
-    return evaluate_rows(am, plan, times, lengths, u_of_s, meta, strict, progress), s
+    return evaluate_rows(am, plan, times, lengths, u_of_s, meta, strict, progress, rates, accels), s
 
 
 def _plan_prefix(plan: PlanResult, m: int, why: str) -> PlanResult:
@@ -236,6 +233,7 @@ def _rows_prefix(traj: Trajectory, count: int) -> Trajectory:
         traj.feasible[:count],
         traj.platforms,
         dict(traj.meta),
+        None if traj.dynamic_forces is None else traj.dynamic_forces[:count],
     )
 
 
@@ -257,7 +255,7 @@ def _valid_prefix(
         if m < 2:
             return None, "no valid trajectory prefix"
         plan = _plan_prefix(plan, m, plan.reason)
-        traj, s = _timed(am, plan, rate, progress=progress)
+        traj, s = _timed(am, plan, rate, progress=progress, law=traj.meta.get("time_law", "quintic"))
     bad = first_bad_row(am, traj)
     if bad is None:
         return traj, f"the trajectory ends at rest at u = {plan.parameters[-1]:.4f}"
@@ -275,6 +273,7 @@ def plan_trajectory(
     rate: float = 50.0,
     refinements: int = 2,
     progress: ProgressCallback | None = None,
+    time_law: str = "auto",
 ) -> MotionResult:
     """Plan a path, time it, and check every output sample; when a check fails between the
     samples of a successful plan, plan again with steps half as long (up to ``refinements``
@@ -288,6 +287,10 @@ def plan_trajectory(
         rate: output samples per second [Hz] (bounds key ``plan.rate``).
         refinements: how many times the whole path may be planned again with half steps.
         progress: called as ``(done, total, note)`` while planning and checking.
+        time_law: ``quintic``, ``optimal`` (:mod:`.time_law`) or ``auto`` (default): the
+            shorter of the two whose every row holds (the optimal law tries
+            :data:`OPTIMAL_SAFETIES` of the limits in turn; with waypoint times only the
+            quintic law applies).
 
     Returns:
         A :class:`MotionResult`. Its trajectory holds valid rows only: the whole path when
@@ -300,6 +303,8 @@ def plan_trajectory(
     from .planner import PlanOptions, plan_path
 
     check_bound("plan.rate", rate, "rate", TrajectoryError)
+    if time_law not in (*TIME_LAWS, "auto"):
+        raise TrajectoryError(f"time_law must be one of {', '.join(TIME_LAWS)} or auto, got {time_law!r}")
     t0 = time.perf_counter()
     opts = checked_options(options, PlanOptions, "options")
     check_bound("plan.refinements", refinements, "refinements", TrajectoryError)
@@ -310,10 +315,9 @@ def plan_trajectory(
         if len(plan.states) < 2:
             return MotionResult(False, plan.reason, plan, None, [plan.reason], time.perf_counter() - t0)
         try:
-            traj, s = _timed(am, plan, rate, progress=progress)
+            traj, s, problems, durations = _best_timed(am, plan, rate, time_law, progress)
         except TrajectoryError as exc:  # a duration or row count over the bounds, waypoint times too short
             return MotionResult(False, str(exc), plan, None, [str(exc)], time.perf_counter() - t0)
-        problems = verify_trajectory(am, traj)
         if not problems or not plan.success or attempt == refinements:
             break
         opts = dataclasses.replace(
@@ -322,7 +326,59 @@ def plan_trajectory(
             rotation_step=opts.rotation_step / 2,
             max_leg_step=opts.max_leg_step / 2,
         )
-    return _answer(am, plan, traj, s, problems, rate, progress, t0)
+    result = _answer(am, plan, traj, s, problems, rate, progress, t0)
+    result.law_durations = durations
+    return result
+
+
+#: Fractions of the legs' limits the optimal law tries, in turn, until every row holds.
+OPTIMAL_SAFETIES = (0.95, 0.85, 0.7)
+
+
+def _best_timed(
+    am: AssemblerModel, plan: PlanResult, rate: float, choice: str, progress: ProgressCallback | None
+) -> tuple[Trajectory, np.ndarray, list[str], dict[str, float]]:
+    """The trajectory of ``choice`` (a law of :data:`TIME_LAWS`, or ``auto``: the shorter law
+    whose rows all hold, the other when they do not), its ``s``, its problems and the duration
+    each law tried reached [s] (or the reason it could not be used)."""
+    laws = list(TIME_LAWS) if choice == "auto" else [choice]
+    durations: dict[str, float] = {}
+    reasons: dict[str, str] = {}
+    order = []
+    for law in laws:
+        try:
+            durations[law] = _law_duration(am, plan, law)
+            order.append(law)
+        except TrajectoryError as exc:
+            reasons[law] = str(exc)
+    if not order:
+        raise TrajectoryError("; ".join(f"{k} time law: {v}" for k, v in reasons.items()))
+    order.sort(key=lambda law: durations[law])
+    best = None
+    for law in order:
+        for safety in OPTIMAL_SAFETIES if law == "optimal" else (0.95,):
+            traj, s = _timed(am, plan, rate, safety=safety, progress=progress, law=law)
+            problems = verify_trajectory(am, traj)
+            durations[law] = traj.duration
+            if not problems:
+                return traj, s, problems, durations
+            if best is None:
+                best = (traj, s, problems, durations)
+            if not plan.success:  # a failed plan's prefix: the first timing is the answer
+                return best
+    assert best is not None
+    return best
+
+
+def _law_duration(am: AssemblerModel, plan: PlanResult, law: str, safety: float = 0.95) -> float:
+    """The duration of ``law`` on the plan [s], without evaluating rows."""
+    from scipy.interpolate import PchipInterpolator
+
+    leg = am.config.leg
+    L = plan.lengths.reshape(len(plan.states), -1)
+    spline = PchipInterpolator(np.arange(len(L), dtype=float), L, axis=0)
+    problem = _problem(am, plan, spline, safety * leg.max_speed, safety * leg.max_acceleration, 16, law)
+    return time_law(law).duration(problem)
 
 
 def _answer(

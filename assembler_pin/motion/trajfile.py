@@ -3,18 +3,22 @@
 A file holds valid rows only (every constraint holds at every row) and says what a reader
 needs to refuse a truncated or edited one: its row count and the SHA-256 of its rows.
 
-* JSON: ``{"format": "assembler-pin trajectory", "version": 2, "meta": {...},
+* JSON: ``{"format": "assembler-pin trajectory", "version": 3, "meta": {...},
   "columns": [...], "rows": [[...], ...]}``.
-* CSV: ``# assembler-pin trajectory v2``, then ``# meta: {...}`` (the same meta as one JSON
+* CSV: ``# assembler-pin trajectory v3``, then ``# meta: {...}`` (the same meta as one JSON
   line), the column header, one line per row, and a last line ``# end: N rows``.
 
 ``meta`` holds ``platforms``, ``rows``, ``sha256`` (of the rows as little-endian float64,
 row-major), ``complete`` (false: the plan did not reach the end of the path and the file
 holds the valid prefix), ``reason``, ``rate_hz``, ``max_speed`` [m/s], ``max_acceleration``
 [m/s²], ``path_kind``, ``base`` (world pose of plate 0, 4×4) and ``waypoint_times`` [s]
-(null unless the path's waypoint times were honoured). Columns: ``t`` [s], the 6n leg
-lengths ``L_sp{j}_leg{i}`` [m], the EE pose as TAA ``ee_x … ee_rz`` [m, rad], ``max_abs_force``
-[N], the smallest margin of each constraint kind ``margin_*`` and ``feasible`` (1).
+(null unless the path's waypoint times were honoured) and ``time_law`` (``quintic`` or
+``optimal``, :mod:`.time_law`). Columns: ``t`` [s], the 6n leg lengths ``L_sp{j}_leg{i}`` [m],
+the EE pose as TAA ``ee_x … ee_rz`` [m, rad], ``max_abs_force`` [N] (statics), the 6n leg
+forces with the motion's own part ``F_sp{j}_leg{i}`` [N, tension positive], the smallest
+margin of each constraint kind ``margin_*`` (``force`` of the statics, ``force_dynamic`` with
+the motion's part) and ``feasible`` (1). Version 3 added ``time_law``, the ``F_*`` columns and
+``margin_force_dynamic``; older files are refused with a request to plan again.
 
 :func:`read_trajectory` checks the format (types, names, counts, checksum, finite numbers,
 times increasing from 0); :func:`~assembler_pin.motion.timing.check_trajectory` then holds
@@ -38,11 +42,21 @@ from ..exceptions import AssemblerError, TrajectoryError
 from ..files import read_text_bounded, write_atomic
 from ..naming import names
 
-__all__ = ["FORMAT", "MARGIN_KINDS", "VERSION", "Trajectory", "read_trajectory", "strict_json", "trajectory_columns"]
+__all__ = [
+    "FORMAT",
+    "MARGIN_KINDS",
+    "TIME_LAW_NAMES",
+    "VERSION",
+    "Trajectory",
+    "read_trajectory",
+    "strict_json",
+    "trajectory_columns",
+]
 
 FORMAT = "assembler-pin trajectory"
-VERSION = 2
-MARGIN_KINDS = ("stroke", "deflection", "rise", "force", "path_position", "path_rotation")
+VERSION = 3
+MARGIN_KINDS = ("stroke", "deflection", "rise", "force", "force_dynamic", "path_position", "path_rotation")
+TIME_LAW_NAMES = ("quintic", "optimal")
 _META_KEYS = {
     "platforms",
     "rows",
@@ -55,6 +69,7 @@ _META_KEYS = {
     "path_kind",
     "base",
     "waypoint_times",
+    "time_law",
 }
 _REPLAN = "plan it again with this version ('assembler-pin plan ... --out FILE')"
 
@@ -63,7 +78,8 @@ def trajectory_columns(platforms: int) -> list[str]:
     """Column names of a trajectory file for ``platforms`` Stewart platforms."""
     legs = [names.length_column(j, i) for j in range(platforms) for i in range(6)]
     ee = ["ee_x", "ee_y", "ee_z", "ee_rx", "ee_ry", "ee_rz"]
-    return ["t", *legs, *ee, "max_abs_force", *[f"margin_{k}" for k in MARGIN_KINDS], "feasible"]
+    forces = [names.force_column(j, i) for j in range(platforms) for i in range(6)]
+    return ["t", *legs, *ee, "max_abs_force", *forces, *[f"margin_{k}" for k in MARGIN_KINDS], "feasible"]
 
 
 @dataclass
@@ -74,14 +90,18 @@ class Trajectory:
         times: (T,) [s], from 0.
         lengths: (T, n, 6) leg lengths [m].
         ee: (T, 6) EE pose as TAA (position [m], rotation vector [rad]), from stack FK.
-        max_abs_force: (T,) max|F| [N].
+        max_abs_force: (T,) max|F| of the statics [N].
         margins: per constraint kind (:data:`MARGIN_KINDS`), (T,) the smallest margin over
             the legs: ``stroke`` [m], ``deflection`` [rad], ``rise`` [m], ``force`` [N]
-            (limit − |F|), ``path_position`` [m] and ``path_rotation`` [rad] (tolerance −
+            (limit − |F|, statics), ``force_dynamic`` [N] (the same with the motion's own
+            part), ``path_position`` [m] and ``path_rotation`` [rad] (tolerance −
             distance from the planned path); negative means violated.
         feasible: (T,) every constraint holds.
         platforms: n.
         meta: what the file's ``meta`` holds (see the module docstring).
+        dynamic_forces: (T, n, 6) leg forces with the motion's own part (static + inertial)
+            [N], tension positive (:func:`~assembler_pin.dynamics.inverse_dynamics_from_lengths`);
+            None: not computed (such a trajectory cannot be written).
     """
 
     times: np.ndarray
@@ -92,6 +112,14 @@ class Trajectory:
     feasible: np.ndarray
     platforms: int
     meta: dict = field(default_factory=dict)
+    dynamic_forces: np.ndarray | None = None
+
+    @property
+    def max_abs_dynamic_force(self) -> np.ndarray:
+        """(T,) max|F| with the motion's own part [N] (NaN when not computed)."""
+        if self.dynamic_forces is None:
+            return np.full(len(self.times), np.nan)
+        return np.abs(self.dynamic_forces).reshape(len(self.times), -1).max(axis=1)
 
     @property
     def duration(self) -> float:
@@ -127,12 +155,14 @@ class Trajectory:
         """(T, columns) the file's rows, in :meth:`columns` order."""
         T = len(self.times)
         margins = np.stack([self.margins[k] for k in MARGIN_KINDS], axis=1)
+        dynamic = np.full((T, 6 * self.platforms), np.nan) if self.dynamic_forces is None else self.dynamic_forces
         return np.hstack(
             [
                 self.times[:, None],
                 self.lengths.reshape(T, -1),
                 self.ee,
                 self.max_abs_force[:, None],
+                dynamic.reshape(T, -1),
                 margins,
                 self.feasible[:, None].astype(float),
             ]
@@ -238,6 +268,8 @@ def _parse_json(text: str) -> tuple[dict, list, list]:
 
 def _parse_csv(text: str) -> tuple[dict, list, list]:
     lines = text.splitlines()
+    if lines and lines[0].startswith(f"# {FORMAT} v") and lines[0] != f"# {FORMAT} v{VERSION}":
+        raise TrajectoryError(f"format {lines[0][2:]!r} is not v{VERSION}: {_REPLAN}")
     if lines and lines[0].startswith("t,L_sp"):
         raise TrajectoryError(f"written by an older version (no row count or checksum): {_REPLAN}")
     if not lines or lines[0] != f"# {FORMAT} v{VERSION}":
@@ -304,6 +336,8 @@ def _check_meta(meta: object) -> dict:
     wt = meta["waypoint_times"]
     if wt is not None and not (isinstance(wt, list) and all(map(_is_num, wt)) and np.isfinite(wt).all()):
         raise TrajectoryError("meta.waypoint_times must be null or a list of finite numbers [s]")
+    if meta["time_law"] not in TIME_LAW_NAMES:
+        raise TrajectoryError(f"meta.time_law must be one of {', '.join(TIME_LAW_NAMES)}")
     return meta
 
 
@@ -335,7 +369,11 @@ def _trajectory(meta: dict, columns: object, rows: list) -> Trajectory:
     legs = arr[:, 1 : 1 + 6 * n]
     if not (legs > 0).all() or not (arr[:, 7 + 6 * n] >= 0).all():
         raise TrajectoryError("leg lengths must be > 0 and max_abs_force >= 0")
-    margins = {k: arr[:, 8 + 6 * n + i] for i, k in enumerate(MARGIN_KINDS)}
+    dynamic = arr[:, 8 + 6 * n : 8 + 12 * n]
+    margins = {k: arr[:, 8 + 12 * n + i] for i, k in enumerate(MARGIN_KINDS)}
+    if not (margins["force_dynamic"] >= 0).all() or not (margins["force"] >= 0).all():
+        k = int(np.argmax((margins["force_dynamic"] < 0) | (margins["force"] < 0)))
+        raise TrajectoryError(f"row {k} has a negative force margin yet is marked feasible")
     return Trajectory(
         times=t.copy(),
         lengths=legs.reshape(-1, n, 6).copy(),
@@ -345,4 +383,5 @@ def _trajectory(meta: dict, columns: object, rows: list) -> Trajectory:
         feasible=np.ones(len(t), dtype=bool),
         platforms=n,
         meta=meta,
+        dynamic_forces=dynamic.reshape(-1, n, 6).copy(),
     )

@@ -567,6 +567,11 @@ TRAJECTORY_MUTATIONS: dict[str, tuple[str, tuple[str, ...]]] = {
     "platforms_mismatch": ("refuse", ("json",)),
     "meta_base_bad": ("refuse", ("json",)),
     "toplist": ("refuse", ("json",)),
+    "dynamic_force_nan": ("refuse", ("csv", "json")),
+    "dynamic_force_nudged": ("refuse", ("csv", "json")),
+    "time_law_unknown": ("refuse", ("json",)),
+    "time_law_missing": ("refuse", ("json",)),
+    "older_version": ("refuse", ("csv", "json")),
     "feasible_flag_cleared": ("any", ("csv",)),
     "extra_column": ("any", ("csv",)),
 }
@@ -602,6 +607,8 @@ def mutate_trajectory(name: str, fmt: str, original: str) -> bytes:
     if fmt == "json":
         return _mutate_json(name, original)
     pre, table, post = _parse_csv(original)
+    if name == "older_version":
+        pre = [pre[0].replace(" v3", " v2"), *pre[1:]]
     header, rows = table[0], table[1:]
     _mutate_table(name, header, rows)
     if name == "header_only":
@@ -656,6 +663,10 @@ def _mutate_table(name: str, header: list[str], rows: list[list]) -> None:
         header[a], header[b] = header[b], header[a]
     elif name == "ragged_row":
         del rows[mid][-3:]
+    elif name == "dynamic_force_nan":
+        rows[mid][col["F_sp1_leg2"]] = num(float("nan"))
+    elif name == "dynamic_force_nudged":
+        rows[mid][col["F_sp1_leg2"]] = num(float(rows[mid][col["F_sp1_leg2"]]) + 1.0)
     elif name == "feasible_flag_cleared":
         rows[mid][col["feasible"]] = num(0.0)
     elif name == "extra_column":
@@ -679,6 +690,12 @@ def _mutate_json(name: str, original: str) -> bytes:
         doc.setdefault("meta", {})["base"] = [[1.0, 0.0], [0.0, "x"]]
     elif name == "toplist":
         return json.dumps([doc]).encode()
+    elif name == "time_law_unknown":
+        doc["meta"]["time_law"] = "fastest"
+    elif name == "time_law_missing":
+        del doc["meta"]["time_law"]
+    elif name == "older_version":
+        doc["version"] = 2
     elif name == "header_only":
         doc["rows"] = []
     else:
