@@ -315,20 +315,26 @@ def config_from_dict(data: Mapping[str, Any] | None) -> AssemblerConfig:
     return AssemblerConfig(**kwargs)
 
 
-def _read_text(path: Path, short_path: str) -> str:
-    """The text of a configuration file, at most :data:`MAX_CONFIG_BYTES` of UTF-8."""
+def read_text_file(path: Path, shown: str, what: str, max_bytes: int, error: type[Exception]) -> str:
+    """The UTF-8 text of the file at ``path``, at most ``max_bytes`` bytes (a configuration or a
+    model file).
+
+    Raises:
+        error: one line naming ``what`` and ``shown`` (the path as the user gave it): the file
+            cannot be read, is larger than ``max_bytes`` or is not UTF-8 text.
+    """
     try:
         with path.open("rb") as f:
-            raw = f.read(MAX_CONFIG_BYTES + 1)
+            raw = f.read(max_bytes + 1)
     except (OSError, ValueError) as exc:  # ValueError: a NUL in the path
         why = getattr(exc, "strerror", None) or exc
-        raise ConfigError(shorten(f"cannot read config file '{short_path}': {why}")) from None
-    if len(raw) > MAX_CONFIG_BYTES:
-        raise ConfigError(f"config file '{short_path}' is larger than {MAX_CONFIG_BYTES} bytes")
+        raise error(shorten(f"cannot read {what} '{shown}': {why}")) from None
+    if len(raw) > max_bytes:
+        raise error(f"{what} '{shown}' is larger than {max_bytes} bytes")
     try:
         return raw.decode("utf-8")
     except UnicodeDecodeError:
-        raise ConfigError(f"config file '{short_path}' is not UTF-8 text") from None
+        raise error(f"{what} '{shown}' is not UTF-8 text") from None
 
 
 def load_config(source: str | Path | Mapping[str, Any] | AssemblerConfig | None = None) -> AssemblerConfig:
@@ -353,7 +359,7 @@ def load_config(source: str | Path | Mapping[str, Any] | AssemblerConfig | None 
         )
     path = Path(source)
     short_path = shorten(path.name, 40)
-    text = _read_text(path, short_path)
+    text = read_text_file(path, short_path, "config file", MAX_CONFIG_BYTES, ConfigError)
     data = load_yaml(text, f"config file '{short_path}'")
     try:
         return config_from_dict(data)

@@ -4,7 +4,8 @@ The optimizer needs the actuator forces, leg lengths, joint deflections, rise an
 plate angular deviations *and their exact derivatives* with respect to the plate poses.
 Differentiating the Pinocchio system ``g(q) = Sᵀτ + J_cᵀλ`` needs second-order kinematics
 and a correction for the world-fixed closure forces; the same equilibrium written per
-platform in closed form differentiates in a few vectorized lines, so this module uses it:
+platform in closed form (:mod:`assembler_pin.closed_form`) differentiates in a few
+vectorized lines, so this module uses it:
 
 * each leg (motor + shaft, a universal joint at the bottom, a ball at the top) balances
   its own weight: the ball force's component across the leg is
@@ -16,8 +17,10 @@ platform in closed form differentiates in a few vectorized lines, so this module
   its moment about the world origin);
 * the actuator force (tension positive) is ``F_i = a_i + m_s g·u_i``.
 
-The tests hold these forces to :func:`~assembler_pin.statics.solve_statics` (Pinocchio)
-and every derivative to finite differences of the Pinocchio statics.
+The values come from the closed form and from the one set of leg measures
+(:mod:`assembler_pin.kinematics.legs`); only their derivatives are written here. The tests
+hold these forces to :func:`~assembler_pin.statics.solve_statics` (Pinocchio) and every
+derivative to finite differences of the Pinocchio statics.
 
 Derivatives are taken with respect to a **world twist** ``η_k = (v, ω)`` of each plate
 k = 1..n (``T_k ← exp6(η_k) · T_k``), columns ``6(k-1) .. 6k-1``; plate 0 is fixed.
@@ -30,8 +33,9 @@ from typing import Any
 
 import numpy as np
 
-from .kinematics import PlateArrays, PlateDeviation, plate_deviation
-from .linalg import cross, inverse_or_nan, skew
+from .closed_form import Equilibrium, equilibrium
+from .kinematics import PlateArrays, PlateDeviation, legs, plate_deviation
+from .linalg import cross, skew
 from .model import AssemblerModel
 
 __all__ = [
@@ -49,16 +53,33 @@ _I3 = np.eye(3)
 
 
 @dataclass(frozen=True)
-class PoseDerivatives:
-    """Values and derivatives (last axis: 6n world-twist columns of plates 1..n).
+class LegDerivatives:
+    """Leg lengths, deflection cosines and rise of a stack pose with their derivatives
+    (last axis: the 6n world-twist columns of plates 1..n).
 
     Attributes:
-        forces, d_forces: (n, 6) actuator forces [N, tension positive] and (n, 6, 6n).
         lengths, d_lengths: (n, 6) [m] and (n, 6, 6n).
         cos_deflection, d_cos_deflection: (n, 6, 2) cosines of the bottom / top joint
             deflections and (n, 6, 2, 6n).
         rise, d_rise: (n, 6) height of each top joint above its bottom joint in the
             bottom plate's frame [m] and (n, 6, 6n).
+    """
+
+    lengths: np.ndarray
+    d_lengths: np.ndarray
+    cos_deflection: np.ndarray
+    d_cos_deflection: np.ndarray
+    rise: np.ndarray
+    d_rise: np.ndarray
+
+
+@dataclass(frozen=True)
+class PoseDerivatives(LegDerivatives):
+    """The :class:`LegDerivatives` with the statics and the plate angles (last axis: 6n
+    world-twist columns of plates 1..n).
+
+    Attributes:
+        forces, d_forces: (n, 6) actuator forces [N, tension positive] and (n, 6, 6n).
         plate_angles, d_plate_angles_sq: (n,) angle λ_k between ``p_k - p_{k-1}`` and the
             rest direction of plate k on plate k-1 [rad] (paper eq. 9), and the
             derivative of λ_k² (n, 6n) — smooth where λ_k itself is not.
@@ -66,12 +87,6 @@ class PoseDerivatives:
 
     forces: np.ndarray
     d_forces: np.ndarray
-    lengths: np.ndarray
-    d_lengths: np.ndarray
-    cos_deflection: np.ndarray
-    d_cos_deflection: np.ndarray
-    rise: np.ndarray
-    d_rise: np.ndarray
     plate_angles: np.ndarray
     d_plate_angles_sq: np.ndarray
 
@@ -115,12 +130,13 @@ def _rest_directions(home: np.ndarray, R: np.ndarray) -> tuple[np.ndarray, np.nd
     return np.matmul(home, R[:-1].transpose(0, 2, 1)), np.matmul(home, R[1:].transpose(0, 2, 1))
 
 
-def _cos_and_rise(
-    R: np.ndarray, d: np.ndarray, u: np.ndarray, h_bottom: np.ndarray, h_top: np.ndarray
+def _deflection_and_rise(
+    am: AssemblerModel, R: np.ndarray, u: np.ndarray, L: np.ndarray
 ) -> tuple[np.ndarray, np.ndarray]:
-    """Cosines of the bottom / top joint deflections (n, 6, 2) and the rise (n, 6) [m]."""
-    cos = np.stack([np.einsum("jik,jik->ji", u, h_bottom), np.einsum("jik,jik->ji", u, h_top)], axis=-1)
-    return cos, np.einsum("jk,jik->ji", R[:-1, :, 2], d)
+    """Cosines of the bottom / top joint deflections (n, 6, 2) and the rise (n, 6) [m] of legs
+    of world directions ``u`` and lengths ``L`` (:mod:`~assembler_pin.kinematics.legs`)."""
+    in_bottom, in_top = legs.directions_in_plates(u, R[:-1], R[1:])
+    return legs.deflection_cosines(in_bottom, in_top, am.geometry.home_direction), legs.leg_rise(in_bottom, L)
 
 
 def _deflection_and_rise_derivatives(
@@ -151,128 +167,21 @@ def _deflection_and_rise_derivatives(
     return np.stack([d_cos_b, d_cos_t], axis=2), d_rise
 
 
-@dataclass(frozen=True)
-class LegDerivatives:
-    """Leg lengths, deflection cosines and rise of a stack pose with their derivatives
-    (last axis: the 6n world-twist columns of plates 1..n; see :class:`PoseDerivatives`)."""
-
-    lengths: np.ndarray
-    d_lengths: np.ndarray
-    cos_deflection: np.ndarray
-    d_cos_deflection: np.ndarray
-    rise: np.ndarray
-    d_rise: np.ndarray
-
-
 def leg_derivatives(am: AssemblerModel, pa: PlateArrays) -> LegDerivatives:
     """The kinematic part of :func:`pose_derivatives` alone (no statics): lengths [m],
     deflection cosines (n, 6, 2), rise [m] and their derivatives w.r.t. the world twists
     of plates 1..n."""
     geo = am.geometry
     R, p = pa.R, pa.p
-    b = np.matmul(geo.bottom_in_plate, np.swapaxes(R[:-1], -1, -2)) + p[:-1, None, :]
-    t = np.matmul(geo.top_in_plate, np.swapaxes(R[1:], -1, -2)) + p[1:, None, :]
+    b, t = legs.leg_points(geo, R, p)
     d = t - b
-    L = np.sqrt(np.einsum("...k,...k->...", d, d))
+    L = legs.leg_lengths(d)
     u = d / L[..., None]
     _, _, dd, dL, du = _leg_jacobians(b, t, L, u)
     h_bottom, h_top = _rest_directions(geo.home_direction, R)
-    cos, rise = _cos_and_rise(R, d, u, h_bottom, h_top)
+    cos, rise = _deflection_and_rise(am, R, u, L)
     d_cos, d_rise = _deflection_and_rise_derivatives(R, d, u, h_bottom, h_top, dd, du)
     return LegDerivatives(L, dL, cos, d_cos, rise, d_rise)
-
-
-@dataclass(frozen=True)
-class Equilibrium:
-    """The closed-form equilibrium of stacks (module docstring), leading batch axes ``...``.
-
-    Attributes:
-        b, t: (..., n, 6, 3) bottom and top joint centres, world [m].
-        d, L, u: leg vectors [m], lengths [m] and unit directions.
-        gu: (..., n, 6) gravity along each leg [m/s²].
-        g_perp, s, f_perp: gravity across the leg, the leg's mass factor [kg] and the
-            transverse ball force [N].
-        up_force, up_moment: (..., n, 3) weight above each top plate [N] and its moment
-            about the world origin [N·m].
-        K: (..., n, 6, 6) the lines of the legs (rows [u; t × u], a column per leg).
-        a: (..., n, 6) axial ball-force components [N]; forces: actuator forces [N, tension +].
-    """
-
-    b: np.ndarray
-    t: np.ndarray
-    d: np.ndarray
-    L: np.ndarray
-    u: np.ndarray
-    gu: np.ndarray
-    g_perp: np.ndarray
-    s: np.ndarray
-    f_perp: np.ndarray
-    motor_c: np.ndarray
-    shaft_c: np.ndarray
-    payload_point: np.ndarray
-    up_force: np.ndarray
-    up_moment: np.ndarray
-    K: np.ndarray
-    a: np.ndarray
-    forces: np.ndarray
-
-
-def equilibrium(
-    am: AssemblerModel, R: np.ndarray, p: np.ndarray, inverse: bool = False
-) -> tuple[Equilibrium, np.ndarray | None]:
-    """The closed-form statics of one stack (R (n+1, 3, 3), p (n+1, 3)) or of a batch
-    (R (B, n+1, 3, 3), p (B, n+1, 3)), vectorized over the batch and the platforms.
-
-    Returns:
-        The :class:`Equilibrium`, and with ``inverse`` the inverses of ``K`` (for condition
-        numbers); a singular ``K`` gives NaN forces (and NaN inverses).
-    """
-    cfg, geo = am.config, am.geometry
-    n, leg = am.n, cfg.leg
-    g = np.array([0.0, 0.0, -cfg.gravity])
-    b = np.matmul(geo.bottom_in_plate, np.swapaxes(R[..., :-1, :, :], -1, -2)) + p[..., :-1, None, :]
-    t = np.matmul(geo.top_in_plate, np.swapaxes(R[..., 1:, :, :], -1, -2)) + p[..., 1:, None, :]
-    d = t - b
-    L = np.sqrt(np.einsum("...k,...k->...", d, d))
-    u = d / L[..., None]
-    gu = u @ g
-    g_perp = g - gu[..., None] * u
-    lever = leg.motor_com * leg.motor_mass - leg.shaft_com * leg.shaft_mass
-    s = leg.shaft_mass + lever / L
-    f_perp = -s[..., None] * g_perp
-    mg_plate = cfg.plate.mass * g
-    payload_point = np.einsum("...ab,b->...a", R[..., n, :, :], np.array([0.0, 0.0, cfg.payload.offset])) + p[..., n, :]
-    motor_c = b + leg.motor_com * u
-    shaft_c = t - leg.shaft_com * u
-    batch = R.shape[:-3]
-    level_moment = np.zeros((*batch, n + 1, 3))  # level k: plate k, legs of SP k, payload (k = n)
-    level_force = np.zeros((*batch, n + 1, 3))
-    level_moment[..., 1:, :] = cross(p[..., 1:, :], mg_plate)
-    level_force[..., 1:, :] = mg_plate
-    level_moment[..., :n, :] += cross((leg.motor_mass * motor_c + leg.shaft_mass * shaft_c).sum(axis=-2), g)
-    level_force[..., :n, :] += 6 * (leg.motor_mass + leg.shaft_mass) * g
-    level_moment[..., n, :] += cfg.payload.mass * cross(payload_point, g)
-    level_force[..., n, :] += cfg.payload.mass * g
-    # everything above plate j+1 = levels j+1 .. n  (reverse cumulative sums)
-    up_force = np.flip(np.cumsum(np.flip(level_force, -2), axis=-2), -2)[..., 1:, :]
-    up_moment = np.flip(np.cumsum(np.flip(level_moment, -2), axis=-2), -2)[..., 1:, :]
-    K = np.swapaxes(np.concatenate([u, cross(t, u)], axis=-1), -1, -2)  # (..., n, 6 rows, 6 legs)
-    rhs = np.concatenate([up_force - f_perp.sum(axis=-2), up_moment - cross(t, f_perp).sum(axis=-2)], axis=-1)
-    K_inv = None
-    if inverse:
-        K_inv = inverse_or_nan(K)
-        a = np.einsum("...ab,...b->...a", K_inv, rhs)
-    else:
-        try:
-            a = np.linalg.solve(K, rhs[..., None])[..., 0]
-        except np.linalg.LinAlgError:
-            K_inv = inverse_or_nan(K)
-            a = np.einsum("...ab,...b->...a", K_inv, rhs)
-    forces = a + leg.shaft_mass * gu
-    eq = Equilibrium(
-        b, t, d, L, u, gu, g_perp, s, f_perp, motor_c, shaft_c, payload_point, up_force, up_moment, K, a, forces
-    )
-    return eq, K_inv
 
 
 @dataclass(frozen=True)
@@ -288,8 +197,6 @@ class PoseValues:
         cos_deflection: (n, 6, 2) cosines of the bottom / top joint deflections.
         rise: (n, 6) height of each top joint above its bottom joint, bottom plate's frame [m].
         deviation: the plate-deviation angles λ_k and their vectors (paper eq. 9).
-        h_bottom, h_top: (n, 6, 3) each leg's rest direction in the world, as seen by its
-            bottom / top plate.
     """
 
     plates: PlateArrays
@@ -297,8 +204,6 @@ class PoseValues:
     cos_deflection: np.ndarray
     rise: np.ndarray
     deviation: PlateDeviation
-    h_bottom: np.ndarray
-    h_top: np.ndarray
 
     @property
     def forces(self) -> np.ndarray:
@@ -325,9 +230,8 @@ def pose_values(am: AssemblerModel, pa: PlateArrays) -> PoseValues:
             :func:`~assembler_pin.kinematics.plate_arrays`).
     """
     eq, _ = equilibrium(am, pa.R, pa.p)
-    h_bottom, h_top = _rest_directions(am.geometry.home_direction, pa.R)
-    cos, rise = _cos_and_rise(pa.R, eq.d, eq.u, h_bottom, h_top)
-    return PoseValues(pa, eq, cos, rise, plate_deviation(am, pa), h_bottom, h_top)
+    cos, rise = _deflection_and_rise(am, pa.R, eq.u, eq.L)
+    return PoseValues(pa, eq, cos, rise, plate_deviation(am, pa))
 
 
 def _transverse_force_derivatives(
@@ -421,7 +325,8 @@ def pose_derivatives(am: AssemblerModel, pa: PlateArrays, values: PoseValues | N
     dgu, df_perp = _transverse_force_derivatives(am, eq, dL, du)
     up_dmoment = _up_moment_derivatives(am, eq, pa.p, db, dt, du)
     da = _axial_force_derivatives(eq, dt, du, df_perp, up_dmoment)
-    d_cos, d_rise = _deflection_and_rise_derivatives(pa.R, eq.d, eq.u, v.h_bottom, v.h_top, dd, du)
+    h_bottom, h_top = _rest_directions(am.geometry.home_direction, pa.R)
+    d_cos, d_rise = _deflection_and_rise_derivatives(pa.R, eq.d, eq.u, h_bottom, h_top, dd, du)
     return PoseDerivatives(
         forces=eq.forces,
         d_forces=da + am.config.leg.shaft_mass * dgu,

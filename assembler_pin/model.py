@@ -21,7 +21,7 @@ from pathlib import Path
 import numpy as np
 import pinocchio as pin
 
-from .config import AssemblerConfig, PayloadConfig, load_config, load_yaml
+from .config import AssemblerConfig, PayloadConfig, load_config, load_yaml, read_text_file
 from .exceptions import ArgumentError, ConfigError, ModelFileError, short_repr
 from .geometry import LEGS_PER_PLATFORM, LegGeometry, home_plates, leg_geometry
 from .naming import names
@@ -322,17 +322,7 @@ MAX_MODEL_FILE_BYTES = 64 << 20
 
 def _read_model_file(path: Path) -> str:
     """The UTF-8 text of a URDF or sidecar file (at most :data:`MAX_MODEL_FILE_BYTES`)."""
-    try:
-        with path.open("rb") as f:
-            raw = f.read(MAX_MODEL_FILE_BYTES + 1)
-    except (OSError, ValueError) as exc:
-        raise ModelFileError(f"cannot read model file '{path.name}': {getattr(exc, 'strerror', None) or exc}") from None
-    if len(raw) > MAX_MODEL_FILE_BYTES:
-        raise ModelFileError(f"model file '{path.name}' is larger than {MAX_MODEL_FILE_BYTES} bytes")
-    try:
-        return raw.decode("utf-8")
-    except UnicodeDecodeError:
-        raise ModelFileError(f"model file '{path.name}' is not UTF-8 text") from None
+    return read_text_file(path, path.name, "model file", MAX_MODEL_FILE_BYTES, ModelFileError)
 
 
 def _string_list(sidecar: dict, key: str, origin: str, pairs: bool = False) -> list:

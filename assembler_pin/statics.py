@@ -29,6 +29,7 @@ import numpy as np
 import numpy.typing as npt
 import pinocchio as pin
 
+from .closed_form import CONDITION_LIMIT, is_singular, line_conditions
 from .exceptions import ArgumentError, PoseError, SingularConfigurationError
 from .kinematics import (
     LegState,
@@ -39,7 +40,7 @@ from .kinematics import (
     platform_configurations,
     q_from_arrays,
 )
-from .linalg import inverse_or_nan, skew
+from .linalg import skew
 from .model import AssemblerModel, checked_model
 from .platform_model import PlatformStatics, stack_gravity_terms
 from .validation import as_float_array
@@ -54,9 +55,6 @@ __all__ = [
     "solve_statics",
     "solve_statics_batch",
 ]
-
-CONDITION_LIMIT = 1e8
-"""Largest 1-norm condition number of a platform's reduced 6×6 statics system trusted."""
 
 
 @dataclass(frozen=True)
@@ -240,17 +238,6 @@ def _own_ball_forces(terms: PlatformStatics, top: np.ndarray) -> np.ndarray:
         ) from None
 
 
-def _raise_singular(condition: np.ndarray) -> None:
-    """Raise :class:`SingularConfigurationError` naming the worst platform of ``condition`` (n,)."""
-    worst = int(np.argmax(np.where(np.isfinite(condition), condition, np.inf)))
-    raise SingularConfigurationError(
-        f"platform {worst} is near a singular configuration (condition number "
-        f"{condition[worst]:.3g} > {CONDITION_LIMIT:.0g}); its forces are not defined",
-        float(condition[worst]),
-        worst,
-    )
-
-
 def solve_statics(
     am: AssemblerModel,
     plates: PlateArrays | Sequence | np.ndarray,
@@ -289,13 +276,9 @@ def solve_statics(
     lines = np.matmul(local, am.top_line_map)  # (n, 6, 2, 6): rows [a, t_i × a]
     lines_t = lines[:, :, 0]  # Wᵀ
     rhs = lines[:, :, 1].sum(axis=1) + terms.g_top
-    inverse_t = inverse_or_nan(lines_t)
+    inverse_t, condition = line_conditions(lines_t)  # ‖W‖₁ ‖W⁻¹‖₁
     tau = np.matmul(rhs[:, None], inverse_t)[:, 0]
-    # ‖W‖₁ ‖W⁻¹‖₁ from the transposes' row sums
-    condition = np.abs(lines_t).sum(axis=2).max(axis=1) * np.abs(inverse_t).sum(axis=2).max(axis=1)
-    singular = not condition.max() <= CONDITION_LIMIT  # NaN counts as singular
-    if singular and raise_on_singular:
-        _raise_singular(condition)
+    singular = is_singular(condition, raise_on_singular)
     ball = own - tau[..., None] * axis
     base = (terms.base_wrench_local.reshape(2, 3) @ pa.R[0].T).ravel()  # root free-flyer wrench, world axes
     return StaticsResult(-tau, ball, base, condition, singular)
@@ -305,7 +288,7 @@ def solve_statics_batch(am: AssemblerModel, plates: npt.ArrayLike, backend: str 
     """Actuator forces of B stacks at once, for maps and sweeps.
 
     Vectorized over the stacks and platforms with the closed-form equilibrium of
-    :func:`~assembler_pin.gradients.equilibrium` (each leg balances its own weight; each top
+    :func:`~assembler_pin.closed_form.equilibrium` (each leg balances its own weight; each top
     plate the weight above it and the six ball forces), which the tests hold to the
     Pinocchio statics of :func:`solve_statics` to 1e-9 N, singular stacks included.
 

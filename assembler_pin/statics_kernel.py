@@ -1,8 +1,8 @@
 """A compiled kernel of the closed-form statics, for batches of stacks and single stacks.
 
-The equilibrium is the one of :func:`~assembler_pin.gradients.equilibrium` (each leg
+The equilibrium is the one of :func:`~assembler_pin.closed_form.equilibrium` (each leg
 balances its own weight; the top plate of each platform the weight above it and the six
-ball forces; module docstring of :mod:`assembler_pin.gradients`), written as plain loops
+ball forces; module docstring of :mod:`assembler_pin.closed_form`), written as plain loops
 over the stacks, platforms and legs in :mod:`~assembler_pin.statics_loops` and compiled
 here by numba (``cache=True``: compiled once per install and Python version, then loaded
 from numba's cache). Per platform it solves the 6×6 system in the top plate's own frame
@@ -11,7 +11,7 @@ inverse gives the 1-norm condition number of :func:`~assembler_pin.statics.solve
 :func:`kernel_result` gives the whole :class:`~assembler_pin.statics.StaticsResult` of one
 stack (ball forces and base wrench too).
 
-The numpy path (:func:`~assembler_pin.gradients.equilibrium`) stays the reference and the
+The numpy path (:func:`~assembler_pin.closed_form.equilibrium`) stays the reference and the
 fallback: it is used when numba is not installed, when ``ASSEMBLER_PIN_STATICS=numpy`` is
 set in the environment, or with ``backend="numpy"``. The tests hold both, and
 :func:`kernel_result`, to Pinocchio's statics (:func:`~assembler_pin.statics.solve_statics`)
@@ -32,8 +32,9 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from . import statics_loops as loops
+from .closed_form import equilibrium, is_singular, line_conditions
 from .exceptions import OptionsError
-from .linalg import cross, inverse_or_nan
+from .linalg import cross
 from .model import AssemblerModel
 
 if TYPE_CHECKING:
@@ -65,31 +66,23 @@ ENV_VAR = "ASSEMBLER_PIN_STATICS"
 KERNEL_MIN_STACKS = 5000
 
 _kernel: Any = None  # the compiled function, once built (None: not yet; False: unavailable)
-_kernel_full: Any = None  # the compiled kernel with ball forces and base wrenches, once built
 _stack, _extras = loops._stack_py, loops._extras_py  # interpreted here; the kernels call compiled copies
+_NO_BALL, _NO_BASE = np.empty((1, 1, 1, 1)), np.empty((1, 1))  # placeholders of a forces-only call
 
 
-def _kernel_py(R, p, bottom, top, consts, forces, condition):  # pragma: no cover - compiled
+def _kernel_py(R, p, bottom, top, consts, forces, condition, ball, base, full):  # pragma: no cover - compiled
     """consts: :data:`~assembler_pin.statics_loops.CONSTANT_NAMES`. Fills forces (B, n, 6)
-    and condition (B, n), stack by stack (:func:`~assembler_pin.statics_loops._stack_py`)."""
+    and condition (B, n), stack by stack (:func:`~assembler_pin.statics_loops._stack_py`), and
+    with ``full`` the ball forces (B, n, 6, 3) and base wrenches (B, 6) too
+    (:func:`~assembler_pin.statics_loops._extras_py`; without, ``ball`` and ``base`` are not read)."""
     B, n = R.shape[0], R.shape[1] - 1
     lev_f, lev_m = np.zeros(n + 1), np.zeros((n + 1, 2))
     t, u, fp, gu = np.zeros((n, 6, 3)), np.zeros((n, 6, 3)), np.zeros((n, 6, 3)), np.zeros((n, 6))
     A, rhs, up = np.zeros((6, 12)), np.zeros(6), np.zeros(3)
     for s in range(B):
         _stack(R, p, bottom, top, consts, s, t, u, fp, gu, lev_f, lev_m, A, rhs, up, forces, condition)
-
-
-def _kernel_full_py(R, p, bottom, top, consts, forces, condition, ball, base):  # pragma: no cover - compiled
-    """:func:`_kernel_py` plus the ball forces (B, n, 6, 3) and base wrenches (B, 6)
-    (:func:`~assembler_pin.statics_loops._extras_py`)."""
-    B, n = R.shape[0], R.shape[1] - 1
-    lev_f, lev_m = np.zeros(n + 1), np.zeros((n + 1, 2))
-    t, u, fp, gu = np.zeros((n, 6, 3)), np.zeros((n, 6, 3)), np.zeros((n, 6, 3)), np.zeros((n, 6))
-    A, rhs, up = np.zeros((6, 12)), np.zeros(6), np.zeros(3)
-    for s in range(B):
-        _stack(R, p, bottom, top, consts, s, t, u, fp, gu, lev_f, lev_m, A, rhs, up, forces, condition)
-        _extras(R, p, s, consts, u, fp, gu, forces, lev_f, lev_m, ball, base)
+        if full:
+            _extras(R, p, s, consts, u, fp, gu, forces, lev_f, lev_m, ball, base)
 
 
 def _build_kernel() -> Any:
@@ -111,12 +104,9 @@ def _build_kernel() -> Any:
         ("_stack", loops._stack_py),
         ("_extras", loops._extras_py),
         ("_kernel", _kernel_py),
-        ("_kernel_full", _kernel_full_py),
     )
     for name, func in parts:  # callees first: the callers see them compiled
         scope[name] = jit(types.FunctionType(func.__code__, scope, func.__name__))
-    global _kernel_full
-    _kernel_full = scope["_kernel_full"]
     return scope["_kernel"]
 
 
@@ -162,16 +152,13 @@ def _constants(am: AssemblerModel) -> np.ndarray:
 
 
 def _numpy_forces(am: AssemblerModel, R: np.ndarray, p: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """The reference path: :func:`~assembler_pin.gradients.equilibrium` and the condition
-    number of the legs' lines in each top plate's frame."""
-    from .gradients import equilibrium
+    """The reference path: :func:`~assembler_pin.closed_form.equilibrium` and the condition
+    number of the legs' lines in each top plate's frame (:func:`~assembler_pin.closed_form.line_conditions`)."""
 
     eq, _ = equilibrium(am, R, p)
     u_local = np.einsum("bjka,bjik->bjia", R[:, 1:], eq.u)
     lines_t = np.concatenate([u_local, cross(am.geometry.top_in_plate, u_local)], axis=-1)  # (B, n, legs, 6)
-    inverse_t = inverse_or_nan(lines_t)
-    condition = np.abs(lines_t).sum(axis=-1).max(axis=-1) * np.abs(inverse_t).sum(axis=-1).max(axis=-1)
-    return eq.forces, condition
+    return eq.forces, line_conditions(lines_t)[1]
 
 
 def closed_form_forces(
@@ -196,15 +183,8 @@ def closed_form_forces(
     forces = np.empty((B, n, 6))
     condition = np.empty((B, n))
     geo = am.geometry
-    _kernel(
-        R,
-        p,
-        np.ascontiguousarray(geo.bottom_in_plate),
-        np.ascontiguousarray(geo.top_in_plate),
-        _constants(am),
-        forces,
-        condition,
-    )
+    bottom, top = np.ascontiguousarray(geo.bottom_in_plate), np.ascontiguousarray(geo.top_in_plate)
+    _kernel(R, p, bottom, top, _constants(am), forces, condition, _NO_BALL, _NO_BASE, False)
     return forces, condition
 
 
@@ -238,7 +218,7 @@ def kernel_statics(am: AssemblerModel, R: np.ndarray, p: np.ndarray) -> tuple[np
     ball, base = np.empty((B, n, 6, 3)), np.empty((B, 6))
     geo = am.geometry
     bottom, top = np.ascontiguousarray(geo.bottom_in_plate), np.ascontiguousarray(geo.top_in_plate)
-    _kernel_full(R, p, bottom, top, _constants(am), forces, condition, ball, base)
+    _kernel(R, p, bottom, top, _constants(am), forces, condition, ball, base, True)
     return forces, ball, base, condition
 
 
@@ -252,18 +232,9 @@ def kernel_result(am: AssemblerModel, pa: PlateArrays, raise_on_singular: bool =
         SingularConfigurationError: with ``raise_on_singular``, a platform's condition number
             exceeds the limit.
     """
-    from .exceptions import SingularConfigurationError
-    from .statics import CONDITION_LIMIT, StaticsResult
+    from .statics import StaticsResult
 
     forces, ball, base, condition = kernel_statics(am, pa.R[None], pa.p[None])
     condition = condition[0]
-    singular = not condition.max() <= CONDITION_LIMIT  # NaN counts as singular
-    if singular and raise_on_singular:
-        worst = int(np.argmax(np.where(np.isfinite(condition), condition, np.inf)))
-        raise SingularConfigurationError(
-            f"platform {worst} is near a singular configuration (condition number "
-            f"{condition[worst]:.3g} > {CONDITION_LIMIT:.0g}); its forces are not defined",
-            float(condition[worst]),
-            worst,
-        )
+    singular = is_singular(condition, raise_on_singular)
     return StaticsResult(forces[0], ball[0], base[0], condition, singular)

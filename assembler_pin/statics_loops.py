@@ -1,9 +1,9 @@
 """The closed-form statics as plain loops: the one source of the compiled kernel and of the
 pure-Python path.
 
-The equilibrium is the one of :func:`~assembler_pin.gradients.equilibrium` (each leg
+The equilibrium is the one of :func:`~assembler_pin.closed_form.equilibrium` (each leg
 balances its own weight; the top plate of each platform the weight above it and the six
-ball forces; module docstring of :mod:`assembler_pin.gradients`). The loops below use only
+ball forces; module docstring of :mod:`assembler_pin.closed_form`). The loops below use only
 scalar arithmetic, :mod:`math` and ``x[i, j, ...]`` indexing, so the same code runs
 
 * compiled by numba on numpy arrays (:mod:`~assembler_pin.statics_kernel` compiles copies

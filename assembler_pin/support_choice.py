@@ -38,6 +38,7 @@ from .kinematics import PlateArrays, leg_vectors, plate_arrays
 from .model import AssemblerModel
 from .statics import CONDITION_LIMIT
 from .supports import (
+    SupportAnswer,
     TwoPointStatics,
     ee_loaded_pose,
     held_plates,
@@ -225,7 +226,7 @@ def _minmax(eq: HeldEquilibrium, lo: np.ndarray, hi: np.ndarray) -> tuple[np.nda
 
 
 @dataclass(frozen=True)
-class ChosenDistribution:
+class ChosenDistribution(SupportAnswer):
     """The forces chosen by commanding length offsets (:func:`chosen_distribution`).
 
     Attributes:
@@ -259,11 +260,6 @@ class ChosenDistribution:
     success: bool
     message: str
 
-    @property
-    def max_abs_force(self) -> float:
-        """max |F| [N] (NaN on failure)."""
-        return float(np.abs(self.forces).max())
-
     def __repr__(self) -> str:
         return (
             f"ChosenDistribution(support={self.support!r}, success={self.success}, max|F| "
@@ -273,19 +269,10 @@ class ChosenDistribution:
 
     def to_dict(self) -> dict:
         """JSON-ready lists (NaN for a failed one: write it with ``cli.common.dumps``)."""
-        return {
-            "success": self.success,
-            "message": self.message,
-            "support": self.support,
-            "forces": self.forces.tolist(),
+        return self._shared_dict() | {
             "length_offsets": self.length_offsets.tolist(),
-            "commanded": self.commanded.tolist(),
-            "max_abs_force": self.max_abs_force,
-            "support_wrenches": {"base": self.base_wrench.tolist(), "ee": self.ee_wrench.tolist()},
-            "residual": self.residual,
             "check_error": self.check_error,
             "within_stroke": self.within_stroke,
-            "plates": self.plates.as_matrices().tolist(),
         }
 
 

@@ -96,8 +96,45 @@ def mechanism_message(support: str) -> str | None:
     return None
 
 
+class SupportAnswer:
+    """What the answers of a held stack share (:class:`TwoPointStatics`,
+    :class:`~assembler_pin.support_choice.ChosenDistribution`): the support, plates, forces
+    (n, 6) [N, tension positive], commanded lengths [m], the two support wrenches [N, N·m],
+    the residual, success and message (attributes of the dataclass using it)."""
+
+    support: str
+    plates: PlateArrays
+    forces: np.ndarray
+    commanded: np.ndarray
+    base_wrench: np.ndarray
+    ee_wrench: np.ndarray
+    residual: float
+    success: bool
+    message: str
+
+    @property
+    def max_abs_force(self) -> float:
+        """max |F| [N] (NaN on failure)."""
+        return float(np.abs(self.forces).max())
+
+    def _shared_dict(self) -> dict:
+        """The JSON-ready keys every held answer writes (NaN kept: write with ``cli.common.dumps``)."""
+        wrenches = {"base": self.base_wrench.tolist(), "ee": self.ee_wrench.tolist()}
+        return {
+            "success": self.success,
+            "message": self.message,
+            "support": self.support,
+            "forces": self.forces.tolist(),
+            "max_abs_force": self.max_abs_force,
+            "commanded": self.commanded.tolist(),
+            "support_wrenches": wrenches,
+            "plates": self.plates.as_matrices().tolist(),
+            "residual": self.residual,
+        }
+
+
 @dataclass(frozen=True)
-class TwoPointStatics:
+class TwoPointStatics(SupportAnswer):
     """The elastic equilibrium of the stack held at plate 0 and plate n (:func:`two_point_statics`).
 
     Attributes:
@@ -125,10 +162,7 @@ class TwoPointStatics:
     success: bool
     message: str
 
-    @property
-    def max_abs_force(self) -> float:
-        """max |F| [N] (NaN on failure)."""
-        return float(np.abs(self.forces).max())
+    support = "both"
 
     def __repr__(self) -> str:
         return (
@@ -139,17 +173,8 @@ class TwoPointStatics:
 
     def to_dict(self) -> dict:
         """JSON-ready lists (NaN for a failed one: write it with ``cli.common.dumps``)."""
-        return {
-            "success": self.success,
-            "message": self.message,
-            "support": "both",
-            "forces": self.forces.tolist(),
-            "max_abs_force": self.max_abs_force,
+        return self._shared_dict() | {
             "lengths": self.lengths.tolist(),
-            "commanded": self.commanded.tolist(),
-            "support_wrenches": {"base": self.base_wrench.tolist(), "ee": self.ee_wrench.tolist()},
-            "plates": self.plates.as_matrices().tolist(),
-            "residual": self.residual,
             "iterations": self.iterations,
             "stable": self.stable,
             "units": "N (tension positive), m; wrenches [f, m] on the held plate, world axes, N and N m",

@@ -161,3 +161,24 @@ def test_solve_starts_option_reaches_the_solver(capsys):
     assert len(err.splitlines()) == 1 and "--starts" in err and "first" in err
     assert main(["solve", "--goal", *goal, "--starts", "all", "--carrier", "ur5"]) == 2
     assert "not available with --carrier" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("entry", [(0, 0, 1.0000001), (3, 0, 1e-6), (1, 1, -1.0)])
+def test_a_plate_file_is_refused_by_the_librarys_own_pose_check(am, tmp_path, entry):
+    """A plate file's bad matrix gets the very refusal the library gives the same poses (one
+    pose check, one message), naming the same plate."""
+    from assembler_pin.cli.common import plates_from_file
+    from assembler_pin.exceptions import CLIError, PoseError
+    from assembler_pin.kinematics import plate_arrays
+
+    plates = [np.eye(4) for _ in range(am.n + 1)]
+    row, col, value = entry
+    plates[2][row, col] = value
+    path = tmp_path / "bad.json"
+    path.write_text(json.dumps({"plates": [m.tolist() for m in plates]}))
+    with pytest.raises(CLIError) as from_file:
+        plates_from_file(str(path))
+    with pytest.raises(PoseError) as from_library:
+        plate_arrays(am, plates)
+    assert str(from_file.value) == str(from_library.value)
+    assert str(from_file.value).startswith("plate 2: ")

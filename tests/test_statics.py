@@ -175,3 +175,24 @@ def test_a_data_of_another_model_is_refused(am):
     for data, match in ((other.create_data(), "another model"), ("data", "pinocchio.Data")):
         with pytest.raises(ArgumentError, match=match):
             solve_statics(am, am.home, data=data)
+
+
+def test_every_condition_number_is_numpys_one_norm_condition_of_the_leg_lines(am, random_poses):
+    """The statics and the elastic truss report the same condition number: numpy's 1-norm
+    condition of the 6×6 matrix whose columns are the legs' lines ``[u; r × u]`` (the statics
+    in each top plate's axes, the truss in world axes), rebuilt here from the joint centres."""
+    from assembler_pin.elastic import elastic_terms, line_conditions
+    from assembler_pin.kinematics import leg_state
+
+    for _, pa in (random_poses[2], random_poses[3]):
+        legs = leg_state(am, pa)
+        r_world = legs.top_points - pa.p[1:, None, :]  # top joints from each top plate's origin
+        statics_cond = solve_statics(am, pa).condition
+        truss_cond = line_conditions(elastic_terms(am, pa.R, pa.p, None, 1e5, hessian=False).lines)[1]
+        for j in range(am.n):
+            R = pa.R[j + 1]
+            u_loc, r_loc = legs.directions[j] @ R, r_world[j] @ R
+            W_local = np.vstack([u_loc.T, np.cross(r_loc, u_loc).T])
+            W_world = np.vstack([legs.directions[j].T, np.cross(r_world[j], legs.directions[j]).T])
+            assert statics_cond[j] == pytest.approx(np.linalg.cond(W_local, 1), rel=1e-9)
+            assert truss_cond[j] == pytest.approx(np.linalg.cond(W_world, 1), rel=1e-9)

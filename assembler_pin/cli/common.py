@@ -9,11 +9,11 @@ import argparse
 import json
 import math
 import os
-import sys
 from pathlib import Path
 from typing import TYPE_CHECKING
 
 from ..exceptions import CLIError
+from .plate_file import MAX_JSON_BYTES, plates_from_file, read_json  # noqa: F401 (re-exported)
 
 if TYPE_CHECKING:
     import numpy as np
@@ -57,135 +57,15 @@ def config_from_args(args: argparse.Namespace) -> AssemblerConfig:
     return load_config(args.config) if args.config else load_config()
 
 
-#: Largest JSON input read [bytes]: a plate file of 64 platforms is under 20 kB.
-MAX_JSON_BYTES = 16 << 20
-
-
-def _refuse_constant(name: str) -> float:
-    raise CLIError(f"{name} is not a number JSON allows (write finite numbers)")
-
-
-def _finite_float(text: str) -> float:
-    value = float(text)
-    if not math.isfinite(value):
-        raise CLIError(f"the number {text[:30]} is out of range (it overflows a float)")
-    return value
-
-
-def _unique_keys(pairs: list[tuple[str, object]]) -> dict:
-    out: dict = {}
-    for key, value in pairs:
-        if key in out:
-            raise CLIError(f"the key {json.dumps(key)[:40]} is given twice in one object")
-        out[key] = value
-    return out
-
-
-def read_json(source: str) -> object:
-    """Strict JSON from a file or stdin (``-``): no NaN/Infinity literals, no number that
-    overflows a float, no key given twice in an object; at most :data:`MAX_JSON_BYTES`.
-
-    Raises:
-        CLIError: one line naming ``source``.
-    """
-    try:
-        if source == "-":
-            raw = sys.stdin.buffer.read(MAX_JSON_BYTES + 1) if hasattr(sys.stdin, "buffer") else sys.stdin.read()
-        else:
-            with Path(source).open("rb") as f:
-                raw = f.read(MAX_JSON_BYTES + 1)
-        text = raw.decode("utf-8") if isinstance(raw, bytes) else raw
-    except OSError as exc:
-        raise CLIError(f"cannot read '{source}': {exc.strerror or exc}") from None
-    except (UnicodeDecodeError, ValueError):
-        raise CLIError(f"'{source}' is not UTF-8 text") from None
-    if len(text) > MAX_JSON_BYTES:
-        raise CLIError(f"'{source}' is larger than {MAX_JSON_BYTES} bytes")
-    try:
-        return json.loads(
-            text, object_pairs_hook=_unique_keys, parse_constant=_refuse_constant, parse_float=_finite_float
-        )
-    except CLIError as exc:
-        raise CLIError(f"'{source}': {exc}") from None
-    except json.JSONDecodeError as exc:
-        raise CLIError(f"'{source}' is not valid JSON: {exc}") from None
-    except RecursionError:
-        raise CLIError(f"'{source}' is nested too deeply to be a plate file") from None
-    except ValueError as exc:  # e.g. an integer of more digits than Python converts
-        raise CLIError(f"'{source}' holds a number that cannot be read: {str(exc)[:80]}") from None
-
-
-#: How far a plate file's rotation may be from orthonormal with det +1 (its bottom row must
-#: be [0, 0, 0, 1] to 1e-12).
-PLATE_FILE_TOL = 1e-9
-
-
-def _plate_matrix(k: int, plate: object) -> list[list[float]]:
-    """Plate ``k`` of a plate file as a 4×4 list of floats, refusing anything that is not."""
-    where = f"plate {k}"
-    if not (isinstance(plate, list) and len(plate) == 4 and all(isinstance(r, list) and len(r) == 4 for r in plate)):
-        raise CLIError(f"{where} must be a 4x4 matrix (a list of 4 rows of 4 numbers)")
-    for row in plate:
-        for x in row:
-            if isinstance(x, bool) or not isinstance(x, (int, float)):
-                shown = json.dumps(x)[:30]
-                raise CLIError(f"{where}: {shown} is not a number (write numbers, not strings or true/false)")
-            if not (isinstance(x, float) or abs(x) < 2**1023) or not math.isfinite(x):
-                raise CLIError(f"{where}: {str(x)[:30]} is not a finite number")
-    return [[float(x) for x in row] for row in plate]
-
-
-def _check_plate_matrix(k: int, m: list[list[float]]) -> None:
-    """Plate ``k``'s bottom row is [0, 0, 0, 1] and its 3×3 block a rotation, to :data:`PLATE_FILE_TOL`."""
-    import numpy as np
-
-    a = np.array(m)
-    if np.abs(a[3] - [0.0, 0.0, 0.0, 1.0]).max() > 1e-12:
-        raise CLIError(f"plate {k}: the bottom row must be [0, 0, 0, 1], got {a[3].tolist()}")
-    rot = a[:3, :3]
-    err = float(np.abs(rot.T @ rot - np.eye(3)).max())
-    det = float(np.linalg.det(rot))
-    if not (err <= PLATE_FILE_TOL and abs(det - 1.0) <= PLATE_FILE_TOL):
-        raise CLIError(
-            f"plate {k}: the 3x3 block is not a rotation (|RᵀR - I| = {err:.2g}, det = {det:.6g}); "
-            f"it must be orthonormal with det +1 to {PLATE_FILE_TOL:g}"
-        )
-
-
-def plates_from_file(source: str) -> list:
-    """The ``plates`` list of a JSON plate file (``{"plates": [n+1 4x4 world transforms]}``),
-    every matrix checked: 4×4 finite numbers (not strings, booleans or null), bottom row
-    [0, 0, 0, 1] (to 1e-12) and a rotation block (orthonormal, det +1, to :data:`PLATE_FILE_TOL`).
-
-    Raises:
-        CLIError: one line naming the plate index.
-    """
-    plates = _plates_of_document(read_json(source))
-    if not isinstance(plates, list) or not plates:
-        raise CLIError('"plates" must be a list of n+1 4x4 matrices, plate 0 first')
-    if len(plates) > 65:
-        raise CLIError(f'"plates" holds {len(plates)} matrices; a stack has at most 65 plates (64 platforms)')
-    out = []
-    for k, plate in enumerate(plates):
-        m = _plate_matrix(k, plate)
-        _check_plate_matrix(k, m)
-        out.append(m)
-    return out
-
-
-def _plates_of_document(doc: object) -> object:
-    """The plates of a plate file, or of a ``solve --json`` answer (its optimized pose, else the
-    helper arm's), which is accepted only when it says ``success: true``."""
-    if isinstance(doc, dict) and "plates" in doc:
-        return doc["plates"]
-    if isinstance(doc, dict) and "goal" in doc and ("optimized" in doc or "initial" in doc):
-        if doc.get("success") is not True:
-            raise CLIError("the solve answer holds no valid pose (its success is not true): solve a reachable goal")
-        for key in ("optimized", "initial"):
-            state = doc.get(key)
-            if isinstance(state, dict) and "plates" in state:
-                return state["plates"]
-    raise CLIError('the input must be a JSON object {"plates": [n+1 4x4 world transforms]} or a solve --json answer')
+def add_pose_source(
+    p: argparse.ArgumentParser, home_help: str = "use the home pose", required: bool = False
+) -> argparse._MutuallyExclusiveGroup:
+    """The pose's source, ``--plates FILE`` or ``--home`` (read by :func:`plates_from_args`), as
+    a mutually exclusive group the caller may add further sources to."""
+    src = p.add_mutually_exclusive_group(required=required)
+    src.add_argument("--plates", metavar="FILE", help='JSON {"plates": [n+1 4x4]} file, or - for stdin')
+    src.add_argument("--home", action="store_true", help=home_help)
+    return src
 
 
 def plates_from_args(args: argparse.Namespace, am: AssemblerModel, missing: str) -> list:

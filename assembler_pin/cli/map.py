@@ -104,8 +104,6 @@ def run(args: argparse.Namespace) -> int:
 
     Exit status 0 once every cell is computed, unreachable cells included (they are answers).
     """
-    import numpy as np
-
     from ..maps import read_map, run_map
 
     grid = _check_options(args)
@@ -125,12 +123,26 @@ def run(args: argparse.Namespace) -> int:
         if prog is not None:
             prog.close()
     table = read_map(args.out)
-    reach = np.asarray(table.column("reachable").to_pylist(), dtype=bool)
-    cap = np.asarray(table.column("capacity_kg").to_pylist(), dtype=float)
+    doc = _summary(args, table, len(grid) * len(configs), run)
+    if args.png or args.html:
+        _pictures(args, table, configs, doc)
+    if args.json:
+        print(dumps(doc))
+    else:
+        _print_summary(doc, run, table.num_rows)
+    return 0
+
+
+def _summary(args: argparse.Namespace, table, cells: int, run) -> dict[str, Any]:
+    """The answer's document: what was computed, how fast, and the ranges of the map's values."""
+    import numpy as np
+
     force = np.asarray(table.column("max_abs_force").to_pylist(), dtype=float)
-    doc: dict[str, Any] = {
+    cap = np.asarray(table.column("capacity_kg").to_pylist(), dtype=float)
+    reach = np.asarray(table.column("reachable").to_pylist(), dtype=bool)
+    return {
         "out": str(Path(args.out)),
-        "cells": len(grid) * len(configs),
+        "cells": cells,
         "computed": run.computed,
         "already_done": run.skipped,
         "workers": run.workers,
@@ -140,18 +152,17 @@ def run(args: argparse.Namespace) -> int:
         "max_abs_force_range": finite_range(force),
         "capacity_kg_range": finite_range(cap),
     }
-    if args.png or args.html:
-        _pictures(args, table, configs, doc)
-    if args.json:
-        print(dumps(doc))
-        return 0
+
+
+def _print_summary(doc: dict[str, Any], run, rows: int) -> None:
+    """The text answer of :func:`run` (``rows``: the cells the map file holds)."""
     print(
         wrapped(
             f"map: {doc['computed']} cells computed, {doc['already_done']} already in {doc['out']}; "
             f"{run.workers or 'no'} workers, {run.time_s:.1f} s ({run.cells_per_second:.2f} cells/s)"
         )
     )
-    print(f"reachable: {doc['reachable']} of {len(reach)} cells")
+    print(f"reachable: {doc['reachable']} of {rows} cells")
     if doc["max_abs_force_range"]:
         lo, hi = doc["max_abs_force_range"]
         print(f"optimized max|F|: {lo:.1f} – {hi:.1f} N")
@@ -161,4 +172,3 @@ def run(args: argparse.Namespace) -> int:
     for key in ("png", "html"):
         if key in doc:
             print(f"wrote {doc[key]}")
-    return 0

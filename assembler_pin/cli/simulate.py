@@ -11,6 +11,7 @@ from ..exceptions import CLIError
 if TYPE_CHECKING:
     from ..model import AssemblerModel
 from .common import (
+    add_pose_source,
     config_from_args,
     dumps,
     plates_from_args,
@@ -21,9 +22,7 @@ from .common import (
 def add_parser(add) -> None:
     """Register the ``simulate`` subcommand (``add`` makes a subparser with ``--config``)."""
     p = add("simulate", "hold a pose in MuJoCo with force-limited position actuators: EE drift, forces over time")
-    src = p.add_mutually_exclusive_group(required=True)
-    src.add_argument("--plates", metavar="FILE", help='JSON {"plates": [n+1 4x4]} file, or - for stdin')
-    src.add_argument("--home", action="store_true", help="hold the home pose")
+    src = add_pose_source(p, "hold the home pose", required=True)
     src.add_argument("--trajectory", metavar="FILE", help="run a trajectory written by 'plan --out' on the servos")
     p.add_argument("--seconds", type=float, default=2.0, help="simulated time [s] (default 2)")
     p.add_argument("--samples", type=int, default=50, help="stored samples (default 50)")

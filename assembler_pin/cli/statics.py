@@ -3,14 +3,11 @@
 from __future__ import annotations
 
 import argparse
-from typing import TYPE_CHECKING
 
 from ..exceptions import CLIError
-
-if TYPE_CHECKING:
-    pass
 from .common import (
     add_carrier_arguments,
+    add_pose_source,
     carrier_from_args,
     config_from_args,
     dumps,
@@ -23,9 +20,7 @@ from .common import (
 def add_parser(add) -> None:
     """Register the ``statics`` subcommand (``add`` makes a subparser with ``--config``)."""
     p = add("statics", "actuator forces of given plate poses (tension positive, newtons)")
-    src = p.add_mutually_exclusive_group()
-    src.add_argument("--plates", metavar="FILE", help='JSON {"plates": [n+1 4x4]} file, or - for stdin')
-    src.add_argument("--home", action="store_true", help="use the home pose")
+    add_pose_source(p)
     add_carrier_arguments(p, " (the plates are then relative to the base plate)")
     p.add_argument(
         "--stiffness",

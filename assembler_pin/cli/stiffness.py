@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 from typing import TYPE_CHECKING
 
-from .common import add_goal_arguments, config_from_args, dumps, goal_from_args, plates_from_args
+from .common import add_goal_arguments, add_pose_source, config_from_args, dumps, goal_from_args, plates_from_args
 
 if TYPE_CHECKING:
     from ..ee_stiffness import StiffnessResult
@@ -15,9 +15,7 @@ if TYPE_CHECKING:
 def add_parser(add) -> None:
     """Register the ``stiffness`` subcommand (``add`` makes a subparser with ``--config``)."""
     p = add("stiffness", "EE stiffness, compliance and sag under gravity and payload (legs of leg.stiffness N/m)")
-    src = p.add_mutually_exclusive_group()
-    src.add_argument("--plates", metavar="FILE", help='JSON {"plates": [n+1 4x4]} file, or - for stdin')
-    src.add_argument("--home", action="store_true", help="use the home pose")
+    src = add_pose_source(p)
     add_goal_arguments(src, " (the pose: solve's force optimum for it)")
     src.add_argument(
         "--scaling",

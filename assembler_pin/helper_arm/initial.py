@@ -9,7 +9,6 @@ import logging
 import math
 import time
 from collections.abc import Iterator
-from dataclasses import dataclass, field
 
 import numpy as np
 import numpy.typing as npt
@@ -18,7 +17,7 @@ import pinocchio as pin
 from ..constraints import GoalTolerance, evaluate_constraints
 from ..geometry import reach_bound
 from ..kinematics import PlateArrays, leg_state, to_se3
-from ..messages import binding, describe, number, one_line
+from ..messages import binding, describe, number
 from ..model import AssemblerModel
 from ..options import checked_options
 from ..state import StackState, evaluate_state
@@ -27,6 +26,7 @@ from .cache import ArmCache, arm_cache
 from .limits import cluster_limits, height_range
 from .link_lengths import link_length_scan
 from .options import HelperArmOptions
+from .outcome import Candidate, InitialConditionResult, Scan, failure_result, success_result, why_not
 from .repair import perturbed_plates, repair_stack
 
 __all__ = [
@@ -59,59 +59,6 @@ KINEMATIC_VIOLATIONS = frozenset(
 )
 
 
-@dataclass
-class InitialConditionResult:
-    """The initial pose of the stack for a goal, from the helper arm.
-
-    Attributes:
-        success: True only when the state satisfies every kinematic constraint
-            (:data:`KINEMATIC_VIOLATIONS`: leg limits, joint deflection, continuous
-            translation, EE at the goal, no singular platform). Force limits are *not*
-            required: they are reported in ``state`` (``state.feasible`` requires them too).
-        message: what happened; on failure one line naming the binding cause
-            (:mod:`~assembler_pin.messages`).
-        goal: the EE goal (world pose).
-        state: the valid state, or the home state (checked against the goal) on failure.
-        leg_lengths: (n, 6) leg lengths of ``state`` [m].
-        arm_q: (3n,) helper-arm joint angles used [rad] (on failure: of the last arm
-            solution tried, if any; None after a repair from the even screw pose).
-        link_length: the d of the arm used [m] (None on failure, and after a repair from
-            the even screw pose).
-        attempts: arm solves (values of d) tried.
-        time_s: wall time [s].
-        arm_points: (n+2, 3) world points of the arm used: base, the n clusters, tip
-            (None when no arm pose was used).
-        repaired: the plates are the arm's closest pose moved onto a valid stack pose
-            (then they are near, not exactly at, the arm's link midpoints).
-    """
-
-    success: bool
-    message: str
-    goal: pin.SE3
-    state: StackState
-    leg_lengths: np.ndarray
-    arm_q: np.ndarray | None
-    link_length: float | None
-    attempts: int
-    time_s: float
-    arm_points: np.ndarray | None = None
-    repaired: bool = False
-    details: str = ""
-    """Everything the scan and the repair met (the long form of a failure's message)."""
-
-    def __repr__(self) -> str:
-        d = f"{self.link_length:.4f} m" if self.link_length is not None else "-"
-        return (
-            f"InitialConditionResult(success={self.success}, max|F| {self.state.max_abs_force:.3f} N, d {d}, "
-            f"{self.attempts} attempts, {1e3 * self.time_s:.1f} ms{', repaired' if self.repaired else ''}, "
-            f"message={self.message!r})"
-        )
-
-    def plates_if_valid(self) -> PlateArrays | None:
-        """The valid state's plate poses, None when no valid initial condition was found."""
-        return self.state.plates if self.success else None
-
-
 def _kinematic_problems(
     am: AssemblerModel, pa: PlateArrays, goal: pin.SE3, tolerance: GoalTolerance
 ) -> tuple[StackState | None, str]:
@@ -124,39 +71,6 @@ def _kinematic_problems(
     if bad:
         return None, describe(binding(bad))
     return state, ""
-
-
-@dataclass
-class Candidate:
-    """An arm pose that gave no valid stack, kept as a start for the repair.
-
-    Attributes:
-        score: goal error [m + rad] plus the largest leg violation; lower is closer.
-        plates: world poses of plates 0..n (plate n at the goal).
-        q, link_length, points: the arm's joint angles [rad], d [m] and world points, or
-            None for a pose that did not come from the arm (the screw poses).
-    """
-
-    score: float
-    plates: list[pin.SE3]
-    q: np.ndarray | None = None
-    link_length: float | None = None
-    points: np.ndarray | None = None
-
-
-@dataclass
-class _Scan:
-    """What the d scan met, for the repair and the failure message."""
-
-    attempts: int = 0
-    broken: list[str] = field(default_factory=list)  # the arm reached the goal, the plates were invalid
-    closest: str = ""
-    closest_error: float = math.inf
-    closest_position: float = math.inf  # [m]
-    closest_rotation: float = math.inf  # [rad]
-    last_q: np.ndarray | None = None
-    last_points: np.ndarray | None = None
-    candidates: list[Candidate] = field(default_factory=list)
 
 
 @one_blas_thread
@@ -197,20 +111,20 @@ def initial_condition(
             f"no valid initial condition: unreachable: the goal is {number(distance, 'm')} from the base, "
             f"out of reach: farther than the stack can span ({reach:.4g} m)"
         )
-        return _failure(am, goal_se3, opts, why, _Scan(), t0)
-    scan = _Scan()
+        return failure_result(am, goal_se3, opts, why, Scan(), t0)
+    scan = Scan()
     d_values = link_length_scan(am.config.home_height, distance, am.n, opts.d_step, height_range(am.config))
     tried: set[tuple] = set()
     for limit in (min(CHEAP_SCAN, opts.max_attempts), opts.max_attempts):
         found = _scan_link_lengths(am, goal_se3, opts, arms, d_values, scan, limit)
         if found is not None:
-            return _success(found[0], goal_se3, found[1], scan.attempts, t0, repaired=False)
+            return success_result(found[0], goal_se3, found[1], scan.attempts, t0, repaired=False)
         # cheap first: the closest arm pose so far and the even screw pose, before the rest of the scan
         repairs = _repair_starts(am, goal_se3, opts, scan, cheap=limit < opts.max_attempts)
         done = _try_repairs(am, goal_se3, opts, repairs, tried, scan.attempts, t0)
         if done is not None:
             return done
-    return _failure(am, goal_se3, opts, _why_not(scan, repairs, opts), scan, t0, distance)
+    return failure_result(am, goal_se3, opts, why_not(scan, repairs, opts), scan, t0, distance)
 
 
 def _scan_link_lengths(
@@ -219,7 +133,7 @@ def _scan_link_lengths(
     opts: HelperArmOptions,
     arms: ArmCache,
     d_values: Iterator[float],
-    scan: _Scan,
+    scan: Scan,
     limit: int,
 ) -> tuple[StackState, Candidate] | None:
     """The paper's recursion over d: solve the arm from each next scan value of ``d_values``
@@ -263,7 +177,7 @@ def _scan_link_lengths(
 
 
 def _repair_starts(
-    am: AssemblerModel, goal: pin.SE3, opts: HelperArmOptions, scan: _Scan, cheap: bool = False
+    am: AssemblerModel, goal: pin.SE3, opts: HelperArmOptions, scan: Scan, cheap: bool = False
 ) -> list[Candidate]:
     """The poses the repair starts from: the arm's ``repair_starts`` closest poses, the even
     screw pose, and ``perturbed_starts`` seeded perturbations of it (the even pose is often a
@@ -313,103 +227,6 @@ def _try_repairs(
             continue
         state, why = _kinematic_problems(am, pa, goal, opts.tolerance)
         if state is not None:
-            return _success(state, goal, cand, attempts, t0, repaired=True)
+            return success_result(state, goal, cand, attempts, t0, repaired=True)
         logger.debug("repair from the pose at d=%s: %s", cand.link_length, why)
     return None
-
-
-def _success(
-    state: StackState, goal: pin.SE3, cand: Candidate, attempts: int, t0: float, repaired: bool
-) -> InitialConditionResult:
-    dt = time.perf_counter() - t0
-    d = cand.link_length
-    if d is None:
-        how = "repaired on the stack from the even screw pose (the arm's poses were not)"
-    elif repaired:
-        how = f"repaired on the stack from the helper arm's closest pose at link length d = {d:.4f} m"
-    else:
-        how = f"with link length d = {d:.4f} m"
-    logger.info("initial condition found (%s) after %d attempt(s) in %.1f ms", how, attempts, 1e3 * dt)
-    worst = binding(state.violations)
-    forces = "" if worst is None else f"; not feasible: {describe(worst)}"
-    how = how if worst is None else how.replace(" from the helper arm's closest pose at link length", " from")
-    return InitialConditionResult(
-        True,
-        one_line(f"valid initial condition {how} after {attempts} attempt(s){forces}"),
-        goal,
-        state,
-        state.leg_lengths.copy(),
-        None if cand.q is None else cand.q.copy(),
-        d,
-        attempts,
-        dt,
-        cand.points,
-        repaired,
-    )
-
-
-def _why_not(scan: _Scan, repairs: list[Candidate], opts: HelperArmOptions) -> str:
-    """The long form of a failure: what the scan and the repair met."""
-    if scan.attempts == 0:
-        why = "no link length within the heights an SP can have was tried"
-    elif scan.broken:
-        more = "; …" if len(scan.broken) > 3 else ""
-        listed = "; ".join(scan.broken[:3]) + more
-        why = f"the helper arm reached the goal only with plates that break a kinematic constraint ({listed})"
-    else:
-        why = f"the goal is out of the helper arm's reach within its joint limits ({scan.closest})"
-    if repairs:
-        why += (
-            f"; repairing {len(repairs) - 1 - opts.perturbed_starts} of its closest pose(s), the even screw pose "
-            f"and {opts.perturbed_starts} perturbed copies on the stack failed"
-        )
-    return why
-
-
-def _short_why(scan: _Scan, repaired: bool) -> str:
-    """The one-line cause of a failed scan (:mod:`~assembler_pin.messages`); ``repaired``:
-    a repair of the stack was tried too."""
-    tried = f"after {scan.attempts} attempt(s){', repair failed' if repaired else ''}"
-    head = "no valid initial condition: "
-    if scan.broken:
-        return f"{head}{scan.broken[0].split(': ', 1)[-1]} (where the helper arm reaches the goal; {tried})"
-    if math.isfinite(scan.closest_error):
-        pos, rot = number(1e3 * scan.closest_position, "mm"), number(math.degrees(scan.closest_rotation), "°")
-        return f"{head}unreachable: the helper arm comes no closer than {pos} and {rot} to the goal ({tried})"
-    return f"{head}unreachable: no link length within the heights an SP can have"
-
-
-def _failure(
-    am: AssemblerModel,
-    goal: pin.SE3,
-    opts: HelperArmOptions,
-    why: str,
-    scan: _Scan,
-    t0: float,
-    distance: float | None = None,
-) -> InitialConditionResult:
-    """The home pose, checked against the goal, with the reason."""
-    state = evaluate_state(am, am.home, goal=goal, tolerance=opts.tolerance)
-    if distance is None:  # answered before the scan
-        message = details = why
-    else:
-        d0, (lo, hi) = am.config.home_height, height_range(am.config)
-        details = (
-            f"no valid initial condition after {scan.attempts} attempt(s) (d from {d0:.4f} m, then from "
-            f"{min(max(distance / am.n, lo), hi):.4f} m, step {opts.d_step} m): {why}"
-        )
-        message = one_line(_short_why(scan, "repairing" in why))
-    logger.info("initial condition failed: %s", details)
-    return InitialConditionResult(
-        False,
-        message,
-        goal,
-        state,
-        state.leg_lengths.copy(),
-        scan.last_q,
-        None,
-        scan.attempts,
-        time.perf_counter() - t0,
-        scan.last_points,
-        details=details,
-    )

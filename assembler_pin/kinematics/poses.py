@@ -98,13 +98,13 @@ def to_se3(pose: pin.SE3 | npt.ArrayLike, what: str = "pose") -> pin.SE3:
     onto SO(3); one further off is refused.
 
     Raises:
-        PoseError: not 4×4, not finite, last row not [0 0 0 1], or not a rotation.
+        PoseError: not 4×4, not finite, bottom row not [0 0 0 1], or not a rotation.
     """
     matrix = pose.homogeneous if isinstance(pose, pin.SE3) else as_float_array(pose, f"{what} (a 4x4 matrix)", (4, 4))
     if not np.all(np.isfinite(matrix)):
         raise PoseError(f"{what} contains NaN or infinite values")
     if not np.abs(matrix[3] - [0.0, 0.0, 0.0, 1.0]).max() <= 1e-12:
-        raise PoseError(f"{what}: the last row must be [0, 0, 0, 1], got {matrix[3].tolist()}")
+        raise PoseError(f"{what}: the bottom row must be [0, 0, 0, 1], got {matrix[3].tolist()}")
     rot = matrix[:3, :3]
     errors, wrong = _rotation_errors(rot[None])
     if wrong is not None:
@@ -218,7 +218,7 @@ def checked_goal(goal: object, what: str = "goal") -> pin.SE3:
 
 def checked_rotations(matrices: np.ndarray, what: str = "plate") -> tuple[np.ndarray, np.ndarray]:
     """(m, 4, 4) homogeneous matrices → (R (m, 3, 3), p (m, 3)), checked all at once: finite,
-    last row ``[0, 0, 0, 1]`` (to 1e-12), rotation orthonormal and of det +1 to
+    bottom row ``[0, 0, 0, 1]`` (to 1e-12), rotation orthonormal and of det +1 to
     :data:`ORTHONORMAL_TOL` (then projected onto SO(3) where not exact to 1e-14).
 
     Raises:
@@ -230,7 +230,7 @@ def checked_rotations(matrices: np.ndarray, what: str = "plate") -> tuple[np.nda
     last = np.abs(matrices[:, 3] - np.array([0.0, 0.0, 0.0, 1.0])).max(axis=1) > 1e-12
     if last.any():
         k = int(np.argmax(last))
-        raise PoseError(f"{what} {k}: the last row must be [0, 0, 0, 1], got {matrices[k, 3].tolist()}")
+        raise PoseError(f"{what} {k}: the bottom row must be [0, 0, 0, 1], got {matrices[k, 3].tolist()}")
     R = matrices[:, :3, :3].copy()
     errors, wrong = _rotation_errors(R)
     if wrong is not None:
