@@ -108,7 +108,6 @@ class SolveResult:
             "goal": se3_to_taa(self.goal).tolist(),
             "success": self.success,
             "message": self.message,
-            "details": self.details,
             # the helper arm's state: the home pose, flagged by success false, when it failed
             "initial": self.initial_result.state.to_dict(),
         }
@@ -137,6 +136,7 @@ class SolveResult:
             }
         else:
             out["timing_s"] = dict(self.timing_s)
+        out["details"] = self.details  # the long form of message: every step met (may be long)
         return out
 
 
