@@ -35,7 +35,7 @@ from ..options import checked_options
 from ..progress import ProgressCallback
 from ..threads import one_blas_thread
 from .paths import EEPath
-from .planner import PlanResult
+from .planner import PlanOptions, PlanResult
 from .result import MotionResult, first_bad_row, verify_trajectory
 from .rows import check_trajectory, trajectory_states
 from .time_law import TIME_LAWS, TimingProblem, time_law
@@ -300,16 +300,10 @@ def plan_trajectory(
     Raises:
         TrajectoryError: ``rate`` out of its bounds (checked before planning).
     """
-    from .planner import PlanOptions, plan_path
+    from .planner import plan_path
 
-    check_bound("plan.rate", rate, "rate", TrajectoryError)
-    if time_law not in (*TIME_LAWS, "auto"):
-        raise TrajectoryError(f"time_law must be one of {', '.join(TIME_LAWS)} or auto, got {time_law!r}")
     t0 = time.perf_counter()
-    opts = checked_options(options, PlanOptions, "options")
-    check_bound("plan.refinements", refinements, "refinements", TrajectoryError)
-    if not isinstance(path, EEPath):
-        raise PathError(f"path must be an EEPath (EEPath.between(start, goal)), got {type(path).__name__}")
+    opts = _checked_plan_inputs(path, options, rate, refinements, time_law)
     for attempt in range(refinements + 1):
         plan = plan_path(am, path, start, opts, progress=progress)
         if len(plan.states) < 2:
@@ -329,6 +323,21 @@ def plan_trajectory(
     result = _answer(am, plan, traj, s, problems, rate, progress, t0)
     result.law_durations = durations
     return result
+
+
+def _checked_plan_inputs(
+    path: EEPath, options: PlanOptions | None, rate: float, refinements: int, time_law: str
+) -> PlanOptions:
+    """The planner's options of :func:`plan_trajectory`, or the error naming what is wrong
+    (every bound checked before planning)."""
+    check_bound("plan.rate", rate, "rate", TrajectoryError)
+    if time_law not in (*TIME_LAWS, "auto"):
+        raise TrajectoryError(f"time_law must be one of {', '.join(TIME_LAWS)} or auto, got {time_law!r}")
+    opts = checked_options(options, PlanOptions, "options")
+    check_bound("plan.refinements", refinements, "refinements", TrajectoryError)
+    if not isinstance(path, EEPath):
+        raise PathError(f"path must be an EEPath (EEPath.between(start, goal)), got {type(path).__name__}")
+    return opts
 
 
 #: Fractions of the legs' limits the optimal law tries, in turn, until every row holds.
