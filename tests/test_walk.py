@@ -284,3 +284,19 @@ def test_six_stacks_carry_a_body_and_its_capacity(am):
     assert not macro_statics(am, stacks, 1.01 * capacity, com).success
     with pytest.raises(ap.exceptions.WalkError):
         macro_statics(am, stacks, math.nan, com)
+
+
+# ---------------------------------------------------------------------- bench
+def test_bench_two_point_figures_name_each_call_its_time_and_target():
+    from assembler_pin.bench_speed import TWO_POINT_TARGETS_MS, benchmark_two_point
+
+    got = benchmark_two_point(platforms=(4,), repeat=2)
+    assert got["n4_two_point_statics_ok"] and got["n4_chosen_distribution_ok"]
+    for key in ("n4_two_point_statics", "n4_chosen_distribution"):
+        assert 0.0 < got[f"{key}_ms"] < 1e4
+        assert got[f"{key}_target_ms"] == TWO_POINT_TARGETS_MS[key]
+    assert TWO_POINT_TARGETS_MS == {
+        "n4_two_point_statics": 1.0,
+        "n64_two_point_statics": 50.0,
+        "n4_chosen_distribution": 5.0,
+    }
