@@ -6,7 +6,7 @@ import argparse
 from pathlib import Path
 
 from ..exceptions import CLIError
-from .common import config_from_args, dumps, progress_for
+from .common import config_from_args, dumps, progress_for, writable_parent
 
 
 def add_parser(add) -> None:
@@ -23,6 +23,12 @@ def add_parser(add) -> None:
     p.add_argument("--clearance", type=float, default=0.03, help="lift and pre-contact height [m] (default 0.03)")
     p.add_argument("--out", metavar="DIR", help="write walk.json and walk.csv (one row per sample) into DIR")
     p.add_argument("--plot", metavar="PNG", help="write max|F| over the walk with its phases marked")
+    p.add_argument(
+        "--html",
+        metavar="PAGE",
+        help="write a standalone page animating every sample (legs by force, held feet, footholds)",
+    )
+    p.add_argument("--fps", type=float, default=10.0, help="with --html: samples shown per second (default 10)")
     p.add_argument("--json", action="store_true", help="print one JSON object")
     p.set_defaults(func=run)
 
@@ -51,6 +57,7 @@ def _footholds(args: argparse.Namespace):
 def run(args: argparse.Namespace) -> int:
     """Exit 0 when the walk reaches its last foothold, 1 when it cannot (the valid prefix is
     still printed and written), 2 for refused input."""
+    from ..bounds import check_bound
     from ..model import AssemblerModel
     from ..walk import WalkOptions, plan_walk
 
@@ -60,6 +67,9 @@ def run(args: argparse.Namespace) -> int:
     out = Path(args.out) if args.out else None
     if out is not None and out.exists() and not out.is_dir():
         raise CLIError(f"--out '{out}' exists and is not a directory")
+    if args.html:
+        writable_parent(args.html, "--html file")
+    check_bound("walk.fps", args.fps, "--fps", CLIError)
     prog = progress_for(args, "walk")
     try:
         walk = plan_walk(am, feet, options=options, progress=prog)
@@ -70,6 +80,8 @@ def run(args: argparse.Namespace) -> int:
         write_walk(am, walk, out)
     if args.plot:
         plot_walk(walk, args.plot)
+    if args.html:
+        view_walk(am, walk, args.html, args.fps)
     print(dumps(doc) if args.json else format_walk(walk))
     return 0 if walk.success else 1
 
@@ -100,6 +112,21 @@ def write_walk(am, walk, out: Path) -> None:
     write_atomic(out / "walk.json", dumps(walk.to_dict()) + "\n")
     lines = [",".join(header)] + [",".join(str(x) for x in r) for r in rows]
     write_atomic(out / "walk.csv", "\n".join(lines) + "\n")
+
+
+def view_walk(am, walk, path: str, fps: float) -> None:
+    """The standalone page animating the walk (:meth:`~assembler_pin.viz.StackViewer.show_walk`),
+    written atomically; a walk without a sample writes none and says so on stderr."""
+    import sys
+
+    from ..viz import StackViewer
+
+    if not any(len(p.plates) for p in walk.phases):
+        print(f"walk: no sample to animate, {path} not written", file=sys.stderr)
+        return
+    with StackViewer(am) as viewer:
+        viewer.show_walk(walk, fps=fps)
+        viewer.static_html(path)
 
 
 def plot_walk(walk, path: str) -> None:
