@@ -20,6 +20,7 @@ import assembler_pin as ap
 from assembler_pin.walk import WalkOptions, WalkResult, plan_walk, plate_target, verify_walk
 from assembler_pin.walk.footholds import checked_footholds, floor_footholds
 from assembler_pin.walk.plan import _transfer_phase
+from assembler_pin.walk.samples import read_walk_csv
 
 
 def _weight(cfg) -> float:
@@ -189,6 +190,7 @@ def test_cli_walk_answers_refuses_and_writes_only_valid_files(capsys, tmp_path):
     assert doc["success"] is False and "out of reach" in doc["reason"]
     assert json.loads((out / "walk.json").read_text())["success"] is False
     assert (out / "walk.csv").read_text().count("\n") == 1  # the header alone: no sample is valid
+    assert len(read_walk_csv(out / "walk.csv", n=4)) == 0
     assert main(["walk", "--floor", "3", "2"]) == 1
     assert "not possible" in capsys.readouterr().out
     bad = tmp_path / "bad.json"
@@ -224,6 +226,10 @@ def test_cli_walk_one_step_writes_the_samples_and_the_figure(capsys, tmp_path, a
     assert len(lines) - 1 == sum(p["samples"] for p in doc["phases"])
     last = dict(zip(header, lines[-1].split(","), strict=True))
     assert last["kind"] == "transfer" and last["support"] == "both"
+    back = read_walk_csv(out / "walk.csv", n=am.n)
+    assert [(int(k), p) for k, p in zip(back.phase, back.kind, strict=True)] == [
+        (k, p["kind"]) for k, p in enumerate(doc["phases"]) for _ in range(p["samples"])
+    ]
     assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
 
 

@@ -87,31 +87,21 @@ def run(args: argparse.Namespace) -> int:
 
 
 def walk_rows(am, walk) -> tuple[list[str], list[list[object]]]:
-    """The CSV header and rows: one row per sample, its phase, support, max|F| [N] and the
-    commanded lengths [m] (the naming module's length columns)."""
-    from ..naming import names
+    """The CSV header and rows (:func:`assembler_pin.walk.samples.walk_rows`)."""
+    from ..walk.samples import walk_rows as rows
 
-    header = ["sample", "phase", "kind", "support", "foothold", "max_abs_force"]
-    header += [names.length_column(j, i) for j in range(am.n) for i in range(6)]
-    rows, count = [], 0
-    for k, phase in enumerate(walk.phases):
-        for i in range(len(phase.plates)):
-            peak = float(abs(phase.forces[i]).max())
-            rows.append([count, k, phase.kind, phase.support, phase.step, f"{peak:.6f}"])
-            rows[-1] += [f"{x:.9f}" for x in phase.commanded[i].ravel()]
-            count += 1
-    return header, rows
+    return rows(am, walk)
 
 
 def write_walk(am, walk, out: Path) -> None:
-    """``walk.json`` (the answer) and ``walk.csv`` (the samples) in ``out``, each atomically."""
+    """``walk.json`` (the answer) and ``walk.csv`` (the samples, read back by
+    :func:`~assembler_pin.walk.samples.read_walk_csv`) in ``out``, each atomically."""
     from ..files import write_atomic
+    from ..walk.samples import walk_csv
 
     out.mkdir(parents=True, exist_ok=True)
-    header, rows = walk_rows(am, walk)
     write_atomic(out / "walk.json", dumps(walk.to_dict()) + "\n")
-    lines = [",".join(header)] + [",".join(str(x) for x in r) for r in rows]
-    write_atomic(out / "walk.csv", "\n".join(lines) + "\n")
+    write_atomic(out / "walk.csv", walk_csv(am, walk))
 
 
 def view_walk(am, walk, path: str, fps: float) -> None:
