@@ -181,3 +181,13 @@ def test_cli_walk_html_refusals_and_a_walk_with_nothing_to_draw(tmp_path, capsys
     assert len(err) == 2 and "--fps" in err[0] and "does not exist" in err[1]
     assert main(["-q", "walk", "--floor", "5", "2", "--html", str(page)]) == 1  # out of reach at once
     assert "not written" in capsys.readouterr().err and not page.exists()
+
+
+def test_the_phase_is_named_frame_by_frame(walk, page):
+    _, _, cmds, clips, _ = page
+    kinds = [kind for _, _, _, kind, _ in _samples(walk)]
+    for kind in ("reach", "transfer", "swing"):
+        shown = [key["value"] for key in clips[f"/meshcat/assembler_walk/labels/{kind}"][".visible"]]
+        assert shown == [k == kind for k in kinds], kind
+    labels = [c for c in cmds if c["type"] == "set_object" and "/assembler_walk/labels/" in c["path"]]
+    assert len(labels) == 3 and all(c["object"]["textures"] for c in labels)  # the name is an image

@@ -38,6 +38,7 @@ __all__ = [
     "force_band_frame",
     "interpolate_states",
     "make_force_bands",
+    "make_phase_labels",
     "make_walk_markers",
     "phase_spans",
     "walk_frames",
@@ -249,12 +250,45 @@ def make_walk_markers(root, am: AssemblerModel, footholds: Sequence[pin.SE3]) ->
             node.set_property("visible", False)
 
 
+#: Width and height [m] of the phase label drawn above the walk.
+PHASE_LABEL_SIZE = (0.36, 0.09)
+
+
+def _label_png(text: str, rgb: np.ndarray) -> bytes:
+    """A PNG of ``text`` in ``rgb`` on white, 4:1 (matplotlib's Agg canvas)."""
+    import io
+
+    from matplotlib.figure import Figure
+
+    fig = Figure(figsize=(4.0, 1.0), dpi=100)
+    fig.patch.set_facecolor("white")
+    fig.text(0.5, 0.5, text, ha="center", va="center", size=56, weight="bold", color=tuple(rgb))
+    buf = io.BytesIO()
+    fig.savefig(buf, format="png", facecolor="white")
+    return buf.getvalue()
+
+
+def make_phase_labels(root, at: np.ndarray) -> None:
+    """Under the meshcat node ``root``: one hidden label per phase kind (``root/labels/<kind>``),
+    its name on a thin box at world point ``at`` [m] facing −y (the side camera), shown by
+    :func:`build_walk_animation` in the frames of that kind."""
+    w, h = PHASE_LABEL_SIZE
+    for kind, rgb in WALK_PHASE_RGB.items():
+        texture = mg.ImageTexture(image=mg.PngImage(_label_png(kind, rgb)))
+        node = root["labels"][kind]
+        node.set_object(mg.Box([w, 1e-3, h]), mg.MeshBasicMaterial(map=texture))
+        T = np.eye(4)
+        T[:3, 3] = at
+        node.set_transform(T)
+        node.set_property("visible", False)
+
+
 def build_walk_animation(viewer, frames: Sequence[WalkFrame], fps: float, markers: str):
     """The meshcat animation of a walk in a :class:`~assembler_pin.viz.StackViewer`: frame k
     places every body of the main stack and the payload rod at ``frames[k].plates``, shows each
     leg's force sleeve for the forces of its phase's support (sleeves by :func:`make_force_bands`)
-    and the held-foot disc of each held plate in the phase's colour (under ``markers``, made by
-    :func:`make_walk_markers`)."""
+    and the held-foot disc of each held plate in the phase's colour and the phase's name (under
+    ``markers``, made by :func:`make_walk_markers` and :func:`make_phase_labels`)."""
     am = viewer.am
     anim = meshcat.animation.Animation(default_framerate=fps)
     rod = am.config.payload.offset > 0 and am.config.payload.mass > 0
@@ -274,4 +308,6 @@ def build_walk_animation(viewer, frames: Sequence[WalkFrame], fps: float, marker
                     node.set_property("visible", "boolean", shown)
                     if shown:
                         node.set_transform(f.plates.se3(foot % (am.n + 1)).homogeneous @ _DISC)
+            for kind in WALK_PHASE_RGB:
+                frame[markers]["labels"][kind].set_property("visible", "boolean", kind == f.kind)
     return anim

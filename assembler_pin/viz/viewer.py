@@ -132,7 +132,8 @@ class StackViewer(StackScene):
         in order, at ``fps`` frames per second; each leg's force sleeve coloured by the forces of
         its phase's support, the held foot (plate 0, plate n, or both) marked by a disc in the
         phase's colour (:data:`~.animation.WALK_PHASE_RGB`), a brown disc at every foothold
-        (``{prefix}_walk/footholds/<k>``), and in the legend each phase with its frames and
+        (``{prefix}_walk/footholds/<k>``), the phase's name above the walk frame by frame
+        (``{prefix}_walk/labels/<kind>``), and in the legend each phase with its frames and
         seconds. The legs' own colour is the URDF's: the force is the sleeve's, its scale (the
         colour bar) the force limits. Returns the phases' spans.
 
@@ -149,7 +150,11 @@ class StackViewer(StackScene):
         self._add_root(self.scene_path("force_bands"))
         root = self.scene_path("walk")
         anim_mod.make_walk_markers(self.meshcat[root], self.am, walk.footholds)
-        self._add_root(root, np.array([f.translation for f in walk.footholds]))
+        feet = np.array([f.translation for f in walk.footholds])
+        top = max(float(pl.stack_points(self.am, f.plates)[:, 2].max()) for f in frames)
+        label = np.array([feet[:, 0].mean(), feet[:, 1].min(), top + 0.12])
+        anim_mod.make_phase_labels(self.meshcat[root], label)
+        self._add_root(root, np.vstack([feet, label]))
         animation = anim_mod.build_walk_animation(self, frames, fps, root)
         self.meshcat.set_animation(animation, play=play, repetitions=repetitions)
         step = max(1, len(frames) // 50)
