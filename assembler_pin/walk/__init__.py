@@ -1,5 +1,6 @@
 """Two-point support in motion: the stack turned around (:mod:`.turned`) and the inchworm walk
-(:mod:`.plan`, checked by :mod:`.verify`, its samples file :mod:`.samples`), and stacks joined to one body (:mod:`.macro`)."""
+(:mod:`.plan`, checked by :mod:`.verify`, its samples file :mod:`.samples`), and stacks joined
+to one body (:mod:`.macro`)."""
 
 from __future__ import annotations
 
