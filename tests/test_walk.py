@@ -215,8 +215,8 @@ def test_cli_walk_one_step_writes_the_samples_and_the_figure(capsys, tmp_path, a
     from assembler_pin.cli import main
     from assembler_pin.naming import names
 
-    out, png = tmp_path / "walk", tmp_path / "walk.png"
-    assert main(["walk", "--floor", "0.5", "2", "--out", str(out), "--plot", str(png)]) == 0
+    out, png, page = tmp_path / "walk", tmp_path / "walk.png", tmp_path / "walk.html"
+    assert main(["walk", "--floor", "0.5", "2", "--out", str(out), "--plot", str(png), "--html", str(page)]) == 0
     assert "success" in capsys.readouterr().out
     doc = json.loads((out / "walk.json").read_text())
     assert doc["success"] is True and [p["kind"] for p in doc["phases"]] == ["reach", "transfer"]
@@ -231,6 +231,18 @@ def test_cli_walk_one_step_writes_the_samples_and_the_figure(capsys, tmp_path, a
         (k, p["kind"]) for k, p in enumerate(doc["phases"]) for _ in range(p["samples"])
     ]
     assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    # the page: one frame per sample; plate 0 stays on foothold 0, plate n lands on foothold 1
+    from test_viewer import page_commands
+
+    anim = [c for c in page_commands(page.read_text()) if c["type"] == "set_animation"][-1]
+    clips = {
+        c["path"].rsplit("/", 1)[-1]: {t["name"]: t["keys"] for t in c["clip"]["tracks"]} for c in anim["animations"]
+    }
+    base, ee = (clips[f"{names.plate(k)}_0"][".position"] for k in (0, am.n))
+    assert len(base) == len(ee) == len(lines) - 1
+    assert max(np.abs(key["value"]).max() for key in base) < 1e-9
+    landed = plate_target(pin.SE3(np.eye(3), np.array([0.5, 0.0, 0.0])), "ee").translation
+    assert np.abs(np.array(ee[-1]["value"]) - landed).max() < 1e-6
 
 
 # ---------------------------------------------------------------------- the macro-configuration
