@@ -177,8 +177,9 @@ def test_cli_walk_html_refusals_and_a_walk_with_nothing_to_draw(tmp_path, capsys
     page = tmp_path / "walk.html"
     assert main(["walk", "--floor", "0.5", "3", "--fps", "0", "--html", str(page)]) == 2
     assert main(["walk", "--floor", "0.5", "3", "--html", str(tmp_path / "no" / "walk.html")]) == 2
+    assert main(["walk", "--floor", "0.5", "3", "--fps", "5"]) == 2
     err = capsys.readouterr().err.strip().splitlines()
-    assert len(err) == 2 and "--fps" in err[0] and "does not exist" in err[1]
+    assert len(err) == 3 and "--fps" in err[0] and "does not exist" in err[1] and "needs --html" in err[2]
     assert main(["-q", "walk", "--floor", "5", "2", "--html", str(page)]) == 1  # out of reach at once
     assert "not written" in capsys.readouterr().err and not page.exists()
 

@@ -8,6 +8,9 @@ from pathlib import Path
 from ..exceptions import CLIError
 from .common import config_from_args, dumps, progress_for, writable_parent
 
+DEFAULT_FPS = 10.0
+"""``walk --html``: samples of the walk shown per second, by default."""
+
 
 def add_parser(add) -> None:
     """Register the ``walk`` subcommand (``add`` makes a subparser with ``--config``)."""
@@ -28,7 +31,7 @@ def add_parser(add) -> None:
         metavar="PAGE",
         help="write a standalone page animating every sample (legs by force, held feet, footholds)",
     )
-    p.add_argument("--fps", type=float, default=10.0, help="with --html: samples shown per second (default 10)")
+    p.add_argument("--fps", type=float, help="with --html: samples shown per second (default 10)")
     p.add_argument("--json", action="store_true", help="print one JSON object")
     p.set_defaults(func=run)
 
@@ -69,7 +72,10 @@ def run(args: argparse.Namespace) -> int:
         raise CLIError(f"--out '{out}' exists and is not a directory")
     if args.html:
         writable_parent(args.html, "--html file")
-    check_bound("walk.fps", args.fps, "--fps", CLIError)
+    if args.fps is not None:
+        if not args.html:
+            raise CLIError("--fps needs --html (it sets the page's samples per second)")
+        check_bound("walk.fps", args.fps, "--fps", CLIError)
     prog = progress_for(args, "walk")
     try:
         walk = plan_walk(am, feet, options=options, progress=prog)
@@ -81,7 +87,7 @@ def run(args: argparse.Namespace) -> int:
     if args.plot:
         plot_walk(walk, args.plot)
     if args.html:
-        view_walk(am, walk, args.html, args.fps)
+        view_walk(am, walk, args.html, DEFAULT_FPS if args.fps is None else args.fps)
     print(dumps(doc) if args.json else format_walk(walk))
     return 0 if walk.success else 1
 
