@@ -10,6 +10,7 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import meshcat.animation
 import meshcat.geometry as mg
@@ -26,6 +27,9 @@ from .camera import cylinder_between
 from .colors import force_color, material
 from .drawing import payload_rod_transform
 from .placements import as_plates
+
+if TYPE_CHECKING:
+    from ..walk import WalkResult
 
 __all__ = [
     "FORCE_BAND_LENGTH",
@@ -206,7 +210,7 @@ class PhaseSpan:
         )
 
 
-def walk_frames(walk) -> list[WalkFrame]:
+def walk_frames(walk: WalkResult) -> list[WalkFrame]:
     """Every sample of every phase of a :class:`~assembler_pin.walk.WalkResult`, in order
     (the phases' plates are world poses of the original model's plates 0..n)."""
     return [

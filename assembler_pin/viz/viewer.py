@@ -6,6 +6,8 @@ ellipsoid. World frame O (z up), SI units.
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import meshcat.geometry as mg
 import numpy as np
 import numpy.typing as npt
@@ -19,6 +21,9 @@ from . import compliance, drawing
 from . import placements as pl
 from .colors import ARM_LINK_RGBA, CARRIER_RGBA, COMPLIANCE_RGBA, GHOST_RGBA, LOADED_RGBA
 from .scene import Pose, StackScene
+
+if TYPE_CHECKING:
+    from ..walk import WalkResult
 
 __all__ = ["StackViewer"]
 
@@ -127,7 +132,9 @@ class StackViewer(StackScene):
     #: Phases named one per row in the legend of :meth:`show_walk`; the rest are counted.
     WALK_LEGEND_PHASES = 12
 
-    def show_walk(self, walk, fps: float = 10.0, play: bool = True, repetitions: int = 1) -> list[anim_mod.PhaseSpan]:
+    def show_walk(
+        self, walk: WalkResult, fps: float = 10.0, play: bool = True, repetitions: int = 1
+    ) -> list[anim_mod.PhaseSpan]:
         """Animate a :class:`~assembler_pin.walk.WalkResult`: one frame per sample of every phase
         in order, at ``fps`` frames per second; each leg's force sleeve coloured by the forces of
         its phase's support, the held foot (plate 0, plate n, or both) marked by a disc in the
