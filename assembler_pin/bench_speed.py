@@ -25,12 +25,14 @@ __all__ = [
     "STARTUP_COMMANDS",
     "STARTUP_TARGETS_S",
     "THREAD_GOALS",
+    "TWO_POINT_TARGETS_MS",
     "benchmark_capacity_memory",
     "benchmark_single_statics",
     "benchmark_solve_starts",
     "benchmark_startup",
     "benchmark_statics_kernel",
     "benchmark_threads",
+    "benchmark_two_point",
     "rss_mb",
 ]
 
@@ -271,4 +273,51 @@ def benchmark_startup(repeat: int = 5) -> dict[str, float]:
         out[f"{stem}_cpu_s"] = float(np.median(cpu[key]))
         if key in STARTUP_TARGETS_S:
             out[f"{stem}_target_s"] = STARTUP_TARGETS_S[key]
+    return out
+
+
+def _median_cpu_ms(fn, repeat: int) -> float:
+    """Median CPU time of this process per call of ``fn()`` over ``repeat`` calls [ms]."""
+    times = []
+    for _ in range(repeat):
+        c0 = time.process_time()
+        fn()
+        times.append(time.process_time() - c0)
+    return 1e3 * float(np.median(times))
+
+
+#: Targets [ms] of the two-point support figures (:func:`benchmark_two_point`), by key stem.
+TWO_POINT_TARGETS_MS = {"n4_two_point_statics": 1.0, "n64_two_point_statics": 50.0, "n4_chosen_distribution": 5.0}
+
+
+def benchmark_two_point(platforms: tuple[int, ...] = (4, 64), repeat: int = 20) -> dict[str, float]:
+    """Two-point support per call [ms] at the home pose, both ends welded: the elastic
+    distribution :func:`~assembler_pin.supports.two_point_statics` at each stack size and the
+    chosen distribution :func:`~assembler_pin.support_choice.chosen_distribution` (its check
+    included) at n = 4, each a median of ``repeat`` calls (``repeat // 4`` at n > 16), wall time
+    (``..._ms``) and this process's CPU time (``..._cpu_ms``, which a loaded machine moves much
+    less), beside its target (``..._target_ms``, :data:`TWO_POINT_TARGETS_MS`); ``..._ok`` says
+    a call succeeded.
+    """
+    from .config import load_config
+    from .kinematics import plate_arrays
+    from .support_choice import chosen_distribution
+    from .supports import two_point_statics
+
+    check_bound("bench.repeat", repeat, "repeat")
+    out: dict[str, float] = {}
+    for n in platforms:
+        am = AssemblerModel.from_config(load_config().replace(platforms=n))
+        pa = plate_arrays(am, am.home)
+        calls: dict[str, Any] = {"two_point_statics": lambda am=am, pa=pa: two_point_statics(am, pa)}
+        if n == 4:
+            calls["chosen_distribution"] = lambda am=am, pa=pa: chosen_distribution(am, pa)
+        for name, call in calls.items():
+            key = f"n{n}_{name}"
+            out[f"{key}_ok"] = bool(call().success)
+            calls_made = max(1, repeat // 4) if n > 16 else repeat
+            out[f"{key}_ms"] = 1e-3 * median_time_us(call, calls_made)
+            out[f"{key}_cpu_ms"] = _median_cpu_ms(call, calls_made)
+            if key in TWO_POINT_TARGETS_MS:
+                out[f"{key}_target_ms"] = TWO_POINT_TARGETS_MS[key]
     return out

@@ -90,6 +90,7 @@ BOUNDS: dict[str, Bound] = {
     "walk.footholds": Bound(2, 100, "", True, "walk --footholds / --floor COUNT: footholds of one walk"),
     "walk.file_bytes": Bound(1, 1 << 20, "bytes", True, "size of a footholds file read"),
     "walk.floor_step": Bound(0.01, 10.0, "m", False, "walk --floor STEP: distance between floor footholds"),
+    "walk.fps": Bound(0.1, 1000.0, "1/s", False, "walk --fps: samples of the walk's page shown per second"),
     "walk.clearance": Bound(0.0, 0.5, "m", False, "WalkOptions.clearance: lift and pre-contact height"),
     "walk.transfer_samples": Bound(2, 1000, "", True, "WalkOptions.transfer_samples: samples of a load transfer"),
 }

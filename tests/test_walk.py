@@ -20,6 +20,7 @@ import assembler_pin as ap
 from assembler_pin.walk import WalkOptions, WalkResult, plan_walk, plate_target, verify_walk
 from assembler_pin.walk.footholds import checked_footholds, floor_footholds
 from assembler_pin.walk.plan import _transfer_phase
+from assembler_pin.walk.samples import read_walk_csv
 
 
 def _weight(cfg) -> float:
@@ -189,6 +190,7 @@ def test_cli_walk_answers_refuses_and_writes_only_valid_files(capsys, tmp_path):
     assert doc["success"] is False and "out of reach" in doc["reason"]
     assert json.loads((out / "walk.json").read_text())["success"] is False
     assert (out / "walk.csv").read_text().count("\n") == 1  # the header alone: no sample is valid
+    assert len(read_walk_csv(out / "walk.csv", n=4)) == 0
     assert main(["walk", "--floor", "3", "2"]) == 1
     assert "not possible" in capsys.readouterr().out
     bad = tmp_path / "bad.json"
@@ -213,8 +215,8 @@ def test_cli_walk_one_step_writes_the_samples_and_the_figure(capsys, tmp_path, a
     from assembler_pin.cli import main
     from assembler_pin.naming import names
 
-    out, png = tmp_path / "walk", tmp_path / "walk.png"
-    assert main(["walk", "--floor", "0.5", "2", "--out", str(out), "--plot", str(png)]) == 0
+    out, png, page = tmp_path / "walk", tmp_path / "walk.png", tmp_path / "walk.html"
+    assert main(["walk", "--floor", "0.5", "2", "--out", str(out), "--plot", str(png), "--html", str(page)]) == 0
     assert "success" in capsys.readouterr().out
     doc = json.loads((out / "walk.json").read_text())
     assert doc["success"] is True and [p["kind"] for p in doc["phases"]] == ["reach", "transfer"]
@@ -224,7 +226,23 @@ def test_cli_walk_one_step_writes_the_samples_and_the_figure(capsys, tmp_path, a
     assert len(lines) - 1 == sum(p["samples"] for p in doc["phases"])
     last = dict(zip(header, lines[-1].split(","), strict=True))
     assert last["kind"] == "transfer" and last["support"] == "both"
+    back = read_walk_csv(out / "walk.csv", n=am.n)
+    assert [(int(k), p) for k, p in zip(back.phase, back.kind, strict=True)] == [
+        (k, p["kind"]) for k, p in enumerate(doc["phases"]) for _ in range(p["samples"])
+    ]
     assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    # the page: one frame per sample; plate 0 stays on foothold 0, plate n lands on foothold 1
+    from test_viewer import page_commands
+
+    anim = [c for c in page_commands(page.read_text()) if c["type"] == "set_animation"][-1]
+    clips = {
+        c["path"].rsplit("/", 1)[-1]: {t["name"]: t["keys"] for t in c["clip"]["tracks"]} for c in anim["animations"]
+    }
+    base, ee = (clips[f"{names.plate(k)}_0"][".position"] for k in (0, am.n))
+    assert len(base) == len(ee) == len(lines) - 1
+    assert max(np.abs(key["value"]).max() for key in base) < 1e-9
+    landed = plate_target(pin.SE3(np.eye(3), np.array([0.5, 0.0, 0.0])), "ee").translation
+    assert np.abs(np.array(ee[-1]["value"]) - landed).max() < 1e-6
 
 
 # ---------------------------------------------------------------------- the macro-configuration
@@ -284,3 +302,19 @@ def test_six_stacks_carry_a_body_and_its_capacity(am):
     assert not macro_statics(am, stacks, 1.01 * capacity, com).success
     with pytest.raises(ap.exceptions.WalkError):
         macro_statics(am, stacks, math.nan, com)
+
+
+# ---------------------------------------------------------------------- bench
+def test_bench_two_point_figures_name_each_call_its_time_and_target():
+    from assembler_pin.bench_speed import TWO_POINT_TARGETS_MS, benchmark_two_point
+
+    got = benchmark_two_point(platforms=(4,), repeat=2)
+    assert got["n4_two_point_statics_ok"] and got["n4_chosen_distribution_ok"]
+    for key in ("n4_two_point_statics", "n4_chosen_distribution"):
+        assert 0.0 < got[f"{key}_ms"] < 1e4 and 0.0 <= got[f"{key}_cpu_ms"] < 1e4
+        assert got[f"{key}_target_ms"] == TWO_POINT_TARGETS_MS[key]
+    assert TWO_POINT_TARGETS_MS == {
+        "n4_two_point_statics": 1.0,
+        "n64_two_point_statics": 50.0,
+        "n4_chosen_distribution": 5.0,
+    }

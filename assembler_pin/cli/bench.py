@@ -50,7 +50,7 @@ def add_parser(add) -> None:
         "--speed",
         action="store_true",
         help="only BLAS threads, lazy starts, the statics kernel, one stack's statics at n = 4, 8, 16, "
-        "capacity memory, CLI start-up (~3 min)",
+        "capacity memory, CLI start-up, two-point support at n = 4, 64 (~3 min)",
     )
     p.set_defaults(func=run)
 
@@ -134,6 +134,7 @@ def _extra_figures(args: argparse.Namespace, am) -> int:
             benchmark_startup,
             benchmark_statics_kernel,
             benchmark_threads,
+            benchmark_two_point,
         )
 
         doc["threads"] = benchmark_threads(am)
@@ -142,6 +143,7 @@ def _extra_figures(args: argparse.Namespace, am) -> int:
         doc["single_statics"] = benchmark_single_statics()
         doc["capacity_memory"] = benchmark_capacity_memory(am)
         doc["startup"] = benchmark_startup()
+        doc["two_point"] = benchmark_two_point()
     if args.json:
         print(dumps(doc))
         return 0

@@ -6,7 +6,10 @@ import argparse
 from pathlib import Path
 
 from ..exceptions import CLIError
-from .common import config_from_args, dumps, progress_for
+from .common import config_from_args, dumps, progress_for, writable_parent
+
+DEFAULT_FPS = 10.0
+"""``walk --html``: samples of the walk shown per second, by default."""
 
 
 def add_parser(add) -> None:
@@ -23,6 +26,12 @@ def add_parser(add) -> None:
     p.add_argument("--clearance", type=float, default=0.03, help="lift and pre-contact height [m] (default 0.03)")
     p.add_argument("--out", metavar="DIR", help="write walk.json and walk.csv (one row per sample) into DIR")
     p.add_argument("--plot", metavar="PNG", help="write max|F| over the walk with its phases marked")
+    p.add_argument(
+        "--html",
+        metavar="PAGE",
+        help="write a standalone page animating every sample (legs by force, held feet, footholds)",
+    )
+    p.add_argument("--fps", type=float, help="with --html: samples shown per second (default 10)")
     p.add_argument("--json", action="store_true", help="print one JSON object")
     p.set_defaults(func=run)
 
@@ -51,6 +60,7 @@ def _footholds(args: argparse.Namespace):
 def run(args: argparse.Namespace) -> int:
     """Exit 0 when the walk reaches its last foothold, 1 when it cannot (the valid prefix is
     still printed and written), 2 for refused input."""
+    from ..bounds import check_bound
     from ..model import AssemblerModel
     from ..walk import WalkOptions, plan_walk
 
@@ -60,6 +70,12 @@ def run(args: argparse.Namespace) -> int:
     out = Path(args.out) if args.out else None
     if out is not None and out.exists() and not out.is_dir():
         raise CLIError(f"--out '{out}' exists and is not a directory")
+    if args.html:
+        writable_parent(args.html, "--html file")
+    if args.fps is not None:
+        if not args.html:
+            raise CLIError("--fps needs --html (it sets the page's samples per second)")
+        check_bound("walk.fps", args.fps, "--fps", CLIError)
     prog = progress_for(args, "walk")
     try:
         walk = plan_walk(am, feet, options=options, progress=prog)
@@ -70,36 +86,43 @@ def run(args: argparse.Namespace) -> int:
         write_walk(am, walk, out)
     if args.plot:
         plot_walk(walk, args.plot)
+    if args.html:
+        view_walk(am, walk, args.html, DEFAULT_FPS if args.fps is None else args.fps)
     print(dumps(doc) if args.json else format_walk(walk))
     return 0 if walk.success else 1
 
 
 def walk_rows(am, walk) -> tuple[list[str], list[list[object]]]:
-    """The CSV header and rows: one row per sample, its phase, support, max|F| [N] and the
-    commanded lengths [m] (the naming module's length columns)."""
-    from ..naming import names
+    """The CSV header and rows (:func:`assembler_pin.walk.samples.walk_rows`)."""
+    from ..walk.samples import walk_rows as rows
 
-    header = ["sample", "phase", "kind", "support", "foothold", "max_abs_force"]
-    header += [names.length_column(j, i) for j in range(am.n) for i in range(6)]
-    rows, count = [], 0
-    for k, phase in enumerate(walk.phases):
-        for i in range(len(phase.plates)):
-            peak = float(abs(phase.forces[i]).max())
-            rows.append([count, k, phase.kind, phase.support, phase.step, f"{peak:.6f}"])
-            rows[-1] += [f"{x:.9f}" for x in phase.commanded[i].ravel()]
-            count += 1
-    return header, rows
+    return rows(am, walk)
 
 
 def write_walk(am, walk, out: Path) -> None:
-    """``walk.json`` (the answer) and ``walk.csv`` (the samples) in ``out``, each atomically."""
+    """``walk.json`` (the answer) and ``walk.csv`` (the samples, read back by
+    :func:`~assembler_pin.walk.samples.read_walk_csv`) in ``out``, each atomically."""
     from ..files import write_atomic
+    from ..walk.samples import walk_csv
 
     out.mkdir(parents=True, exist_ok=True)
-    header, rows = walk_rows(am, walk)
     write_atomic(out / "walk.json", dumps(walk.to_dict()) + "\n")
-    lines = [",".join(header)] + [",".join(str(x) for x in r) for r in rows]
-    write_atomic(out / "walk.csv", "\n".join(lines) + "\n")
+    write_atomic(out / "walk.csv", walk_csv(am, walk))
+
+
+def view_walk(am, walk, path: str, fps: float) -> None:
+    """The standalone page animating the walk (:meth:`~assembler_pin.viz.StackViewer.show_walk`),
+    written atomically; a walk without a sample writes none and says so on stderr."""
+    import sys
+
+    from ..viz import StackViewer
+
+    if not any(len(p.plates) for p in walk.phases):
+        print(f"walk: no sample to animate, {path} not written", file=sys.stderr)
+        return
+    with StackViewer(am) as viewer:
+        viewer.show_walk(walk, fps=fps)
+        viewer.static_html(path)
 
 
 def plot_walk(walk, path: str) -> None:

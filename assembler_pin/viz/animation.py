@@ -9,6 +9,8 @@ per leg and level (:func:`make_force_bands`), the one of the frame's level shown
 from __future__ import annotations
 
 from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import meshcat.animation
 import meshcat.geometry as mg
@@ -17,7 +19,7 @@ import pinocchio as pin
 
 from ..exceptions import AssemblerError, ConvergenceError
 from ..geometry import DIMENSIONS
-from ..kinematics import PlateArrays, leg_state, stack_forward_kinematics
+from ..kinematics import PlateArrays, leg_state, leg_vectors, stack_forward_kinematics
 from ..model import AssemblerModel
 from ..naming import names
 from ..state import StackState, evaluate_state
@@ -26,13 +28,24 @@ from .colors import force_color, material
 from .drawing import payload_rod_transform
 from .placements import as_plates
 
+if TYPE_CHECKING:
+    from ..walk import WalkResult
+
 __all__ = [
     "FORCE_BAND_LENGTH",
     "FORCE_BAND_LEVELS",
+    "WALK_PHASE_RGB",
+    "PhaseSpan",
+    "WalkFrame",
     "build_animation",
+    "build_walk_animation",
     "force_band_frame",
     "interpolate_states",
     "make_force_bands",
+    "make_phase_labels",
+    "make_walk_markers",
+    "phase_spans",
+    "walk_frames",
 ]
 
 FORCE_BAND_LEVELS = np.linspace(-1.0, 1.0, 11)
@@ -132,14 +145,173 @@ def make_force_bands(root, am: AssemblerModel) -> None:
 def force_band_frame(root, am: AssemblerModel, state: StackState) -> None:
     """In one animation frame (``root`` its node of the sleeves), place and show the sleeve
     of each leg's force level and hide the others."""
+    _band_frame(root, am, state.forces, state.legs.bottom_points, state.legs.top_points)
+
+
+def _band_frame(root, am: AssemblerModel, forces: np.ndarray, bottom: np.ndarray, top: np.ndarray) -> None:
+    """:func:`force_band_frame` of leg forces (n, 6) [N] and joint centres (n, 6, 3) [m]."""
     leg = am.config.leg
-    fraction = np.where(state.forces >= 0, state.forces / leg.max_tension, state.forces / leg.max_compression)
+    fraction = np.where(forces >= 0, forces / leg.max_tension, forces / leg.max_compression)
     level = np.abs(FORCE_BAND_LEVELS[None, None, :] - np.clip(fraction, -1, 1)[..., None]).argmin(axis=-1)
     for j in range(am.n):
         for i in range(6):
-            T = cylinder_between(state.legs.bottom_points[j, i], state.legs.top_points[j, i])
+            T = cylinder_between(bottom[j, i], top[j, i])
             for k in range(len(FORCE_BAND_LEVELS)):
                 node = root[names.leg(j, i)][f"level{k}"]
                 node.set_property("visible", "boolean", bool(k == level[j, i]))
                 if k == level[j, i]:
                     node.set_transform(T)
+
+
+# ---------------------------------------------------------------------- the walk
+WALK_PHASE_RGB = {
+    "reach": np.array([0.106, 0.620, 0.467]),
+    "transfer": np.array([0.459, 0.439, 0.702]),
+    "swing": np.array([0.906, 0.161, 0.541]),
+}
+"""Colour of the held-foot marker in each kind of walk phase (no leg takes these: legs run
+blue ↔ grey ↔ red)."""
+FOOTHOLD_RGBA = np.array([0.55, 0.27, 0.07, 0.8])
+"""A foothold's disc (the floor's brown)."""
+HELD_PLATES = {"base": (0,), "ee": (-1,), "both": (0, -1)}
+"""The plates held in each support of a walk phase (index into plates 0..n)."""
+_DISC = pin.SE3(pin.exp3(np.array([0.5 * np.pi, 0.0, 0.0])), np.zeros(3)).homogeneous  # y axis -> z
+
+
+@dataclass(frozen=True)
+class WalkFrame:
+    """One animation frame of a walk: sample ``sample`` of phase ``phase`` (its ``kind`` and
+    ``support``), its world plate poses and leg forces (n, 6) [N] with that support."""
+
+    phase: int
+    sample: int
+    kind: str
+    support: str
+    plates: PlateArrays
+    forces: np.ndarray
+
+
+@dataclass(frozen=True)
+class PhaseSpan:
+    """A walk phase in its animation: frames ``first..last`` (included), seconds ``start..end``."""
+
+    phase: int
+    kind: str
+    support: str
+    first: int
+    last: int
+    start: float
+    end: float
+
+    def label(self) -> str:
+        return (
+            f"phase {self.phase} {self.kind} ({self.support} held): frames {self.first}–{self.last}, "
+            f"{self.start:.1f}–{self.end:.1f} s"
+        )
+
+
+def walk_frames(walk: WalkResult) -> list[WalkFrame]:
+    """Every sample of every phase of a :class:`~assembler_pin.walk.WalkResult`, in order
+    (the phases' plates are world poses of the original model's plates 0..n)."""
+    return [
+        WalkFrame(k, i, phase.kind, phase.support, plates, np.asarray(phase.forces[i], dtype=float))
+        for k, phase in enumerate(walk.phases)
+        for i, plates in enumerate(phase.plates)
+    ]
+
+
+def phase_spans(frames: Sequence[WalkFrame], fps: float) -> list[PhaseSpan]:
+    """The frames and seconds of each phase with samples, frame k shown at k / ``fps`` [s]."""
+    spans: list[PhaseSpan] = []
+    for k, f in enumerate(frames):
+        if spans and spans[-1].phase == f.phase:
+            last = spans[-1]
+            spans[-1] = PhaseSpan(last.phase, last.kind, last.support, last.first, k, last.start, k / fps)
+        else:
+            spans.append(PhaseSpan(f.phase, f.kind, f.support, k, k, k / fps, k / fps))
+    return spans
+
+
+def _held_node(root, foot: int, kind: str):
+    return root["held"][f"{'base' if foot == 0 else 'ee'}_{kind}"]
+
+
+def make_walk_markers(root, am: AssemblerModel, footholds: Sequence[pin.SE3]) -> None:
+    """Under the meshcat node ``root``: a disc at every foothold (``root/footholds/<k>``, world
+    frame) and one hidden held-foot disc per foot and phase kind (``root/held/<base|ee>_<kind>``,
+    shown by :func:`build_walk_animation` in the frames where that foot is held)."""
+    root.delete()
+    radius = 1.2 * am.config.plate.node_radius
+    for k, f in enumerate(footholds):
+        node = root["footholds"][str(k)]
+        node.set_object(mg.Cylinder(0.004, radius), material(FOOTHOLD_RGBA))
+        node.set_transform(f.homogeneous @ _DISC)
+    held = mg.Cylinder(0.012, 1.1 * radius)
+    for foot in (0, -1):
+        for kind, rgb in WALK_PHASE_RGB.items():
+            node = _held_node(root, foot, kind)
+            node.set_object(held, material([*rgb, 0.7]))
+            node.set_property("visible", False)
+
+
+#: Width and height [m] of the phase label drawn above the walk.
+PHASE_LABEL_SIZE = (0.36, 0.09)
+
+
+def _label_png(text: str, rgb: np.ndarray) -> bytes:
+    """A PNG of ``text`` in ``rgb`` on white, 4:1 (matplotlib's Agg canvas)."""
+    import io
+
+    from matplotlib.figure import Figure
+
+    fig = Figure(figsize=(4.0, 1.0), dpi=100)
+    fig.patch.set_facecolor("white")
+    fig.text(0.5, 0.5, text, ha="center", va="center", size=56, weight="bold", color=tuple(rgb))
+    buf = io.BytesIO()
+    fig.savefig(buf, format="png", facecolor="white")
+    return buf.getvalue()
+
+
+def make_phase_labels(root, at: np.ndarray) -> None:
+    """Under the meshcat node ``root``: one hidden label per phase kind (``root/labels/<kind>``),
+    its name on a thin box at world point ``at`` [m] facing −y (the side camera), shown by
+    :func:`build_walk_animation` in the frames of that kind."""
+    w, h = PHASE_LABEL_SIZE
+    for kind, rgb in WALK_PHASE_RGB.items():
+        texture = mg.ImageTexture(image=mg.PngImage(_label_png(kind, rgb)))
+        node = root["labels"][kind]
+        node.set_object(mg.Box([w, 1e-3, h]), mg.MeshBasicMaterial(map=texture))
+        T = np.eye(4)
+        T[:3, 3] = at
+        node.set_transform(T)
+        node.set_property("visible", False)
+
+
+def build_walk_animation(viewer, frames: Sequence[WalkFrame], fps: float, markers: str):
+    """The meshcat animation of a walk in a :class:`~assembler_pin.viz.StackViewer`: frame k
+    places every body of the main stack and the payload rod at ``frames[k].plates``, shows each
+    leg's force sleeve for the forces of its phase's support (sleeves by :func:`make_force_bands`)
+    and the held-foot disc of each held plate in the phase's colour and the phase's name (under
+    ``markers``, made by :func:`make_walk_markers` and :func:`make_phase_labels`)."""
+    am = viewer.am
+    anim = meshcat.animation.Animation(default_framerate=fps)
+    rod = am.config.payload.offset > 0 and am.config.payload.mass > 0
+    for k, f in enumerate(frames):
+        with anim.at_frame(viewer.meshcat, k) as frame:
+            for g, T in zip(viewer.visual_model.geometryObjects, viewer.placements(f.plates), strict=True):
+                frame[viewer.viz.getViewerNodeName(g, pin.GeometryType.VISUAL)].set_transform(T)
+            if rod:
+                T_rod = payload_rod_transform(am, f.plates.R[-1], f.plates.p[-1])
+                frame[viewer.scene_path("payload_rod")]["rod"].set_transform(T_rod)
+            bottom, top = leg_vectors(am, f.plates)[:2]
+            _band_frame(frame[viewer.scene_path("force_bands")], am, f.forces, bottom, top)
+            for foot in (0, -1):
+                for kind in WALK_PHASE_RGB:
+                    node = _held_node(frame[markers], foot, kind)
+                    shown = kind == f.kind and foot in HELD_PLATES[f.support]
+                    node.set_property("visible", "boolean", shown)
+                    if shown:
+                        node.set_transform(f.plates.se3(foot % (am.n + 1)).homogeneous @ _DISC)
+            for kind in WALK_PHASE_RGB:
+                frame[markers]["labels"][kind].set_property("visible", "boolean", kind == f.kind)
+    return anim

@@ -6,6 +6,8 @@ ellipsoid. World frame O (z up), SI units.
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import meshcat.geometry as mg
 import numpy as np
 import numpy.typing as npt
@@ -14,10 +16,14 @@ from pinocchio.visualize import MeshcatVisualizer
 from ..exceptions import AssemblerError, ViewerError
 from ..kinematics import PlateArrays
 from ..state import StackState
+from . import animation as anim_mod
 from . import compliance, drawing
 from . import placements as pl
 from .colors import ARM_LINK_RGBA, CARRIER_RGBA, COMPLIANCE_RGBA, GHOST_RGBA, LOADED_RGBA
 from .scene import Pose, StackScene
+
+if TYPE_CHECKING:
+    from ..walk import WalkResult
 
 __all__ = ["StackViewer"]
 
@@ -27,7 +33,8 @@ class StackViewer(StackScene):
 
     Besides the main stack (:meth:`display`, :meth:`animate`) it draws, each under its own
     meshcat path and named in the page's legend: a ghost pose, the helper arm, point clouds,
-    a carrier, the loaded pose and the compliance ellipsoid.
+    a carrier, the loaded pose and the compliance ellipsoid; and it animates a walk
+    (:meth:`show_walk`).
     """
 
     def show_ghost(
@@ -121,3 +128,68 @@ class StackViewer(StackScene):
         self._add_root(root, view.extent)
         self._legend[root] = (COMPLIANCE_RGBA, view.label)
         return view
+
+    #: Phases named one per row in the legend of :meth:`show_walk`; the rest are counted.
+    WALK_LEGEND_PHASES = 12
+
+    def show_walk(
+        self, walk: WalkResult, fps: float = 10.0, play: bool = True, repetitions: int = 1
+    ) -> list[anim_mod.PhaseSpan]:
+        """Animate a :class:`~assembler_pin.walk.WalkResult`: one frame per sample of every phase
+        in order, at ``fps`` frames per second; each leg's force sleeve coloured by the forces of
+        its phase's support, the held foot (plate 0, plate n, or both) marked by a disc in the
+        phase's colour (:data:`~.animation.WALK_PHASE_RGB`), a brown disc at every foothold
+        (``{prefix}_walk/footholds/<k>``), the phase's name above the walk frame by frame
+        (``{prefix}_walk/labels/<kind>``), and in the legend each phase with its frames and
+        seconds. The legs' own colour is the URDF's: the force is the sleeve's, its scale (the
+        colour bar) the force limits. Returns the phases' spans.
+
+        Raises:
+            ViewerError: the walk has no sample, or ``fps`` is not a positive number.
+        """
+        frames = anim_mod.walk_frames(walk)
+        if not frames:
+            raise ViewerError(f"the walk has no sample to animate ({walk.reason})")
+        if not (isinstance(fps, (int, float)) and 0 < fps < 1e4):
+            raise ViewerError(f"fps must be a number in (0, 10000), got {fps!r}")
+        self.display(frames[0].plates, color_forces=False, mark_violations=False)
+        anim_mod.make_force_bands(self.meshcat[self.scene_path("force_bands")], self.am)
+        self._add_root(self.scene_path("force_bands"))
+        root = self.scene_path("walk")
+        anim_mod.make_walk_markers(self.meshcat[root], self.am, walk.footholds)
+        feet = np.array([f.translation for f in walk.footholds])
+        top = max(float(pl.stack_points(self.am, f.plates)[:, 2].max()) for f in frames)
+        label = np.array([feet[:, 0].mean(), feet[:, 1].min(), top + 0.12])
+        anim_mod.make_phase_labels(self.meshcat[root], label)
+        self._add_root(root, np.vstack([feet, label]))
+        animation = anim_mod.build_walk_animation(self, frames, fps, root)
+        self.meshcat.set_animation(animation, play=play, repetitions=repetitions)
+        step = max(1, len(frames) // 50)
+        self._extra_points.update(
+            {f"anim{k}": pl.stack_points(self.am, f.plates) for k, f in enumerate(frames[::step])}
+        )
+        self._animated = True
+        self._place(self.viz, frames[0].plates)
+        spans = anim_mod.phase_spans(frames, fps)
+        leg = self.am.config.leg
+        self.force_range = (leg.max_tension, leg.max_compression)  # where the sleeves saturate
+        self._walk_legend(spans, root)
+        peak = max(float(np.abs(f.forces).max()) for f in frames)
+        verdict = "valid" if walk.success else f"not possible ({walk.reason[:80]})"
+        self.set_title(f"Walk over {len(walk.footholds)} footholds: {verdict}; peak max|F| {peak:.1f} N")
+        return spans
+
+    def _walk_legend(self, spans: list[anim_mod.PhaseSpan], root: str) -> None:
+        """The footholds and every phase (its kind's colour, frames and seconds) in the legend."""
+        for key in [k for k in self._legend if k.startswith(root)]:
+            del self._legend[key]
+        self._legend[f"{root}/footholds"] = (anim_mod.FOOTHOLD_RGBA[:3], "foothold")
+        shown = spans[: self.WALK_LEGEND_PHASES]
+        for s in shown:
+            self._legend[f"{root}/phase{s.phase}"] = (anim_mod.WALK_PHASE_RGB[s.kind], f"held foot, {s.label()}")
+        if len(spans) > len(shown):
+            rest = spans[len(shown)]
+            self._legend[f"{root}/more"] = (
+                anim_mod.WALK_PHASE_RGB[rest.kind],
+                f"… {len(spans) - len(shown)} more phases, from frame {rest.first} ({rest.start:.1f} s)",
+            )

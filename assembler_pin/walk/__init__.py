@@ -1,10 +1,12 @@
 """Two-point support in motion: the stack turned around (:mod:`.turned`) and the inchworm walk
-(:mod:`.plan`, checked by :mod:`.verify`), and stacks joined to one body (:mod:`.macro`)."""
+(:mod:`.plan`, checked by :mod:`.verify`, its samples file :mod:`.samples`), and stacks joined
+to one body (:mod:`.macro`)."""
 
 from __future__ import annotations
 
 from .macro import MacroStatics, macro_capacity, macro_statics
 from .plan import WalkOptions, WalkPhase, WalkResult, checked_footholds, plan_walk, plate_target
+from .samples import WalkSamples, parse_walk_csv, read_walk_csv
 from .turned import TurnedModel, turned_config, turned_model
 from .verify import verify_walk
 
@@ -14,11 +16,14 @@ __all__ = [
     "WalkOptions",
     "WalkPhase",
     "WalkResult",
+    "WalkSamples",
     "checked_footholds",
     "macro_capacity",
     "macro_statics",
+    "parse_walk_csv",
     "plan_walk",
     "plate_target",
+    "read_walk_csv",
     "turned_config",
     "turned_model",
     "verify_walk",
