@@ -15,6 +15,7 @@ import contextlib
 import logging
 from collections.abc import Sequence
 from pathlib import Path
+from typing import TypeVar
 
 import meshcat
 import meshcat.animation
@@ -45,6 +46,9 @@ __all__ = ["Pose", "StackScene"]
 logger = logging.getLogger(__name__)
 
 Pose = StackState | PlateArrays | Sequence | np.ndarray
+
+
+_Scene = TypeVar("_Scene", bound="StackScene")
 
 
 class StackScene:
@@ -148,7 +152,7 @@ class StackScene:
                 self.meshcat.window.zmq_socket.close(linger=0)
             self.server.stop()
 
-    def __enter__(self) -> StackScene:
+    def __enter__(self: _Scene) -> _Scene:
         return self
 
     def __exit__(self, *exc: object) -> None:
