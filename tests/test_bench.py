@@ -5,7 +5,8 @@ from __future__ import annotations
 import numpy as np
 from checks import sp_legs
 
-from assembler_pin.bench import benchmark_platform_count, format_sweep, random_reachable_plates
+from assembler_pin.bench import random_reachable_plates
+from assembler_pin.bench_scaling import benchmark_platform_count, format_sweep
 
 
 def test_random_reachable_plates_are_the_fk_of_their_lengths(am):

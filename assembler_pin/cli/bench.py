@@ -63,14 +63,14 @@ def run(args: argparse.Namespace) -> int:
 
     check_bound("bench.repeat", args.repeat, "--repeat", CLIError)
     if args.platforms_sweep:
-        from ..bench import benchmark_platforms_sweep, format_sweep
+        from ..bench_scaling import benchmark_platforms_sweep, format_sweep
 
         with progress_for(args, "bench: platforms") as prog:
             rows = benchmark_platforms_sweep(progress=prog)
         print(dumps(rows) if args.json else format_sweep(rows))
         return 0
     if args.maps:
-        from ..bench import benchmark_maps, format_maps
+        from ..bench_scaling import benchmark_maps, format_maps
 
         result = benchmark_maps()
         print(dumps(result) if args.json else format_maps(result))
@@ -79,13 +79,13 @@ def run(args: argparse.Namespace) -> int:
     if args.truss or args.speed:
         return _extra_figures(args, am)
     if args.time_laws:
-        from ..bench import benchmark_time_laws, format_time_laws
+        from ..bench_motion import benchmark_time_laws, format_time_laws
 
         rows = benchmark_time_laws(am)
         print(dumps(rows) if args.json else format_time_laws(rows))
         return 0
     if args.mujoco:
-        from ..bench import benchmark_mujoco, format_mujoco
+        from ..bench_motion import benchmark_mujoco, format_mujoco
 
         rows = benchmark_mujoco(am)
         print(dumps(rows) if args.json else format_mujoco(rows))
