@@ -3,6 +3,7 @@ timed trajectory against the legs' limits."""
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass, field
 
@@ -12,7 +13,7 @@ from ..model import AssemblerModel
 from .planner import PlanResult
 from .trajfile import Trajectory
 
-__all__ = ["MotionResult", "first_bad_row", "verify_trajectory"]
+__all__ = ["MotionResult", "first_bad_row", "plan_prefix", "rows_prefix", "verify_trajectory"]
 
 
 def verify_trajectory(am: AssemblerModel, traj: Trajectory, rtol: float = 1e-6) -> list[str]:
@@ -134,3 +135,30 @@ class MotionResult:
             f"{self.peak_max_abs_force:.2f} N, travel {self.total_leg_travel:.3f} m, duration "
             f"{self.duration:.2f} s, reason={self.reason!r})"
         )
+
+
+def plan_prefix(plan: PlanResult, m: int, why: str) -> PlanResult:
+    """The plan's first ``m`` samples, marked failed with ``why``."""
+    return dataclasses.replace(
+        plan,
+        success=False,
+        reason=why,
+        states=plan.states[:m],
+        parameters=plan.parameters[:m],
+        solve_times_s=plan.solve_times_s[:m],
+    )
+
+
+def rows_prefix(traj: Trajectory, count: int) -> Trajectory:
+    """The trajectory's first ``count`` rows (a new object, meta copied)."""
+    return Trajectory(
+        traj.times[:count],
+        traj.lengths[:count],
+        traj.ee[:count],
+        traj.max_abs_force[:count],
+        {k: v[:count] for k, v in traj.margins.items()},
+        traj.feasible[:count],
+        traj.platforms,
+        dict(traj.meta),
+        None if traj.dynamic_forces is None else traj.dynamic_forces[:count],
+    )

@@ -36,7 +36,7 @@ from ..progress import ProgressCallback
 from ..threads import one_blas_thread
 from .paths import EEPath
 from .planner import PlanOptions, PlanResult
-from .result import MotionResult, first_bad_row, verify_trajectory
+from .result import MotionResult, first_bad_row, plan_prefix, rows_prefix, verify_trajectory
 from .rows import check_trajectory, trajectory_states
 from .time_law import TIME_LAWS, TimingProblem, time_law
 from .trajfile import Trajectory, read_trajectory
@@ -210,33 +210,6 @@ def _timed(
     return evaluate_rows(am, plan, times, lengths, u_of_s, meta, strict, progress, rates, accels), s
 
 
-def _plan_prefix(plan: PlanResult, m: int, why: str) -> PlanResult:
-    """The plan's first ``m`` samples, marked failed with ``why``."""
-    return dataclasses.replace(
-        plan,
-        success=False,
-        reason=why,
-        states=plan.states[:m],
-        parameters=plan.parameters[:m],
-        solve_times_s=plan.solve_times_s[:m],
-    )
-
-
-def _rows_prefix(traj: Trajectory, count: int) -> Trajectory:
-    """The trajectory's first ``count`` rows (a new object, meta copied)."""
-    return Trajectory(
-        traj.times[:count],
-        traj.lengths[:count],
-        traj.ee[:count],
-        traj.max_abs_force[:count],
-        {k: v[:count] for k, v in traj.margins.items()},
-        traj.feasible[:count],
-        traj.platforms,
-        dict(traj.meta),
-        None if traj.dynamic_forces is None else traj.dynamic_forces[:count],
-    )
-
-
 def _valid_prefix(
     am: AssemblerModel,
     plan: PlanResult,
@@ -254,14 +227,14 @@ def _valid_prefix(
         m = min(int(np.floor(s[bad])) + 1, len(plan.states) - 1)
         if m < 2:
             return None, "no valid trajectory prefix"
-        plan = _plan_prefix(plan, m, plan.reason)
+        plan = plan_prefix(plan, m, plan.reason)
         traj, s = _timed(am, plan, rate, progress=progress, law=traj.meta.get("time_law", "quintic"))
     bad = first_bad_row(am, traj)
     if bad is None:
         return traj, f"the trajectory ends at rest at u = {plan.parameters[-1]:.4f}"
     if bad < 2:
         return None, "no valid trajectory prefix"
-    return _rows_prefix(traj, bad), f"the trajectory stops, in motion, at t = {traj.times[bad - 1]:.3f} s"
+    return rows_prefix(traj, bad), f"the trajectory stops, in motion, at t = {traj.times[bad - 1]:.3f} s"
 
 
 @one_blas_thread
