@@ -109,6 +109,7 @@ class IpoptForm:
         cols, rows = np.nonzero(self.pattern.T)  # column-major: CasADi's nonzero order
         self.rows, self.cols = rows, cols
         self.singular = ""
+        self._last: tuple[bytes, np.ndarray, np.ndarray] | None = None
 
     @property
     def shape(self) -> tuple[int, int]:
@@ -118,6 +119,21 @@ class IpoptForm:
     def jacobian_nonzeros(self, x: np.ndarray) -> np.ndarray:
         """The pattern's entries of the constraint Jacobian at ``x``."""
         return self.smooth.cons_jac(x)[self.rows, self.cols]
+
+    def derivatives(self, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """(objective gradient (nx,), Jacobian non-zeros) at ``x``, computed once per point
+        (IPOPT asks for both at the same point); NaN at a singular iterate, whose reason is
+        kept in :attr:`singular`."""
+        key = x.tobytes()
+        if self._last is not None and self._last[0] == key:
+            return self._last[1], self._last[2]
+        try:
+            grad, nz = self.smooth.grad(x), self.jacobian_nonzeros(x)
+        except _SingularIterateError as exc:
+            self.singular = f"stopped at a singular iterate: {exc}"
+            grad, nz = np.full(x.size, np.nan), np.full(self.rows.size, np.nan)
+        self._last = (key, grad, nz)
+        return grad, nz
 
 
 def _callbacks(form: IpoptForm) -> tuple[Any, Any]:
@@ -143,14 +159,15 @@ def _callbacks(form: IpoptForm) -> tuple[Any, Any]:
         def get_sparsity_out(self, i: int) -> Any:
             return ca.Sparsity.dense(1, nx) if i == 0 else g_sparsity
 
-        def eval(self, arg: list) -> list:
-            x = np.asarray(arg[0], dtype=float).ravel()
-            try:
-                grad, nz = form.smooth.grad(x), form.jacobian_nonzeros(x)
-            except _SingularIterateError as exc:
-                form.singular = f"stopped at a singular iterate: {exc}"
-                grad, nz = np.full(nx, np.nan), np.full(form.rows.size, np.nan)
-            return [ca.DM(grad[None, :]), ca.DM(g_sparsity, nz)]
+        def has_eval_buffer(self) -> bool:
+            return True
+
+        def eval_buffer(self, arg: list, res: list) -> int:
+            grad, nz = form.derivatives(np.frombuffer(arg[0], dtype=np.float64).copy())
+            for out, value in zip(res, (grad, nz), strict=True):
+                if out is not None:  # None: an output not asked for
+                    np.frombuffer(out, dtype=np.float64)[:] = value
+            return 0
 
     class Values(ca.Callback):
         def __init__(self) -> None:
@@ -170,9 +187,21 @@ def _callbacks(form: IpoptForm) -> tuple[Any, Any]:
         def get_sparsity_out(self, i: int) -> Any:
             return ca.Sparsity.dense(1, 1) if i == 0 else ca.Sparsity.dense(ng, 1)
 
-        def eval(self, arg: list) -> list:
-            x = np.asarray(arg[0], dtype=float).ravel()
-            return [ca.DM(form.smooth.fun(x)), ca.DM(form.smooth.cons(x))]
+        def has_eval_buffer(self) -> bool:
+            return True
+
+        def eval_buffer(self, arg: list, res: list) -> int:
+            x = np.frombuffer(arg[0], dtype=np.float64).copy()
+            for out, value in zip(res, (form.smooth.fun, form.smooth.cons), strict=True):
+                if out is not None:  # None: an output not asked for
+                    np.frombuffer(out, dtype=np.float64)[:] = value(x)
+            return 0
+
+        def has_jac_sparsity(self, oind: int, iind: int) -> bool:
+            return True
+
+        def get_jac_sparsity(self, oind: int, iind: int, symmetric: bool) -> Any:
+            return ca.Sparsity.dense(1, nx) if oind == 0 else g_sparsity
 
         def has_jacobian(self) -> bool:
             return True
