@@ -25,7 +25,7 @@ from ..options import IPOPT_INSTALL_HINT, casadi_missing
 from .problem import Problem
 from .smooth import SmoothForm
 
-__all__ = ["IpoptForm", "casadi_missing", "jacobian_pattern", "run_ipopt"]
+__all__ = ["IpoptForm", "casadi_missing", "jacobian_pattern", "run_ipopt", "values_callback"]
 
 logger = logging.getLogger(__name__)
 
@@ -136,8 +136,10 @@ class IpoptForm:
         return grad, nz
 
 
-def _callbacks(form: IpoptForm) -> tuple[Any, Any]:
-    """(values, jacobian) CasADi callbacks of x -> (objective, rows)."""
+def values_callback(form: IpoptForm) -> Any:
+    """The CasADi callback x -> (objective, rows >= 0) of the form, whose Jacobian (the
+    objective's gradient and the rows' sparse Jacobian, from the analytic derivatives) is
+    a second callback on the structural pattern."""
     ca = _casadi()
     ng, nx = form.shape
     g_sparsity = ca.Sparsity.triplet(ng, nx, form.rows.tolist(), form.cols.tolist())
@@ -211,7 +213,7 @@ def _callbacks(form: IpoptForm) -> tuple[Any, Any]:
             self.jacobians.append(jacobian)  # CasADi holds no Python reference: keep every one
             return jacobian
 
-    return Values(), None
+    return Values()
 
 
 @dataclass
@@ -250,7 +252,7 @@ def run_ipopt(problem: Problem, x0: np.ndarray) -> tuple[IpoptResult, str]:
     stopped at a singular iterate else "")."""
     ca = _casadi()
     form = IpoptForm(problem)
-    values, _ = _callbacks(form)
+    values = values_callback(form)
     X = ca.MX.sym("x", form.shape[1])
     f, g = values(X)
     solver = ca.nlpsol("assembler_ipopt", "ipopt", {"x": X, "f": f, "g": g}, ipopt_options(problem))
