@@ -16,18 +16,18 @@ from .bounds import check_bound
 from .exceptions import OptionsError, short_repr
 
 __all__ = [
+    "AUTO_IPOPT_PLATFORMS",
     "DEFAULT_GOAL_TOLERANCE",
     "GEOMETRIC_MARGIN",
     "METHODS",
     "SMOOTH_METHODS",
-    "AUTO_IPOPT_PLATFORMS",
     "GoalTolerance",
     "HelperArmOptions",
     "OptimizeOptions",
     "casadi_missing",
     "checked_options",
-    "resolved_method",
     "is_number",
+    "resolved_method",
 ]
 
 
