@@ -13,6 +13,7 @@ from dataclasses import dataclass, field
 from typing import TypeVar
 
 from .bounds import check_bound
+from .choices import OPTIMIZE_METHODS
 from .exceptions import OptionsError, short_repr
 
 __all__ = [
@@ -76,11 +77,11 @@ def checked_options(value: object, cls: type[_OptionsT], what: str) -> _OptionsT
 DEFAULT_GOAL_TOLERANCE = GoalTolerance()
 
 
-#: The optimizer's methods (:mod:`assembler_pin.optimize`): ``slsqp`` (smooth epigraph form,
-#: scipy's SLSQP), ``paper`` (the paper's literal form), ``ipopt`` (the smooth form by IPOPT
-#: on the sparse Jacobian, the ``nlp`` extra), ``auto`` (by the stack's size,
-#: :data:`AUTO_IPOPT_PLATFORMS`).
-METHODS = ("slsqp", "paper", "ipopt", "auto")
+#: The optimizer's methods (:data:`~assembler_pin.choices.OPTIMIZE_METHODS`): ``slsqp``
+#: (smooth epigraph form, scipy's SLSQP), ``paper`` (the paper's literal form), ``ipopt``
+#: (the smooth form by IPOPT on the sparse Jacobian, the ``nlp`` extra), ``auto`` (by the
+#: stack's size, :data:`AUTO_IPOPT_PLATFORMS`).
+METHODS = OPTIMIZE_METHODS
 
 #: The methods of the smooth epigraph form (analytic gradients): the sag objectives, the
 #: sag limit and a motion term need one of them.

@@ -118,6 +118,7 @@ def _extra_figures(args: argparse.Namespace, am) -> int:
         from ..bench import LEVEL_GRID
         from ..bench_speed import (
             benchmark_capacity_memory,
+            benchmark_long_stacks,
             benchmark_single_statics,
             benchmark_solve_starts,
             benchmark_startup,
@@ -131,6 +132,7 @@ def _extra_figures(args: argparse.Namespace, am) -> int:
         doc["single_statics"] = benchmark_single_statics()
         doc["capacity_memory"] = benchmark_capacity_memory(am)
         doc["startup"] = benchmark_startup()
+        doc["long_stacks"] = benchmark_long_stacks()
     if args.json:
         print(dumps(doc))
         return 0

@@ -128,7 +128,9 @@ class Problem:
             pose = pose_derivatives(self.am, p.plates, p.values)
         except (np.linalg.LinAlgError, SingularConfigurationError) as exc:
             raise _SingularIterateError(str(exc)) from None
-        d = ChartDerivatives(pose, self.chart.twist_jacobian(p.x, p.plates))
+        # the block product for IPOPT (SLSQP keeps the dense one, its answers bit for bit)
+        blocks = np.asarray(self.chart.movable) - 1 if self.opts.method == "ipopt" else None
+        d = ChartDerivatives(pose, self.chart.twist_jacobian(p.x, p.plates), blocks)
         self._derivs = (key, d)
         self.gradient_evaluations += 1
         return d
