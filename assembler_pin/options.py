@@ -187,8 +187,8 @@ class OptimizeOptions:
             check_bound("optimize.max_sag", self.max_sag, "max_sag [m]")
         if self.method not in SMOOTH_METHODS and (self.objective != "force" or self.max_sag is not None):
             raise OptionsError(
-                f"objective {self.objective!r} and max_sag need method {', '.join(SMOOTH_METHODS)} "
-                "(the analytic gradients), "
+                f"objective {self.objective!r} and max_sag need method 'slsqp' (or 'ipopt', 'auto': "
+                "the analytic gradients), "
                 f"got method {self.method!r}"
             )
 

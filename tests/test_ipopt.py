@@ -161,3 +161,25 @@ def test_cli_method_ipopt(capsys):
     doc = json.loads(capsys.readouterr().out)
     assert doc["success"]
     assert doc["optimizer"]["method"] == "ipopt"
+
+
+def test_ipopt_sag_limit_and_motion_rows(am, random_poses):
+    """The rows of the other smooth options reach IPOPT too: a sag limit below the force
+    optimum's sag is met (by the package's independent sag of the returned state), and a
+    motion step holds every leg within it of the previous sample."""
+    from assembler_pin.compliance import sag_and_gradient
+    from assembler_pin.optimize import MotionTerm
+    from assembler_pin.state import evaluate_state
+
+    start = random_poses[7][1]
+    free = optimize_internal_poses(am, start, options=IPOPT)
+    limit = 0.9 * sag_and_gradient(am, free.optimized.plates).sag
+    capped = optimize_internal_poses(am, start, options=OptimizeOptions(method="ipopt", max_sag=limit))
+    assert capped.success
+    assert sag_and_gradient(am, capped.optimized.plates).sag <= limit
+    _independently_feasible(am, capped, start.se3(am.n))
+    previous = evaluate_state(am, start).leg_lengths
+    motion = MotionTerm(previous, max_step=2e-3)
+    stepped = optimize_internal_poses(am, start, options=IPOPT, motion=motion)
+    assert stepped.optimized.feasible
+    assert np.abs(stepped.optimized.leg_lengths - previous).max() <= 2e-3 + 1e-12

@@ -161,7 +161,7 @@ def _checked_inputs(
         goal = checked_goal(goal, "goal")
     if motion is not None:
         if opts.method not in SMOOTH_METHODS:
-            raise OptionsError(f"a motion term needs method {', '.join(SMOOTH_METHODS)}")
+            raise OptionsError("a motion term needs method 'slsqp' (or 'ipopt', 'auto')")
         if motion.previous_lengths.shape != (am.n, 6):
             raise OptionsError(f"previous_lengths must have shape ({am.n}, 6), got {motion.previous_lengths.shape}")
     start = initial.plates if isinstance(initial, StackState) else plate_arrays(am, initial)
