@@ -314,14 +314,15 @@ def benchmark_long_stacks(
     thread) of :func:`long_stack` per size and method: wall and CPU time [s], iterations,
     time per iteration [ms], max|F| of the answer [N] and success; SLSQP only up to
     ``slsqp_up_to`` platforms (above, its dense step takes minutes). Then, per method, the
-    exponent p of time per iteration ∝ n^p (least squares over the sizes, target 1.5) and
-    the targets of :data:`LONG_STACK_TARGETS_S` beside the times."""
+    exponent p of time per iteration ∝ n^p (least squares over the sizes, of the wall time
+    and of the CPU time, the steadier one on a shared machine; target 1.5) and the targets
+    of :data:`LONG_STACK_TARGETS_S` beside the times."""
     from .optimize import OptimizeOptions, optimize_internal_poses
     from .optimize.ipopt import casadi_missing
 
     methods = tuple(m for m in methods if m != "ipopt" or not casadi_missing())
     out: dict[str, Any] = {}
-    per_iteration: dict[str, list[tuple[int, float]]] = {m: [] for m in methods}
+    per_iteration: dict[str, list[tuple[int, float, float]]] = {m: [] for m in methods}
     for n in sizes:
         am, start = long_stack(n)
         for method in methods:
@@ -329,19 +330,21 @@ def benchmark_long_stacks(
                 continue
             cpu = time.process_time()
             result = optimize_internal_poses(am, start, options=OptimizeOptions(method=method))
-            key = f"n{n}_{method}"
+            cpu = time.process_time() - cpu
+            key, iterations = f"n{n}_{method}", max(result.iterations, 1)
             out[f"{key}_s"] = result.time_s
-            out[f"{key}_cpu_s"] = time.process_time() - cpu
+            out[f"{key}_cpu_s"] = cpu
             out[f"{key}_iterations"] = result.iterations
-            out[f"{key}_ms_per_iteration"] = 1e3 * result.time_s / max(result.iterations, 1)
+            out[f"{key}_ms_per_iteration"] = 1e3 * result.time_s / iterations
             out[f"{key}_max_abs_force_N"] = result.optimized.max_abs_force
             out[f"{key}_success"] = bool(result.success)
-            per_iteration[method].append((n, result.time_s / max(result.iterations, 1)))
+            per_iteration[method].append((n, result.time_s / iterations, cpu / iterations))
             if n in LONG_STACK_TARGETS_S:
                 out[f"{key}_target_s"] = LONG_STACK_TARGETS_S[n]
     for method, points in per_iteration.items():
         if len(points) >= 2:
-            ns, ts = np.log([p[0] for p in points]), np.log([p[1] for p in points])
-            out[f"{method}_per_iteration_exponent"] = float(np.polyfit(ns, ts, 1)[0])
+            ns = np.log([p[0] for p in points])
+            out[f"{method}_per_iteration_exponent"] = float(np.polyfit(ns, np.log([p[1] for p in points]), 1)[0])
+            out[f"{method}_per_iteration_exponent_cpu"] = float(np.polyfit(ns, np.log([p[2] for p in points]), 1)[0])
     out["per_iteration_exponent_target"] = 1.5
     return out

@@ -84,9 +84,9 @@ class ChartDerivatives:
         if self.blocks is None:
             return rows @ self.B
         k = self.blocks
-        per_plate = rows.reshape(rows.shape[0], -1, 6)[:, k, :]  # (rows, movable, 6)
+        per_plate = rows.reshape(rows.shape[0], -1, 6)[:, k, :].transpose(1, 0, 2)  # (movable, rows, 6)
         B = self.B.reshape(-1, 6, len(k), 6)[k, :, np.arange(len(k)), :]  # (movable, 6, 6)
-        return np.einsum("rsi,sij->rsj", per_plate, B).reshape(rows.shape[0], -1)
+        return np.matmul(per_plate, B).transpose(1, 0, 2).reshape(rows.shape[0], -1)
 
     @cached_property
     def forces(self) -> np.ndarray:
