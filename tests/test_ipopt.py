@@ -183,3 +183,34 @@ def test_ipopt_sag_limit_and_motion_rows(am, random_poses):
     stepped = optimize_internal_poses(am, start, options=IPOPT, motion=motion)
     assert stepped.optimized.feasible
     assert np.abs(stepped.optimized.leg_lengths - previous).max() <= 2e-3 + 1e-12
+
+
+def test_long_stack_figure_and_its_bench_row(monkeypatch, capsys):
+    """The scaling figure on two tiny stacks: every key, IPOPT's optimum no worse than
+    SLSQP's; ``bench --speed`` prints it as its ``long_stacks`` group."""
+    from assembler_pin import bench_speed
+    from assembler_pin.cli.app import main
+
+    row = bench_speed.benchmark_long_stacks(sizes=(2, 3))
+    for n in (2, 3):
+        for method in ("slsqp", "ipopt"):
+            assert row[f"n{n}_{method}_success"], (n, method)
+            assert row[f"n{n}_{method}_s"] > 0 and row[f"n{n}_{method}_iterations"] >= 1
+        assert row[f"n{n}_ipopt_max_abs_force_N"] <= row[f"n{n}_slsqp_max_abs_force_N"] * (1 + 1e-3)
+        _, plates = bench_speed.long_stack(n)
+        am = AssemblerModel.from_config(load_config().replace(platforms=n))
+        assert np.abs(design_forces(am.config, plates)).max() >= row[f"n{n}_ipopt_max_abs_force_N"] - 1e-9
+    assert "ipopt_per_iteration_exponent" in row and row["per_iteration_exponent_target"] == 1.5
+    stub = {"x": 1.0}
+    for name in (
+        "benchmark_threads",
+        "benchmark_solve_starts",
+        "benchmark_statics_kernel",
+        "benchmark_capacity_memory",
+    ):
+        monkeypatch.setattr(bench_speed, name, lambda *a, **k: stub)
+    monkeypatch.setattr(bench_speed, "benchmark_single_statics", lambda *a, **k: stub)
+    monkeypatch.setattr(bench_speed, "benchmark_startup", lambda *a, **k: stub)
+    monkeypatch.setattr(bench_speed, "benchmark_long_stacks", lambda *a, **k: {"n32_ipopt_s": 1.5})
+    assert main(["bench", "--speed", "--json"]) == 0
+    assert json.loads(capsys.readouterr().out)["long_stacks"] == {"n32_ipopt_s": 1.5}
