@@ -214,3 +214,21 @@ def test_long_stack_figure_and_its_bench_row(monkeypatch, capsys):
     monkeypatch.setattr(bench_speed, "benchmark_long_stacks", lambda *a, **k: {"n32_ipopt_s": 1.5})
     assert main(["bench", "--speed", "--json"]) == 0
     assert json.loads(capsys.readouterr().out)["long_stacks"] == {"n32_ipopt_s": 1.5}
+
+
+def test_ctrl_c_inside_ipopt_reaches_the_caller(am, random_poses, monkeypatch):
+    """A Ctrl-C in an evaluation is not taken for a failed evaluation: it is raised again
+    once IPOPT returns."""
+    from assembler_pin.optimize.smooth import SmoothForm
+
+    real, calls = SmoothForm.cons, []
+
+    def interrupted(self, x):
+        calls.append(1)
+        if len(calls) == 4:
+            raise KeyboardInterrupt
+        return real(self, x)
+
+    monkeypatch.setattr(SmoothForm, "cons", interrupted)
+    with pytest.raises(KeyboardInterrupt):
+        optimize_internal_poses(am, random_poses[7][1], options=IPOPT)

@@ -108,6 +108,7 @@ class IpoptForm:
         cols, rows = np.nonzero(self.pattern.T)  # column-major: CasADi's nonzero order
         self.rows, self.cols = rows, cols
         self.singular = ""
+        self.interrupt: KeyboardInterrupt | None = None
         self._last: tuple[bytes, np.ndarray, np.ndarray] | None = None
 
     @property
@@ -135,13 +136,31 @@ class IpoptForm:
         return grad, nz
 
 
-def values_callback(form: IpoptForm) -> Any:
-    """The CasADi callback x -> (objective, rows >= 0) of the form, whose Jacobian (the
-    objective's gradient and the rows' sparse Jacobian, from the analytic derivatives) is
-    a second callback on the structural pattern."""
-    ca = _casadi()
+def _guarded(form: IpoptForm, fill: Any) -> int:
+    """Run ``fill()`` inside a CasADi callback: 0, or 1 after a Ctrl-C (kept in
+    :attr:`IpoptForm.interrupt` and raised again once IPOPT returns: CasADi would take it
+    for a failed evaluation)."""
+    if form.interrupt is not None:  # IPOPT's retries after a Ctrl-C: refused at once
+        return 1
+    try:
+        fill()
+    except KeyboardInterrupt as exc:
+        form.interrupt = exc
+        return 1
+    return 0
+
+
+def _write(res: list, values: tuple) -> None:
+    """Copy each value (an array, or a function of nothing) into its output buffer; a
+    ``None`` buffer is an output not asked for."""
+    for out, value in zip(res, values, strict=True):
+        if out is not None:
+            np.frombuffer(out, dtype=np.float64)[:] = value() if callable(value) else value
+
+
+def _jacobian_callback(ca: Any, form: IpoptForm, g_sparsity: Any) -> Any:
+    """The callback (x, f, g) -> (objective gradient (1, nx), rows' Jacobian on the pattern)."""
     ng, nx = form.shape
-    g_sparsity = ca.Sparsity.triplet(ng, nx, form.rows.tolist(), form.cols.tolist())
 
     class Jacobian(ca.Callback):
         def __init__(self) -> None:
@@ -164,11 +183,19 @@ def values_callback(form: IpoptForm) -> Any:
             return True
 
         def eval_buffer(self, arg: list, res: list) -> int:
-            grad, nz = form.derivatives(np.frombuffer(arg[0], dtype=np.float64).copy())
-            for out, value in zip(res, (grad, nz), strict=True):
-                if out is not None:  # None: an output not asked for
-                    np.frombuffer(out, dtype=np.float64)[:] = value
-            return 0
+            x = np.frombuffer(arg[0], dtype=np.float64).copy()
+            return _guarded(form, lambda: _write(res, form.derivatives(x)))
+
+    return Jacobian()
+
+
+def values_callback(form: IpoptForm) -> Any:
+    """The CasADi callback x -> (objective, rows >= 0) of the form, whose Jacobian (the
+    objective's gradient and the rows' sparse Jacobian, from the analytic derivatives) is
+    a second callback on the structural pattern (:func:`_jacobian_callback`)."""
+    ca = _casadi()
+    ng, nx = form.shape
+    g_sparsity = ca.Sparsity.triplet(ng, nx, form.rows.tolist(), form.cols.tolist())
 
     class Values(ca.Callback):
         def __init__(self) -> None:
@@ -193,10 +220,7 @@ def values_callback(form: IpoptForm) -> Any:
 
         def eval_buffer(self, arg: list, res: list) -> int:
             x = np.frombuffer(arg[0], dtype=np.float64).copy()
-            for out, value in zip(res, (form.smooth.fun, form.smooth.cons), strict=True):
-                if out is not None:  # None: an output not asked for
-                    np.frombuffer(out, dtype=np.float64)[:] = value(x)
-            return 0
+            return _guarded(form, lambda: _write(res, (lambda: form.smooth.fun(x), lambda: form.smooth.cons(x))))
 
         def has_jac_sparsity(self, oind: int, iind: int) -> bool:
             return True
@@ -208,7 +232,7 @@ def values_callback(form: IpoptForm) -> Any:
             return True
 
         def get_jacobian(self, name: str, inames: list, onames: list, opts: dict) -> Any:
-            jacobian = Jacobian()
+            jacobian = _jacobian_callback(ca, form, g_sparsity)
             self.jacobians.append(jacobian)  # CasADi holds no Python reference: keep every one
             return jacobian
 
@@ -266,6 +290,8 @@ def run_ipopt(problem: Problem, x0: np.ndarray) -> tuple[IpoptResult, str]:
     f, g = values(X)
     solver = ca.nlpsol("assembler_ipopt", "ipopt", {"x": X, "f": f, "g": g}, ipopt_options(problem))
     sol = solver(x0=x0, lbg=0.0, ubg=np.inf)
+    if form.interrupt is not None:
+        raise form.interrupt
     stats = solver.stats()
     status = str(stats.get("return_status", "unknown"))
     x = np.asarray(sol["x"], dtype=float).ravel()
