@@ -318,7 +318,7 @@ def benchmark_long_stacks(
     and of the CPU time, the steadier one on a shared machine; target 1.5) and the targets
     of :data:`LONG_STACK_TARGETS_S` beside the times."""
     from .optimize import OptimizeOptions, optimize_internal_poses
-    from .optimize.ipopt import casadi_missing
+    from .options import casadi_missing
 
     methods = tuple(m for m in methods if m != "ipopt" or not casadi_missing())
     out: dict[str, Any] = {}
