@@ -22,17 +22,21 @@ from .bounds import check_bound
 from .model import AssemblerModel
 
 __all__ = [
+    "LONG_STACK_SIZES",
+    "LONG_STACK_TARGETS_S",
     "STARTUP_COMMANDS",
     "STARTUP_TARGETS_S",
     "THREAD_GOALS",
     "TWO_POINT_TARGETS_MS",
     "benchmark_capacity_memory",
+    "benchmark_long_stacks",
     "benchmark_single_statics",
     "benchmark_solve_starts",
     "benchmark_startup",
     "benchmark_statics_kernel",
     "benchmark_threads",
     "benchmark_two_point",
+    "long_stack",
     "rss_mb",
 ]
 
@@ -320,4 +324,76 @@ def benchmark_two_point(platforms: tuple[int, ...] = (4, 64), repeat: int = 20) 
             out[f"{key}_cpu_ms"] = _median_cpu_ms(call, calls_made)
             if key in TWO_POINT_TARGETS_MS:
                 out[f"{key}_target_ms"] = TWO_POINT_TARGETS_MS[key]
+    return out
+
+
+#: Stack sizes of :func:`benchmark_long_stacks`.
+LONG_STACK_SIZES = (8, 16, 32, 64)
+
+#: Targets [s] of one optimization per stack size (:func:`benchmark_long_stacks`).
+LONG_STACK_TARGETS_S = {32: 2.0, 64: 5.0}
+
+#: The bend of one platform of :func:`long_stack` at n = 8 (a twist [m, rad] in its home
+#: step's frame: 2 mm along x, 5 mrad about y), scaled by 8/n.
+LONG_STACK_BEND = (0.002, 0.0, 0.0, 0.0, 0.005, 0.0)
+
+
+def long_stack(n: int) -> tuple[AssemblerModel, Any]:
+    """A stack of ``n`` default platforms and its start: every platform bent alike from its
+    home step by :data:`LONG_STACK_BEND` times 8/n (the EE about 5 cm off the vertical,
+    leaning 2.3°, at every size); the goal is the start's plate n."""
+    import pinocchio as pin
+
+    from .config import load_config
+    from .kinematics import PlateArrays
+
+    am = AssemblerModel.from_config(load_config().replace(platforms=n))
+    step = pin.SE3(np.eye(3), np.array([0.0, 0.0, am.config.home_height]))
+    step = step * pin.exp6(np.array(LONG_STACK_BEND) * 8.0 / n)
+    plates = [pin.SE3.Identity()]
+    for _ in range(n):
+        plates.append(plates[-1] * step)
+    return am, PlateArrays.from_se3(plates)
+
+
+def benchmark_long_stacks(
+    sizes: tuple[int, ...] = LONG_STACK_SIZES, methods: tuple[str, ...] = ("slsqp", "ipopt"), slsqp_up_to: int = 32
+) -> dict[str, Any]:
+    """One optimization (:func:`~assembler_pin.optimize.optimize_internal_poses`, one BLAS
+    thread) of :func:`long_stack` per size and method: wall and CPU time [s], iterations,
+    time per iteration [ms], max|F| of the answer [N] and success; SLSQP only up to
+    ``slsqp_up_to`` platforms (above, its dense step takes minutes). Then, per method, the
+    exponent p of time per iteration ∝ n^p (least squares over the sizes, of the wall time
+    and of the CPU time, the steadier one on a shared machine; target 1.5) and the targets
+    of :data:`LONG_STACK_TARGETS_S` beside the times."""
+    from .optimize import OptimizeOptions, optimize_internal_poses
+    from .options import casadi_missing
+
+    methods = tuple(m for m in methods if m != "ipopt" or not casadi_missing())
+    out: dict[str, Any] = {}
+    per_iteration: dict[str, list[tuple[int, float, float]]] = {m: [] for m in methods}
+    for n in sizes:
+        am, start = long_stack(n)
+        for method in methods:
+            if method == "slsqp" and n > slsqp_up_to:
+                continue
+            cpu = time.process_time()
+            result = optimize_internal_poses(am, start, options=OptimizeOptions(method=method))
+            cpu = time.process_time() - cpu
+            key, iterations = f"n{n}_{method}", max(result.iterations, 1)
+            out[f"{key}_s"] = result.time_s
+            out[f"{key}_cpu_s"] = cpu
+            out[f"{key}_iterations"] = result.iterations
+            out[f"{key}_ms_per_iteration"] = 1e3 * result.time_s / iterations
+            out[f"{key}_max_abs_force_N"] = result.optimized.max_abs_force
+            out[f"{key}_success"] = bool(result.success)
+            per_iteration[method].append((n, result.time_s / iterations, cpu / iterations))
+            if n in LONG_STACK_TARGETS_S:
+                out[f"{key}_target_s"] = LONG_STACK_TARGETS_S[n]
+    for method, points in per_iteration.items():
+        if len(points) >= 2:
+            ns = np.log([p[0] for p in points])
+            out[f"{method}_per_iteration_exponent"] = float(np.polyfit(ns, np.log([p[1] for p in points]), 1)[0])
+            out[f"{method}_per_iteration_exponent_cpu"] = float(np.polyfit(ns, np.log([p[2] for p in points]), 1)[0])
+    out["per_iteration_exponent_target"] = 1.5
     return out

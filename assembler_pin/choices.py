@@ -14,6 +14,7 @@ __all__ = [
     "CARRIER_NAMES",
     "FORCE_SCALES",
     "OBJECTIVES",
+    "OPTIMIZE_METHODS",
     "PATH_KINDS",
     "SCENARIO_NAMES",
     "SOLVE_STARTS",
@@ -39,6 +40,12 @@ SOLVE_STARTS = ("first", "all")
 #: (Ω, paper eq. 10), ``sag`` (the EE's sag under its own load), ``weighted`` (Ω plus a
 #: weighted, normalized sag).
 OBJECTIVES = ("force", "sag", "weighted")
+
+#: The optimizer's methods (:mod:`assembler_pin.optimize`, the default first): ``slsqp``
+#: (smooth epigraph form, scipy's SLSQP), ``paper`` (the paper's literal form, finite
+#: differences), ``ipopt`` (the smooth form by IPOPT on the sparse constraint Jacobian, the
+#: ``nlp`` extra), ``auto`` (IPOPT for long stacks, SLSQP otherwise).
+OPTIMIZE_METHODS = ("slsqp", "paper", "ipopt", "auto")
 
 #: Interpolations of an EE path on SE(3): ``screw`` (geodesic) or ``linear`` (line + slerp).
 PATH_KINDS = ("screw", "linear")

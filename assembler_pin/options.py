@@ -13,17 +13,22 @@ from dataclasses import dataclass, field
 from typing import TypeVar
 
 from .bounds import check_bound
+from .choices import OPTIMIZE_METHODS
 from .exceptions import OptionsError, short_repr
 
 __all__ = [
+    "AUTO_IPOPT_PLATFORMS",
     "DEFAULT_GOAL_TOLERANCE",
     "GEOMETRIC_MARGIN",
     "METHODS",
+    "SMOOTH_METHODS",
     "GoalTolerance",
     "HelperArmOptions",
     "OptimizeOptions",
+    "casadi_missing",
     "checked_options",
     "is_number",
+    "resolved_method",
 ]
 
 
@@ -72,7 +77,19 @@ def checked_options(value: object, cls: type[_OptionsT], what: str) -> _OptionsT
 DEFAULT_GOAL_TOLERANCE = GoalTolerance()
 
 
-METHODS = ("slsqp", "paper")
+#: The optimizer's methods (:data:`~assembler_pin.choices.OPTIMIZE_METHODS`): ``slsqp``
+#: (smooth epigraph form, scipy's SLSQP), ``paper`` (the paper's literal form), ``ipopt``
+#: (the smooth form by IPOPT on the sparse Jacobian, the ``nlp`` extra), ``auto`` (by the
+#: stack's size, :data:`AUTO_IPOPT_PLATFORMS`).
+METHODS = OPTIMIZE_METHODS
+
+#: The methods of the smooth epigraph form (analytic gradients): the sag objectives, the
+#: sag limit and a motion term need one of them.
+SMOOTH_METHODS = ("slsqp", "ipopt", "auto")
+
+#: ``method="auto"`` runs IPOPT from this many platforms up (SLSQP below, and wherever
+#: CasADi is not installed): measured, SLSQP is faster up to 8 platforms, IPOPT from 12.
+AUTO_IPOPT_PLATFORMS = 12
 
 #: How far inside the stroke and deflection limits the optimizer's rows keep a point [m, and
 #: cosine units]. SLSQP satisfies its rows only to ~1e-8; with a smaller margin its optimum can
@@ -85,7 +102,10 @@ class OptimizeOptions:
     """Settings of :func:`optimize_internal_poses`.
 
     Attributes:
-        method: ``"slsqp"`` (smooth epigraph form, analytic gradients) or ``"paper"``.
+        method: ``"slsqp"`` (smooth epigraph form, analytic gradients, scipy's SLSQP),
+            ``"ipopt"`` (the same form by IPOPT on the sparse constraint Jacobian; needs the
+            ``nlp`` extra), ``"auto"`` (IPOPT from :data:`AUTO_IPOPT_PLATFORMS` platforms up
+            when CasADi is installed, SLSQP otherwise) or ``"paper"``.
         w1: weight of max|F| [1/N]; w2: weight of the plate-deviation term [1/rad].
         ee_tolerance: allow the EE plate to move this far from the goal (position [m],
             rotation [rad]); None keeps it exactly at the goal.
@@ -99,11 +119,11 @@ class OptimizeOptions:
         objective: what is minimized (:data:`~assembler_pin.choices.OBJECTIVES`,
             :mod:`assembler_pin.objective`): ``"force"`` Ω (paper eq. 10), ``"sag"`` the EE's
             sag under its own load, ``"weighted"`` Ω plus ``sag_weight`` times the normalized
-            sag; ``"sag"`` and ``"weighted"`` need method ``"slsqp"``.
+            sag; ``"sag"`` and ``"weighted"`` need a smooth method (:data:`SMOOTH_METHODS`).
         sag_weight: the weight w of the sag in the weighted objective (bounds key
             ``optimize.sag_weight``, no unit).
         max_sag: largest EE sag [m] of the answer (bounds key ``optimize.max_sag``), None for
-            no limit; needs method ``"slsqp"``.
+            no limit; needs a smooth method.
     """
 
     method: str = "slsqp"
@@ -122,6 +142,8 @@ class OptimizeOptions:
     def __post_init__(self) -> None:
         if not isinstance(self.method, str) or self.method not in METHODS:
             raise OptionsError(f"method must be one of {', '.join(METHODS)}, got {short_repr(self.method)}")
+        if self.method == "ipopt":
+            _check_casadi()
         self._check_sag_options()
         for name, positive in (
             ("w1", False),
@@ -163,11 +185,40 @@ class OptimizeOptions:
         check_bound("optimize.sag_weight", self.sag_weight, "sag_weight")
         if self.max_sag is not None:
             check_bound("optimize.max_sag", self.max_sag, "max_sag [m]")
-        if self.method != "slsqp" and (self.objective != "force" or self.max_sag is not None):
+        if self.method not in SMOOTH_METHODS and (self.objective != "force" or self.max_sag is not None):
             raise OptionsError(
-                f"objective {self.objective!r} and max_sag need method 'slsqp' (the analytic gradients), "
+                f"objective {self.objective!r} and max_sag need method 'slsqp' (or 'ipopt', 'auto': "
+                "the analytic gradients), "
                 f"got method {self.method!r}"
             )
+
+
+#: What a user without CasADi is told.
+IPOPT_INSTALL_HINT = "method 'ipopt' needs CasADi (IPOPT): pip install assembler_pin[nlp]"
+
+
+def casadi_missing() -> bool:
+    """CasADi cannot be imported here (checked without importing it: CasADi is heavy)."""
+    import importlib.util
+    import sys
+
+    if "casadi" in sys.modules:
+        return sys.modules["casadi"] is None
+    return importlib.util.find_spec("casadi") is None
+
+
+def _check_casadi() -> None:
+    """OptionsError naming the ``nlp`` extra when CasADi cannot be imported."""
+    if casadi_missing():
+        raise OptionsError(IPOPT_INSTALL_HINT)
+
+
+def resolved_method(method: str, platforms: int) -> str:
+    """The method that runs: ``"auto"`` is ``"ipopt"`` from :data:`AUTO_IPOPT_PLATFORMS`
+    platforms up when CasADi is installed, else ``"slsqp"``; any other method itself."""
+    if method != "auto":
+        return method
+    return "ipopt" if platforms >= AUTO_IPOPT_PLATFORMS and not casadi_missing() else "slsqp"
 
 
 @dataclass

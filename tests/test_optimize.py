@@ -166,3 +166,15 @@ def test_smooth_form_derivatives_match_finite_differences(start):
     row_scale = np.abs(fd_jac).max(axis=1, keepdims=True)  # each row held at its own scale
     assert np.all(np.abs(jac - fd_jac) <= 1e-6 * row_scale + 1e-10)
     assert jac.shape[0] == 2 * 24 + 2 * 24 + 5 * 24 + 2 + 2 * 24  # every family present
+
+
+def test_auto_method_is_slsqp_bit_for_bit_on_short_stacks(am, start):
+    """``method="auto"`` below :data:`~assembler_pin.options.AUTO_IPOPT_PLATFORMS` is SLSQP:
+    the same plates to the last bit, and the result names the method that ran."""
+    from assembler_pin.options import AUTO_IPOPT_PLATFORMS
+
+    assert am.n < AUTO_IPOPT_PLATFORMS
+    slsqp = optimize_internal_poses(am, start)
+    auto = optimize_internal_poses(am, start, options=OptimizeOptions(method="auto"))
+    assert auto.method == "slsqp" and auto.success
+    assert np.array_equal(auto.optimized.plates.as_matrices(), slsqp.optimized.plates.as_matrices())

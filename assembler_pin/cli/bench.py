@@ -129,6 +129,7 @@ def _extra_figures(args: argparse.Namespace, am) -> int:
         from ..bench import LEVEL_GRID
         from ..bench_speed import (
             benchmark_capacity_memory,
+            benchmark_long_stacks,
             benchmark_single_statics,
             benchmark_solve_starts,
             benchmark_startup,
@@ -144,6 +145,7 @@ def _extra_figures(args: argparse.Namespace, am) -> int:
         doc["capacity_memory"] = benchmark_capacity_memory(am)
         doc["startup"] = benchmark_startup()
         doc["two_point"] = benchmark_two_point()
+        doc["long_stacks"] = benchmark_long_stacks()
     if args.json:
         print(dumps(doc))
         return 0

@@ -22,6 +22,12 @@ Methods:
 * ``"slsqp"`` (default, :mod:`.smooth`): max|F| through an epigraph variable ``s``
   (``-s <= F_i <= s``), so the problem is smooth, and analytic gradients of every force,
   length, deflection and angle (:mod:`assembler_pin.gradients`) — scipy's SLSQP.
+* ``"ipopt"`` (:mod:`.ipopt`, the ``nlp`` extra): the same epigraph problem, rows and
+  analytic derivatives, solved by IPOPT (through CasADi) on the constraint Jacobian's
+  structural sparsity (platform j's legs move with plates j and j+1, its forces with plates
+  j..n); every point IPOPT evaluates is tracked, so the best feasible one is never lost.
+* ``"auto"``: IPOPT from :data:`~assembler_pin.options.AUTO_IPOPT_PLATFORMS` platforms up
+  when CasADi is installed, SLSQP otherwise (the result's ``method`` names the one that ran).
 * ``"paper"`` (:mod:`.paper`): the paper's literal formulation — the non-smooth ``max`` in
   the objective, the poses as TAA vectors in the world frame, gradients by scipy's finite
   differences — kept as the baseline to compare against.

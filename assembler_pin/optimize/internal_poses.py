@@ -7,6 +7,7 @@ and only such a re-checked state can be called feasible.
 
 from __future__ import annotations
 
+import dataclasses
 import logging
 import time
 from dataclasses import dataclass
@@ -19,7 +20,7 @@ from ..kinematics import PlateArrays, checked_goal, plate_arrays
 from ..messages import one_line
 from ..model import AssemblerModel, checked_model
 from ..objective import SagObjective, state_sag, state_score
-from ..options import GoalTolerance, OptimizeOptions, checked_options
+from ..options import SMOOTH_METHODS, GoalTolerance, OptimizeOptions, checked_options, resolved_method
 from ..state import StackState, evaluate_state
 from ..threads import one_blas_thread
 from .options import MotionTerm
@@ -137,8 +138,6 @@ def _sag_verdict(
 
 def _sag_checked(check: _Check, result: OptimizeResult, state: StackState) -> OptimizeResult:
     """A result without a solve (nothing to optimize) with the sag limit and the sags."""
-    import dataclasses
-
     success, message = _sag_verdict(check, result.success, result.message, False, state, state)
     sag = state_sag(check.am, state)
     return dataclasses.replace(
@@ -161,11 +160,13 @@ def _checked_inputs(
     if goal is not None:
         goal = checked_goal(goal, "goal")
     if motion is not None:
-        if opts.method != "slsqp":
-            raise OptionsError("a motion term needs method 'slsqp'")
+        if opts.method not in SMOOTH_METHODS:
+            raise OptionsError("a motion term needs method 'slsqp' (or 'ipopt', 'auto')")
         if motion.previous_lengths.shape != (am.n, 6):
             raise OptionsError(f"previous_lengths must have shape ({am.n}, 6), got {motion.previous_lengths.shape}")
     start = initial.plates if isinstance(initial, StackState) else plate_arrays(am, initial)
+    if opts.method == "auto":
+        opts = dataclasses.replace(opts, method=resolved_method(opts.method, am.n))
     return opts, start, start.se3(am.n) if goal is None else goal
 
 
@@ -198,11 +199,16 @@ class _Check:
 
 
 def _run_solver(problem: Problem, initial_state: StackState) -> tuple[SolverResult, np.ndarray, str]:
-    """Run SLSQP in the method's chart; returns (scipy result, final pose point, the reason
-    when it stopped at a singular iterate else "")."""
+    """Run the method (SLSQP in its chart, or IPOPT on the epigraph form); returns (solver
+    result, final pose point, the reason when it stopped at a singular iterate else "")."""
     from scipy.optimize import minimize  # on first use: fast start-up
 
     opts = problem.opts
+    if opts.method == "ipopt":
+        from .ipopt import run_ipopt
+
+        ipopt_result, singular = run_ipopt(problem, SmoothForm(problem).x0(initial_state))
+        return ipopt_result, ipopt_result.x[:-1], singular
     form = SmoothForm(problem) if opts.method == "slsqp" else PaperForm(problem)
     x0 = form.x0(initial_state)
     cons: dict = {"type": "ineq", "fun": form.cons}

@@ -21,7 +21,7 @@ from ..gradients import pose_derivatives, pose_values
 from ..kinematics import PlateArrays
 from ..model import AssemblerModel
 from ..objective import SagObjective, motion_cost, omega, sag_reference
-from ..options import OptimizeOptions
+from ..options import SMOOTH_METHODS, OptimizeOptions
 from .charts import LocalChart, TaaChart
 from .options import MotionTerm
 from .point import ChartDerivatives, Point
@@ -78,7 +78,7 @@ class Problem:
             opts.objective, opts.sag_weight, sag_reference(am) if opts.objective != "force" else 1.0
         )
         force_objective = opts.objective == "force"
-        cap = self.start_max_force if opts.method == "slsqp" and start_feasible and force_objective else np.inf
+        cap = self.start_max_force if opts.method in SMOOTH_METHODS and start_feasible and force_objective else np.inf
         self.force_limits = ForceLimitRows(min(leg.max_tension, cap) - 1e-6, min(leg.max_compression, cap) - 1e-6)
         self.leg_limits = LegLimitRows(leg, opts.limit_margin, opts.rise_margin)
         self.ee = EETolerance(goal, opts.ee_tolerance, self.chart) if opts.ee_tolerance is not None else None
@@ -128,7 +128,9 @@ class Problem:
             pose = pose_derivatives(self.am, p.plates, p.values)
         except (np.linalg.LinAlgError, SingularConfigurationError) as exc:
             raise _SingularIterateError(str(exc)) from None
-        d = ChartDerivatives(pose, self.chart.twist_jacobian(p.x, p.plates))
+        # the block product for IPOPT (SLSQP keeps the dense one, its answers bit for bit)
+        blocks = np.asarray(self.chart.movable) - 1 if self.opts.method == "ipopt" else None
+        d = ChartDerivatives(pose, self.chart.twist_jacobian(p.x, p.plates), blocks)
         self._derivs = (key, d)
         self.gradient_evaluations += 1
         return d

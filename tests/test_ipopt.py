@@ -1,0 +1,234 @@
+"""The interior-point method (``method="ipopt"``): its answers checked by the independent
+free-body forces and design constraints (:mod:`checks`), its Jacobian against central
+differences, its optimum against SLSQP's, the ``auto`` rule and a missing CasADi."""
+
+from __future__ import annotations
+
+import json
+import sys
+
+import numpy as np
+import pinocchio as pin
+import pytest
+from checks import design_forces, design_problems
+
+from assembler_pin import AssemblerModel, load_config
+from assembler_pin.exceptions import OptionsError
+from assembler_pin.kinematics import PlateArrays
+from assembler_pin.optimize import OptimizeOptions, optimize_internal_poses
+from assembler_pin.options import AUTO_IPOPT_PLATFORMS, resolved_method
+
+casadi = pytest.importorskip("casadi")
+
+IPOPT = OptimizeOptions(method="ipopt")
+
+
+def bent_stack(n: int, twist=(0.004, 0.0, 0.0, 0.0, 0.01, 0.0)) -> tuple[AssemblerModel, PlateArrays]:
+    """A stack of ``n`` platforms, each bent alike from its home pose (a feasible start)."""
+    am = AssemblerModel.from_config(load_config().replace(platforms=n))
+    step = pin.SE3(np.eye(3), np.array([0.0, 0.0, am.config.home_height])) * pin.exp6(np.array(twist))
+    plates = [pin.SE3.Identity()]
+    for _ in range(n):
+        plates.append(plates[-1] * step)
+    return am, PlateArrays.from_se3(plates)
+
+
+def _independently_feasible(am, result, goal) -> None:
+    """Every constraint by the design's own geometry and the free-body forces (checks.py)."""
+    assert design_problems(am.config, result.optimized.plates, goal, 1e-9) == []
+    forces = design_forces(am.config, result.optimized.plates)
+    assert np.abs(forces).max() == pytest.approx(result.optimized.max_abs_force, rel=1e-9)
+
+
+@pytest.fixture(scope="module")
+def stack8():
+    return bent_stack(8)
+
+
+def test_ipopt_answer_meets_every_constraint_at_n4(am, random_poses):
+    start = random_poses[7][1]
+    result = optimize_internal_poses(am, start, options=IPOPT)
+    assert result.success and result.method == "ipopt"
+    _independently_feasible(am, result, start.se3(am.n))
+    assert result.optimized.max_abs_force < result.initial.max_abs_force
+    slsqp = optimize_internal_poses(am, start)
+    assert result.optimized.max_abs_force <= slsqp.optimized.max_abs_force * (1 + 1e-3)
+
+
+def test_ipopt_answer_meets_every_constraint_at_n8(stack8):
+    am, start = stack8
+    result = optimize_internal_poses(am, start, options=IPOPT)
+    assert result.success and result.method == "ipopt"
+    _independently_feasible(am, result, start.se3(am.n))
+    slsqp = optimize_internal_poses(am, start)
+    assert result.optimized.max_abs_force <= slsqp.optimized.max_abs_force * (1 + 1e-3)
+    # the independent free-body forces of the start: the optimum is well below them
+    assert result.optimized.max_abs_force < 0.8 * np.abs(design_forces(am.config, start)).max()
+
+
+def test_ipopt_matches_slsqp_on_the_scenarios(am):
+    """The five scenarios (n = 4) from the helper arm's start: IPOPT's max|F| within 1e-3
+    of SLSQP's or below it, its answer feasible by the independent checks."""
+    from assembler_pin.helper_arm import initial_condition
+    from assembler_pin.scenarios import SCENARIOS
+
+    for name, sc in SCENARIOS.items():
+        init = initial_condition(am, sc.goal)
+        assert init.success, name
+        slsqp = optimize_internal_poses(am, init.state, sc.goal)
+        ipopt = optimize_internal_poses(am, init.state, sc.goal, IPOPT)
+        assert ipopt.optimized.feasible, name
+        _independently_feasible(am, ipopt, sc.goal)
+        assert ipopt.optimized.max_abs_force <= slsqp.optimized.max_abs_force * (1 + 1e-3), name
+
+
+def _problem(am, start, options):
+    from assembler_pin.optimize.problem import Problem
+
+    return Problem(am, start, start.se3(am.n), options, True)
+
+
+@pytest.mark.parametrize("ee", [False, True])
+def test_callback_jacobian_equals_central_differences(am, random_poses, ee):
+    """The Jacobian IPOPT gets through the CasADi callback (sparse, on the structural
+    pattern) against central differences of the rows, and the objective's gradient."""
+    from assembler_pin.constraints import GoalTolerance
+    from assembler_pin.optimize.ipopt import IpoptForm, values_callback
+
+    tol = GoalTolerance(0.01, 0.05) if ee else None
+    form = IpoptForm(_problem(am, random_poses[7][1], OptimizeOptions(method="ipopt", ee_tolerance=tol)))
+    cb = values_callback(form)
+    X = casadi.MX.sym("x", form.shape[1])
+    f, g = cb(X)
+    fun = casadi.Function("j", [X], [casadi.jacobian(g, X), casadi.gradient(f, X)])
+    rng = np.random.default_rng(3)
+    x = np.append(rng.normal(0.0, 0.01, form.shape[1] - 1), 40.0)
+    J, grad = (np.asarray(casadi.DM(v).full()) for v in fun(x))
+    h = 1e-6
+    J_fd = np.empty_like(J)
+    g_fd = np.empty(x.size)
+    for i in range(x.size):
+        e = np.zeros_like(x)
+        e[i] = h
+        J_fd[:, i] = (form.smooth.cons(x + e) - form.smooth.cons(x - e)) / (2 * h)
+        g_fd[i] = (form.smooth.fun(x + e) - form.smooth.fun(x - e)) / (2 * h)
+    assert J.shape == J_fd.shape
+    # every non-zero of the differences lies on the pattern
+    assert np.abs(J_fd[~form.pattern]).max() < 1e-7 * np.abs(J_fd).max()
+    scale = np.abs(J_fd).max(axis=1, keepdims=True) + 1e-12
+    assert np.abs(J - J_fd).max(initial=0.0, where=np.ones_like(J, bool)) <= 1e-6 * np.abs(J_fd).max()
+    assert np.all(np.abs(J - J_fd) <= 1e-6 * scale + 1e-9)
+    np.testing.assert_allclose(grad.ravel(), g_fd, rtol=1e-6, atol=1e-6 * np.abs(g_fd).max())
+
+
+def test_pattern_is_sparse_for_long_stacks():
+    """Leg rows banded, force rows triangular: at n = 16 fewer than 40 % of the entries."""
+    from assembler_pin.optimize.ipopt import jacobian_pattern
+
+    am, start = bent_stack(16)
+    pattern = jacobian_pattern(_problem(am, start, IPOPT))
+    assert pattern.mean() < 0.4
+    legs = pattern[12 * am.n + 1 :]
+    assert legs.sum(axis=1).max() == 12  # two plates of six coordinates
+
+
+def test_auto_picks_by_size(am, random_poses, monkeypatch):
+    assert resolved_method("auto", AUTO_IPOPT_PLATFORMS - 1) == "slsqp"
+    assert resolved_method("auto", AUTO_IPOPT_PLATFORMS) == "ipopt"
+    assert resolved_method("slsqp", 64) == "slsqp" and resolved_method("ipopt", 2) == "ipopt"
+    result = optimize_internal_poses(am, random_poses[7][1], options=OptimizeOptions(method="auto"))
+    assert result.method == "slsqp"
+    monkeypatch.setitem(sys.modules, "casadi", None)
+    assert resolved_method("auto", 64) == "slsqp"
+
+
+def test_missing_casadi_is_one_line_options_error(monkeypatch, capsys):
+    from assembler_pin.cli.app import main
+
+    monkeypatch.setitem(sys.modules, "casadi", None)
+    with pytest.raises(OptionsError, match=r"pip install assembler_pin\[nlp\]"):
+        OptimizeOptions(method="ipopt")
+    OptimizeOptions(method="auto")  # auto falls back to slsqp
+    assert main(["solve", "--goal", "0.1", "0", "0.8", "0", "0", "0", "--method", "ipopt"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and "pip install assembler_pin[nlp]" in err
+
+
+def test_cli_method_ipopt(capsys):
+    from assembler_pin.cli.app import main
+
+    assert main(["solve", "--goal", "0.1", "0", "0.8", "0", "0", "0", "--method", "ipopt", "--json"]) == 0
+    doc = json.loads(capsys.readouterr().out)
+    assert doc["success"]
+    assert doc["optimizer"]["method"] == "ipopt"
+
+
+def test_ipopt_sag_limit_and_motion_rows(am, random_poses):
+    """The rows of the other smooth options reach IPOPT too: a sag limit below the force
+    optimum's sag is met (by the package's independent sag of the returned state), and a
+    motion step holds every leg within it of the previous sample."""
+    from assembler_pin.compliance import sag_and_gradient
+    from assembler_pin.optimize import MotionTerm
+    from assembler_pin.state import evaluate_state
+
+    start = random_poses[7][1]
+    free = optimize_internal_poses(am, start, options=IPOPT)
+    limit = 0.9 * sag_and_gradient(am, free.optimized.plates).sag
+    capped = optimize_internal_poses(am, start, options=OptimizeOptions(method="ipopt", max_sag=limit))
+    assert capped.success
+    assert sag_and_gradient(am, capped.optimized.plates).sag <= limit
+    _independently_feasible(am, capped, start.se3(am.n))
+    previous = evaluate_state(am, start).leg_lengths
+    motion = MotionTerm(previous, max_step=2e-3)
+    stepped = optimize_internal_poses(am, start, options=IPOPT, motion=motion)
+    assert stepped.optimized.feasible
+    assert np.abs(stepped.optimized.leg_lengths - previous).max() <= 2e-3 + 1e-12
+
+
+def test_long_stack_figure_and_its_bench_row(monkeypatch, capsys):
+    """The scaling figure on two tiny stacks: every key, IPOPT's optimum no worse than
+    SLSQP's; ``bench --speed`` prints it as its ``long_stacks`` group."""
+    from assembler_pin import bench_speed
+    from assembler_pin.cli.app import main
+
+    row = bench_speed.benchmark_long_stacks(sizes=(2, 3))
+    for n in (2, 3):
+        for method in ("slsqp", "ipopt"):
+            assert row[f"n{n}_{method}_success"], (n, method)
+            assert row[f"n{n}_{method}_s"] > 0 and row[f"n{n}_{method}_iterations"] >= 1
+        assert row[f"n{n}_ipopt_max_abs_force_N"] <= row[f"n{n}_slsqp_max_abs_force_N"] * (1 + 1e-3)
+        _, plates = bench_speed.long_stack(n)
+        am = AssemblerModel.from_config(load_config().replace(platforms=n))
+        assert np.abs(design_forces(am.config, plates)).max() >= row[f"n{n}_ipopt_max_abs_force_N"] - 1e-9
+    assert "ipopt_per_iteration_exponent" in row and row["per_iteration_exponent_target"] == 1.5
+    stub = {"x": 1.0}
+    for name in (
+        "benchmark_threads",
+        "benchmark_solve_starts",
+        "benchmark_statics_kernel",
+        "benchmark_capacity_memory",
+    ):
+        monkeypatch.setattr(bench_speed, name, lambda *a, **k: stub)
+    monkeypatch.setattr(bench_speed, "benchmark_single_statics", lambda *a, **k: stub)
+    monkeypatch.setattr(bench_speed, "benchmark_startup", lambda *a, **k: stub)
+    monkeypatch.setattr(bench_speed, "benchmark_long_stacks", lambda *a, **k: {"n32_ipopt_s": 1.5})
+    assert main(["bench", "--speed", "--json"]) == 0
+    assert json.loads(capsys.readouterr().out)["long_stacks"] == {"n32_ipopt_s": 1.5}
+
+
+def test_ctrl_c_inside_ipopt_reaches_the_caller(am, random_poses, monkeypatch):
+    """A Ctrl-C in an evaluation is not taken for a failed evaluation: it is raised again
+    once IPOPT returns."""
+    from assembler_pin.optimize.smooth import SmoothForm
+
+    real, calls = SmoothForm.cons, []
+
+    def interrupted(self, x):
+        calls.append(1)
+        if len(calls) == 4:
+            raise KeyboardInterrupt
+        return real(self, x)
+
+    monkeypatch.setattr(SmoothForm, "cons", interrupted)
+    with pytest.raises(KeyboardInterrupt):
+        optimize_internal_poses(am, random_poses[7][1], options=IPOPT)
