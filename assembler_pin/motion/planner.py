@@ -197,9 +197,10 @@ def _valid_step(
 
 
 def _warm_starts(am: AssemblerModel, prev: StackState, goal: pin.SE3) -> list[PlateArrays]:
-    """Starts of the sample at ``goal`` after ``prev``: the previous plates with only the EE
-    moved, and with the EE's move shared by every platform (:func:`.guess.spread_start`)."""
-    return [_with_ee(prev.plates, goal), spread_start(prev.plates, goal)]
+    """Starts of the sample at ``goal`` after ``prev``, in the order tried: the previous
+    plates with the EE's move shared by every platform (:func:`.guess.spread_start`), and
+    with only the EE moved."""
+    return [spread_start(prev.plates, goal), _with_ee(prev.plates, goal)]
 
 
 def _step(
