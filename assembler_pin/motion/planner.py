@@ -2,15 +2,22 @@
 pose, each warm-started from the previous one and kept close to it.
 
 For each sample the optimizer (:func:`~assembler_pin.optimize.optimize_internal_poses`)
-starts from the previous optimum with its EE plate moved to the new goal, with a
+starts from the previous optimum with the EE's move to the new goal shared evenly by the
+platforms (:func:`.guess.spread_start`), then, if that does not converge to a valid sample,
+from the previous optimum with only its EE plate moved; with a
 :class:`~assembler_pin.optimize.MotionTerm`: no leg moves more than ``max_leg_step`` from
 the previous sample (so the plan cannot jump to another assembly mode or local minimum),
 and, with ``w3 > 0``, the paper's minimum-movement term ``w3·Σ ΔL²`` in the objective.
+When neither run converges, the valid state of lowest max|F| met (a state an optimizer
+returned, or a warm start itself) is the sample, listed in ``PlanResult.unconverged``:
+valid, checked as every sample, but not a converged optimum.
 Between two samples the leg lengths are interpolated and the stack checked there
 (``checks_between`` points: stack FK of the lengths, every limit, the EE within
 ``path_tolerance`` of the path). A step that fails any of this is halved, up to
-``max_refinements`` times; a sample that still cannot be made valid ends the plan with the
-reason and the valid prefix — never a gap.
+``max_refinements`` times below its segment's spacing (counted again after each valid
+sample); a sample that still cannot be made valid ends the plan with the reason and the
+valid prefix — never a gap. The EE step is at most ``STEP_SHARE · n · max_leg_step``, so
+that an even share of it fits the motion step of every leg.
 """
 
 from __future__ import annotations
@@ -47,11 +54,13 @@ class PlanOptions:
     """Settings of :func:`plan_path`.
 
     Attributes:
-        position_step, rotation_step: largest EE move between samples [m], [rad].
+        position_step, rotation_step: largest EE move between samples [m], [rad] (the
+            position step at most ``STEP_SHARE · n · max_leg_step``).
         max_leg_step: largest change of any leg length between samples [m].
         w3: weight of the motion term Σ ΔL² [1/m²] (0: force only); it also keeps the
             legs that do not set max|F| from wandering between samples.
-        max_refinements: how many times a failing step may be halved.
+        max_refinements: how many times a failing step may be halved below its segment's
+            sample spacing (counted again after each valid sample).
         checks_between: interpolated checks between two samples.
         path_tolerance: how far the EE may leave the path between samples.
         limit_margin: how far inside the stroke [m] and deflection limit [rad] the samples
