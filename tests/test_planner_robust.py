@@ -10,7 +10,9 @@ import numpy as np
 import pinocchio as pin
 from checks import design_problems, sp_legs
 
+from assembler_pin.kinematics import plate_arrays
 from assembler_pin.motion import EEPath, PlanOptions, plan_path
+from assembler_pin.motion.guess import spread_start
 
 
 def _lengths(cfg, plates) -> np.ndarray:
@@ -83,3 +85,26 @@ def test_a_waypoint_path_from_an_optimized_start(am):
     plan = plan_path(am, path, start=None, options=opts)
     assert plan.success, plan.reason
     _assert_valid_samples(am, plan, opts)
+
+
+def test_the_shared_move_start_moves_each_plate_by_its_share(am):
+    """``spread_start``: a translation d of the EE moves plate k by k/n·d, a turn θ about
+    the vertical through the EE turns plate k by k/n·θ; plate 0 stays, plate n is the goal."""
+    plates = plate_arrays(am, am.home)
+    n, ee = am.n, am.home[-1]
+    d = np.array([0.01, -0.02, 0.03])
+    moved = spread_start(plates, pin.SE3(ee.rotation, ee.translation + d))
+    for k in range(n + 1):
+        np.testing.assert_allclose(moved.p[k] - plates.p[k], k / n * d, atol=1e-12)
+        np.testing.assert_allclose(moved.R[k], plates.R[k], atol=1e-12)
+    theta = 0.2
+    turn = np.array([[np.cos(theta), -np.sin(theta), 0.0], [np.sin(theta), np.cos(theta), 0.0], [0.0, 0.0, 1.0]])
+    turned = spread_start(plates, pin.SE3(turn @ ee.rotation, ee.translation))
+    for k in range(n + 1):
+        a = k / n * theta
+        share = np.array([[np.cos(a), -np.sin(a), 0.0], [np.sin(a), np.cos(a), 0.0], [0.0, 0.0, 1.0]])
+        np.testing.assert_allclose(turned.R[k], share @ plates.R[k], atol=1e-12)
+        axis = ee.translation[:2]  # the vertical through the EE
+        np.testing.assert_allclose(turned.p[k][:2] - axis, share[:2, :2] @ (plates.p[k][:2] - axis), atol=1e-12)
+        assert abs(turned.p[k][2] - plates.p[k][2]) < 1e-12
+    np.testing.assert_allclose(turned.p[n], ee.translation, atol=1e-12)

@@ -36,6 +36,7 @@ from ..exceptions import OptionsError
 from ..kinematics import PlateArrays, plate_arrays, stack_forward_kinematics
 from ..messages import binding, describe, one_line
 from ..model import AssemblerModel
+from ..objective import state_sag
 from ..optimize import MotionTerm, OptimizeOptions, optimize_internal_poses
 from ..options import checked_options
 from ..progress import ProgressCallback
@@ -205,7 +206,7 @@ def _valid_step(
     return problem, (dev_p, dev_r)
 
 
-def _warm_starts(am: AssemblerModel, prev: StackState, goal: pin.SE3) -> list[PlateArrays]:
+def _warm_starts(prev: StackState, goal: pin.SE3) -> list[PlateArrays]:
     """Starts of the sample at ``goal`` after ``prev``, in the order tried: the previous
     plates with the EE's move shared by every platform (:func:`.guess.spread_start`), and
     with only the EE moved."""
@@ -225,7 +226,7 @@ def _step(
     motion = MotionTerm(prev.leg_lengths, opts.max_leg_step, opts.w3)
     tolerance = opts.optimize.ee_tolerance or opts.optimize.goal_tolerance
     first_why, spent, fallback = "", 0.0, []
-    for start in _warm_starts(am, prev, goal):
+    for start in _warm_starts(prev, goal):
         result = optimize_internal_poses(am, start, goal, opts.optimize, motion=motion)
         spent += result.time_s
         why, dev = _valid_step(am, path, u0, u1, prev, result.optimized, opts)
@@ -249,11 +250,15 @@ def _best_valid(
     candidates: list[StackState],
     opts: PlanOptions,
 ) -> tuple[StackState, tuple[float, float]] | None:
-    """The candidate of lowest max|F| that passes every check of :func:`_valid_step`, with
-    its EE deviation between the samples, or None."""
+    """The candidate of lowest max|F| that passes every check of :func:`_valid_step` and
+    the optimizer's sag limit (``max_sag``, when set), with its EE deviation between the
+    samples, or None."""
+    limit = opts.optimize.max_sag
     for state in sorted(candidates, key=lambda s: s.max_abs_force if s.feasible else math.inf):
         if not state.feasible:
             break
+        if limit is not None and not state_sag(am, state) <= limit:
+            continue
         why, dev = _valid_step(am, path, u0, u1, prev, state, opts)
         if not why:
             return state, dev
