@@ -323,17 +323,9 @@ def plan_path(
     targets = _targets(am, path, opts)  # bounded before planning
     start_state, why = _start_state(am, path, start, opts)
     if start_state is None:
+        empty = np.zeros(0)
         return PlanResult(
-            False,
-            why,
-            path,
-            np.zeros(0),
-            [],
-            np.zeros(0),
-            0,
-            (0.0, 0.0),
-            time.perf_counter() - t_start,
-            opts.path_tolerance,
+            False, why, path, empty, [], empty, 0, (0.0, 0.0), time.perf_counter() - t_start, opts.path_tolerance
         )
     params, states, times = [0.0], [start_state], [0.0]
     refinements, dev, unconverged = 0, (0.0, 0.0), []
