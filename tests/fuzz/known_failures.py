@@ -7,9 +7,4 @@ is not parametrized, its function name.
 """
 
 KNOWN: set[str] = {
-    # valid inputs refused
-    # planner: from the force-optimized start state (no start given: --waypoints or --from) at
-    # the home EE pose the first step is infeasible ("Inequality constraints incompatible");
-    # from am.home the same path plans. Not a local fix.
-    "plan.waypoints_valid",
 }
