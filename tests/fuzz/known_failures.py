@@ -6,5 +6,4 @@ An id is the pytest parameter id of a corpus case (``solve.goal_nan``) or, for a
 is not parametrized, its function name.
 """
 
-KNOWN: set[str] = {
-}
+KNOWN: set[str] = set()
