@@ -38,7 +38,7 @@ from .exceptions import ArgumentError, SingularConfigurationError
 from .kinematics import PlateArrays, leg_vectors, plate_arrays, q_from_arrays
 from .linalg import cross, inverse_or_nan
 from .model import WHOLE_DATA_MAX_PLATFORMS, AssemblerModel, checked_model
-from .statics import CONDITION_LIMIT, _leg_jacobians_t
+from .statics import CONDITION_LIMIT, StaticsResult, _leg_jacobians_t
 from .validation import as_float_array
 
 __all__ = [
@@ -51,7 +51,7 @@ __all__ = [
 
 
 @dataclass(frozen=True)
-class DynamicsResult:
+class DynamicsResult(StaticsResult):
     """Actuator forces of a motion (:func:`inverse_dynamics`).
 
     Attributes:
@@ -62,16 +62,6 @@ class DynamicsResult:
         condition: (n,) 1-norm condition number of each platform's block.
         singular: a block's condition number exceeds :data:`~assembler_pin.statics.CONDITION_LIMIT`.
     """
-
-    forces: np.ndarray
-    ball_forces: np.ndarray
-    base_wrench: np.ndarray
-    condition: np.ndarray
-    singular: bool
-
-    @property
-    def max_abs_force(self) -> float:
-        return float(np.abs(self.forces).max())
 
 
 @dataclass
