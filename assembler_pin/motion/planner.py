@@ -327,6 +327,37 @@ def plan_path(
         return PlanResult(
             False, why, path, empty, [], empty, 0, (0.0, 0.0), time.perf_counter() - t_start, opts.path_tolerance
         )
+    march = _march(am, path, opts, targets, start_state, progress)
+    params, states, times, refinements, dev, unconverged, reason, success = march
+    result = PlanResult(
+        success,
+        reason,
+        path,
+        np.array(params),
+        states,
+        np.array(times),
+        refinements,
+        dev,
+        time.perf_counter() - t_start,
+        opts.path_tolerance,
+        tuple(unconverged),
+    )
+    logger.info("plan: %s", result)
+    return result
+
+
+def _march(
+    am: AssemblerModel,
+    path: EEPath,
+    opts: PlanOptions,
+    targets: list,
+    start_state: StackState,
+    progress: ProgressCallback | None,
+) -> tuple[list[float], list[StackState], list[float], int, tuple[float, float], list[int], str, bool]:
+    """The samples of :func:`plan_path` from its start: each target tried, a failing step
+    halved down to its segment's floor (the count restarting after each valid sample).
+    Returns (parameters, states, solve times, halvings, path deviation, unconverged samples,
+    reason, success)."""
     params, states, times = [0.0], [start_state], [0.0]
     refinements, dev, unconverged = 0, (0.0, 0.0), []
     reason, success = "reached the end of the path", True
@@ -353,18 +384,4 @@ def plan_path(
         dev = (max(dev[0], d[0]), max(dev[1], d[1]))
         if progress is not None:
             progress(round(1000 * u1 / path.segments), 1000, f"planning: {len(states)} samples")
-    result = PlanResult(
-        success,
-        reason,
-        path,
-        np.array(params),
-        states,
-        np.array(times),
-        refinements,
-        dev,
-        time.perf_counter() - t_start,
-        opts.path_tolerance,
-        tuple(unconverged),
-    )
-    logger.info("plan: %s", result)
-    return result
+    return params, states, times, refinements, dev, unconverged, reason, success
