@@ -112,8 +112,6 @@ class MotionResult:
             "success": self.success,
             "reason": self.reason,
             "samples": self.samples,
-            # samples held valid though their optimization did not converge (valid, maybe not force-optimal)
-            "unconverged_samples": list(self.plan.not_optimal),
             "peak_max_abs_force": self.peak_max_abs_force if self.plan.states else None,
             "total_leg_travel_m": self.total_leg_travel,
             "duration_s": self.duration if self.trajectory is not None else None,
