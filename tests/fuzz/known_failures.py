@@ -6,10 +6,4 @@ An id is the pytest parameter id of a corpus case (``solve.goal_nan``) or, for a
 is not parametrized, its function name.
 """
 
-KNOWN: set[str] = {
-    # valid inputs refused
-    # planner: from the force-optimized start state (no start given: --waypoints or --from) at
-    # the home EE pose the first step is infeasible ("Inequality constraints incompatible");
-    # from am.home the same path plans. Not a local fix.
-    "plan.waypoints_valid",
-}
+KNOWN: set[str] = set()
