@@ -225,55 +225,68 @@ def plan_path(
     targets = list(path.parameters(opts.position_step, opts.rotation_step)[1:])  # bounded before planning
     start_state, why = _start_state(am, path, start, opts)
     if start_state is None:
-        return PlanResult(
-            False,
-            why,
-            path,
-            np.zeros(0),
-            [],
-            np.zeros(0),
-            0,
-            (0.0, 0.0),
-            time.perf_counter() - t_start,
-            opts.path_tolerance,
-        )
-    params, states, times = [0.0], [start_state], [0.0]
-    refinements, dev = 0, (0.0, 0.0)
-    base_step = 1.0 / max(1, len(targets))
-    reason = "reached the end of the path"
-    success = True
-    while targets:
-        u0, u1 = params[-1], targets[0]
-        state, why, dt, d = _step(am, path, u0, u1, states[-1], opts)
-        if state is None:
-            if (u1 - u0) <= base_step * path.segments / 2**opts.max_refinements + 1e-12 or opts.max_refinements == 0:
-                success = False
-                where = (
-                    f"no valid sample after u = {u0:.4f} of {path.segments}, step halved {opts.max_refinements} times"
-                )
-                reason = one_line(f"{why} ({where})")
-                break
-            targets.insert(0, 0.5 * (u0 + u1))
-            refinements += 1
-            continue
-        targets.pop(0)
-        params.append(u1)
-        states.append(state)
-        times.append(dt)
-        dev = (max(dev[0], d[0]), max(dev[1], d[1]))
-        if progress is not None:
-            progress(round(1000 * u1 / path.segments), 1000, f"planning: {len(states)} samples")
+        march = _March(False, why, [], [], [], 0, (0.0, 0.0))
+    else:
+        march = _march(am, path, targets, start_state, opts, progress)
     result = PlanResult(
-        success,
-        reason,
+        march.success,
+        march.reason,
         path,
-        np.array(params),
-        states,
-        np.array(times),
-        refinements,
-        dev,
+        np.array(march.params),
+        march.states,
+        np.array(march.times),
+        march.refinements,
+        march.deviation,
         time.perf_counter() - t_start,
         opts.path_tolerance,
     )
     logger.info("plan: %s", result)
     return result
+
+
+@dataclass
+class _March:
+    """The samples :func:`_march` placed along the path, and why it stopped."""
+
+    success: bool
+    reason: str
+    params: list[float]
+    states: list[StackState]
+    times: list[float]
+    refinements: int
+    deviation: tuple[float, float]
+
+
+def _march(
+    am: AssemblerModel,
+    path: EEPath,
+    targets: list[float],
+    start_state: StackState,
+    opts: PlanOptions,
+    progress: ProgressCallback | None,
+) -> _March:
+    """Step from ``start_state`` through the path parameters ``targets``, halving a step
+    that finds no valid sample up to ``opts.max_refinements`` times."""
+    march = _March(True, "reached the end of the path", [0.0], [start_state], [0.0], 0, (0.0, 0.0))
+    base_step = 1.0 / max(1, len(targets))
+    smallest = base_step * path.segments / 2**opts.max_refinements + 1e-12
+    while targets:
+        u0, u1 = march.params[-1], targets[0]
+        state, why, dt, d = _step(am, path, u0, u1, march.states[-1], opts)
+        if state is None:
+            if (u1 - u0) <= smallest or opts.max_refinements == 0:
+                where = f"no valid sample after u = {u0:.4f} of {path.segments}"
+                where += f", step halved {opts.max_refinements} times"
+                march.success, march.reason = False, one_line(f"{why} ({where})")
+                break
+            targets.insert(0, 0.5 * (u0 + u1))
+            march.refinements += 1
+            continue
+        targets.pop(0)
+        march.params.append(u1)
+        march.states.append(state)
+        march.times.append(dt)
+        march.deviation = (max(march.deviation[0], d[0]), max(march.deviation[1], d[1]))
+        if progress is not None:
+            progress(round(1000 * u1 / path.segments), 1000, f"planning: {len(march.states)} samples")
+    return march
