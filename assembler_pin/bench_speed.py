@@ -56,9 +56,12 @@ def rss_mb() -> float:
     return float("nan")
 
 
-def _goal(xyz: tuple[float, float, float]) -> Any:
+def _goal(xyz: Any) -> Any:
+    """A level EE goal at ``xyz`` [m, world], or ``xyz`` itself when it is a pose already."""
     import pinocchio as pin
 
+    if isinstance(xyz, pin.SE3):
+        return xyz
     return pin.SE3(np.eye(3), np.array(xyz, dtype=float))
 
 
@@ -165,14 +168,13 @@ def benchmark_statics_kernel(
 
 def _statics_calls(am: AssemblerModel, poses: list, has_kernel: bool) -> dict[str, Any]:
     """The calls timed by :func:`benchmark_single_statics`, cycling through ``poses``."""
-    from .kinematics import plate_arrays
     from .statics import solve_statics
     from .statics_kernel import kernel_result
 
     counter = iter(range(10**9))
     calls = {"pinocchio": lambda: solve_statics(am, poses[next(counter) % len(poses)])}
     if has_kernel:
-        calls["kernel"] = lambda: kernel_result(am, plate_arrays(am, poses[next(counter) % len(poses)]))
+        calls["kernel"] = lambda: kernel_result(am, poses[next(counter) % len(poses)])
     return calls
 
 

@@ -54,6 +54,7 @@ BOUNDS: dict[str, Bound] = {
         1e-3, 1e6, "N", False, "view --ellipsoid-force: the force whose sag the compliance ellipsoid draws"
     ),
     "bench.repeat": Bound(1, 100_000, "", True, "bench --repeat: calls per figure"),
+    "bench.map_cells": Bound(8, 20_000, "", True, "bench --targets --map-cells: cells of the map measured (0: none)"),
     "helper.max_attempts": Bound(1, 1000, "", True, "solve --max-attempts: helper-arm solves (link lengths) tried"),
     "helper.d_step": Bound(1e-4, 1.0, "m", False, "solve --d-step: helper-arm link-length scan step"),
     "helper.scan_values": Bound(1, 100_000, "", True, "solve --d-step: link lengths scanned (height range / step)"),

@@ -66,6 +66,7 @@ ENV_VAR = "ASSEMBLER_PIN_STATICS"
 KERNEL_MIN_STACKS = 5000
 
 _kernel: Any = None  # the compiled function, once built (None: not yet; False: unavailable)
+_exact_poses: Any = None  # the compiled pose check, built with the kernel
 _stack, _extras = loops._stack_py, loops._extras_py  # interpreted here; the kernels call compiled copies
 _NO_BALL, _NO_BASE = np.empty((1, 1, 1, 1)), np.empty((1, 1))  # placeholders of a forces-only call
 
@@ -83,6 +84,37 @@ def _kernel_py(R, p, bottom, top, consts, forces, condition, ball, base, full): 
         _stack(R, p, bottom, top, consts, s, t, u, fp, gu, lev_f, lev_m, A, rhs, up, forces, condition)
         if full:
             _extras(R, p, s, consts, u, fp, gu, forces, lev_f, lev_m, ball, base)
+
+
+#: A pose the compiled check passes as is: bottom row [0, 0, 0, 1] to 1e-12 and |RᵀR − I| at
+#: most this (below it :func:`~assembler_pin.kinematics.checked_rotations` keeps R as given).
+EXACT_ROTATION_TOL = 1e-14
+
+
+def _exact_poses_py(M):  # pragma: no cover - compiled
+    """Whether every (4, 4) matrix of M (m, 4, 4) is finite, has the bottom row [0, 0, 0, 1]
+    to 1e-12 and an orthonormal 3×3 block to :data:`EXACT_ROTATION_TOL` with det > 0."""
+    for k in range(M.shape[0]):
+        for i in range(4):
+            for j in range(4):
+                if not math.isfinite(M[k, i, j]):
+                    return False
+        bottom = max(abs(M[k, 3, 0]), abs(M[k, 3, 1]), abs(M[k, 3, 2]), abs(M[k, 3, 3] - 1.0))
+        if not bottom <= 1e-12:
+            return False
+        for a in range(3):
+            for b in range(3):
+                g = M[k, 0, a] * M[k, 0, b] + M[k, 1, a] * M[k, 1, b] + M[k, 2, a] * M[k, 2, b]
+                if abs(g - (1.0 if a == b else 0.0)) > 1e-14:
+                    return False
+        det = (
+            M[k, 0, 0] * (M[k, 1, 1] * M[k, 2, 2] - M[k, 1, 2] * M[k, 2, 1])
+            - M[k, 0, 1] * (M[k, 1, 0] * M[k, 2, 2] - M[k, 1, 2] * M[k, 2, 0])
+            + M[k, 0, 2] * (M[k, 1, 0] * M[k, 2, 1] - M[k, 1, 1] * M[k, 2, 0])
+        )
+        if not det > 0.0:
+            return False
+    return True
 
 
 def _build_kernel() -> Any:
@@ -104,9 +136,12 @@ def _build_kernel() -> Any:
         ("_stack", loops._stack_py),
         ("_extras", loops._extras_py),
         ("_kernel", _kernel_py),
+        ("_exact_poses", _exact_poses_py),
     )
     for name, func in parts:  # callees first: the callers see them compiled
         scope[name] = jit(types.FunctionType(func.__code__, scope, func.__name__))
+    global _exact_poses
+    _exact_poses = scope["_exact_poses"]
     return scope["_kernel"]
 
 
@@ -222,19 +257,46 @@ def kernel_statics(am: AssemblerModel, R: np.ndarray, p: np.ndarray) -> tuple[np
     return forces, ball, base, condition
 
 
-def kernel_result(am: AssemblerModel, pa: PlateArrays, raise_on_singular: bool = False) -> StaticsResult:
-    """:func:`~assembler_pin.statics.solve_statics` of checked plate arrays on the compiled
-    kernel: the same :class:`~assembler_pin.statics.StaticsResult` (forces, ball forces,
-    base wrench, condition numbers, the singular flag and error of
-    :data:`~assembler_pin.statics.CONDITION_LIMIT`), which the tests hold to Pinocchio's.
+def kernel_result(
+    am: AssemblerModel, plates: PlateArrays | np.ndarray, raise_on_singular: bool = False
+) -> StaticsResult:
+    """:func:`~assembler_pin.statics.solve_statics` on the compiled kernel: the same
+    :class:`~assembler_pin.statics.StaticsResult` (forces, ball forces, base wrench, condition
+    numbers, the singular flag and error of :data:`~assembler_pin.statics.CONDITION_LIMIT`),
+    which the tests hold to Pinocchio's.
+
+    Args:
+        plates: checked plate arrays (:func:`~assembler_pin.kinematics.plate_arrays`), or
+            the n+1 plate poses as a float array (n+1, 4, 4), plate 0 first. Matrices that
+            are exact rotations (:data:`EXACT_ROTATION_TOL`) pass a compiled check; any
+            other array goes through :func:`~assembler_pin.kinematics.plate_arrays`, which
+            projects a rotation off by less than its tolerance and refuses the rest with its
+            message.
 
     Raises:
+        PoseError: the matrices are not n+1 plate poses.
         SingularConfigurationError: with ``raise_on_singular``, a platform's condition number
             exceeds the limit.
     """
+    from .kinematics import PlateArrays, plate_arrays
     from .statics import StaticsResult
 
-    forces, ball, base, condition = kernel_statics(am, pa.R[None], pa.p[None])
+    if not kernel_available():
+        raise OptionsError("the numba statics backend needs numba: pip install numba")
+    if isinstance(plates, PlateArrays):
+        checked = plate_arrays(am, plates)  # checks arrays the caller built, once
+        R, p = checked.R[None], checked.p[None]
+    elif (
+        isinstance(plates, np.ndarray)
+        and plates.dtype == np.float64
+        and plates.shape == (am.n + 1, 4, 4)
+        and _exact_poses(plates)
+    ):
+        R, p = plates[None, :, :3, :3], plates[None, :, :3, 3]
+    else:
+        checked = plate_arrays(am, plates)
+        R, p = checked.R[None], checked.p[None]
+    forces, ball, base, condition = kernel_statics(am, R, p)
     condition = condition[0]
     singular = is_singular(condition, raise_on_singular)
     return StaticsResult(forces[0], ball[0], base[0], condition, singular)

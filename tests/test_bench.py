@@ -60,3 +60,59 @@ def test_single_statics_row_times_both_paths():
     paths = ("pinocchio", "kernel") if importlib.util.find_spec("numba") else ("pinocchio",)
     for path in paths:
         assert row[f"n2_{path}_us"] > 0 and row[f"n2_{path}_4x4_us"] > 0
+
+
+def test_target_rows_say_met_only_when_the_measured_value_meets_its_target():
+    """Each row is read from its group and key and held to its target in its sense; a
+    figure not measured (NaN, or absent) is never met, a group not run is left out."""
+    from assembler_pin.bench_targets import format_targets, target_rows
+
+    doc = {
+        "threads": {"threads_identical": True},
+        "random_solves": {"first_p50_s": 0.039, "first_p95_s": 0.101, "first_goals_worse": 0},
+        "grid_solves": {"first_p95_s": 0.2, "first_solved": 110, "all_solved": 111},
+        "statics_kernel": {"numba_100000_stacks_per_s": 260_000.0, "numba_100000_peak_kb_per_stack": float("nan")},
+    }
+    rows = {r.what: r for r in target_rows(doc)}
+    met = {what: r.met for what, r in rows.items()}
+    assert met["answers identical under 1 and 2 BLAS threads (1 = yes)"]
+    assert met["solve, random goals, p50 [ms]"] and rows["solve, random goals, p50 [ms]"].value == 39.0
+    assert not met["solve, random goals, p95 [ms]"]  # 101 ms > 100 ms
+    assert met["random goals with a worse optimum than every start"]
+    assert met["solve, 120-goal grid, p95 [s]"]
+    assert not met["grid goals solved (target: as many as every start)"]  # 110 < 111
+    assert met["batched statics, 100,000 stacks [stacks/s]"]
+    assert not met["batched statics, peak memory per stack [KB]"]  # not measured
+    assert rows["batched statics, peak memory per stack [KB]"].text == "not measured"
+    assert not any(w.startswith(("map", "one optimization", "one stack")) for w in rows)  # groups not run
+    table = format_targets(list(rows.values()))
+    assert table.splitlines()[-1] == f"{sum(met.values())} of {len(rows)} targets met"
+    assert max(len(line) for line in table.splitlines()) <= 100
+
+
+def test_random_goals_are_reachable_poses_the_solver_finds(am):
+    """The random solve row's goals: the solver finds a pose for each that meets every
+    constraint and the goal, checked independently of the package."""
+    from checks import design_problems
+
+    from assembler_pin.bench_targets import random_goals
+    from assembler_pin.solver import solve
+
+    for goal in random_goals(am, 3, seed=1):
+        result = solve(am, goal, optimize=False)
+        assert result.success, result.message
+        assert not design_problems(am.config, result.best.plates, goal, tol=1e-6)
+
+
+def test_map_memory_row_samples_each_worker_of_a_real_map():
+    """The map memory row runs a real map on two local workers and finds both worker
+    processes (not their nannies or the resource tracker), each with a plausible resident
+    size: more than an interpreter with numpy and Pinocchio loaded, less than the target's
+    tenfold."""
+    from assembler_pin.bench_targets import benchmark_map_memory
+
+    row = benchmark_map_memory(8, workers=2)
+    assert row["cells"] == 8 and row["workers_seen"] == 2
+    assert 60 < row["worker_peak_mb"] < 3000
+    assert row["worker_growth_mb"] < row["worker_peak_mb"]
+    assert row["cells_per_s"] > 0 and row["one_worker_cells_per_s"] > 0 and row["speedup"] > 0

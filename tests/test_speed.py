@@ -299,3 +299,36 @@ def test_statics_backend_choice(monkeypatch):
     assert statics_kernel.resolve_backend("auto", 10**6) == "numpy"
     with pytest.raises(OptionsError, match="needs numba"):
         statics_kernel.resolve_backend("numba", 1)
+
+
+@pytest.mark.skipif(not HAS_NUMBA, reason="no numba")
+def test_kernel_result_from_matrices_is_the_checked_arrays_result():
+    """From 4×4 matrices the kernel gives the result of the checked plate arrays: exact
+    rotations pass the compiled check, a rotation slightly off is projected as
+    plate_arrays projects it, and every malformed pose is refused with plate_arrays'
+    message (the compiled check never lets one through)."""
+    from assembler_pin.exceptions import PoseError
+    from assembler_pin.kinematics import plate_arrays
+
+    am = AssemblerModel.from_config({"platforms": 4})
+    stack = np.array(_random_stacks(am, 1, seed=3)[0])
+    off = stack.copy()
+    off[2, :3, :3] *= 1 + 1e-11  # within the tolerance: projected onto SO(3)
+    for matrices in (stack, off):
+        mine, ref = statics_kernel.kernel_result(am, matrices), solve_statics(am, plate_arrays(am, matrices))
+        np.testing.assert_allclose(mine.forces, ref.forces, atol=1e-10, rtol=0)
+    hostile = {"nan": (1, 0, 3, np.nan), "bottom row": (2, 3, 0, 1e-9), "inf": (0, 1, 1, np.inf)}
+    for what, (k, i, j, value) in hostile.items():
+        bad = stack.copy()
+        bad[k, i, j] = value
+        with pytest.raises(PoseError) as expected:
+            plate_arrays(am, bad)
+        with pytest.raises(PoseError) as got:
+            statics_kernel.kernel_result(am, bad)
+        assert str(got.value) == str(expected.value), what
+    mirrored = stack.copy()
+    mirrored[3, :3, 0] *= -1  # orthonormal, det -1
+    with pytest.raises(PoseError, match="not a rotation"):
+        statics_kernel.kernel_result(am, mirrored)
+    with pytest.raises(PoseError, match="expected 5 plate poses"):
+        statics_kernel.kernel_result(am, stack[:4])

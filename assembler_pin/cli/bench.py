@@ -52,6 +52,19 @@ def add_parser(add) -> None:
         help="only BLAS threads, lazy starts, the statics kernel, one stack's statics at n = 4, 8, 16, "
         "capacity memory, CLI start-up, two-point support at n = 4, 64 (~3 min)",
     )
+    p.add_argument(
+        "--targets",
+        action="store_true",
+        help="only the speed targets, each figure beside its target: BLAS threads, solve on 60 random and "
+        "120 grid goals, IPOPT on long stacks, statics, batched statics, a map's memory (~20 min)",
+    )
+    p.add_argument(
+        "--map-cells",
+        type=int,
+        default=None,
+        metavar="N",
+        help="with --targets: cells of the map whose memory is measured (default 1000; 0 skips the map)",
+    )
     p.set_defaults(func=run)
 
 
@@ -62,6 +75,8 @@ def run(args: argparse.Namespace) -> int:
     from ..model import AssemblerModel
 
     check_bound("bench.repeat", args.repeat, "--repeat", CLIError)
+    if args.map_cells is not None and not args.targets:
+        raise CLIError("--map-cells applies to bench --targets only")
     if args.platforms_sweep:
         from ..bench_scaling import benchmark_platforms_sweep, format_sweep
 
@@ -76,6 +91,8 @@ def run(args: argparse.Namespace) -> int:
         print(dumps(result) if args.json else format_maps(result))
         return 0
     am = AssemblerModel.from_config(config_from_args(args))
+    if args.targets:
+        return _targets(args, am)
     if args.truss or args.speed:
         return _extra_figures(args, am)
     if args.time_laws:
@@ -113,6 +130,24 @@ def run(args: argparse.Namespace) -> int:
                 f"{name:<24}{v['slsqp_s']:9.3f}{v['paper_s']:9.3f}{v['speedup']:9.1f}"
                 f"{v['initial_objective']:11.2f}{v['slsqp_objective']:9.2f}{v['paper_objective']:9.2f}"
             )
+    return 0
+
+
+def _targets(args: argparse.Namespace, am) -> int:
+    """``bench --targets``: the speed targets' table, or one JSON object with the figures."""
+    from ..bench_targets import MAP_MEMORY_CELLS, benchmark_targets, format_targets, target_rows
+    from ..bounds import check_bound
+
+    cells = MAP_MEMORY_CELLS if args.map_cells is None else args.map_cells
+    if cells:
+        check_bound("bench.map_cells", cells, "--map-cells", CLIError)
+    doc = benchmark_targets(am, map_cells=cells, quick=args.quick)
+    rows = target_rows(doc)
+    if args.json:
+        doc["targets"] = [{"figure": r.what, "value": r.value, "target": r.target, "met": r.met} for r in rows]
+        print(dumps(doc))
+    else:
+        print(format_targets(rows))
     return 0
 
 

@@ -233,6 +233,11 @@ def _bench_cases() -> list[CliCase]:
         _case("bench.repeat_float", "bench --repeat 1e12 --quick --no-optimize"),
         _case("bench.repeat_huge", "bench --repeat 1000000000000 --quick --no-optimize --json", isolate=True),
         _case("bench.config_bad", "bench --quick --no-optimize --config {d}/cfg_nan.yaml"),
+        _case("bench.map_cells_without_targets", "bench --quick --map-cells 100"),
+        _case("bench.map_cells_negative", "bench --targets --quick --map-cells -1"),
+        _case("bench.map_cells_tiny", "bench --targets --quick --map-cells 3"),
+        _case("bench.map_cells_huge", "bench --targets --quick --map-cells 1000000000000", isolate=True),
+        _case("bench.map_cells_float", "bench --targets --quick --map-cells 1e3"),
         _case("bench.quick", "bench --repeat 1 --quick --no-optimize --json", "answer", slow=True, check="finite"),
     ]
 
