@@ -259,9 +259,12 @@ def test_durations_and_row_counts_out_of_bounds_are_refused_before_allocating(am
     slow = AssemblerModel.from_config(
         cfg.replace(leg=dataclasses.replace(cfg.leg, max_speed=1e-4, max_acceleration=1e-4))
     )
-    monkeypatch.setattr(planner, "plan_path", lambda *a, **k: looped)
-    motion = plan_trajectory(slow, looped.path, start=slow.home, rate=10.0)
+    longer = _looped(short, 12)  # long enough for the time-optimal law too to pass the 3600 s
+    monkeypatch.setattr(planner, "plan_path", lambda *a, **k: longer)
+    t0 = time.perf_counter()
+    motion = plan_trajectory(slow, longer.path, start=slow.home, rate=10.0)
     assert not motion.success and motion.trajectory is None and "would take" in motion.reason
+    assert time.perf_counter() - t0 < 30  # refused from the laws' durations, no row evaluated
     assert motion.to_dict()["complete"] is False
     with pytest.raises(PathError, match=r"plan.path_samples"):
         EEPath.between(am.home[-1], pin.SE3(np.eye(3), np.array([1e9, 0, 0]))).parameters(0.01, 0.03)
