@@ -458,3 +458,23 @@ def test_the_cluster_limits_use_the_one_set_of_leg_measures():
     from assembler_pin.kinematics import legs
 
     assert limits.relative_leg_measures is legs.relative_leg_measures
+
+
+def test_an_arm_cache_stays_bounded_and_a_rebuilt_arm_gives_the_same_answer(am, monkeypatch):
+    """Goals far apart start the scan at link lengths of their own: the cache keeps the
+    KEPT_ARMS most recent arms, and a goal solved again once its arms were dropped gets the
+    same internal pose, bit for bit (an arm holds no state between solves)."""
+    from assembler_pin.helper_arm import cache as cache_module
+
+    monkeypatch.setattr(cache_module, "KEPT_ARMS", 3)
+    arms = cache_module.ArmCache(am.config)
+    home = am.home[-1]
+    goal = pin.SE3(home.rotation @ pin.exp3(np.array([0.0, 0.2, 0.0])), home.translation + np.array([0.1, 0.0, -0.05]))
+    first = initial_condition(am, goal, arms=arms)
+    assert first.success
+    for d in np.linspace(0.1, 0.3, 10):  # other goals' link lengths push the goal's arms out
+        arms.get(d)
+    assert len(arms) == 3 and arms.get(0.3) is arms.get(0.3)
+    again = initial_condition(am, goal, arms=arms)
+    assert again.state.plates.p.tobytes() == first.state.plates.p.tobytes()
+    assert again.state.plates.R.tobytes() == first.state.plates.R.tobytes()

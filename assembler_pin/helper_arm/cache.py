@@ -19,10 +19,16 @@ from ..config import AssemblerConfig, PayloadConfig
 from ..model import AssemblerModel
 from .arm import HelperArm
 
-__all__ = ["KEPT_CONFIGURATIONS", "ArmCache", "arm_cache", "arm_key"]
+__all__ = ["KEPT_ARMS", "KEPT_CONFIGURATIONS", "ArmCache", "arm_cache", "arm_key"]
 
 #: Configurations whose helper arms the default cache of a thread keeps (least recent dropped).
 KEPT_CONFIGURATIONS = 8
+
+#: Helper arms (link lengths) one :class:`ArmCache` keeps, least recently used dropped: the
+#: scan starts at a link length of the goal's own (its distance / n), so a map of many goals
+#: would otherwise keep an arm (~0.3 MB) for every one. An arm holds no state between
+#: solves, so building one again gives the same answers.
+KEPT_ARMS = 48
 
 
 class ArmCache:
@@ -33,14 +39,19 @@ class ArmCache:
 
     def __init__(self, config: AssemblerConfig) -> None:
         self.config = config
-        self._arms: dict[float, HelperArm] = {}
+        self._arms: OrderedDict[float, HelperArm] = OrderedDict()
 
     def get(self, link_length: float) -> HelperArm:
-        """The arm of link length ``link_length`` [m] (rounded to 1e-12 m), built on first use."""
+        """The arm of link length ``link_length`` [m] (rounded to 1e-12 m), built on first use;
+        the :data:`KEPT_ARMS` most recently used are kept."""
         key = round(float(link_length), 12)
-        if key not in self._arms:
-            self._arms[key] = HelperArm(self.config, key)
-        return self._arms[key]
+        arm = self._arms.get(key)
+        if arm is None:
+            arm = self._arms[key] = HelperArm(self.config, key)
+            while len(self._arms) > KEPT_ARMS:
+                self._arms.popitem(last=False)
+        self._arms.move_to_end(key)
+        return arm
 
     def __len__(self) -> int:
         return len(self._arms)
