@@ -117,9 +117,9 @@ def benchmark_map_memory(cells: int = MAP_MEMORY_CELLS, workers: int = 2) -> dic
     """A capability map of ``cells`` level-EE goals (x in [-0.4, 0.5] m, y in [0, 0.3] m,
     z in [0.55, 1.0] m) on ``workers`` local Dask workers, with the memory of every worker
     process sampled: its peak and its growth from its first to its last sample [MB], the
-    cells per second, and the same map's first ``cells // 10`` cells on one worker for the
-    speed-up (both runs include starting their cluster, whose share is larger in the shorter
-    run: the speed-up is the slightly generous side). The growth is over the second half of
+    cells per second, and a map of about a tenth of the cells over the same box on one worker
+    for the speed-up (both runs include starting their cluster, whose share is larger in the
+    shorter run: the speed-up is the slightly generous side). The growth is over the second half of
     each worker's life (:meth:`_PeakMemory.growth`). Each run writes into a fresh temporary
     directory."""
     import tempfile
@@ -130,7 +130,8 @@ def benchmark_map_memory(cells: int = MAP_MEMORY_CELLS, workers: int = 2) -> dic
     side = max(2, round(cells ** (1 / 3)))
     nz = max(1, math.ceil(cells / side**2))
     spec = f"x=-0.4:0.5:{side},y=0:0.3:{side},z=0.55:1.0:{nz}"
-    small_spec = f"x=-0.4:0.5:{side},y=0:0.3:{side},z=0.55:1.0:{max(1, nz // 10)}"
+    small = max(2, round(side / 10 ** (1 / 3)))  # a tenth of the cells, over the same box
+    small_spec = f"x=-0.4:0.5:{small},y=0:0.3:{small},z=0.55:1.0:{max(1, round(nz / 10 ** (1 / 3)))}"
     out: dict[str, Any] = {"grid": spec}
     with tempfile.TemporaryDirectory() as tmp:
         one = run_map(parse_grid(small_spec), [("default", load_config())], f"{tmp}/one", workers=1)

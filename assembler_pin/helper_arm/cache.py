@@ -26,7 +26,7 @@ KEPT_CONFIGURATIONS = 8
 
 #: Helper arms (link lengths) one :class:`ArmCache` keeps, least recently used dropped: the
 #: scan starts at a link length of the goal's own (its distance / n), so a map of many goals
-#: would otherwise keep an arm (~0.3 MB) for every one. An arm holds no state between
+#: would otherwise keep an arm (~0.25 MB) for every one. An arm holds no state between
 #: solves, so building one again gives the same answers.
 KEPT_ARMS = 48
 
