@@ -60,9 +60,7 @@ def _goal(xyz: Any) -> Any:
     """A level EE goal at ``xyz`` [m, world], or ``xyz`` itself when it is a pose already."""
     import pinocchio as pin
 
-    if isinstance(xyz, pin.SE3):
-        return xyz
-    return pin.SE3(np.eye(3), np.array(xyz, dtype=float))
+    return xyz if isinstance(xyz, pin.SE3) else pin.SE3(np.eye(3), np.array(xyz, dtype=float))
 
 
 def benchmark_threads(am: AssemblerModel, goals: tuple = THREAD_GOALS, limits: tuple[int, ...] = (1, 2)) -> dict:

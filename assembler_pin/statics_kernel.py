@@ -91,9 +91,9 @@ def _kernel_py(R, p, bottom, top, consts, forces, condition, ball, base, full): 
 EXACT_ROTATION_TOL = 1e-14
 
 
-def _exact_poses_py(M):  # pragma: no cover - compiled
+def _exact_poses_py(M, tol):  # pragma: no cover - compiled
     """Whether every (4, 4) matrix of M (m, 4, 4) is finite, has the bottom row [0, 0, 0, 1]
-    to 1e-12 and an orthonormal 3×3 block to :data:`EXACT_ROTATION_TOL` with det > 0."""
+    to 1e-12 and an orthonormal 3×3 block to ``tol`` (:data:`EXACT_ROTATION_TOL`) with det > 0."""
     for k in range(M.shape[0]):
         for i in range(4):
             for j in range(4):
@@ -105,7 +105,7 @@ def _exact_poses_py(M):  # pragma: no cover - compiled
         for a in range(3):
             for b in range(3):
                 g = M[k, 0, a] * M[k, 0, b] + M[k, 1, a] * M[k, 1, b] + M[k, 2, a] * M[k, 2, b]
-                if abs(g - (1.0 if a == b else 0.0)) > 1e-14:
+                if abs(g - (1.0 if a == b else 0.0)) > tol:
                     return False
         det = (
             M[k, 0, 0] * (M[k, 1, 1] * M[k, 2, 2] - M[k, 1, 2] * M[k, 2, 1])
@@ -278,22 +278,19 @@ def kernel_result(
         SingularConfigurationError: with ``raise_on_singular``, a platform's condition number
             exceeds the limit.
     """
-    from .kinematics import PlateArrays, plate_arrays
+    from .kinematics import plate_arrays
     from .statics import StaticsResult
 
     if not kernel_available():
         raise OptionsError("the numba statics backend needs numba: pip install numba")
-    if isinstance(plates, PlateArrays):
-        checked = plate_arrays(am, plates)  # checks arrays the caller built, once
-        R, p = checked.R[None], checked.p[None]
-    elif (
+    if (
         isinstance(plates, np.ndarray)
         and plates.dtype == np.float64
         and plates.shape == (am.n + 1, 4, 4)
-        and _exact_poses(plates)
+        and _exact_poses(plates, EXACT_ROTATION_TOL)
     ):
         R, p = plates[None, :, :3, :3], plates[None, :, :3, 3]
-    else:
+    else:  # plate arrays (checked once) or anything else: the package's validation
         checked = plate_arrays(am, plates)
         R, p = checked.R[None], checked.p[None]
     forces, ball, base, condition = kernel_statics(am, R, p)
