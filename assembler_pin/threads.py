@@ -8,6 +8,11 @@ optimizer or the helper arm (:func:`~assembler_pin.solver.solve`,
 :func:`~assembler_pin.helper_arm.initial_condition`, motion planning, payload capacity, the
 carrier's solve, map cells) runs under :func:`one_blas_thread`, whatever the caller's
 thread setting; the caller's setting is restored on return.
+
+CasADi's IPOPT brings its own OpenBLAS (``libcasadi-tp-openblas``, threaded, loaded with the
+solver plugin), which threadpoolctl does not know by name: it is registered here
+(:class:`_CasadiOpenBLAS`), and :func:`forget_loaded_libraries` makes the next limit see a
+library loaded after the first one was set.
 """
 
 from __future__ import annotations
@@ -16,7 +21,7 @@ import functools
 from collections.abc import Callable
 from typing import Any, ParamSpec, TypeVar
 
-__all__ = ["one_blas_thread", "single_blas_thread"]
+__all__ = ["forget_loaded_libraries", "one_blas_thread", "single_blas_thread"]
 
 P = ParamSpec("P")
 R = TypeVar("R")
@@ -31,8 +36,35 @@ def single_blas_thread() -> Any:
         import scipy.linalg  # noqa: F401  (load scipy's own OpenBLAS first, so it is limited too)
         from threadpoolctl import ThreadpoolController
 
+        _register_casadi_openblas()
         _controller = ThreadpoolController()
     return _controller.limit(limits=1, user_api="blas")
+
+
+def forget_loaded_libraries() -> None:
+    """Make the next :func:`single_blas_thread` look again for the loaded BLAS libraries
+    (call it after loading one, e.g. CasADi's IPOPT plugin; a search costs ~5 ms)."""
+    global _controller
+    _controller = None
+
+
+_registered = False
+
+
+def _register_casadi_openblas() -> None:
+    """Teach threadpoolctl CasADi's bundled OpenBLAS (once per process)."""
+    global _registered
+    if _registered:
+        return
+    import threadpoolctl
+
+    class _CasadiOpenBLAS(threadpoolctl.OpenBLASController):
+        """CasADi's own OpenBLAS (``libcasadi-tp-openblas.so``), used by its IPOPT and MUMPS."""
+
+        filename_prefixes = ("libcasadi-tp-openblas",)
+
+    threadpoolctl.register(_CasadiOpenBLAS)
+    _registered = True
 
 
 def one_blas_thread(func: Callable[P, R]) -> Callable[P, R]:

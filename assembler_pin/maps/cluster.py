@@ -140,7 +140,8 @@ def _local(workers: int, local_cluster, client):
                 n_workers=workers,
                 threads_per_worker=1,
                 processes=True,
-                dashboard_address=None,
+                dashboard_address=":0",  # the scheduler's HTTP routes on a free port, never 8787's warning
+                scheduler_kwargs={"dashboard": False},
                 silence_logs=logging.CRITICAL,
                 preload=[_IGNORE_SIGINT],
                 env=dict(ONE_THREAD_ENV),

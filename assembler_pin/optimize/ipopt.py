@@ -21,6 +21,7 @@ import numpy as np
 
 from ..exceptions import OptionsError, _SingularIterateError
 from ..options import IPOPT_INSTALL_HINT, casadi_missing
+from ..threads import forget_loaded_libraries, single_blas_thread
 from .problem import Problem
 from .smooth import SmoothForm
 
@@ -32,14 +33,23 @@ logger = logging.getLogger(__name__)
 _CONVERGED = ("Solve_Succeeded", "Solved_To_Acceptable_Level")
 
 
+_plugin_loaded = False
+
+
 def _casadi() -> Any:
-    """The ``casadi`` module, or an :class:`OptionsError` naming the extra to install."""
+    """The ``casadi`` module with its IPOPT plugin loaded, or an :class:`OptionsError` naming
+    the extra to install."""
+    global _plugin_loaded
     if casadi_missing():
         raise OptionsError(IPOPT_INSTALL_HINT)
     try:
         import casadi
     except ImportError:
         raise OptionsError(IPOPT_INSTALL_HINT) from None
+    if not _plugin_loaded:
+        casadi.load_nlpsol("ipopt")  # loads CasADi's own threaded OpenBLAS with it
+        forget_loaded_libraries()  # so that single_blas_thread limits that one too
+        _plugin_loaded = True
     return casadi
 
 
@@ -289,7 +299,8 @@ def run_ipopt(problem: Problem, x0: np.ndarray) -> tuple[IpoptResult, str]:
     X = ca.MX.sym("x", form.shape[1])
     f, g = values(X)
     solver = ca.nlpsol("assembler_ipopt", "ipopt", {"x": X, "f": f, "g": g}, ipopt_options(problem))
-    sol = solver(x0=x0, lbg=0.0, ubg=np.inf)
+    with single_blas_thread():  # CasADi's OpenBLAS too (loaded after the caller's limit was set)
+        sol = solver(x0=x0, lbg=0.0, ubg=np.inf)
     if form.interrupt is not None:
         raise form.interrupt
     stats = solver.stats()
