@@ -134,6 +134,39 @@ def test_map_workers_run_one_blas_thread_and_give_the_serial_numbers(tmp_path, m
     assert a.num_rows == 2 and a.select(numbers).equals(b.select(numbers))
 
 
+def _worker_periodic_callbacks(dask_worker) -> list[str]:
+    return sorted(dask_worker.periodic_callbacks)
+
+
+def test_local_cluster_workers_run_without_the_profiler_and_without_a_fixed_port():
+    """Dask's profiler grew each map worker ~0.5 MB a cell: a local cluster's workers run
+    without it. The scheduler's HTTP routes take a free port, so a second cluster (port 8787
+    taken) starts without a warning."""
+    pytest.importorskip("distributed")
+    import socket
+    import warnings
+
+    from assembler_pin.maps.cluster import client_for, stop
+
+    held = socket.socket()
+    try:
+        held.bind(("127.0.0.1", 8787))  # taken by this test, or already by someone else
+    except OSError:
+        pass
+    try:
+        with warnings.catch_warnings(record=True) as seen:
+            warnings.simplefilter("always")
+            client, cluster = client_for(None, 1)
+        try:
+            callbacks = client.run(_worker_periodic_callbacks)
+        finally:
+            stop(client, cluster)
+    finally:
+        held.close()
+    assert not [w for w in seen if "already in use" in str(w.message)]
+    assert callbacks and all("heartbeat" in c and not {"profile", "profile-cycle"} & set(c) for c in callbacks.values())
+
+
 # ------------------------------------------------------------------ lazy starts
 def test_starts_option_is_checked(am):
     with pytest.raises(OptionsError, match="starts must be one of first, all"):

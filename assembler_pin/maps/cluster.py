@@ -9,7 +9,10 @@ has no worker within :data:`WORKERS_TIMEOUT_S`, is reported in one line.
 
 Every worker of a map, local or remote, runs with one BLAS thread
 (:class:`~assembler_pin.maps.workers.OneBlasThread`), so that a map's numbers are the same
-whatever the machines' thread settings.
+whatever the machines' thread settings. Local workers run without Dask's statistical profiler
+(:data:`LOCAL_WORKER_CONFIG`), which would grow their memory with every cell; a remote
+cluster's workers keep their own settings (``distributed.worker.profile.enabled: false`` in
+their Dask configuration keeps them flat too).
 """
 
 from __future__ import annotations
@@ -23,7 +26,7 @@ import threading
 
 from ..exceptions import AssemblerError, MapError
 
-__all__ = ["CONNECT_TIMEOUT_S", "WORKERS_TIMEOUT_S", "check_scheduler", "client_for", "stop"]
+__all__ = ["CONNECT_TIMEOUT_S", "LOCAL_WORKER_CONFIG", "WORKERS_TIMEOUT_S", "check_scheduler", "client_for", "stop"]
 
 CONNECT_TIMEOUT_S = 10.0
 """How long a connection to a scheduler is tried [s]."""
@@ -129,13 +132,23 @@ def _sigint_ignored():
         signal.signal(signal.SIGINT, old)
 
 
+#: Dask settings of a local cluster's workers. Dask's statistical profiler samples each worker's
+#: stack every 10 ms and keeps an hour of call trees: a map's solves have so many distinct call
+#: paths that a worker grew ~0.5 MB a cell with it (and ran ~10 % slower); without it a
+#: worker's memory is flat.
+LOCAL_WORKER_CONFIG = {"distributed.worker.profile.enabled": False}
+
+
 def _local(workers: int, local_cluster, client):
-    """A local cluster of ``workers`` single-threaded processes (one BLAS thread each) and its client."""
+    """A local cluster of ``workers`` single-threaded processes (one BLAS thread each, no
+    profiler: :data:`LOCAL_WORKER_CONFIG`) and its client."""
+    import dask
+
     from .workers import ONE_THREAD_ENV
 
     cluster = None
     try:
-        with _sigint_ignored():
+        with _sigint_ignored(), dask.config.set(LOCAL_WORKER_CONFIG):  # passed on to the workers
             cluster = local_cluster(
                 n_workers=workers,
                 threads_per_worker=1,
