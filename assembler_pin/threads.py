@@ -43,8 +43,10 @@ def single_blas_thread() -> Any:
 
 def forget_loaded_libraries() -> None:
     """Make the next :func:`single_blas_thread` look again for the loaded BLAS libraries
-    (call it after loading one, e.g. CasADi's IPOPT plugin; a search costs ~5 ms)."""
+    (call it after loading one, e.g. CasADi's IPOPT plugin; a search costs ~5 ms). CasADi's
+    OpenBLAS is known to threadpoolctl from then on (``threadpool_info`` lists it too)."""
     global _controller
+    _register_casadi_openblas()
     _controller = None
 
 

@@ -134,6 +134,27 @@ def test_map_workers_run_one_blas_thread_and_give_the_serial_numbers(tmp_path, m
     assert a.num_rows == 2 and a.select(numbers).equals(b.select(numbers))
 
 
+def test_ipopt_runs_casadis_own_openblas_on_one_thread():
+    """CasADi's IPOPT loads its own OpenBLAS (not named like the others): the limit that the
+    optimizer runs under covers it, and the caller's setting comes back afterwards."""
+    if importlib.util.find_spec("casadi") is None:
+        pytest.skip("casadi is not installed")
+    from threadpoolctl import ThreadpoolController
+
+    from assembler_pin.optimize.ipopt import _casadi
+    from assembler_pin.threads import single_blas_thread
+
+    _casadi()
+
+    def casadi_threads() -> list[int]:
+        return [i["num_threads"] for i in ThreadpoolController().info() if "casadi" in i["filepath"]]
+
+    before = casadi_threads()
+    with single_blas_thread():
+        inside = casadi_threads()
+    assert before and inside == [1] * len(before) and casadi_threads() == before
+
+
 def _worker_periodic_callbacks(dask_worker) -> list[str]:
     return sorted(dask_worker.periodic_callbacks)
 
