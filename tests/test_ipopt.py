@@ -66,6 +66,25 @@ def test_ipopt_answer_meets_every_constraint_at_n8(stack8):
     assert result.optimized.max_abs_force < 0.8 * np.abs(design_forces(am.config, start)).max()
 
 
+def test_ipopt_long_stack_hessian_start_keeps_the_optimum():
+    """From SCALAR2_PLATFORMS up the limited-memory Hessian starts from IPOPT's ``scalar2``
+    scale: at n = 16 the answer meets every constraint by the independent checks and is the
+    optimum reached with IPOPT's default ``scalar1`` (to 1e-6 relative)."""
+    from assembler_pin.bench_speed import long_stack
+    from assembler_pin.optimize import ipopt
+
+    am, start = long_stack(ipopt.SCALAR2_PLATFORMS)
+    result = optimize_internal_poses(am, start, options=IPOPT)
+    assert result.success
+    _independently_feasible(am, result, start.se3(am.n))
+    default = ipopt.ipopt_options
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setattr(ipopt, "ipopt_options", lambda pr: {**default(pr), "ipopt.limited_memory_initialization": "scalar1"})
+        scalar1 = optimize_internal_poses(am, start, options=IPOPT)
+    assert scalar1.success
+    assert result.optimized.max_abs_force == pytest.approx(scalar1.optimized.max_abs_force, rel=1e-6)
+
+
 def test_ipopt_matches_slsqp_on_the_scenarios(am):
     """The five scenarios (n = 4) from the helper arm's start: IPOPT's max|F| within 1e-3
     of SLSQP's or below it, its answer feasible by the independent checks."""

@@ -260,6 +260,14 @@ class IpoptResult:
     nit: int
 
 
+#: From this many platforms up, the limited-memory Hessian starts each update from the
+#: least-squares scale of its first correction pair (IPOPT's ``scalar2``), below from
+#: ``sᵀy/sᵀs`` (``scalar1``, IPOPT's default). Measured on the bench's long stacks (iterations,
+#: scalar1 → scalar2; the same optimum to 1e-10 relative): n = 4: 20 → 79, 12: 86 → 154,
+#: 16: 123 → 75, 24: 81 → 71, 32: 186 → 65, 48: 100 → 58, 64: 122 → 58.
+SCALAR2_PLATFORMS = 16
+
+
 def ipopt_options(problem: Problem) -> dict:
     """IPOPT's settings from :class:`~assembler_pin.options.OptimizeOptions`.
 
@@ -267,10 +275,12 @@ def ipopt_options(problem: Problem) -> dict:
     "acceptable" level after 3 iterations whose objective changes by less than ``10·ftol``
     (relative) with the rows met to 1e-9 and complementarity 1e-6 (L-BFGS brings the dual
     infeasibility down slowly, the objective much sooner). The constraints are not relaxed
-    (``bound_relax_factor = 0``); the Hessian is the limited-memory one; silent.
+    (``bound_relax_factor = 0``); the Hessian is the limited-memory one, initialized by
+    :data:`SCALAR2_PLATFORMS`; silent.
     """
     opts = problem.opts
     return {
+        "ipopt.limited_memory_initialization": "scalar2" if problem.n >= SCALAR2_PLATFORMS else "scalar1",
         "ipopt.max_iter": int(opts.max_iterations),
         "ipopt.tol": float(opts.ftol),
         "ipopt.acceptable_tol": 1e6,
