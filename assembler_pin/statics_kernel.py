@@ -301,7 +301,7 @@ def _model_arrays(am: AssemblerModel) -> _ModelArrays:
     entry = _ModelArrays(am)
     _MODEL_ARRAYS.pop(id(am), None)
     while len(_MODEL_ARRAYS) >= _MODEL_ARRAYS_KEPT:
-        del _MODEL_ARRAYS[next(iter(_MODEL_ARRAYS))]
+        _MODEL_ARRAYS.pop(next(iter(_MODEL_ARRAYS)), None)
     _MODEL_ARRAYS[id(am)] = entry
     return entry
 
