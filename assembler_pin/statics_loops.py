@@ -53,47 +53,48 @@ def _legs_py(R, p, bottom, top, consts, s, t, u, fp, gu, lev_f, lev_m):
     x, y about the world origin lev_m (level k: plate k (k ≥ 1), the legs of SP k, the payload)."""
     g, mm, ms, mc = consts[0], consts[1], consts[2], consts[3]
     sc, mplate, mpay, off = consts[4], consts[5], consts[6], consts[7]
-    lever = mc * mm - sc * ms
+    lever, w_plate, w_leg = mc * mm - sc * ms, mplate * g, (mm + ms) * g
     n = R.shape[1] - 1
-    for k in range(n + 1):
-        lev_f[k] = 0.0
-        lev_m[k, 0] = 0.0
-        lev_m[k, 1] = 0.0
+    lev_f[0], lev_m[0, 0], lev_m[0, 1] = 0.0, 0.0, 0.0
     for k in range(1, n + 1):  # a weight w at x has the moment x × (0, 0, -w) = (-x_y w, x_x w, 0)
-        lev_f[k] += mplate * g
-        lev_m[k, 0] -= p[s, k, 1] * mplate * g
-        lev_m[k, 1] += p[s, k, 0] * mplate * g
+        lev_f[k] = w_plate
+        lev_m[k, 0] = -p[s, k, 1] * w_plate
+        lev_m[k, 1] = p[s, k, 0] * w_plate
     lev_f[n] += mpay * g
     lev_m[n, 0] -= (R[s, n, 1, 2] * off + p[s, n, 1]) * mpay * g
     lev_m[n, 1] += (R[s, n, 0, 2] * off + p[s, n, 0]) * mpay * g
     for j in range(n):
+        mx, my = 0.0, 0.0
         for i in range(6):
-            bx, by, bz = p[s, j, 0], p[s, j, 1], p[s, j, 2]
-            for c in range(3):
-                bx += R[s, j, 0, c] * bottom[j, i, c]
-                by += R[s, j, 1, c] * bottom[j, i, c]
-                bz += R[s, j, 2, c] * bottom[j, i, c]
-            for a in range(3):
-                t[j, i, a] = p[s, j + 1, a]
-                for c in range(3):
-                    t[j, i, a] += R[s, j + 1, a, c] * top[j, i, c]
-            dx, dy, dz = t[j, i, 0] - bx, t[j, i, 1] - by, t[j, i, 2] - bz
+            b0, b1, b2 = bottom[j, i, 0], bottom[j, i, 1], bottom[j, i, 2]
+            bx = p[s, j, 0] + R[s, j, 0, 0] * b0 + R[s, j, 0, 1] * b1 + R[s, j, 0, 2] * b2
+            by = p[s, j, 1] + R[s, j, 1, 0] * b0 + R[s, j, 1, 1] * b1 + R[s, j, 1, 2] * b2
+            bz = p[s, j, 2] + R[s, j, 2, 0] * b0 + R[s, j, 2, 1] * b1 + R[s, j, 2, 2] * b2
+            c0, c1, c2 = top[j, i, 0], top[j, i, 1], top[j, i, 2]
+            tx = p[s, j + 1, 0] + R[s, j + 1, 0, 0] * c0 + R[s, j + 1, 0, 1] * c1 + R[s, j + 1, 0, 2] * c2
+            ty = p[s, j + 1, 1] + R[s, j + 1, 1, 0] * c0 + R[s, j + 1, 1, 1] * c1 + R[s, j + 1, 1, 2] * c2
+            tz = p[s, j + 1, 2] + R[s, j + 1, 2, 0] * c0 + R[s, j + 1, 2, 1] * c1 + R[s, j + 1, 2, 2] * c2
+            dx, dy, dz = tx - bx, ty - by, tz - bz
             L = math.sqrt(dx * dx + dy * dy + dz * dz)
-            u[j, i, 0], u[j, i, 1], u[j, i, 2] = dx / L, dy / L, dz / L
-            gu[j, i] = -g * u[j, i, 2]
-            sf = ms + lever / L
-            for a in range(3):  # f⊥ = -s (g - (g·u) u), g = (0, 0, -g)
-                fp[j, i, a] = -sf * ((-g if a == 2 else 0.0) - gu[j, i] * u[j, i, a])
-            cx = mm * (bx + mc * u[j, i, 0]) + ms * (t[j, i, 0] - sc * u[j, i, 0])
-            cy = mm * (by + mc * u[j, i, 1]) + ms * (t[j, i, 1] - sc * u[j, i, 1])
-            lev_f[j] += (mm + ms) * g
-            lev_m[j, 0] -= cy * g
-            lev_m[j, 1] += cx * g
+            ux, uy, uz = dx / L, dy / L, dz / L
+            g_u = -g * uz
+            sf = ms + lever / L  # f⊥ = -s (g - (g·u) u), g = (0, 0, -g)
+            t[j, i, 0], t[j, i, 1], t[j, i, 2] = tx, ty, tz
+            u[j, i, 0], u[j, i, 1], u[j, i, 2] = ux, uy, uz
+            fp[j, i, 0], fp[j, i, 1], fp[j, i, 2] = sf * g_u * ux, sf * g_u * uy, -sf * (-g - g_u * uz)
+            gu[j, i] = g_u
+            mx -= mm * (by + mc * uy) + ms * (ty - sc * uy)
+            my += mm * (bx + mc * ux) + ms * (tx - sc * ux)
+        lev_f[j] += 6.0 * w_leg
+        lev_m[j, 0] += mx * g
+        lev_m[j, 1] += my * g
 
 
-def _invert_py(A):
-    """Gauss–Jordan with partial pivoting on A = [M | I] (6×12) in place: A[:, 6:] becomes
-    M⁻¹. Returns False for an exactly singular (or non-finite) M."""
+def _invert_py(A, rhs):
+    """Gauss–Jordan with partial pivoting on the 6×6 A in place, each row swap applied to
+    rhs (6,) too: A becomes X with X·rhs = A₀⁻¹·rhs₀ and A₀⁻¹ = X up to a permutation of
+    its columns (the same column sums). Returns False for an exactly singular (or
+    non-finite) A₀."""
     for c in range(6):
         piv = c
         for r in range(c + 1, 6):
@@ -102,15 +103,18 @@ def _invert_py(A):
         if A[piv, c] == 0.0 or not math.isfinite(A[piv, c]):
             return False
         if piv != c:
-            for q in range(12):
+            for q in range(6):
                 A[c, q], A[piv, q] = A[piv, q], A[c, q]
+            rhs[c], rhs[piv] = rhs[piv], rhs[c]
         inv_p = 1.0 / A[c, c]
-        for q in range(12):
+        A[c, c] = 1.0
+        for q in range(6):
             A[c, q] *= inv_p
         for r in range(6):
-            if r != c and A[r, c] != 0.0:
-                f = A[r, c]
-                for q in range(12):
+            f = A[r, c]
+            if r != c and f != 0.0:
+                A[r, c] = 0.0
+                for q in range(6):
                     A[r, q] -= f * A[c, q]
     return True
 
@@ -119,55 +123,53 @@ def _platform_rhs(R, p, s, j, t, fp, up, rhs):
     """The wrench platform j's legs must supply to plate j+1, in its axes, moments about its
     origin: the weight above (``up``: [N, downward] and its moment's x, y about the world
     origin) less the legs' transverse ball forces."""
-    for a in range(6):
-        rhs[a] = 0.0
-    rhs[2], rhs[3], rhs[4] = -up[0], up[1], up[2]
+    f0, f1, f2, m0, m1, m2 = 0.0, 0.0, -up[0], up[1], up[2], 0.0
     for i in range(6):
         tx, ty, tz = t[j, i, 0], t[j, i, 1], t[j, i, 2]
         fx, fy, fz = fp[j, i, 0], fp[j, i, 1], fp[j, i, 2]
-        rhs[0] -= fx
-        rhs[1] -= fy
-        rhs[2] -= fz
-        rhs[3] -= ty * fz - tz * fy
-        rhs[4] -= tz * fx - tx * fz
-        rhs[5] -= tx * fy - ty * fx
+        f0 -= fx
+        f1 -= fy
+        f2 -= fz
+        m0 -= ty * fz - tz * fy
+        m1 -= tz * fx - tx * fz
+        m2 -= tx * fy - ty * fx
     px, py, pz = p[s, j + 1, 0], p[s, j + 1, 1], p[s, j + 1, 2]  # about the plate's origin: m - p × f
-    m0 = rhs[3] - (py * rhs[2] - pz * rhs[1])
-    m1 = rhs[4] - (pz * rhs[0] - px * rhs[2])
-    m2 = rhs[5] - (px * rhs[1] - py * rhs[0])
-    f0, f1, f2 = rhs[0], rhs[1], rhs[2]
+    m0 -= py * f2 - pz * f1
+    m1 -= pz * f0 - px * f2
+    m2 -= px * f1 - py * f0
     for a in range(3):  # in the plate's axes: Rᵀ
-        rhs[a] = R[s, j + 1, 0, a] * f0 + R[s, j + 1, 1, a] * f1 + R[s, j + 1, 2, a] * f2
-        rhs[3 + a] = R[s, j + 1, 0, a] * m0 + R[s, j + 1, 1, a] * m1 + R[s, j + 1, 2, a] * m2
+        r0, r1, r2 = R[s, j + 1, 0, a], R[s, j + 1, 1, a], R[s, j + 1, 2, a]
+        rhs[a] = r0 * f0 + r1 * f1 + r2 * f2
+        rhs[3 + a] = r0 * m0 + r1 * m1 + r2 * m2
 
 
 def _platform_py(R, p, top, s, j, t, u, fp, gu, up, ms, A, rhs, forces, condition):
-    """Platform j of stack s: the 6×6 system in the top plate's frame (moments about its
-    origin), its 1-norm condition number and the actuator forces (see :func:`_platform_rhs`)."""
+    """Platform j of stack s: the 6×6 system W a = rhs in the top plate's frame (moments
+    about its origin; W's columns the legs' lines), its 1-norm condition number and the
+    actuator forces (see :func:`_platform_rhs`)."""
     _rhs(R, p, s, j, t, fp, up, rhs)
     norm = 0.0
-    for i in range(6):  # A = [Wᵀ | I], Wᵀ's rows (one per leg) [u_l, top × u_l]
-        for a in range(3):
-            A[i, a] = R[s, j + 1, 0, a] * u[j, i, 0] + R[s, j + 1, 1, a] * u[j, i, 1] + R[s, j + 1, 2, a] * u[j, i, 2]
-        A[i, 3] = top[j, i, 1] * A[i, 2] - top[j, i, 2] * A[i, 1]
-        A[i, 4] = top[j, i, 2] * A[i, 0] - top[j, i, 0] * A[i, 2]
-        A[i, 5] = top[j, i, 0] * A[i, 1] - top[j, i, 1] * A[i, 0]
-        for c in range(6):
-            A[i, 6 + c] = 1.0 if c == i else 0.0
-        norm = max(norm, abs(A[i, 0]) + abs(A[i, 1]) + abs(A[i, 2]) + abs(A[i, 3]) + abs(A[i, 4]) + abs(A[i, 5]))
-    if not _invert(A):
+    for i in range(6):  # column i of W: [u_i, top_i × u_i] in the plate's axes
+        ux, uy, uz = u[j, i, 0], u[j, i, 1], u[j, i, 2]
+        a0 = R[s, j + 1, 0, 0] * ux + R[s, j + 1, 1, 0] * uy + R[s, j + 1, 2, 0] * uz
+        a1 = R[s, j + 1, 0, 1] * ux + R[s, j + 1, 1, 1] * uy + R[s, j + 1, 2, 1] * uz
+        a2 = R[s, j + 1, 0, 2] * ux + R[s, j + 1, 1, 2] * uy + R[s, j + 1, 2, 2] * uz
+        c0, c1, c2 = top[j, i, 0], top[j, i, 1], top[j, i, 2]
+        a3, a4, a5 = c1 * a2 - c2 * a1, c2 * a0 - c0 * a2, c0 * a1 - c1 * a0
+        A[0, i], A[1, i], A[2, i], A[3, i], A[4, i], A[5, i] = a0, a1, a2, a3, a4, a5
+        norm = max(norm, abs(a0) + abs(a1) + abs(a2) + abs(a3) + abs(a4) + abs(a5))
+    if not _invert(A, rhs):
         condition[s, j] = math.nan
         for i in range(6):
             forces[s, j, i] = math.nan
         return
     inorm = 0.0
-    for i in range(6):
-        inorm = max(inorm, abs(A[i, 6]) + abs(A[i, 7]) + abs(A[i, 8]) + abs(A[i, 9]) + abs(A[i, 10]) + abs(A[i, 11]))
+    for c in range(6):
+        inorm = max(inorm, abs(A[0, c]) + abs(A[1, c]) + abs(A[2, c]) + abs(A[3, c]) + abs(A[4, c]) + abs(A[5, c]))
     condition[s, j] = norm * inorm
-    for i in range(6):  # W a = rhs: a = (Wᵀ)⁻ᵀ rhs; the actuator force adds the shaft's weight along the leg
-        a_i = 0.0
-        for c in range(6):
-            a_i += A[c, 6 + i] * rhs[c]
+    for i in range(6):  # the actuator force adds the shaft's weight along the leg
+        a_i = A[i, 0] * rhs[0] + A[i, 1] * rhs[1] + A[i, 2] * rhs[2]
+        a_i += A[i, 3] * rhs[3] + A[i, 4] * rhs[4] + A[i, 5] * rhs[5]
         forces[s, j, i] = a_i + ms * gu[j, i]
 
 
@@ -281,7 +283,7 @@ def closed_form_pure(
     ball, base = Grid((1, n, 6, 3)), Grid((1, 6))
     lev_f, lev_m = Grid((n + 1,)), Grid((n + 1, 2))
     t, u, fp, gu = Grid((n, 6, 3)), Grid((n, 6, 3)), Grid((n, 6, 3)), Grid((n, 6))
-    A, rhs, up = Grid((6, 12)), Grid((6,)), Grid((3,))
+    A, rhs, up = Grid((6, 6)), Grid((6,)), Grid((3,))
     _stack(R, p, bottom, top, consts, 0, t, u, fp, gu, lev_f, lev_m, A, rhs, up, forces, condition)
     _extras(R, p, 0, consts, u, fp, gu, forces, lev_f, lev_m, ball, base)
     return forces, condition, ball, base
