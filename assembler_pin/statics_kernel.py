@@ -8,7 +8,10 @@ here by numba (``cache=True``: compiled once per install and Python version, the
 from numba's cache). Per platform it solves the 6×6 system in the top plate's own frame
 (moments about its origin) by Gauss–Jordan elimination with partial pivoting; the same
 inverse gives the 1-norm condition number of :func:`~assembler_pin.statics.solve_statics`.
-The loops' callees are inlined into the compiled kernel.
+The loops' callees are inlined into the compiled kernel. numba checks a cached kernel against
+the timestamp of this file only: in a working copy, a change to
+:mod:`~assembler_pin.statics_loops` alone is seen once this file is touched too (or its
+``__pycache__/statics_kernel.*.nbi`` files are deleted); an install replaces both.
 
 :func:`kernel_result` gives the whole :class:`~assembler_pin.statics.StaticsResult` of one
 stack (ball forces and base wrench too) from one compiled call that checks the poses first
