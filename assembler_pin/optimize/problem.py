@@ -45,6 +45,8 @@ SINGULAR_SAG = 1e3
 def finite_rows(rows: np.ndarray) -> np.ndarray:
     """``rows`` with NaN and -inf replaced by a large negative (infeasible) value, +inf by a
     large positive one: SLSQP cannot handle non-finite rows."""
+    if np.isfinite(rows).all():  # the common case, without nan_to_num's copy
+        return rows
     return np.nan_to_num(rows, nan=_NON_FINITE_ROW, posinf=-_NON_FINITE_ROW, neginf=_NON_FINITE_ROW)
 
 
@@ -77,42 +79,45 @@ class Problem:
         self.chart: LocalChart | TaaChart = (TaaChart if opts.method == "paper" else LocalChart)(ref, movable)
         self.nx_pose = self.chart.size
         leg = am.config.leg
-        self.start_max_force = Point(np.zeros(0), pose_values(am, start)).max_abs_force
         self.objective = SagObjective(
             opts.objective, opts.sag_weight, sag_reference(am) if opts.objective != "force" else 1.0
         )
+        self.sag_rows = SagRows(opts.max_sag) if opts.max_sag is not None else None
+        self.reads_sag = self.objective.needs_sag or self.sag_rows is not None
+        # the sag reads the numpy pass's intermediates: a problem that reads it keeps that pass
+        self._compiled = CompiledPass(am) if not self.reads_sag and use_pose_kernel() else None
+        start_values = self._compiled.values(start) if self._compiled is not None else pose_values(am, start)
+        self.start_max_force = Point(np.zeros(0), start_values).max_abs_force
         force_objective = opts.objective == "force"
         cap = self.start_max_force if opts.method in SMOOTH_METHODS and start_feasible and force_objective else np.inf
         self.force_limits = ForceLimitRows(min(leg.max_tension, cap) - 1e-6, min(leg.max_compression, cap) - 1e-6)
         self.leg_limits = LegLimitRows(leg, opts.limit_margin, opts.rise_margin)
         self.ee = EETolerance(goal, opts.ee_tolerance, self.chart) if opts.ee_tolerance is not None else None
         self.motion_rows = MotionRows(motion) if motion is not None else None
-        self.sag_rows = SagRows(opts.max_sag) if opts.max_sag is not None else None
-        self.reads_sag = self.objective.needs_sag or self.sag_rows is not None
-        # the sag reads the numpy pass's intermediates: a problem that reads it keeps that pass
-        self._compiled = CompiledPass(am) if not self.reads_sag and use_pose_kernel() else None
         self._sag: tuple[Point, float] | None = None
         self._sag_grad: tuple[ChartDerivatives, np.ndarray] | None = None
         self.best: tuple[float, np.ndarray] | None = None
         self.evaluations = 0
         self.gradient_evaluations = 0
         self._point: Point | None = None
+        self._point_key = b""
         self._derivs: tuple[bytes, ChartDerivatives] | None = None
         self._rows: tuple[Point, dict[str, np.ndarray]] | None = None
 
     def point(self, x_pose: np.ndarray) -> Point:
         """The values at the pose part of x (cached for the last point); tracks the best
         feasible point met."""
-        if self._point is not None and np.array_equal(self._point.x, x_pose):
-            return self._point
         x = np.array(x_pose, dtype=float)
+        key = x.tobytes()
+        if self._point is not None and self._point_key == key:
+            return self._point
         plates = self.chart.plates(x)
         if self._compiled is not None:
             p = Point(x, self._compiled.values(plates))
         else:
             with np.errstate(invalid="ignore", divide="ignore"):
                 p = Point(x, pose_values(self.am, plates))
-        self._point = p
+        self._point, self._point_key = p, key
         self.evaluations += 1
         if self.feasible(p):
             value = self.score(p)
@@ -217,4 +222,4 @@ class Problem:
 
     def feasible(self, p: Point) -> bool:
         """Every row of the problem holds at the point."""
-        return bool(all(np.all(r >= 0) for r in self.rows(p).values()))
+        return all(bool((r >= 0).all()) for r in self.rows(p).values())
