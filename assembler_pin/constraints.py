@@ -109,8 +109,7 @@ def leg_limit_margins(
         bottom and top joint (cosine form: smooth at θ = 0) [1]; ``rise - rise_margin`` [m].
     """
     cos_limit = math.cos(leg.max_deflection - margin)
-    shape = np.broadcast_shapes(np.shape(lengths), np.shape(cos_deflection)[:-1], np.shape(rise))
-    out = np.empty((5, *shape))
+    out = np.empty((5, *np.shape(lengths)))  # the three inputs share one shape
     np.subtract(lengths, leg.min_length + margin, out=out[0])
     np.subtract(leg.max_length - margin, lengths, out=out[1])
     np.subtract(cos_deflection[..., 0], cos_limit, out=out[2])
