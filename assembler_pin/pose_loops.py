@@ -29,13 +29,13 @@ import math
 
 import numpy as np
 
+from .statics_loops import CONSTANT_NAMES
+
 __all__ = ["CONSTANT_NAMES", "PARTS"]
 
-#: The order of ``consts``: gravity [m/s²], motor mass [kg], shaft mass [kg], motor CoM
-#: from the bottom joint [m], shaft CoM from the top joint [m], plate mass [kg], payload
-#: mass [kg], payload offset along the top plate's z [m] (those of
-#: :data:`assembler_pin.statics_loops.CONSTANT_NAMES`).
-CONSTANT_NAMES = ("gravity", "motor_mass", "shaft_mass", "motor_com", "shaft_com", "plate_mass", "payload", "offset")
+# ``consts`` below: the constants of :data:`~assembler_pin.statics_loops.CONSTANT_NAMES`
+# (gravity [m/s²], motor and shaft mass [kg], their CoM offsets [m], plate mass [kg],
+# payload mass [kg] and offset [m]), from :func:`~assembler_pin.statics_loops.constants`.
 
 
 def _legs_py(R, p, bottom, top, home, consts, b, t, d, u, L, gp, fp, hb, ht, cosd, rise):
