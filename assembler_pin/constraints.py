@@ -109,15 +109,13 @@ def leg_limit_margins(
         bottom and top joint (cosine form: smooth at θ = 0) [1]; ``rise - rise_margin`` [m].
     """
     cos_limit = math.cos(leg.max_deflection - margin)
-    return np.stack(
-        [
-            lengths - (leg.min_length + margin),
-            (leg.max_length - margin) - lengths,
-            cos_deflection[..., 0] - cos_limit,
-            cos_deflection[..., 1] - cos_limit,
-            rise - (margin if rise_margin is None else rise_margin),
-        ]
-    )
+    out = np.empty((5, *np.shape(lengths)))  # the three inputs share one shape
+    np.subtract(lengths, leg.min_length + margin, out=out[0])
+    np.subtract(leg.max_length - margin, lengths, out=out[1])
+    np.subtract(cos_deflection[..., 0], cos_limit, out=out[2])
+    np.subtract(cos_deflection[..., 1], cos_limit, out=out[3])
+    np.subtract(rise, margin if rise_margin is None else rise_margin, out=out[4])
+    return out
 
 
 def _per_leg(kind: str, mask: np.ndarray, values: np.ndarray, limit: float) -> list[Violation]:

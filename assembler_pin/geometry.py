@@ -13,6 +13,7 @@ at -60°. All arrays below are indexed ``[platform j, leg i, ...]``.
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass
 
 import numpy as np
@@ -128,11 +129,13 @@ def home_plates(cfg: AssemblerConfig, base: pin.SE3 | None = None) -> list[pin.S
     return plates
 
 
+@functools.lru_cache(maxsize=64)
 def reach_bound(cfg: AssemblerConfig) -> float:
     """An upper bound on the distance from plate 0's origin to plate n's [m].
 
     Plate j+1's origin is ``p_j + b_i + L_i u_i - R_{j+1} t_i`` for any of its legs, so one
     platform spans at most ``|b_i| + max_length + |t_i|``; a goal farther away is unreachable.
+    Cached per configuration (immutable): every helper-arm solve asks for it.
     """
     geo = leg_geometry(cfg)
     span = np.linalg.norm(geo.bottom_in_plate, axis=-1) + np.linalg.norm(geo.top_in_plate, axis=-1)

@@ -182,9 +182,13 @@ def state_score(
 
 
 def state_sag(am: AssemblerModel, state: StackState) -> float:
-    """The EE's linear sag [m] of a state's plates (inf when a platform is singular)."""
-    from .gradients import pose_values
-    from .optimize.sag import linear_sag
+    """The EE's linear sag [m] of a state's plates (inf when a platform is singular), from the
+    closed-form equilibrium of its plates (the pass of :func:`~assembler_pin.gradients.pose_values`
+    without the angles the sag does not read)."""
+    from .closed_form import equilibrium
+    from .optimize.sag import equilibrium_sag
 
-    sag = linear_sag(pose_values(am, state.plates), float(am.config.leg.stiffness))[0]
+    plates = state.plates
+    eq, _ = equilibrium(am, plates.R, plates.p)
+    sag = equilibrium_sag(eq, plates.p[-1], float(am.config.leg.stiffness))[0]
     return sag if np.isfinite(sag) else float("inf")

@@ -3,6 +3,7 @@ portfolio, a stack without internal plates, singular trial points, goals out of 
 
 from __future__ import annotations
 
+import importlib.util
 import json
 
 import numpy as np
@@ -16,6 +17,8 @@ from assembler_pin.cli import main
 from assembler_pin.kinematics import taa_to_se3
 from assembler_pin.optimize import OptimizeOptions, optimize_internal_poses
 from assembler_pin.solver import STARTS, solve
+
+HAS_NUMBA = importlib.util.find_spec("numba") is not None
 
 # A goal (the EE of random in-stroke lengths) whose converged optimum used to sit 1e-8 past a
 # deflection row: it was rejected and the start returned as a success, 24% above the optimum.
@@ -87,34 +90,64 @@ def test_one_platform_from_the_cli(tmp_path, capsys):
         assert json.loads(capsys.readouterr().out)["success"] is True
 
 
-def test_a_singular_trial_point_is_an_infeasible_step(am, monkeypatch):
+#: The optimizer's two evaluation paths: the numpy pass and, with numba, the compiled one.
+BACKENDS = [
+    "numpy",
+    pytest.param("compiled", marks=pytest.mark.skipif(not HAS_NUMBA, reason="no numba")),
+]
+
+
+def _patch_values(monkeypatch, backend: str, wrap) -> None:
+    """Route the optimizer's values through ``wrap(real)(*args)`` on the given path."""
+    if backend == "numpy":
+        monkeypatch.setenv("ASSEMBLER_PIN_STATICS", "numpy")
+        monkeypatch.setattr(problem_module, "pose_values", wrap(problem_module.pose_values))
+    else:
+        monkeypatch.setenv("ASSEMBLER_PIN_STATICS", "numba")
+        from assembler_pin.pose_kernel import CompiledPass
+
+        monkeypatch.setattr(CompiledPass, "values", wrap(CompiledPass.values))
+
+
+@pytest.mark.parametrize("backend", BACKENDS)
+def test_a_singular_trial_point_is_an_infeasible_step(am, monkeypatch, backend):
     goal = taa_to_se3([0.3, 0.0, 0.8, 0.0, 0.6, 0.0])
     init = solve(am, goal, optimize=False).initial
-    real = problem_module.pose_values
     calls = {"n": 0}
 
-    def sometimes_singular(*args, **kwargs):
-        values = real(*args, **kwargs)
-        calls["n"] += 1
-        if calls["n"] % 3 == 0:  # the closed form's answer at a singular platform: NaN forces
-            values.eq.forces[...] = np.nan
-        return values
+    def sometimes_singular(real):
+        def values_at(*args, **kwargs):
+            values = real(*args, **kwargs)
+            calls["n"] += 1
+            if calls["n"] % 3 == 0:  # the closed form's answer at a singular platform: NaN forces
+                values.forces[...] = np.nan
+            return values
 
-    monkeypatch.setattr(problem_module, "pose_values", sometimes_singular)
+        return values_at
+
+    _patch_values(monkeypatch, backend, sometimes_singular)
     result = optimize_internal_poses(am, init, goal)  # no exception escapes
     assert calls["n"] >= 3
     assert result.optimized.feasible
     assert_feasible(am, result.optimized, goal)
 
 
-def test_singular_derivatives_end_the_solve_with_the_reason(am, monkeypatch):
+@pytest.mark.parametrize("backend", BACKENDS)
+def test_singular_derivatives_end_the_solve_with_the_reason(am, monkeypatch, backend):
     goal = taa_to_se3([0.3, 0.0, 0.8, 0.0, 0.6, 0.0])
     init = solve(am, goal, optimize=False).initial
 
     def singular(*args, **kwargs):
         raise np.linalg.LinAlgError("Singular matrix")
 
-    monkeypatch.setattr(problem_module, "pose_derivatives", singular)
+    if backend == "numpy":
+        monkeypatch.setenv("ASSEMBLER_PIN_STATICS", "numpy")
+        monkeypatch.setattr(problem_module, "pose_derivatives", singular)
+    else:
+        monkeypatch.setenv("ASSEMBLER_PIN_STATICS", "numba")
+        from assembler_pin.pose_kernel import CompiledPass
+
+        monkeypatch.setattr(CompiledPass, "derivatives", singular)
     result = optimize_internal_poses(am, init, goal)
     assert not result.success and "singular" in result.message
     assert result.optimized.feasible  # the valid start is kept

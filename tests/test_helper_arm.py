@@ -325,6 +325,26 @@ def test_repair_jacobian_is_the_derivative_of_the_hinge(am):
     assert violation == 0.0 and kinematic_problems(am.config, repaired) == []
 
 
+def test_penalty_jacobian_is_the_forward_difference_of_each_joint(am):
+    """The IK penalty's Jacobian (every cluster's three joints and d moved in one batched
+    call) equals the forward difference of :meth:`HelperArm.stack_violation` taken joint by
+    joint and for d, one pose at a time, at a pose with violated legs."""
+    arm = HelperArm(am.config)
+    q = np.random.default_rng(1).choice([-1.0, 1.0], arm.nq) * arm.upper
+    d, margin, step = 1.05 * arm.link_length, 1e-5, 1e-7
+    value = arm.stack_violation(q, margin, d)
+    assert (value > 0).sum() >= 3
+    jac = arm._penalty_jacobian(q, value, margin, step=step, link_length=d, with_d=True)
+    columns = []
+    for c in range(q.size):
+        moved = q.copy()
+        moved[c] += step
+        columns.append(((arm.stack_violation(moved, margin, d) - value) / step).ravel())
+    columns.append(((arm.stack_violation(q, margin, d + step) - value) / step).ravel())
+    np.testing.assert_allclose(jac, np.array(columns).T, rtol=0, atol=1e-9)
+    assert np.abs(jac).max() > 1.0
+
+
 def test_random_reachable_goals_mostly_succeed(am):
     """EE poses of random leg lengths over the middle 80 % of the stroke (stack FK, seed 0).
 

@@ -3,6 +3,8 @@ determinism, infeasible starts, the paper baseline."""
 
 from __future__ import annotations
 
+import importlib.util
+
 import numpy as np
 import pytest
 from checks import assert_feasible, design_objective, design_problems
@@ -10,6 +12,8 @@ from checks import assert_feasible, design_objective, design_problems
 from assembler_pin import AssemblerModel, load_config
 from assembler_pin.constraints import GoalTolerance
 from assembler_pin.optimize import OptimizeOptions, optimize_internal_poses
+
+HAS_NUMBA = importlib.util.find_spec("numba") is not None
 
 
 def _assert_feasible_independently(am, state, goal=None, tol=1e-9):
@@ -103,11 +107,13 @@ def test_bad_options():
 
 
 def test_iterates_take_one_closed_form_pass(am, start, monkeypatch):
-    """Each point: one closed-form pass for the values, derivatives extending that same pass
-    (never computed again), and the Pinocchio statics only re-checking returned states."""
+    """On the numpy path each point takes one closed-form pass for the values and the
+    derivatives extend that same pass (never computed again); the Pinocchio statics only
+    re-check returned states."""
     import assembler_pin.optimize.problem as problem
     import assembler_pin.state as state_module
 
+    monkeypatch.setenv("ASSEMBLER_PIN_STATICS", "numpy")
     calls = {"values": 0, "derivatives": 0, "from_scratch": 0, "pinocchio": 0}
     real_values, real_derivatives, real_statics = (
         problem.pose_values,
@@ -137,6 +143,39 @@ def test_iterates_take_one_closed_form_pass(am, start, monkeypatch):
     assert calls["derivatives"] == result.gradient_evaluations > 0 and calls["from_scratch"] == 0
     # the start, the answer, the best point met and at most four pull-back trials
     assert 2 <= calls["pinocchio"] <= 7 < result.evaluations
+    _assert_feasible_independently(am, result.optimized, goal=start.se3(am.n))
+
+
+@pytest.mark.skipif(not HAS_NUMBA, reason="no numba")
+def test_compiled_iterates_take_one_call_per_point(am, start, monkeypatch):
+    """With ``ASSEMBLER_PIN_STATICS=numba`` each point takes one compiled call for its values
+    and one for its derivatives (and the start one, for its max|F|: the force cap); the numpy
+    pass never runs, and the optimum equals the numpy path's."""
+    import assembler_pin.optimize.problem as problem
+    from assembler_pin.pose_kernel import CompiledPass
+
+    calls = {"values": 0, "derivatives": 0, "numpy": 0}
+    real_values, real_derivatives, real_numpy = CompiledPass.values, CompiledPass.derivatives, problem.pose_values
+
+    def counted(key, real):
+        def call(*args, **kwargs):
+            calls[key] += 1
+            return real(*args, **kwargs)
+
+        return call
+
+    monkeypatch.setattr(CompiledPass, "values", counted("values", real_values))
+    monkeypatch.setattr(CompiledPass, "derivatives", counted("derivatives", real_derivatives))
+    monkeypatch.setattr(problem, "pose_values", counted("numpy", real_numpy))
+    monkeypatch.setenv("ASSEMBLER_PIN_STATICS", "numba")
+    result = optimize_internal_poses(am, start)
+    assert result.success
+    assert calls["values"] == result.evaluations + 1 and calls["numpy"] == 0
+    assert calls["derivatives"] == result.gradient_evaluations > 0
+    monkeypatch.undo()
+    monkeypatch.setenv("ASSEMBLER_PIN_STATICS", "numpy")
+    reference = optimize_internal_poses(am, start)
+    assert result.objective_optimized == pytest.approx(reference.objective_optimized, rel=1e-9)
     _assert_feasible_independently(am, result.optimized, goal=start.se3(am.n))
 
 

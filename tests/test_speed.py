@@ -53,13 +53,13 @@ def test_optimizer_sees_one_blas_thread_whatever_the_caller_sets(am, monkeypatch
     import assembler_pin.optimize.problem as problem
 
     seen: list[int] = []
-    real = problem.pose_derivatives
+    real = problem.Problem._pose_derivatives
 
     def recording(*args, **kwargs):
         seen.extend(lib["num_threads"] for lib in threadpool_info() if lib["user_api"] == "blas")
         return real(*args, **kwargs)
 
-    monkeypatch.setattr(problem, "pose_derivatives", recording)
+    monkeypatch.setattr(problem.Problem, "_pose_derivatives", recording)
     with threadpool_limits(limits=2, user_api="blas"):
         solve(am, _goal((0.0, 0.0, 0.8)))
     assert seen and set(seen) == {1}

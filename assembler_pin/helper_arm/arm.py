@@ -144,6 +144,23 @@ class HelperArm:
         lengths, cos, rise = relative_leg_measures(self.geometry, rot, half + rot @ half)
         return np.maximum(-leg_limit_margins(self.config.leg, lengths, cos, rise, margin), 0.0)
 
+    def stack_violations(self, qs: np.ndarray, margin: float, link_lengths: np.ndarray) -> np.ndarray:
+        """:meth:`stack_violation` of m arm poses at once, the same numbers row by row.
+
+        Args:
+            qs: (m, 3n) joint angles [rad]; link_lengths: (m,) d of each [m].
+
+        Returns:
+            (5, m, n, 6) non-negative amounts, zero where the constraint holds.
+        """
+        m = qs.shape[0]
+        rot = _xyz_rotations(qs.reshape(-1, 3)).reshape(m, -1, 3, 3)
+        half = np.zeros((m, 1, 3, 1))
+        half[:, 0, 2, 0] = 0.5 * np.asarray(link_lengths, dtype=float)
+        translations = (half + rot @ half)[..., 0]
+        lengths, cos, rise = relative_leg_measures(self.geometry, rot, translations)
+        return np.maximum(-leg_limit_margins(self.config.leg, lengths, cos, rise, margin), 0.0)
+
     def _penalty_jacobian(
         self,
         q: np.ndarray,
@@ -157,20 +174,25 @@ class HelperArm:
         as a last column when ``with_d``).
 
         SP j depends only on cluster j, so the three columns of all clusters are perturbed at
-        once (3 evaluations, one more for d)."""
+        once (3 poses, one more for d), all evaluated in one :meth:`stack_violations` call."""
         n = self.config.platforms
         flat = base_value.reshape(5, n, 6)
+        d = self.link_length if link_length is None else float(link_length)
+        qs = np.repeat(q[None, :], 4 if with_d else 3, axis=0)
+        for k in range(3):
+            qs[k, k::3] += step
+        ds = np.full(qs.shape[0], d)
+        if with_d:
+            ds[3] += step
+        moved = self.stack_violations(qs, margin, ds)  # (5, 3 or 4, n, 6), one call
         jac: np.ndarray = np.zeros((5, n, 6, n, 3))
         for k in range(3):
-            dq = q.copy()
-            dq[k::3] += step
-            diff = (self.stack_violation(dq, margin, link_length) - flat) / step  # (5, n, 6)
+            diff = (moved[:, k] - flat) / step  # (5, n, 6)
             jac[:, np.arange(n), :, np.arange(n), k] = diff.transpose(1, 0, 2)
         jac = jac.reshape(30 * n, 3 * n)
         if not with_d:
             return jac
-        d = self.link_length if link_length is None else float(link_length)
-        col = (self.stack_violation(q, margin, d + step) - flat).reshape(-1, 1) / step
+        col = (moved[:, 3] - flat).reshape(-1, 1) / step
         return np.hstack([jac, col])
 
     def ik(
@@ -293,6 +315,17 @@ class ArmIKProblem:
             self.lower, self.upper = np.append(self.lower, d_lo), np.append(self.upper, d_hi)
         self.evaluations = 0
         self.statuses: list[int] = []
+        self._last_violation: tuple[np.ndarray, np.ndarray] | None = None  # (x, violation at x)
+
+    def _violation(self, x: np.ndarray) -> np.ndarray:
+        """:meth:`HelperArm.stack_violation` at x, kept for the last x (the Jacobian is asked
+        at the point whose residual was just computed)."""
+        if self._last_violation is not None and np.array_equal(self._last_violation[0], x):
+            return self._last_violation[1]
+        q, d = self.split(x)
+        value = self.arm.stack_violation(q, self.margin, d)
+        self._last_violation = (np.array(x, dtype=float), value)
+        return value
 
     def start(self, q: np.ndarray) -> np.ndarray:
         return np.append(q, self.arm.link_length) if self.free_d else q
@@ -309,7 +342,7 @@ class ArmIKProblem:
         self.evaluations += 1
         q, d = self.split(x)
         err, _ = self.arm._error(q, self.goal_inv, d / self.arm.link_length)
-        parts = [err, self.constraint_weight * self.arm.stack_violation(q, self.margin, d).ravel()]
+        parts = [err, self.constraint_weight * self._violation(x).ravel()]
         if w > 0:
             parts.append(self._pull(w) @ x)
         return np.concatenate(parts)
@@ -325,8 +358,7 @@ class ArmIKProblem:
             tip = arm.data.oMf[arm.tip_frame]
             j_d = np.concatenate([tip.rotation.T @ tip.translation / arm.link_length, np.zeros(3)])
             j_tip = np.hstack([np.vstack([scale * j_tip[:3], j_tip[3:]]), j_d[:, None]])
-        value = arm.stack_violation(q, self.margin, d)
-        j_pen = arm._penalty_jacobian(q, value, self.margin, link_length=d, with_d=self.free_d)
+        j_pen = arm._penalty_jacobian(q, self._violation(x), self.margin, link_length=d, with_d=self.free_d)
         parts = [pin.Jlog6(m) @ j_tip, self.constraint_weight * j_pen]
         if w > 0:
             parts.append(self._pull(w))

@@ -22,10 +22,12 @@ __all__ = ["LocalChart", "TaaChart"]
 
 
 class _Chart:
-    """What both charts share: the reference poses of plates 0..n and the movable plates."""
+    """What both charts share: the reference poses of plates 0..n (also as arrays,
+    ``ref_arrays``) and the movable plates."""
 
     def __init__(self, ref: Sequence[pin.SE3], movable: Sequence[int]) -> None:
         self.ref = list(ref)
+        self.ref_arrays = PlateArrays.from_se3(self.ref)
         self.movable = list(movable)
         self.n = len(self.ref) - 1
         self.size = 6 * len(self.movable)
@@ -44,17 +46,19 @@ class LocalChart(_Chart):
 
     def plates(self, x: np.ndarray) -> PlateArrays:
         """World poses of plates 0..n at the chart point ``x``."""
-        poses = list(self.ref)
+        R, p = self.ref_arrays.R.copy(), self.ref_arrays.p.copy()
         for slot, k in enumerate(self.movable):
-            poses[k] = self.ref[k] * pin.exp6(self.slot(x, slot))
-        return PlateArrays.from_se3(poses)
+            moved = self.ref[k] * pin.exp6(self.slot(x, slot))
+            R[k], p[k] = moved.rotation, moved.translation
+        return PlateArrays(R, p)
 
     def twist_jacobian(self, x: np.ndarray, plates: PlateArrays) -> np.ndarray:
         """B (6n, size): the world twists of plates 1..n per chart coordinate,
         ``Ad(T_k) · Jexp6(x_k)`` on the movable plates' blocks, zero elsewhere."""
         B = np.zeros((6 * self.n, self.size))
         for slot, k in enumerate(self.movable):
-            B[6 * (k - 1) : 6 * k, 6 * slot : 6 * slot + 6] = plates.se3(k).action @ pin.Jexp6(self.slot(x, slot))
+            action = pin.SE3(plates.R[k], plates.p[k]).action
+            B[6 * (k - 1) : 6 * k, 6 * slot : 6 * slot + 6] = action @ pin.Jexp6(self.slot(x, slot))
         return B
 
     def ee_rotation(self, x: np.ndarray, plates: PlateArrays, goal: pin.SE3) -> np.ndarray:

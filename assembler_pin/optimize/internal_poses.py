@@ -182,8 +182,16 @@ class _Check:
     motion: MotionTerm | None
     objective: SagObjective
 
+    states: dict[bytes, StackState] = dataclasses.field(default_factory=dict)
+    """The states re-checked so far, by chart point (the best point met is often the final one)."""
+
     def state_at(self, problem: Problem, x_pose: np.ndarray) -> StackState:
-        return evaluate_state(self.am, problem.chart.plates(x_pose), goal=self.goal, tolerance=self.tolerance)
+        """The Pinocchio-checked state at the chart point (each point checked once)."""
+        key = np.asarray(x_pose, dtype=float).tobytes()
+        if key not in self.states:
+            plates = problem.chart.plates(x_pose)
+            self.states[key] = evaluate_state(self.am, plates, goal=self.goal, tolerance=self.tolerance)
+        return self.states[key]
 
     def acceptable(self, state: StackState) -> bool:
         """Feasible, within the motion step of the previous sample and within the sag limit."""

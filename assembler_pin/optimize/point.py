@@ -10,6 +10,7 @@ import numpy as np
 
 from ..gradients import PoseDerivatives, PoseValues
 from ..kinematics import PlateArrays
+from ..pose_kernel import PoseMeasures
 
 __all__ = ["SINGULAR_FORCE", "ChartDerivatives", "Point"]
 
@@ -24,13 +25,14 @@ class Point:
 
     Attributes:
         x: the chart coordinates of the movable plates.
-        values: the closed-form pass (:func:`~assembler_pin.gradients.pose_values`).
+        values: the closed-form pass (:func:`~assembler_pin.gradients.pose_values`, or its
+            compiled twin :meth:`~assembler_pin.pose_kernel.CompiledPass.values`).
         forces: (n, 6) actuator forces [N, tension positive], :data:`SINGULAR_FORCE` where
             the statics are not defined.
     """
 
     x: np.ndarray
-    values: PoseValues
+    values: PoseValues | PoseMeasures
 
     @cached_property
     def forces(self) -> np.ndarray:

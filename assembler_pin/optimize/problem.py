@@ -1,14 +1,17 @@
 """The optimization problem common to both methods: the chart, the constraint row families,
 and the evaluation of a chart point.
 
-Every iterate is evaluated by ONE closed-form pass (:func:`~assembler_pin.gradients.pose_values`):
-forces, lengths, deflection cosines, rise and plate angles. Where the solver asks for
-derivatives at that point, :func:`~assembler_pin.gradients.pose_derivatives` extends the
-same pass. The sag objectives and the sag limit read the EE's linear sag of the same pass
-(:func:`.sag.linear_sag`) and, with the derivatives, its adjoint gradient
-(:func:`~assembler_pin.compliance.sag_and_gradient`). The Pinocchio statics are not used
-here: they re-check the returned state (:func:`~assembler_pin.state.evaluate_state` in
-:mod:`.internal_poses`), an independent path.
+Every iterate is evaluated by ONE closed-form pass: forces, lengths, deflection cosines, rise
+and plate angles. Where the solver asks for derivatives at that point, a second pass gives
+them. With numba installed the passes run compiled
+(:class:`~assembler_pin.pose_kernel.CompiledPass`, values and derivatives in one call each);
+without it, with ``ASSEMBLER_PIN_STATICS=numpy``, and whenever the problem reads the sag,
+they are the numpy reference (:func:`~assembler_pin.gradients.pose_values`, whose pass
+:func:`~assembler_pin.gradients.pose_derivatives` extends). The sag objectives and the sag
+limit read the EE's linear sag of that pass (:func:`.sag.linear_sag`) and, with the
+derivatives, its adjoint gradient (:func:`~assembler_pin.compliance.sag_and_gradient`).
+The Pinocchio statics are not used here: they re-check the returned state
+(:func:`~assembler_pin.state.evaluate_state` in :mod:`.internal_poses`), an independent path.
 """
 
 from __future__ import annotations
@@ -17,11 +20,12 @@ import numpy as np
 import pinocchio as pin
 
 from ..exceptions import SingularConfigurationError, _SingularIterateError
-from ..gradients import pose_derivatives, pose_values
+from ..gradients import PoseDerivatives, PoseValues, pose_derivatives, pose_values
 from ..kinematics import PlateArrays
 from ..model import AssemblerModel
 from ..objective import SagObjective, motion_cost, omega, sag_reference
 from ..options import SMOOTH_METHODS, OptimizeOptions
+from ..pose_kernel import CompiledPass, use_pose_kernel
 from .charts import LocalChart, TaaChart
 from .options import MotionTerm
 from .point import ChartDerivatives, Point
@@ -41,6 +45,8 @@ SINGULAR_SAG = 1e3
 def finite_rows(rows: np.ndarray) -> np.ndarray:
     """``rows`` with NaN and -inf replaced by a large negative (infeasible) value, +inf by a
     large positive one: SLSQP cannot handle non-finite rows."""
+    if np.isfinite(rows).all():  # the common case, without nan_to_num's copy
+        return rows
     return np.nan_to_num(rows, nan=_NON_FINITE_ROW, posinf=-_NON_FINITE_ROW, neginf=_NON_FINITE_ROW)
 
 
@@ -73,36 +79,45 @@ class Problem:
         self.chart: LocalChart | TaaChart = (TaaChart if opts.method == "paper" else LocalChart)(ref, movable)
         self.nx_pose = self.chart.size
         leg = am.config.leg
-        self.start_max_force = Point(np.zeros(0), pose_values(am, start)).max_abs_force
         self.objective = SagObjective(
             opts.objective, opts.sag_weight, sag_reference(am) if opts.objective != "force" else 1.0
         )
+        self.sag_rows = SagRows(opts.max_sag) if opts.max_sag is not None else None
+        self.reads_sag = self.objective.needs_sag or self.sag_rows is not None
+        # the sag reads the numpy pass's intermediates: a problem that reads it keeps that pass
+        self._compiled = CompiledPass(am) if not self.reads_sag and use_pose_kernel() else None
+        start_values = self._compiled.values(start) if self._compiled is not None else pose_values(am, start)
+        self.start_max_force = Point(np.zeros(0), start_values).max_abs_force
         force_objective = opts.objective == "force"
         cap = self.start_max_force if opts.method in SMOOTH_METHODS and start_feasible and force_objective else np.inf
         self.force_limits = ForceLimitRows(min(leg.max_tension, cap) - 1e-6, min(leg.max_compression, cap) - 1e-6)
         self.leg_limits = LegLimitRows(leg, opts.limit_margin, opts.rise_margin)
         self.ee = EETolerance(goal, opts.ee_tolerance, self.chart) if opts.ee_tolerance is not None else None
         self.motion_rows = MotionRows(motion) if motion is not None else None
-        self.sag_rows = SagRows(opts.max_sag) if opts.max_sag is not None else None
-        self.reads_sag = self.objective.needs_sag or self.sag_rows is not None
         self._sag: tuple[Point, float] | None = None
         self._sag_grad: tuple[ChartDerivatives, np.ndarray] | None = None
         self.best: tuple[float, np.ndarray] | None = None
         self.evaluations = 0
         self.gradient_evaluations = 0
         self._point: Point | None = None
+        self._point_key = b""
         self._derivs: tuple[bytes, ChartDerivatives] | None = None
         self._rows: tuple[Point, dict[str, np.ndarray]] | None = None
 
     def point(self, x_pose: np.ndarray) -> Point:
         """The values at the pose part of x (cached for the last point); tracks the best
         feasible point met."""
-        if self._point is not None and np.array_equal(self._point.x, x_pose):
-            return self._point
         x = np.array(x_pose, dtype=float)
-        with np.errstate(invalid="ignore", divide="ignore"):
-            p = Point(x, pose_values(self.am, self.chart.plates(x)))
-        self._point = p
+        key = x.tobytes()
+        if self._point is not None and self._point_key == key:
+            return self._point
+        plates = self.chart.plates(x)
+        if self._compiled is not None:
+            p = Point(x, self._compiled.values(plates))
+        else:
+            with np.errstate(invalid="ignore", divide="ignore"):
+                p = Point(x, pose_values(self.am, plates))
+        self._point, self._point_key = p, key
         self.evaluations += 1
         if self.feasible(p):
             value = self.score(p)
@@ -125,7 +140,7 @@ class Problem:
         if p.singular:
             raise _SingularIterateError("the statics are singular at the iterate")
         try:
-            pose = pose_derivatives(self.am, p.plates, p.values)
+            pose = self._pose_derivatives(p)
         except (np.linalg.LinAlgError, SingularConfigurationError) as exc:
             raise _SingularIterateError(str(exc)) from None
         # the block product for IPOPT (SLSQP keeps the dense one, its answers bit for bit)
@@ -134,6 +149,19 @@ class Problem:
         self._derivs = (key, d)
         self.gradient_evaluations += 1
         return d
+
+    def _pose_derivatives(self, p: Point) -> PoseDerivatives:
+        """The world-twist derivatives at the point, on the pass its values came from."""
+        if self._compiled is not None:
+            return self._compiled.derivatives(p.plates)
+        return pose_derivatives(self.am, p.plates, self._reference_values(p))
+
+    def _reference_values(self, p: Point) -> PoseValues:
+        """The numpy pass at the point (its intermediates feed the derivatives and the sag)."""
+        if isinstance(p.values, PoseValues):
+            return p.values
+        with np.errstate(invalid="ignore", divide="ignore"):
+            return pose_values(self.am, p.plates)
 
     def score(self, p: Point) -> float:
         """The objective at the point (Ω, the sag or both, :mod:`assembler_pin.objective`),
@@ -146,7 +174,11 @@ class Problem:
         """The EE's linear sag at the point [m] (:data:`SINGULAR_SAG` where it is not
         defined), computed once per point."""
         if self._sag is None or self._sag[0] is not p:
-            sag = SINGULAR_SAG if p.singular else linear_sag(p.values, float(self.am.config.leg.stiffness))[0]
+            sag = (
+                SINGULAR_SAG
+                if p.singular
+                else linear_sag(self._reference_values(p), float(self.am.config.leg.stiffness))[0]
+            )
             self._sag = (p, sag if np.isfinite(sag) else SINGULAR_SAG)
         return self._sag[1]
 
@@ -190,4 +222,4 @@ class Problem:
 
     def feasible(self, p: Point) -> bool:
         """Every row of the problem holds at the point."""
-        return bool(all(np.all(r >= 0) for r in self.rows(p).values()))
+        return all(bool((r >= 0).all()) for r in self.rows(p).values())

@@ -15,10 +15,11 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..closed_form import Equilibrium
 from ..gradients import PoseValues
 from ..linalg import cross
 
-__all__ = ["linear_sag"]
+__all__ = ["equilibrium_sag", "linear_sag"]
 
 
 def linear_sag(values: PoseValues, stiffness: float) -> tuple[float, np.ndarray]:
@@ -30,7 +31,17 @@ def linear_sag(values: PoseValues, stiffness: float) -> tuple[float, np.ndarray]
 
     Returns NaN when a platform's lines are singular (no sag is defined there).
     """
-    eq = values.eq
+    return equilibrium_sag(values.eq, values.plates.p[-1], stiffness)
+
+
+def equilibrium_sag(eq: Equilibrium, ee_position: np.ndarray, stiffness: float) -> tuple[float, np.ndarray]:
+    """:func:`linear_sag` from the closed-form equilibrium alone.
+
+    Args:
+        eq: the pose's :class:`~assembler_pin.closed_form.Equilibrium` (world frame).
+        ee_position: the EE plate's origin, world [m].
+        stiffness: the legs' axial stiffness k [N/m].
+    """
     top = eq.K  # (n, 6 rows, 6 legs): the lines [u; t × u], one column per leg
     bottom = np.concatenate([eq.u, cross(eq.b, eq.u)], axis=-1)  # (n, 6 legs, 6)
     stretch = eq.forces / stiffness
@@ -40,6 +51,6 @@ def linear_sag(values: PoseValues, stiffness: float) -> tuple[float, np.ndarray]
             y = np.linalg.solve(top[j].T, stretch[j] + bottom[j] @ y)
     except np.linalg.LinAlgError:
         return float("nan"), np.full(3, np.nan)
-    p = values.plates.p[-1]
+    p = ee_position
     dp = y[:3] + np.array([y[4] * p[2] - y[5] * p[1], y[5] * p[0] - y[3] * p[2], y[3] * p[1] - y[4] * p[0]])
     return float(np.linalg.norm(dp)), dp

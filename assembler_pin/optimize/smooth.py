@@ -62,24 +62,26 @@ class SmoothForm:
         return finite_rows(np.concatenate(rows))
 
     def cons_jac(self, x: np.ndarray) -> np.ndarray:
-        """Jacobian of :meth:`cons`, in its order."""
+        """Jacobian of :meth:`cons`, in its order (last column: d/ds)."""
         pr = self.problem
         p, d = pr.point(x[:-1]), pr.derivatives(x[:-1])
-
-        def with_s(block: np.ndarray, ds: float | np.ndarray = 0.0) -> np.ndarray:
-            return np.hstack([block, np.broadcast_to(np.asarray(ds, dtype=float), (block.shape[0],))[:, None]])
-
         dF, ds = self.epigraph.jacobian(d)
+        blocks: list[tuple[np.ndarray, float | np.ndarray]] = [(dF, ds)]
         if pr.force_limits.symmetric:
-            limits = np.zeros((1, x.size))
-            limits[0, -1] = -1.0
+            blocks.append((np.zeros((1, x.size - 1)), -1.0))
         else:
-            limits = with_s(pr.force_limits.jacobian(d))
-        rows = [with_s(dF, ds), limits, with_s(pr.leg_limits.jacobian(d))]
+            blocks.append((pr.force_limits.jacobian(d), 0.0))
+        blocks.append((pr.leg_limits.jacobian(d), 0.0))
         if pr.ee is not None:
-            rows.append(with_s(pr.ee.jacobian(p, d)))
+            blocks.append((pr.ee.jacobian(p, d), 0.0))
         if pr.motion_rows is not None:
-            rows.append(with_s(pr.motion_rows.jacobian(d)))
+            blocks.append((pr.motion_rows.jacobian(d), 0.0))
         if pr.sag_rows is not None:
-            rows.append(with_s(pr.sag_rows.jacobian(pr.sag_gradient(x[:-1]))))
-        return np.vstack(rows)
+            blocks.append((pr.sag_rows.jacobian(pr.sag_gradient(x[:-1])), 0.0))
+        out = np.empty((sum(block.shape[0] for block, _ in blocks), x.size))
+        row = 0
+        for block, d_s in blocks:
+            out[row : row + block.shape[0], :-1] = block
+            out[row : row + block.shape[0], -1] = d_s
+            row += block.shape[0]
+        return out
