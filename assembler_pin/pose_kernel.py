@@ -14,8 +14,9 @@ optimizer runs on the compiled pass only when ``ASSEMBLER_PIN_STATICS=numba`` is
 environment (:data:`~assembler_pin.statics_kernel.ENV_VAR`, the switch of the compiled
 statics too). Its rounding differs from numpy's, and SLSQP can turn a difference in the last
 digits into another local optimum (8 of the bench's 120 grid goals, better or worse by up to
-10 %): as the default, an answer would depend on whether numba is installed. The tests hold the two to 1e-10 N on stacks of 1..16 platforms and the compiled
-derivatives to finite differences.
+10 %): as the default, an answer would depend on whether numba is installed. The tests hold
+the two to 1e-10 N on stacks of 1..16 platforms and the compiled derivatives to finite
+differences.
 
 Frames: world poses of plates 0..n; forces [N], tension positive; lengths [m]; angles [rad].
 """
