@@ -38,7 +38,7 @@ from .exceptions import OptionsError
 from .gradients import PoseDerivatives
 from .kinematics import PlateArrays
 from .model import AssemblerModel
-from .statics_kernel import ENV_VAR
+from .statics_kernel import BACKENDS, ENV_VAR
 from .statics_loops import constants
 
 __all__ = ["CompiledPass", "PoseMeasures", "pose_kernel_available", "use_pose_kernel"]
@@ -105,9 +105,13 @@ def use_pose_kernel() -> bool:
     :data:`~assembler_pin.statics_kernel.ENV_VAR` is ``numba`` (see the module docstring).
 
     Raises:
-        OptionsError: ``numba`` is asked for and numba is not installed.
+        OptionsError: the variable is not one of the statics backends, or ``numba`` is asked
+            for and numba is not installed.
     """
-    if os.environ.get(ENV_VAR, "") != "numba":
+    choice = os.environ.get(ENV_VAR, "") or "auto"
+    if choice not in BACKENDS:
+        raise OptionsError(f"{ENV_VAR} must be one of {', '.join(BACKENDS)}, got {choice!r}")
+    if choice != "numba":
         return False
     if _kernel is False or (_kernel is None and importlib.util.find_spec("numba") is None):
         raise OptionsError(f"{ENV_VAR}=numba needs numba: pip install numba")

@@ -161,6 +161,9 @@ def test_the_numpy_path_is_the_default(monkeypatch):
     assert not pose_kernel.use_pose_kernel()
     monkeypatch.setenv("ASSEMBLER_PIN_STATICS", "numpy")
     assert not pose_kernel.use_pose_kernel()
+    monkeypatch.setenv("ASSEMBLER_PIN_STATICS", "fast")
+    with pytest.raises(OptionsError, match="must be one of auto, numba, numpy, got 'fast'"):
+        pose_kernel.use_pose_kernel()
     monkeypatch.setenv("ASSEMBLER_PIN_STATICS", "numba")
     assert pose_kernel.use_pose_kernel()
     monkeypatch.setattr(pose_kernel, "_kernel", False)  # numba absent
