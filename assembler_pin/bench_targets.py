@@ -14,9 +14,13 @@ call much less).
 
 from __future__ import annotations
 
+import contextlib
+import importlib.util
 import math
+import os
 import threading
 import time
+from collections.abc import Iterator
 from dataclasses import dataclass
 from typing import Any
 
@@ -170,6 +174,9 @@ def benchmark_targets(am: AssemblerModel, map_cells: int = MAP_MEMORY_CELLS, qui
     with threadpool_limits(limits=1):
         goals = random_goals(am, 4 if quick else RANDOM_GOALS)
         doc["random_solves"] = benchmark_solve_starts(am, tuple(goals))
+        if importlib.util.find_spec("numba") is not None:
+            with _compiled_optimizer():
+                doc["random_solves_numba"] = benchmark_solve_starts(am, tuple(goals), modes=("first",))
         if not quick:
             doc["grid_solves"] = benchmark_solve_starts(am, LEVEL_GRID)
         sizes = (4, 8) if quick else (8, 16, 32, 64)
@@ -183,6 +190,23 @@ def benchmark_targets(am: AssemblerModel, map_cells: int = MAP_MEMORY_CELLS, qui
         except ImportError:  # Dask (the ``maps`` extra) missing
             doc["map_memory"] = {}
     return doc
+
+
+@contextlib.contextmanager
+def _compiled_optimizer() -> Iterator[None]:
+    """The optimizer on its compiled pass (``ASSEMBLER_PIN_STATICS=numba``, opt-in) for the
+    duration; the variable's former value is restored."""
+    from .statics_kernel import ENV_VAR
+
+    before = os.environ.get(ENV_VAR)
+    os.environ[ENV_VAR] = "numba"
+    try:
+        yield
+    finally:
+        if before is None:
+            os.environ.pop(ENV_VAR, None)
+        else:
+            os.environ[ENV_VAR] = before
 
 
 @dataclass(frozen=True)
@@ -233,6 +257,15 @@ TARGET_SPECS: tuple[tuple[str, str, str, float, float, str], ...] = (
     ("solve, random goals, p50 [ms]", "random_solves", "first_p50_s", 1e3, 40, "<="),
     ("solve, random goals, p95 [ms]", "random_solves", "first_p95_s", 1e3, 100, "<="),
     ("random goals with a worse optimum than every start", "random_solves", "first_goals_worse", 1, 0, "=="),
+    ("solve, random goals, compiled pass (opt-in), p50 [ms]", "random_solves_numba", "first_p50_s", 1e3, 40, "<="),
+    (
+        "solve, random goals, compiled pass (opt-in), p95 [ms]",
+        "random_solves_numba",
+        "first_p95_s",
+        1e3,
+        100,
+        "<=",
+    ),
     ("solve, 120-goal grid, p95 [s]", "grid_solves", "first_p95_s", 1, 0.3, "<="),
     ("one optimization, n = 32, IPOPT [s]", "long_stacks", "n32_ipopt_s", 1, 2.0, "<="),
     ("one optimization, n = 64, IPOPT [s]", "long_stacks", "n64_ipopt_s", 1, 5.0, "<="),
