@@ -192,7 +192,7 @@ COMMANDS: list[tuple[str, str, str]] = [
     (r"assembler-pin plan --from", SLOW, ""),
     (r"pip install", "", "installs packages"),
     (r"assembler-pin bench --(truss|speed)$", "", "timings (minutes under --speed)"),
-    (r"assembler-pin bench --targets( --json| --map-cells (0|200))?$", "", "5-20 min of timings (test_bench.py runs rows)"),
+    (r"assembler-pin bench --targets( --json| --map-cells (0|200))?$", "", "minutes of timings (test_bench runs rows)"),
     (r"python -m pytest", "", "the test suite itself"),
     (r"mkdocs build", "", "builds this site (CI runs it)"),
     (r"mypy ", "", "a type check of the whole package (CI runs it)"),
