@@ -174,6 +174,18 @@ def design_plate_deviation(plates) -> np.ndarray:
     return np.arctan2(np.linalg.norm(np.cross(step, normal), axis=1), np.sum(step * normal, axis=1))
 
 
+def twist_moved(plates, column: int, h: float):
+    """``plates`` (PlateArrays) with plate k = column // 6 + 1 moved by the world twist
+    h·e_(column % 6): the perturbation of the optimizer's derivative columns."""
+    k = column // 6 + 1
+    twist = np.zeros(6)
+    twist[column % 6] = h
+    moved = pin.exp6(twist) * plates.se3(k)
+    R, p = plates.R.copy(), plates.p.copy()
+    R[k], p[k] = moved.rotation, moved.translation
+    return type(plates)(R, p)
+
+
 def design_objective(cfg, plates, w1: float = 1.0, w2: float = 1.0) -> float:
     """Ω = w1·max|F| + w2·sqrt(Σ λ_k²) (paper eq. 10) from :func:`design_forces` and
     :func:`design_plate_deviation`."""

@@ -4,23 +4,12 @@ Pinocchio statics and of the plain kinematics."""
 from __future__ import annotations
 
 import numpy as np
-import pinocchio as pin
 import pytest
+from checks import twist_moved
 
 from assembler_pin import solve_statics
 from assembler_pin.gradients import pose_derivatives
 from assembler_pin.kinematics import PlateArrays, leg_state
-
-
-def _perturbed(pa: PlateArrays, column: int, h: float) -> PlateArrays:
-    """Plate k = column // 6 + 1 moved by a world twist h·e_(column % 6)."""
-    k = column // 6 + 1
-    twist = np.zeros(6)
-    twist[column % 6] = h
-    moved = pin.exp6(twist) * pa.se3(k)
-    R, p = pa.R.copy(), pa.p.copy()
-    R[k], p[k] = moved.rotation, moved.translation
-    return PlateArrays(R, p)
 
 
 def _paper_lambda(am, pa: PlateArrays) -> np.ndarray:
@@ -63,7 +52,7 @@ def test_derivatives_match_finite_differences(am, random_poses, pose):
         }.items()
     }
     for c in range(C):
-        plus, minus = _perturbed(pa, c, h), _perturbed(pa, c, -h)
+        plus, minus = twist_moved(pa, c, h), twist_moved(pa, c, -h)
         lp, lm = leg_state(am, plus), leg_state(am, minus)
         fd["forces"][..., c] = (solve_statics(am, plus).forces - solve_statics(am, minus).forces) / (2 * h)
         fd["lengths"][..., c] = (lp.lengths - lm.lengths) / (2 * h)

@@ -9,6 +9,7 @@ import importlib.util
 import numpy as np
 import pinocchio as pin
 import pytest
+from checks import design_plate_deviation, twist_moved
 
 from assembler_pin import pose_kernel, pose_loops, solve_statics
 from assembler_pin.bench import random_reachable_plates
@@ -67,29 +68,6 @@ def test_compiled_pass_equals_the_numpy_reference(n):
             assert np.abs(getattr(derivs, derivative) - expected).max() <= 1e-10 * scale, derivative
 
 
-def _moved(pa: PlateArrays, column: int, h: float) -> PlateArrays:
-    """Plate k = column // 6 + 1 moved by a world twist h·e_(column % 6)."""
-    k = column // 6 + 1
-    twist = np.zeros(6)
-    twist[column % 6] = h
-    moved = pin.exp6(twist) * pa.se3(k)
-    R, p = pa.R.copy(), pa.p.copy()
-    R[k], p[k] = moved.rotation, moved.translation
-    return PlateArrays(R, p)
-
-
-def _plate_angles(am: AssemblerModel, pa: PlateArrays) -> np.ndarray:
-    """Paper eq. 9 written out: angle between p_k - p_{k-1} and R_{k-1} (0, 0, h_home)."""
-    rest = [pa.R[k - 1] @ [0.0, 0.0, am.config.home_height] for k in range(1, am.n + 1)]
-    steps = [pa.p[k] - pa.p[k - 1] for k in range(1, am.n + 1)]
-    return np.array(
-        [
-            np.arccos(np.clip(a @ r / np.linalg.norm(a) / np.linalg.norm(r), -1, 1))
-            for a, r in zip(steps, rest, strict=True)
-        ]
-    )
-
-
 def _independent_values(am: AssemblerModel, pa: PlateArrays) -> dict[str, np.ndarray]:
     """Forces by Pinocchio's statics, legs by the plain kinematics, λ² written out."""
     legs = leg_state(am, pa)
@@ -98,7 +76,7 @@ def _independent_values(am: AssemblerModel, pa: PlateArrays) -> dict[str, np.nda
         "lengths": legs.lengths,
         "cos_deflection": np.cos(legs.deflection),
         "rise": legs.rise,
-        "plate_angles": _plate_angles(am, pa) ** 2,
+        "plate_angles": design_plate_deviation(pa) ** 2,
     }
 
 
@@ -112,7 +90,7 @@ def test_compiled_derivatives_match_finite_differences(n):
     h = 1e-6
     fd = {name: np.zeros_like(getattr(derivs, d)) for name, d in PAIRS}
     for c in range(6 * n):
-        plus, minus = _independent_values(am, _moved(pa, c, h)), _independent_values(am, _moved(pa, c, -h))
+        plus, minus = _independent_values(am, twist_moved(pa, c, h)), _independent_values(am, twist_moved(pa, c, -h))
         for name in fd:
             fd[name][..., c] = (plus[name] - minus[name]) / (2 * h)
     for name, d in PAIRS:
