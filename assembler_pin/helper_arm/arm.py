@@ -137,15 +137,11 @@ class HelperArm:
         Returns:
             (5, n, 6) non-negative amounts, zero where the constraint holds.
         """
-        q = np.asarray(q, dtype=float).reshape(-1, 3)
-        rot = _xyz_rotations(q)
         d = self.link_length if link_length is None else float(link_length)
-        half = np.array([0.0, 0.0, 0.5 * d])
-        lengths, cos, rise = relative_leg_measures(self.geometry, rot, half + rot @ half)
-        return np.maximum(-leg_limit_margins(self.config.leg, lengths, cos, rise, margin), 0.0)
+        return self.stack_violations(np.asarray(q, dtype=float).reshape(1, -1), margin, np.array([d]))[:, 0]
 
     def stack_violations(self, qs: np.ndarray, margin: float, link_lengths: np.ndarray) -> np.ndarray:
-        """:meth:`stack_violation` of m arm poses at once, the same numbers row by row.
+        """:meth:`stack_violation` of m arm poses at once (the single pose is the case m = 1).
 
         Args:
             qs: (m, 3n) joint angles [rad]; link_lengths: (m,) d of each [m].
