@@ -3,18 +3,20 @@ and the evaluation of a chart point.
 
 Every iterate is evaluated by ONE closed-form pass: forces, lengths, deflection cosines, rise
 and plate angles. Where the solver asks for derivatives at that point, a second pass gives
-them. With numba installed the passes run compiled
-(:class:`~assembler_pin.pose_kernel.CompiledPass`, values and derivatives in one call each);
-without it, with ``ASSEMBLER_PIN_STATICS=numpy``, and whenever the problem reads the sag,
-they are the numpy reference (:func:`~assembler_pin.gradients.pose_values`, whose pass
-:func:`~assembler_pin.gradients.pose_derivatives` extends). The sag objectives and the sag
-limit read the EE's linear sag of that pass (:func:`.sag.linear_sag`) and, with the
+them. By default the passes are the numpy reference
+(:func:`~assembler_pin.gradients.pose_values`, whose pass
+:func:`~assembler_pin.gradients.pose_derivatives` extends); with ``ASSEMBLER_PIN_STATICS=numba``
+they run compiled (:class:`~assembler_pin.pose_kernel.CompiledPass`, values and derivatives in
+one call each), except in a problem that reads the sag. The sag objectives and the sag limit
+read the EE's linear sag of that pass (:func:`.sag.linear_sag`) and, with the
 derivatives, its adjoint gradient (:func:`~assembler_pin.compliance.sag_and_gradient`).
 The Pinocchio statics are not used here: they re-check the returned state
 (:func:`~assembler_pin.state.evaluate_state` in :mod:`.internal_poses`), an independent path.
 """
 
 from __future__ import annotations
+
+from typing import cast
 
 import numpy as np
 import pinocchio as pin
@@ -154,14 +156,7 @@ class Problem:
         """The world-twist derivatives at the point, on the pass its values came from."""
         if self._compiled is not None:
             return self._compiled.derivatives(p.plates)
-        return pose_derivatives(self.am, p.plates, self._reference_values(p))
-
-    def _reference_values(self, p: Point) -> PoseValues:
-        """The numpy pass at the point (its intermediates feed the derivatives and the sag)."""
-        if isinstance(p.values, PoseValues):
-            return p.values
-        with np.errstate(invalid="ignore", divide="ignore"):
-            return pose_values(self.am, p.plates)
+        return pose_derivatives(self.am, p.plates, _numpy_values(p))
 
     def score(self, p: Point) -> float:
         """The objective at the point (Ω, the sag or both, :mod:`assembler_pin.objective`),
@@ -174,11 +169,7 @@ class Problem:
         """The EE's linear sag at the point [m] (:data:`SINGULAR_SAG` where it is not
         defined), computed once per point."""
         if self._sag is None or self._sag[0] is not p:
-            sag = (
-                SINGULAR_SAG
-                if p.singular
-                else linear_sag(self._reference_values(p), float(self.am.config.leg.stiffness))[0]
-            )
+            sag = SINGULAR_SAG if p.singular else linear_sag(_numpy_values(p), float(self.am.config.leg.stiffness))[0]
             self._sag = (p, sag if np.isfinite(sag) else SINGULAR_SAG)
         return self._sag[1]
 
@@ -223,3 +214,9 @@ class Problem:
     def feasible(self, p: Point) -> bool:
         """Every row of the problem holds at the point."""
         return all(bool((r >= 0).all()) for r in self.rows(p).values())
+
+
+def _numpy_values(p: Point) -> PoseValues:
+    """The numpy pass's values of a point of a problem off the compiled pass (every problem
+    that reads the sag is): its intermediates feed the derivatives and the sag."""
+    return cast(PoseValues, p.values)
