@@ -237,7 +237,8 @@ def pose_values(am: AssemblerModel, pa: PlateArrays) -> PoseValues:
 def _transverse_force_derivatives(
     am: AssemblerModel, eq: Equilibrium, dL: np.ndarray, du: np.ndarray
 ) -> tuple[np.ndarray, np.ndarray]:
-    """d(gravity along each leg) (n, 6, 6n) [m/s²] and d(transverse ball force) (n, 6, 3, 6n) [N]."""
+    """d(gravity along each leg) (n, 6, C) [m/s²] and d(transverse ball force) (n, 6, 3, C) [N],
+    over the C derivative columns of ``dL`` and ``du``."""
     leg = am.config.leg
     g = np.array([0.0, 0.0, -am.config.gravity])
     dgu = np.einsum("k,jikc->jic", g, du)
@@ -266,16 +267,22 @@ def _up_moment_derivatives(
 
 
 def _axial_force_derivatives(
-    eq: Equilibrium, dt: np.ndarray, du: np.ndarray, df_perp: np.ndarray, up_dmoment: np.ndarray
+    eq: Equilibrium,
+    dt: np.ndarray,
+    du: np.ndarray,
+    df_perp: np.ndarray,
+    up_dmoment: np.ndarray,
+    a: np.ndarray | None = None,
 ) -> np.ndarray:
-    """d(axial ball-force components) (n, 6, 6n) [N]: the 6×6 system of each platform
-    differentiated, ``K da = d(rhs) - dK a``."""
+    """d(axial ball-force components) (n, 6, C) [N] over any C derivative columns: the 6×6
+    system of each platform differentiated, ``K da = d(rhs) - dK a`` (``a``: the axial
+    components the system is differentiated at, the equilibrium's by default)."""
     skew_t = skew(eq.t)
     # d(t × f) = -[f]× dt + [t]× df ;  d(t × u) = -[u]× dt + [t]× du
     d_t_cross_f = -np.matmul(skew(eq.f_perp), dt) + np.matmul(skew_t, df_perp)
     d_t_cross_u = -np.matmul(skew(eq.u), dt) + np.matmul(skew_t, du)
     d_rhs = np.concatenate([-df_perp.sum(axis=1), up_dmoment - d_t_cross_f.sum(axis=1)], axis=1)
-    a = eq.a
+    a = eq.a if a is None else a
     dK_a = np.concatenate([np.einsum("ji,jikc->jkc", a, du), np.einsum("ji,jikc->jkc", a, d_t_cross_u)], axis=1)
     return np.linalg.solve(eq.K, d_rhs - dK_a)
 

@@ -107,21 +107,54 @@ def _problem(am, start, options):
     return Problem(am, start, start.se3(am.n), options, True)
 
 
-@pytest.mark.parametrize("ee", [False, True])
-def test_callback_jacobian_equals_central_differences(am, random_poses, ee):
-    """The Jacobian IPOPT gets through the CasADi callback (sparse, on the structural
-    pattern) against central differences of the rows, and the objective's gradient."""
-    from assembler_pin.constraints import GoalTolerance
-    from assembler_pin.optimize.ipopt import IpoptForm, values_callback
+def _wrench_case(am, start, case):
+    """A moment-variable form of one kind: plain, a free EE, or unequal force limits with a
+    motion step (every row family)."""
+    import dataclasses
 
-    tol = GoalTolerance(0.01, 0.05) if ee else None
-    form = IpoptForm(_problem(am, random_poses[7][1], OptimizeOptions(method="ipopt", ee_tolerance=tol)))
+    from assembler_pin.constraints import GoalTolerance
+    from assembler_pin.optimize import MotionTerm
+    from assembler_pin.optimize.wrench import WrenchForm
+    from assembler_pin.state import evaluate_state
+
+    if case == "ee":
+        return WrenchForm(_problem(am, start, OptimizeOptions(method="ipopt", ee_tolerance=GoalTolerance(0.01, 0.05))))
+    if case == "limits+motion":
+        from assembler_pin.optimize.problem import Problem
+
+        leg = dataclasses.replace(am.config.leg, max_tension=450.0, max_compression=380.0)
+        am = AssemblerModel.from_config(am.config.replace(leg=leg))
+        motion = MotionTerm(evaluate_state(am, start).leg_lengths + 1e-3, max_step=5e-3, w3=10.0)
+        problem = Problem(am, start, start.se3(am.n), IPOPT, False, motion)
+        assert not problem.force_limits.symmetric and problem.motion_rows is not None
+        return WrenchForm(problem)
+    return WrenchForm(_problem(am, start, IPOPT))
+
+
+def _moved_point(form, seed=3):
+    """A point off the start: the poses moved, the moment variables moved off the poses'
+    moments (so the level rows do not hold), ``s`` = 40 N."""
+    rng = np.random.default_rng(seed)
+    x = form.x0(np.append(np.zeros(form.nx_pose), 40.0))
+    x[: form.nx_pose] += rng.normal(0.0, 0.01, form.nx_pose)
+    x[form.nx_pose : -1] += rng.normal(0.0, 0.05, 3 * form.n)
+    return x
+
+
+@pytest.mark.parametrize("case", ["plain", "ee", "limits+motion"])
+def test_callback_jacobian_equals_central_differences(am, random_poses, case):
+    """The Jacobian IPOPT gets through the CasADi callback (sparse, on the form's banded
+    pattern) against central differences of the rows — poses, moment variables and ``s`` —
+    and the objective's gradient, at a point where the level rows do not hold."""
+    from assembler_pin.optimize.ipopt import values_callback
+
+    form = _wrench_case(am, random_poses[7][1], case)
     cb = values_callback(form)
     X = casadi.MX.sym("x", form.shape[1])
     f, g = cb(X)
     fun = casadi.Function("j", [X], [casadi.jacobian(g, X), casadi.gradient(f, X)])
-    rng = np.random.default_rng(3)
-    x = np.append(rng.normal(0.0, 0.01, form.shape[1] - 1), 40.0)
+    x = _moved_point(form)
+    assert np.abs(form.cons(x)[-3 * am.n :]).max() > 1e-3  # off the level rows
     J, grad = (np.asarray(casadi.DM(v).full()) for v in fun(x))
     h = 1e-6
     J_fd = np.empty_like(J)
@@ -129,26 +162,59 @@ def test_callback_jacobian_equals_central_differences(am, random_poses, ee):
     for i in range(x.size):
         e = np.zeros_like(x)
         e[i] = h
-        J_fd[:, i] = (form.smooth.cons(x + e) - form.smooth.cons(x - e)) / (2 * h)
-        g_fd[i] = (form.smooth.fun(x + e) - form.smooth.fun(x - e)) / (2 * h)
-    assert J.shape == J_fd.shape
+        J_fd[:, i] = (form.cons(x + e) - form.cons(x - e)) / (2 * h)
+        g_fd[i] = (form.fun(x + e) - form.fun(x - e)) / (2 * h)
+    assert J.shape == J_fd.shape == form.shape
+    pattern = np.zeros(form.shape, dtype=bool)
+    pattern[form.rows, form.cols] = True
     # every non-zero of the differences lies on the pattern
-    assert np.abs(J_fd[~form.pattern]).max() < 1e-7 * np.abs(J_fd).max()
+    assert np.abs(J_fd[~pattern]).max() < 1e-7 * np.abs(J_fd).max()
     scale = np.abs(J_fd).max(axis=1, keepdims=True) + 1e-12
-    assert np.abs(J - J_fd).max(initial=0.0, where=np.ones_like(J, bool)) <= 1e-6 * np.abs(J_fd).max()
     assert np.all(np.abs(J - J_fd) <= 1e-6 * scale + 1e-9)
     np.testing.assert_allclose(grad.ravel(), g_fd, rtol=1e-6, atol=1e-6 * np.abs(g_fd).max())
 
 
-def test_pattern_is_sparse_for_long_stacks():
-    """Leg rows banded, force rows triangular: at n = 16 fewer than 40 % of the entries."""
-    from assembler_pin.optimize.ipopt import jacobian_pattern
+@pytest.mark.parametrize("case", ["plain", "ee", "limits+motion"])
+def test_moment_form_is_the_smooth_form_where_the_levels_hold(am, random_poses, case):
+    """With the moment variables at the poses' own moments (the independent cumulative sum
+    of the closed form), the level rows are zero and every other row and the objective are
+    :class:`SmoothForm`'s, bit for bit up to rounding."""
+    from assembler_pin.gradients import pose_values
+    from assembler_pin.optimize.smooth import SmoothForm
+    from assembler_pin.optimize.wrench import MOMENT_SCALE
 
-    am, start = bent_stack(16)
-    pattern = jacobian_pattern(_problem(am, start, IPOPT))
-    assert pattern.mean() < 0.4
-    legs = pattern[12 * am.n + 1 :]
-    assert legs.sum(axis=1).max() == 12  # two plates of six coordinates
+    form = _wrench_case(am, random_poses[7][1], case)
+    smooth = SmoothForm(form.problem)
+    x = _moved_point(form)
+    plates = form.problem.chart.plates(x[: form.nx_pose])
+    x[form.nx_pose : -1] = pose_values(form.problem.am, plates).eq.up_moment.ravel() / MOMENT_SCALE
+    rows = form.cons(x)
+    np.testing.assert_allclose(rows[-3 * am.n :], 0.0, atol=1e-12)
+    x_smooth = np.append(x[: form.nx_pose], x[-1])
+    np.testing.assert_allclose(rows[: -3 * am.n], smooth.cons(x_smooth), rtol=1e-12, atol=1e-9)
+    assert form.fun(x) == pytest.approx(smooth.fun(x_smooth), rel=1e-12)
+    np.testing.assert_allclose(form.smooth_x(x), x_smooth)
+
+
+def test_pattern_is_banded_for_long_stacks():
+    """No row reads more than two plates' chart columns, two platforms' moments and ``s``,
+    and the non-zeros grow linearly with the stack: O(n), where the force rows of the
+    poses-only form fill a triangle."""
+    from assembler_pin.optimize.wrench import WrenchForm
+
+    counts = {}
+    for n in (8, 16, 24):
+        am, start = bent_stack(n)
+        form = WrenchForm(_problem(am, start, IPOPT))
+        per_row = np.bincount(form.rows, minlength=form.shape[0])
+        assert per_row.max() <= 12 + 3 + 1
+        pose = form.cols < form.nx_pose
+        first, last = np.full(form.shape[0], form.nx), np.full(form.shape[0], -1)
+        np.minimum.at(first, form.rows[pose], form.cols[pose])
+        np.maximum.at(last, form.rows[pose], form.cols[pose])
+        assert (last - first)[last >= 0].max() < 12  # two consecutive plates
+        counts[n] = form.rows.size
+    assert counts[24] - counts[16] == counts[16] - counts[8]  # the same per platform
 
 
 def test_auto_picks_by_size(am, random_poses, monkeypatch):
@@ -238,9 +304,9 @@ def test_long_stack_figure_and_its_bench_row(monkeypatch, capsys):
 def test_ctrl_c_inside_ipopt_reaches_the_caller(am, random_poses, monkeypatch):
     """A Ctrl-C in an evaluation is not taken for a failed evaluation: it is raised again
     once IPOPT returns."""
-    from assembler_pin.optimize.smooth import SmoothForm
+    from assembler_pin.optimize.wrench import WrenchForm
 
-    real, calls = SmoothForm.cons, []
+    real, calls = WrenchForm.cons, []
 
     def interrupted(self, x):
         calls.append(1)
@@ -248,6 +314,6 @@ def test_ctrl_c_inside_ipopt_reaches_the_caller(am, random_poses, monkeypatch):
             raise KeyboardInterrupt
         return real(self, x)
 
-    monkeypatch.setattr(SmoothForm, "cons", interrupted)
+    monkeypatch.setattr(WrenchForm, "cons", interrupted)
     with pytest.raises(KeyboardInterrupt):
         optimize_internal_poses(am, random_poses[7][1], options=IPOPT)

@@ -52,13 +52,22 @@ class LocalChart(_Chart):
             R[k], p[k] = moved.rotation, moved.translation
         return PlateArrays(R, p)
 
+    def twist_blocks(self, x: np.ndarray, plates: PlateArrays) -> np.ndarray:
+        """(movable, 6, 6): the world twist of each movable plate per its chart coordinates,
+        ``Ad(T_k) · Jexp6(x_k)``."""
+        return np.array(
+            [
+                pin.SE3(plates.R[k], plates.p[k]).action @ pin.Jexp6(self.slot(x, slot))
+                for slot, k in enumerate(self.movable)
+            ]
+        ).reshape(-1, 6, 6)
+
     def twist_jacobian(self, x: np.ndarray, plates: PlateArrays) -> np.ndarray:
-        """B (6n, size): the world twists of plates 1..n per chart coordinate,
-        ``Ad(T_k) · Jexp6(x_k)`` on the movable plates' blocks, zero elsewhere."""
+        """B (6n, size): the world twists of plates 1..n per chart coordinate, the
+        :meth:`twist_blocks` on the movable plates' blocks, zero elsewhere."""
         B = np.zeros((6 * self.n, self.size))
-        for slot, k in enumerate(self.movable):
-            action = pin.SE3(plates.R[k], plates.p[k]).action
-            B[6 * (k - 1) : 6 * k, 6 * slot : 6 * slot + 6] = action @ pin.Jexp6(self.slot(x, slot))
+        for slot, (k, block) in enumerate(zip(self.movable, self.twist_blocks(x, plates), strict=True)):
+            B[6 * (k - 1) : 6 * k, 6 * slot : 6 * slot + 6] = block
         return B
 
     def ee_rotation(self, x: np.ndarray, plates: PlateArrays, goal: pin.SE3) -> np.ndarray:

@@ -7,7 +7,7 @@ them. By default the passes are the numpy reference
 (:func:`~assembler_pin.gradients.pose_values`, whose pass
 :func:`~assembler_pin.gradients.pose_derivatives` extends); with ``ASSEMBLER_PIN_STATICS=numba``
 they run compiled (:class:`~assembler_pin.pose_kernel.CompiledPass`, values and derivatives in
-one call each), except in a problem that reads the sag. The sag objectives and the sag limit
+one call each), except in a problem that reads the sag or runs IPOPT. The sag objectives and the sag limit
 read the EE's linear sag of that pass (:func:`.sag.linear_sag`) and, with the
 derivatives, its adjoint gradient (:func:`~assembler_pin.compliance.sag_and_gradient`).
 The Pinocchio statics are not used here: they re-check the returned state
@@ -86,8 +86,10 @@ class Problem:
         )
         self.sag_rows = SagRows(opts.max_sag) if opts.max_sag is not None else None
         self.reads_sag = self.objective.needs_sag or self.sag_rows is not None
-        # the sag reads the numpy pass's intermediates: a problem that reads it keeps that pass
-        self._compiled = CompiledPass(am) if not self.reads_sag and use_pose_kernel() else None
+        # the sag and IPOPT's moment-variable form read the numpy pass's intermediates: a
+        # problem that reads them keeps that pass
+        numpy_pass = self.reads_sag or opts.method == "ipopt"
+        self._compiled = CompiledPass(am) if not numpy_pass and use_pose_kernel() else None
         start_values = self._compiled.values(start) if self._compiled is not None else pose_values(am, start)
         self.start_max_force = Point(np.zeros(0), start_values).max_abs_force
         force_objective = opts.objective == "force"

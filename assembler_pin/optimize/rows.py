@@ -100,12 +100,13 @@ class EETolerance:
         rot = self.chart.ee_rotation(p.x, p.plates, self.goal)
         return np.array([(self.SHRINK * tol.position) ** 2 - dp @ dp, (self.SHRINK * tol.rotation) ** 2 - rot @ rot])
 
-    def jacobian(self, p: Point, d: ChartDerivatives) -> np.ndarray:
-        """(2, m), for the local chart (the EE rotation is its last three coordinates)."""
+    def jacobian(self, p: Point, B_ee: np.ndarray) -> np.ndarray:
+        """(2, m), for the local chart (the EE rotation is its last three coordinates), from
+        ``B_ee`` (6, m): the EE's world twist per chart coordinate (its rows of ``B``)."""
         n, m = self.chart.n, self.chart.size
         dp = p.plates.p[n] - self.goal.translation
         # d p_n / d(world twist) = [I, -[p_n]x]
-        jp = np.hstack([np.eye(3), -pin.skew(p.plates.p[n])]) @ d.B[6 * (n - 1) : 6 * n]
+        jp = np.hstack([np.eye(3), -pin.skew(p.plates.p[n])]) @ B_ee
         ee = np.zeros((2, m))
         ee[0] = -2.0 * dp @ jp
         ee[1, m - 3 :] = -2.0 * p.x[m - 3 :]

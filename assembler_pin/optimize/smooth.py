@@ -73,7 +73,7 @@ class SmoothForm:
             blocks.append((pr.force_limits.jacobian(d), 0.0))
         blocks.append((pr.leg_limits.jacobian(d), 0.0))
         if pr.ee is not None:
-            blocks.append((pr.ee.jacobian(p, d), 0.0))
+            blocks.append((pr.ee.jacobian(p, d.B[-6:]), 0.0))
         if pr.motion_rows is not None:
             blocks.append((pr.motion_rows.jacobian(d), 0.0))
         if pr.sag_rows is not None:
