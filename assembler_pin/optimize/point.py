@@ -12,7 +12,7 @@ from ..gradients import PoseDerivatives, PoseValues
 from ..kinematics import PlateArrays
 from ..pose_kernel import PoseMeasures
 
-__all__ = ["SINGULAR_FORCE", "ChartDerivatives", "Point"]
+__all__ = ["SINGULAR_FORCE", "ChartDerivatives", "Point", "block_chart"]
 
 #: Forces [N] standing in for the statics at a singular trial point: finite (SLSQP cannot
 #: handle NaN) and far outside every force limit, so such a step is infeasible.
@@ -63,6 +63,14 @@ class Point:
         return float(np.abs(self.forces).max())
 
 
+def block_chart(rows: np.ndarray, blocks: np.ndarray, plates: np.ndarray) -> np.ndarray:
+    """Rows (r, 6n) per world twist of plates 1..n → (r, 6·len(plates)) per chart coordinate
+    of a block-diagonal chart: the columns of each movable plate (``plates``: its index,
+    0 for plate 1) times its 6×6 block (``blocks`` (len(plates), 6, 6))."""
+    per_plate = rows.reshape(rows.shape[0], -1, 6)[:, plates, :].transpose(1, 0, 2)  # (movable, rows, 6)
+    return np.matmul(per_plate, blocks).transpose(1, 0, 2).reshape(rows.shape[0], -1)
+
+
 @dataclass(frozen=True)
 class ChartDerivatives:
     """Derivatives at a :class:`Point`, in chart coordinates.
@@ -86,9 +94,7 @@ class ChartDerivatives:
         if self.blocks is None:
             return rows @ self.B
         k = self.blocks
-        per_plate = rows.reshape(rows.shape[0], -1, 6)[:, k, :].transpose(1, 0, 2)  # (movable, rows, 6)
-        B = self.B.reshape(-1, 6, len(k), 6)[k, :, np.arange(len(k)), :]  # (movable, 6, 6)
-        return np.matmul(per_plate, B).transpose(1, 0, 2).reshape(rows.shape[0], -1)
+        return block_chart(rows, self.B.reshape(-1, 6, len(k), 6)[k, :, np.arange(len(k)), :], k)
 
     @cached_property
     def forces(self) -> np.ndarray:

@@ -198,7 +198,7 @@ class Problem:
         point: ``leg``, ``force`` and, where they apply, ``ee``, ``motion`` and ``sag``."""
         if self._rows is not None and self._rows[0] is p:
             return self._rows[1]
-        rows = {"leg": self.leg_limits.values(p), "force": self.force_limits.values(p)}
+        rows = {"leg": self.leg_limits.values(p), "force": self.force_limits.values(p.forces)}
         if self.ee is not None:
             rows["ee"] = self.ee.values(p)
         if self.motion_rows is not None:

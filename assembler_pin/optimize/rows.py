@@ -61,10 +61,15 @@ class ForceLimitRows:
         """Equal limits: the epigraph variable can carry them in one row."""
         return self.tension_limit == self.compression_limit
 
-    def values(self, p: Point) -> np.ndarray:
-        """(2·6n,) [N]."""
-        F = p.forces.ravel()
+    def values(self, forces: np.ndarray) -> np.ndarray:
+        """(2·6n,) [N] of the forces (n, 6) [N]."""
+        F = forces.ravel()
         return np.concatenate([self.tension_limit - F, F + self.compression_limit])
+
+    def epigraph_values(self, forces: np.ndarray, s: float) -> np.ndarray:
+        """The rows of the limits in the epigraph form: one on ``s`` when the limits are equal
+        (``limit - s``), else :meth:`values`."""
+        return np.array([self.tension_limit - s]) if self.symmetric else self.values(forces)
 
     def jacobian(self, d: ChartDerivatives) -> np.ndarray:
         """(2·6n, m)."""
@@ -74,9 +79,9 @@ class ForceLimitRows:
 class EpigraphRows:
     """``s - F_i >= 0`` and ``s + F_i >= 0``: the bound ``s`` [N] on every |F_i|."""
 
-    def values(self, p: Point, s: float) -> np.ndarray:
-        """(2·6n,) [N]."""
-        F = p.forces.ravel()
+    def values(self, forces: np.ndarray, s: float) -> np.ndarray:
+        """(2·6n,) [N] of the forces (n, 6) [N]."""
+        F = forces.ravel()
         return np.concatenate([s - F, s + F])
 
     def jacobian(self, d: ChartDerivatives) -> tuple[np.ndarray, np.ndarray]:

@@ -56,9 +56,8 @@ class SmoothForm:
         """Rows >= 0: ``s ∓ F``, the force limits, the leg limits, EE tolerance, motion step, sag."""
         pr = self.problem
         p, s = pr.point(x[:-1]), x[-1]
-        fl = pr.force_limits
-        limits = np.array([fl.tension_limit - s]) if fl.symmetric else pr.rows(p)["force"]
-        rows = [self.epigraph.values(p, s), limits, pr.rows(p)["leg"], *pr.optional_rows(p)]
+        limits = pr.force_limits.epigraph_values(p.forces, s)
+        rows = [self.epigraph.values(p.forces, s), limits, pr.rows(p)["leg"], *pr.optional_rows(p)]
         return finite_rows(np.concatenate(rows))
 
     def cons_jac(self, x: np.ndarray) -> np.ndarray:

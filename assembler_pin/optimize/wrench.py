@@ -44,10 +44,11 @@ from ..gradients import (
 )
 from ..linalg import inverse_or_nan, skew
 from ..model import AssemblerModel
-from ..objective import deviation_term_gradient, motion_cost, omega
+from ..objective import deviation_term_gradient, motion_cost_gradient
 from .charts import LocalChart
-from .point import Point
+from .point import Point, block_chart
 from .problem import Problem, finite_rows
+from .smooth import SmoothForm
 
 __all__ = ["MOMENT_SCALE", "BandedDerivatives", "WrenchForm", "banded_derivatives", "level_moments"]
 
@@ -66,14 +67,13 @@ class BandedDerivatives:
     last axis 12 = ``[η_j, η_{j+1}]`` (each ``(v, ω)``), and of the level equality rows.
 
     Attributes:
-        forces: (n, 6) actuator forces [N] at the moment variables; d_forces (n, 6, 12);
+        d_forces: (n, 6, 12) of the actuator forces [N] at the moment variables;
             d_forces_dm (n, 6, 3) [N per N·m], w.r.t. ``m_j``.
         d_lengths: (n, 6, 12); d_cos_deflection: (n, 6, 2, 12); d_rise: (n, 6, 12).
         d_level: (n, 3, 12) [N·m] the moment of level j+1 (plate j+1, the legs of platform
             j+1, the payload at j+1 = n) w.r.t. ``[η_{j+1}, η_{j+2}]``.
     """
 
-    forces: np.ndarray
     d_forces: np.ndarray
     d_forces_dm: np.ndarray
     d_lengths: np.ndarray
@@ -99,8 +99,8 @@ def _forces_at_moments(am: AssemblerModel, v: PoseValues, m: np.ndarray, K_inv: 
 
 
 def banded_derivatives(am: AssemblerModel, v: PoseValues, m: np.ndarray) -> BandedDerivatives:
-    """Forces at the moment variables ``m`` (n, 3) [N·m] and every derivative of the
-    moment-variable form, per platform (:class:`BandedDerivatives`).
+    """Every derivative of the moment-variable form at the moment variables ``m`` (n, 3)
+    [N·m], per platform (:class:`BandedDerivatives`).
 
     The same equilibrium as :func:`~assembler_pin.gradients.pose_derivatives` with
     ``M_up,j`` replaced by ``m_j``: ``K da = d(rhs) - dK a`` on the platform's own plates.
@@ -110,8 +110,7 @@ def banded_derivatives(am: AssemblerModel, v: PoseValues, m: np.ndarray) -> Band
     g = np.array([0.0, 0.0, -cfg.gravity])
     eq, R = v.eq, v.plates.R
     K_inv = inverse_or_nan(eq.K)
-    forces = _forces_at_moments(am, v, m, K_inv)
-    a = forces - leg.shaft_mass * eq.gu
+    a = _forces_at_moments(am, v, m, K_inv) - leg.shaft_mass * eq.gu
     db = np.zeros((n, 6, 3, 12))
     dt = np.zeros((n, 6, 3, 12))
     db[..., :6] = _point_blocks(eq.b)
@@ -143,7 +142,6 @@ def banded_derivatives(am: AssemblerModel, v: PoseValues, m: np.ndarray) -> Band
     d_level[:-1] += d_legs[1:]
     d_level[-1, :, :6] += -cfg.payload.mass * skew_g @ _point_blocks(eq.payload_point)
     return BandedDerivatives(
-        forces=forces,
         d_forces=d_forces,
         d_forces_dm=K_inv[..., 3:],
         d_lengths=dL,
@@ -203,7 +201,7 @@ class WrenchForm:
         self.nx_pose = problem.nx_pose
         self.nx = self.nx_pose + 3 * n + 1
         self.blocks = _Blocks(problem.chart)
-        self.moment_scale = MOMENT_SCALE
+        self.smooth = SmoothForm(problem)
         self.singular = ""
         self.interrupt: KeyboardInterrupt | None = None
         self._last: tuple[bytes, np.ndarray, np.ndarray] | None = None
@@ -213,13 +211,13 @@ class WrenchForm:
 
     def split(self, x: np.ndarray) -> tuple[np.ndarray, np.ndarray, float]:
         """(pose part, moments (n, 3) [N·m], s)."""
-        return x[: self.nx_pose], self.moment_scale * x[self.nx_pose : -1].reshape(self.n, 3), float(x[-1])
+        return x[: self.nx_pose], MOMENT_SCALE * x[self.nx_pose : -1].reshape(self.n, 3), float(x[-1])
 
     def x0(self, x0_smooth: np.ndarray) -> np.ndarray:
         """The start from :meth:`.smooth.SmoothForm.x0`'s ``[poses, s]``: the moments of the
         start poses, so that the equality rows hold there."""
         v = self._values(x0_smooth[:-1])
-        return np.concatenate([x0_smooth[:-1], v.eq.up_moment.ravel() / self.moment_scale, x0_smooth[-1:]])
+        return np.concatenate([x0_smooth[:-1], v.eq.up_moment.ravel() / MOMENT_SCALE, x0_smooth[-1:]])
 
     def smooth_x(self, x: np.ndarray) -> np.ndarray:
         """``[poses, s]``: the point of :mod:`.smooth`'s form."""
@@ -247,13 +245,7 @@ class WrenchForm:
 
     def fun(self, x: np.ndarray) -> float:
         """The objective: :meth:`.smooth.SmoothForm.fun` (it reads no moment variable)."""
-        pr = self.problem
-        x_pose, _, s = self.split(x)
-        p = pr.point(x_pose)
-        sag = pr.sag(p) if pr.objective.needs_sag else 0.0
-        return pr.objective.value(omega(s, p.plate_angles, pr.opts.w1, pr.opts.w2), sag) + motion_cost(
-            p.lengths, pr.motion
-        )
+        return self.smooth.fun(self.smooth_x(x))
 
     def cons(self, x: np.ndarray) -> np.ndarray:
         """Every row (class docstring), inequalities ``>= 0`` then equalities ``= 0``."""
@@ -262,15 +254,10 @@ class WrenchForm:
         p = pr.point(x_pose)
         v = self._values(x_pose)
         with np.errstate(invalid="ignore"):
-            F = _forces_at_moments(pr.am, v, m, inverse_or_nan(v.eq.K)).ravel()
-        fl = pr.force_limits
-        limits = (
-            np.array([fl.tension_limit - s])
-            if fl.symmetric
-            else np.concatenate([fl.tension_limit - F, F + fl.compression_limit])
-        )
-        levels = (m - np.concatenate([m[1:], np.zeros((1, 3))]) - level_moments(pr.am, v)) / self.moment_scale
-        rows = [s - F, s + F, limits, pr.rows(p)["leg"], *pr.optional_rows(p), levels.ravel()]
+            F = _forces_at_moments(pr.am, v, m, inverse_or_nan(v.eq.K))
+        limits = pr.force_limits.epigraph_values(F, s)
+        levels = (m - np.concatenate([m[1:], np.zeros((1, 3))]) - level_moments(pr.am, v)) / MOMENT_SCALE
+        rows = [self.smooth.epigraph.values(F, s), limits, pr.rows(p)["leg"], *pr.optional_rows(p), levels.ravel()]
         return finite_rows(np.concatenate(rows))
 
     # --- the sparse Jacobian -------------------------------------------------------------
@@ -344,7 +331,7 @@ class WrenchForm:
         j6 = np.repeat(np.arange(n), 6)
         to_chart = self.blocks.to_chart
         dF = to_chart(bd.d_forces.reshape(6 * n, 12), j6, B)
-        dFm = self.moment_scale * bd.d_forces_dm.reshape(6 * n, 3)
+        dFm = MOMENT_SCALE * bd.d_forces_dm.reshape(6 * n, 3)
         dL = to_chart(bd.d_lengths.reshape(6 * n, 12), j6, B)
         per_kind = {
             "s-F": np.hstack([-dF, -dFm, np.ones((6 * n, 1))]),
@@ -366,7 +353,7 @@ class WrenchForm:
         if pr.sag_rows is not None:
             per_kind["sag"] = pr.sag_rows.jacobian(pr.sag_gradient(x_pose))
         j3 = np.repeat(np.arange(n), 3)
-        d_level = to_chart(bd.d_level.reshape(3 * n, 12), j3 + 1, B) / self.moment_scale
+        d_level = to_chart(bd.d_level.reshape(3 * n, 12), j3 + 1, B) / MOMENT_SCALE
         per_kind["level"] = np.hstack([-d_level, np.ones((3 * n, 1)), -np.ones((3 * n, 1))])
         values = np.concatenate([per_kind[kind].ravel() for kind, _ in self._families])
         jac = values[self._keep][self._order]
@@ -375,32 +362,26 @@ class WrenchForm:
     def _gradient(self, x_pose: np.ndarray, p: Point, v: PoseValues, dL: np.ndarray, B: np.ndarray) -> np.ndarray:
         """The objective's gradient (nx,): on the poses and ``s`` (none on the moments)."""
         pr, n = self.problem, self.n
-        grad_pose = np.zeros(self.nx_pose)
+        movable = np.asarray(self.chart.movable)
         d_ang = _plate_angle_sq_derivatives(v.deviation, v.plates.p)  # (n, 6n) world twists
-        d_ang_chart = self._dense_chart(d_ang, B)
-        d_omega = pr.opts.w2 * deviation_term_gradient(p.plate_angles, d_ang_chart)
+        d_omega = pr.opts.w2 * deviation_term_gradient(p.plate_angles, block_chart(d_ang, B[movable], movable - 1))
         d_sag = pr.sag_gradient(x_pose) if pr.objective.needs_sag else None
         grad = pr.objective.gradient(np.append(d_omega, pr.opts.w1), None if d_sag is None else np.append(d_sag, 0.0))
-        grad_pose = grad[:-1]
-        if pr.motion is not None and pr.motion.w3 != 0.0:
-            step = (p.lengths - pr.motion.previous_lengths).ravel()
-            dense = np.zeros((6 * n, self.nx_pose))
-            cols = self.blocks.cols(np.repeat(np.arange(n), 6))
-            rows = np.broadcast_to(np.arange(6 * n)[:, None], cols.shape)
-            keep = cols >= 0
-            dense[rows[keep], cols[keep]] = dL[keep]
-            grad_pose = grad_pose + 2.0 * pr.motion.w3 * step @ dense
+        if pr.motion is not None:
+            grad[:-1] += motion_cost_gradient(p.lengths, self._dense(dL, np.repeat(np.arange(n), 6)), pr.motion)
         out = np.zeros(self.nx)
-        out[: self.nx_pose] = grad_pose
+        out[: self.nx_pose] = grad[:-1]
         out[-1] = grad[-1]
         return out
 
-    def _dense_chart(self, d: np.ndarray, B: np.ndarray) -> np.ndarray:
-        """``d`` (r, 6n) per world twist of plates 1..n → (r, nx_pose) per chart coordinate."""
-        out = np.zeros((d.shape[0], self.nx_pose))
-        for slot, k in enumerate(self.chart.movable):
-            out[:, 6 * slot : 6 * slot + 6] = d[:, 6 * (k - 1) : 6 * k] @ B[k]
-        return out
+    def _dense(self, d: np.ndarray, first: np.ndarray) -> np.ndarray:
+        """Rows ``d`` (r, 12) on the chart columns of plates ``first``, ``first + 1`` as
+        dense rows (r, nx_pose)."""
+        cols = self.blocks.cols(first)
+        keep = cols >= 0
+        dense = np.zeros((d.shape[0], self.nx_pose))
+        dense[np.broadcast_to(np.arange(d.shape[0])[:, None], cols.shape)[keep], cols[keep]] = d[keep]
+        return dense
 
     def derivatives(self, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """(objective gradient, Jacobian non-zeros) at ``x``, computed once per point; NaN at
