@@ -285,12 +285,17 @@ def test_low_goals_are_repaired_on_the_stack(am, xyz):
     assert not initial_condition(am, goal, HelperArmOptions(repair_starts=0)).success
 
 
-def test_low_goal_is_repaired_before_the_rest_of_the_scan(am):
+@pytest.mark.parametrize("xyz", [(0.3, 0.0, 0.6), (0.3, 0.0, 0.5)])
+def test_low_goal_is_repaired_before_the_rest_of_the_scan(am, xyz):
     """The tail of the scan: a low goal the arm cannot reach is repaired after CHEAP_SCAN arm
-    solves, not after all max_attempts of them (formerly 15 arm solves, then the repair)."""
-    result = initial_condition(am, pin.SE3(np.eye(3), np.array([0.3, 0.0, 0.6])))
+    solves, not after all max_attempts of them (formerly 15 arm solves, then the repair).
+    At z = 0.5 m neither the arm's closest pose nor the even screw pose repairs: a perturbed
+    copy of the screw pose does, and it too is tried before the rest of the scan."""
+    result = initial_condition(am, pin.SE3(np.eye(3), np.array(xyz)))
     check_result(am, result)
+    assert leg_state_problems(am, result) == []
     assert result.repaired and result.attempts == CHEAP_SCAN < HelperArmOptions().max_attempts
+    assert result.link_length is None or xyz[2] > 0.5  # z = 0.5 m: from a screw pose
 
 
 def test_repair_jacobian_is_the_derivative_of_the_hinge(am):

@@ -40,8 +40,9 @@ __all__ = [
 
 logger = logging.getLogger(__name__)
 
-#: Arm solves of the d scan before a first, cheap repair (closest arm pose, even screw pose)
-#: is tried; the rest of the scan and the full repair follow only when it fails.
+#: Arm solves of the d scan before a first, cheap repair (the closest arm pose, the even screw
+#: pose and its perturbed copies) is tried; the rest of the scan and the repair of its closest
+#: arm poses follow only when it fails.
 CHEAP_SCAN = 2
 
 #: Violation kinds that make an initial condition invalid (force limits are reported only).
@@ -119,7 +120,7 @@ def initial_condition(
         found = _scan_link_lengths(am, goal_se3, opts, arms, d_values, scan, limit)
         if found is not None:
             return success_result(found[0], goal_se3, found[1], scan.attempts, t0, repaired=False)
-        # cheap first: the closest arm pose so far and the even screw pose, before the rest of the scan
+        # cheap first: the closest arm pose so far and the (perturbed) even screw pose, before the rest of the scan
         repairs = _repair_starts(am, goal_se3, opts, scan, cheap=limit < opts.max_attempts)
         done = _try_repairs(am, goal_se3, opts, repairs, tried, scan.attempts, t0)
         if done is not None:
@@ -182,13 +183,14 @@ def _repair_starts(
     """The poses the repair starts from: the arm's ``repair_starts`` closest poses, the even
     screw pose, and ``perturbed_starts`` seeded perturbations of it (the even pose is often a
     saddle of the leg limits: every platform alike); with ``cheap``, the closest arm pose
-    and the even screw pose only."""
+    only. The screw poses do not depend on the scan: tried once in the cheap stage, they are
+    skipped after the rest of it (:func:`_try_repairs`)."""
     if opts.repair_starts == 0 or scan.last_q is None:
         return []
     starts = sorted(scan.candidates, key=lambda c: c.score)[: 1 if cheap else opts.repair_starts]
-    starts.append(Candidate(math.inf, even_screw_pose(am, goal)))
-    if not cheap:
-        starts += [Candidate(math.inf, plates) for plates in perturbed_plates(starts[-1].plates, opts.perturbed_starts)]
+    screw = even_screw_pose(am, goal)
+    starts.append(Candidate(math.inf, screw))
+    starts += [Candidate(math.inf, plates) for plates in perturbed_plates(screw, opts.perturbed_starts)]
     return starts
 
 
