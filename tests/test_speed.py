@@ -199,6 +199,30 @@ def test_all_starts_run_every_start(am):
     assert {"helper_arm", "home", "screw"} <= set(result.runs)
 
 
+def _legs_at_min_stroke(am, state) -> int:
+    """Legs whose length is within AT_LIMIT of the optimizer's margin above the minimum."""
+    from assembler_pin.options import OptimizeOptions
+    from assembler_pin.solver import AT_LIMIT
+
+    floor = am.config.leg.min_length + OptimizeOptions().limit_margin + AT_LIMIT
+    return int(np.count_nonzero(np.asarray(state.leg_lengths) <= floor))
+
+
+@pytest.mark.parametrize("xyz", [(-0.3, 0.2, 0.5), (0.0, 0.0, 0.9)])
+def test_screw_start_runs_only_for_a_compressed_optimum(am, xyz):
+    """The lazy portfolio adds the screw start exactly when the helper arm's optimum has at
+    least COMPRESSED_SHARE of the legs at their minimum stroke (counted here from the leg
+    lengths): a low goal does, a goal at mid height does not."""
+    from assembler_pin.solver import COMPRESSED_SHARE
+
+    result = solve(am, _goal(xyz))
+    helper = result.runs["helper_arm"]
+    assert result.success and helper.success
+    compressed = _legs_at_min_stroke(am, helper.optimized) >= np.ceil(COMPRESSED_SHARE * 6 * am.n)
+    assert set(result.runs) == ({"helper_arm", "screw"} if compressed else {"helper_arm"})
+    assert compressed == (xyz[2] < 0.6)
+
+
 def test_solve_starts_bench_reports_the_helper_arms_own_time(am):
     """The grid bench's helper-arm percentiles are the solves' ``timing_s["initial"]``: within
     each solve's total, and the solved count is the solves' own."""
