@@ -85,14 +85,11 @@ def benchmark_threads(am: AssemblerModel, goals: tuple = THREAD_GOALS, limits: t
 def benchmark_solve_starts(
     am: AssemblerModel, goals: tuple = LEVEL_GRID, modes: tuple[str, ...] = ("first", "all")
 ) -> dict:
-    """``solve`` over ``goals`` with each ``starts`` mode, interleaved goal by goal (so that a
-    machine's changing load hits every mode alike): p50, p95 and max [s], the helper arm's own
-    p50, p90 and p95 (``timing_s["initial"]``) [s], goals solved, optimizer runs, the
-    optimizer's total time [s], and, for ``first`` against ``all``, the largest relative loss
-    of Ω and how many goals lose more than 1e-6.
-
-    The default goals are the bench's 120-goal grid (a few minutes per mode).
-    """
+    """``solve`` over ``goals`` (default: the 120-goal grid, a few minutes per mode) with each
+    ``starts`` mode, interleaved goal by goal (a changing load hits every mode alike): p50, p95
+    and max [s], the helper arm's p50 / p90 / p95 (``timing_s["initial"]``) [s], goals solved,
+    optimizer runs and time [s], and, for ``first`` against ``all``, the largest relative loss
+    of Ω and how many goals lose more than 1e-6."""
     from .solver import solve
 
     times: dict[str, list[float]] = {m: [] for m in modes}

@@ -19,7 +19,7 @@ import pinocchio as pin
 
 from .constraints import leg_limit_margins
 from .exceptions import ArgumentError, OptionsError
-from .kinematics import PlateArrays, leg_state, se3_to_taa, to_se3
+from .kinematics import PlateArrays, se3_to_taa, to_se3
 from .messages import binding, describe, one_line
 from .model import AssemblerModel, checked_model
 from .optimize import OptimizeOptions, OptimizeResult, optimize_internal_poses
@@ -292,7 +292,7 @@ def needs_other_starts(am: AssemblerModel, run: OptimizeResult, opts: OptimizeOp
     fewer legs at their minimum is kept alone; ``starts="all"`` runs every start."""
     if not run.success:
         return True
-    legs = leg_state(am, run.optimized.plates)
+    legs = run.optimized.legs  # the state's own leg state (evaluate_state: leg_state of its plates)
     margins = leg_limit_margins(am.config.leg, legs.lengths, np.cos(legs.deflection), legs.rise, opts.limit_margin)
     at_min_stroke = int(np.count_nonzero(margins[0] <= AT_LIMIT))
     return at_min_stroke >= math.ceil(COMPRESSED_SHARE * margins[0].size)
