@@ -7,7 +7,9 @@ subcommand, and the viewer around its server, without importing anything numeric
 
 from __future__ import annotations
 
+import _thread
 import signal
+import sys
 import threading
 from collections.abc import Callable, Sequence
 from typing import Any
@@ -34,25 +36,56 @@ def interrupt_on_signals(names: Sequence[str] = ("SIGTERM", "SIGHUP")) -> Callab
     its ``finally`` blocks (which stop servers and remove temporary files). Signals this
     platform lacks are skipped; outside the main thread nothing is installed.
 
+    An interrupt that lands while a finalizer runs (a ``__del__`` or a weakref callback, run
+    by the garbage collector at any point) cannot leave it: Python would print it as an
+    ignored exception, with a traceback, and go on working. The hook installed here
+    (:func:`_redelivered`) raises the same signal again instead, :data:`REDELIVERY_DELAY`
+    later, so the program's own code is interrupted and unwinds as for any Ctrl-C.
+
     Returns:
-        A function restoring the previous handlers.
+        A function restoring the previous handlers (and the previous unraisable hook).
     """
 
     def interrupt(signum: int, frame: object) -> None:
         raise StopRequested(signum)
 
     previous: dict[int, Any] = {}
+    previous_hook = sys.unraisablehook
     if threading.current_thread() is threading.main_thread():
         for name in names:
             sig = getattr(signal, name, None)
             if sig is not None:
                 previous[sig] = signal.signal(sig, interrupt)
+        sys.unraisablehook = _redelivered(previous_hook)
 
     def restore() -> None:
         for sig, handler in previous.items():
             signal.signal(sig, handler)
+        sys.unraisablehook = previous_hook
 
     return restore
+
+
+#: How long after a finalizer's interrupt it is raised again in the main thread [s].
+REDELIVERY_DELAY = 0.01
+
+
+def _redelivered(fallback: Callable[[Any], object]) -> Callable[[Any], None]:
+    """An unraisable hook that raises an interrupt caught in a finalizer again as its signal
+    (SIGINT for Ctrl-C, the :class:`StopRequested`'s own otherwise); every other unraisable
+    exception goes to ``fallback``."""
+
+    def hook(unraisable: Any) -> None:
+        exc = unraisable.exc_value
+        if isinstance(exc, KeyboardInterrupt):
+            # from a thread, after the hook has returned: raised here, it would be ignored again
+            later = threading.Timer(REDELIVERY_DELAY, _thread.interrupt_main, (getattr(exc, "signum", signal.SIGINT),))
+            later.daemon = True
+            later.start()
+            return
+        fallback(unraisable)
+
+    return hook
 
 
 def forget_interrupt() -> None:

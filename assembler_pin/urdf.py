@@ -56,11 +56,13 @@ SIDECAR_FILENAME = "assembler.yaml"
 
 
 def xml_number(x: float) -> str:
-    """A number as URDF text: 15 significant decimals, ``0`` for zero (shared by every URDF writer)."""
-    x = float(x)
+    """A number as URDF text: 15 decimals, ``0`` for what rounds to zero (shared by every URDF
+    writer; a component that is zero up to rounding, such as 1e-17, reads the same whatever
+    the machine's floating-point path)."""
+    x = round(float(x), 15)
     if x == 0.0:
         return "0"
-    return repr(round(x, 15))
+    return repr(x)
 
 
 def xml_vector(v: np.ndarray) -> str:

@@ -208,19 +208,32 @@ def _legs_at_min_stroke(am, state) -> int:
     return int(np.count_nonzero(np.asarray(state.leg_lengths) <= floor))
 
 
-@pytest.mark.parametrize("xyz", [(-0.3, 0.2, 0.5), (0.0, 0.0, 0.9)])
-def test_screw_start_runs_only_for_a_compressed_optimum(am, xyz):
-    """The lazy portfolio adds the screw start exactly when the helper arm's optimum has at
-    least COMPRESSED_SHARE of the legs at their minimum stroke (counted here from the leg
-    lengths): a low goal does, a goal at mid height does not."""
+def _compressed_by_the_rule(am, result) -> bool | None:
+    """Whether the helper arm's optimum counts as compressed (COMPRESSED_SHARE of the legs at
+    their minimum stroke, counted from the leg lengths); None when its run failed. Checks
+    that the lazy portfolio ran exactly the starts the rule asks for."""
     from assembler_pin.solver import COMPRESSED_SHARE
 
-    result = solve(am, _goal(xyz))
     helper = result.runs["helper_arm"]
-    assert result.success and helper.success
-    compressed = _legs_at_min_stroke(am, helper.optimized) >= np.ceil(COMPRESSED_SHARE * 6 * am.n)
+    if not helper.success:  # every start then
+        assert {"home", "screw"} <= set(result.runs)
+        return None
+    compressed = bool(_legs_at_min_stroke(am, helper.optimized) >= np.ceil(COMPRESSED_SHARE * 6 * am.n))
     assert set(result.runs) == ({"helper_arm", "screw"} if compressed else {"helper_arm"})
-    assert compressed == (xyz[2] < 0.6)
+    return compressed
+
+
+def test_screw_start_runs_only_for_a_compressed_optimum(am):
+    """The lazy portfolio adds the screw start exactly when the helper arm's optimum has at
+    least COMPRESSED_SHARE of the legs at their minimum stroke: checked on low goals (at least
+    one of which has a converged, compressed optimum: where SLSQP's last digits decide which
+    of them converge, the others still hold the rule) and on a goal at mid height (not
+    compressed)."""
+    low = [(-0.3, 0.2, 0.5), (-0.3, 0.0, 0.5), (0.5, 0.0, 0.5)]
+    compressed = [_compressed_by_the_rule(am, solve(am, _goal(xyz))) for xyz in low]
+    assert True in compressed, compressed
+    mid = solve(am, _goal((0.0, 0.0, 0.9)))
+    assert mid.success and _compressed_by_the_rule(am, mid) is False
 
 
 def test_solve_starts_bench_reports_the_helper_arms_own_time(am):

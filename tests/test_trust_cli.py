@@ -553,3 +553,27 @@ def test_no_warning_escapes_the_cli(monkeypatch, capsys):
         warnings.simplefilter("always")
         assert _run(capsys, ["statics", "--home"]) == (0, "", [])
     assert seen == []
+
+
+def test_ctrl_c_inside_a_finalizer_interrupts_the_command_without_a_traceback(monkeypatch, capsys):
+    """A Ctrl-C that lands while the garbage collector runs a ``__del__`` would be printed as an
+    ignored exception (a traceback) and the command would go on; it is raised again in the
+    command's own code: one line, exit 130, and the unraisable hook is restored after."""
+
+    class Finalized:
+        def __del__(self) -> None:
+            raise KeyboardInterrupt
+
+    done = []
+
+    def interrupted_in_a_finalizer(args):
+        Finalized()  # its __del__ runs here, its interrupt is unraisable
+        for _ in range(1000):  # the re-raised signal interrupts this loop
+            time.sleep(0.001)
+        done.append(True)
+        return 0
+
+    before = sys.unraisablehook
+    _replace_run(monkeypatch, interrupted_in_a_finalizer)
+    assert _run(capsys, ["statics", "--home"]) == (130, "", ["assembler-pin statics: interrupted"])
+    assert not done and sys.unraisablehook is before

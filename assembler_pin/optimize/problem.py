@@ -26,7 +26,7 @@ from ..gradients import PoseDerivatives, PoseValues, pose_derivatives, pose_valu
 from ..kinematics import PlateArrays
 from ..model import AssemblerModel
 from ..objective import SagObjective, motion_cost, omega, sag_reference
-from ..options import SMOOTH_METHODS, OptimizeOptions
+from ..options import GEOMETRIC_MARGIN, SMOOTH_METHODS, OptimizeOptions
 from ..pose_kernel import CompiledPass, use_pose_kernel
 from .charts import LocalChart, TaaChart
 from .options import MotionTerm
@@ -97,7 +97,7 @@ class Problem:
         self.force_limits = ForceLimitRows(min(leg.max_tension, cap) - 1e-6, min(leg.max_compression, cap) - 1e-6)
         self.leg_limits = LegLimitRows(leg, opts.limit_margin, opts.rise_margin)
         self.ee = EETolerance(goal, opts.ee_tolerance, self.chart) if opts.ee_tolerance is not None else None
-        self.motion_rows = MotionRows(motion) if motion is not None else None
+        self.motion_rows = MotionRows(motion, GEOMETRIC_MARGIN) if motion is not None else None
         self._sag: tuple[Point, float] | None = None
         self._sag_grad: tuple[ChartDerivatives, np.ndarray] | None = None
         self.best: tuple[float, np.ndarray] | None = None

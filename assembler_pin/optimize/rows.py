@@ -119,14 +119,17 @@ class EETolerance:
 
 
 class MotionRows:
-    """``max_step ∓ (L_i - L_i^prev) >= 0`` for every leg [m]."""
+    """``max_step - margin ∓ (L_i - L_i^prev) >= 0`` for every leg [m]: ``margin``
+    (:data:`~assembler_pin.options.GEOMETRIC_MARGIN`) inside the step the final check applies,
+    as the leg limits are: SLSQP honours its rows to ~1e-8, and an optimum on the step would
+    otherwise be returned just outside it."""
 
-    def __init__(self, motion: MotionTerm) -> None:
-        self.motion = motion
+    def __init__(self, motion: MotionTerm, margin: float) -> None:
+        self.motion, self.margin = motion, float(margin)
 
     def values(self, p: Point) -> np.ndarray:
         """(2·6n,) [m]."""
-        return self.motion.margins(p.lengths)
+        return self.motion.margins(p.lengths) - self.margin
 
     def jacobian(self, d: ChartDerivatives) -> np.ndarray:
         """(2·6n, m)."""
