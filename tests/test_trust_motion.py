@@ -129,6 +129,25 @@ def test_a_failed_plan_keeps_its_valid_prefix_and_says_so(am, tmp_path):
     assert took < 60  # planned once: a failed plan is not planned again with half steps
 
 
+def test_a_vertical_plan_from_home_ends_at_the_stacks_full_height(am):
+    """Straight up from the home pose, past the reach: the plan goes on until the legs are at
+    their longest, not a few centimetres above home. The bound is geometry alone: a level
+    platform whose six legs are all L long stands sqrt(L^2 - c^2) tall, with c the chord
+    between a leg's two ends (60 deg - spacing apart on the node circle); with the plan's
+    margin, L = max_length - limit_margin. No sample can be above n of those, and the plan
+    must end within one position step of it."""
+    cfg, opts = am.config, PlanOptions()
+    chord = 2 * cfg.plate.node_radius * math.sin(math.radians(60 - cfg.plate.node_spacing_deg) / 2)
+    longest = cfg.leg.max_length - opts.limit_margin
+    top_z = am.home[0].translation[2] + am.n * math.sqrt(longest**2 - chord**2)
+    goal = pin.SE3(np.eye(3), np.array([0.0, 0.0, 1.6]))
+    plan = plan_path(am, EEPath.between(am.home[-1], goal), start=am.home)
+    assert not plan.success and "no valid sample" in plan.reason
+    last_z = plan.states[-1].plates.p[-1, 2]
+    assert top_z - opts.position_step <= last_z <= top_z + 1e-9, (last_z, top_z)
+    assert all(state.feasible for state in plan.states)
+
+
 def test_cli_plan_exits_1_on_a_failed_plan_with_the_prefix_written(am, tmp_path, monkeypatch, capsys):
     import assembler_pin.motion as motion_pkg
 
