@@ -148,6 +148,24 @@ def test_a_vertical_plan_from_home_ends_at_the_stacks_full_height(am):
     assert all(state.feasible for state in plan.states)
 
 
+def test_a_yaw_at_home_height_is_planned_to_its_end(am):
+    """A 1.2 rad yaw of the EE about the stack's axis (0.95 m up): every sample's leg lengths,
+    by the stack FK from home, put the EE on the path and the stack within every limit, and
+    the last one at the goal (1e-6 m / rad). Planned from the previous plates with the EE
+    moved alone, the top platform took the whole twist and the plan stopped at a third of it."""
+    goal = pin.SE3(pin.rpy.rpyToMatrix(0.0, 0.0, 1.2), np.array([0.0, 0.0, 0.95]))
+    path = EEPath.between(am.home[-1], goal)
+    plan = plan_path(am, path, start=am.home)
+    assert plan.success, plan.reason
+    for u, state in zip(plan.parameters, plan.states, strict=True):
+        fk = stack_forward_kinematics(am, state.leg_lengths, base=am.home[0], guess=state.plates)
+        assert fk.success and kinematic_problems(am.config, fk.plates, tol=1e-9) == []
+        target = path.at(u)
+        assert np.linalg.norm(fk.plates.p[-1] - target.translation) <= 1e-6
+        assert np.linalg.norm(pin.log3(target.rotation.T @ fk.plates.R[-1])) <= 1e-6
+    assert plan.parameters[-1] == pytest.approx(path.segments)
+
+
 def test_cli_plan_exits_1_on_a_failed_plan_with_the_prefix_written(am, tmp_path, monkeypatch, capsys):
     import assembler_pin.motion as motion_pkg
 
