@@ -39,7 +39,7 @@ def interrupt_on_signals(names: Sequence[str] = ("SIGTERM", "SIGHUP")) -> Callab
     An interrupt that lands while a finalizer runs (a ``__del__`` or a weakref callback, run
     by the garbage collector at any point) cannot leave it: Python would print it as an
     ignored exception, with a traceback, and go on working. The hook installed here
-    (:func:`_redelivered`) raises the same signal again instead, :data:`REDELIVERY_DELAY`
+    (:class:`_Redelivery`) raises the same signal again instead, :data:`REDELIVERY_DELAY`
     later, so the program's own code is interrupted and unwinds as for any Ctrl-C.
 
     Returns:
@@ -56,12 +56,14 @@ def interrupt_on_signals(names: Sequence[str] = ("SIGTERM", "SIGHUP")) -> Callab
             sig = getattr(signal, name, None)
             if sig is not None:
                 previous[sig] = signal.signal(sig, interrupt)
-        sys.unraisablehook = _redelivered(previous_hook)
+        sys.unraisablehook = hook = _Redelivery(previous_hook)
 
     def restore() -> None:
         for sig, handler in previous.items():
             signal.signal(sig, handler)
-        sys.unraisablehook = previous_hook
+        if previous:
+            sys.unraisablehook = previous_hook
+            hook.active = False  # a redelivery still pending is dropped: the program has unwound
 
     return restore
 
@@ -70,22 +72,27 @@ def interrupt_on_signals(names: Sequence[str] = ("SIGTERM", "SIGHUP")) -> Callab
 REDELIVERY_DELAY = 0.01
 
 
-def _redelivered(fallback: Callable[[Any], object]) -> Callable[[Any], None]:
+class _Redelivery:
     """An unraisable hook that raises an interrupt caught in a finalizer again as its signal
-    (SIGINT for Ctrl-C, the :class:`StopRequested`'s own otherwise); every other unraisable
-    exception goes to ``fallback``."""
+    (SIGINT for Ctrl-C, the :class:`StopRequested`'s own otherwise), while ``active``; every
+    other unraisable exception goes to ``fallback``."""
 
-    def hook(unraisable: Any) -> None:
+    def __init__(self, fallback: Callable[[Any], object]) -> None:
+        self.fallback, self.active = fallback, True
+
+    def __call__(self, unraisable: Any) -> None:
         exc = unraisable.exc_value
-        if isinstance(exc, KeyboardInterrupt):
-            # from a thread, after the hook has returned: raised here, it would be ignored again
-            later = threading.Timer(REDELIVERY_DELAY, _thread.interrupt_main, (getattr(exc, "signum", signal.SIGINT),))
-            later.daemon = True
-            later.start()
+        if not isinstance(exc, KeyboardInterrupt):
+            self.fallback(unraisable)
             return
-        fallback(unraisable)
+        # from a thread, after the hook has returned: raised in the hook, it would be ignored again
+        later = threading.Timer(REDELIVERY_DELAY, self._interrupt, (getattr(exc, "signum", signal.SIGINT),))
+        later.daemon = True
+        later.start()
 
-    return hook
+    def _interrupt(self, signum: int) -> None:
+        if self.active:
+            _thread.interrupt_main(signal.Signals(signum))
 
 
 def forget_interrupt() -> None:

@@ -577,3 +577,18 @@ def test_ctrl_c_inside_a_finalizer_interrupts_the_command_without_a_traceback(mo
     _replace_run(monkeypatch, interrupted_in_a_finalizer)
     assert _run(capsys, ["statics", "--home"]) == (130, "", ["assembler-pin statics: interrupted"])
     assert not done and sys.unraisablehook is before
+
+
+def test_an_interrupt_redelivered_after_the_command_unwound_is_dropped():
+    """A finalizer's interrupt whose redelivery is still pending when the signal handlers are
+    restored does not interrupt what runs next."""
+    import types
+
+    from assembler_pin.signals import REDELIVERY_DELAY, interrupt_on_signals
+
+    restore = interrupt_on_signals(("SIGTERM",))
+    hook = sys.unraisablehook
+    hook(types.SimpleNamespace(exc_value=KeyboardInterrupt(), exc_type=KeyboardInterrupt))
+    restore()
+    time.sleep(20 * REDELIVERY_DELAY)  # a KeyboardInterrupt here would fail the test
+    assert sys.unraisablehook is not hook
