@@ -317,3 +317,29 @@ def test_ctrl_c_inside_ipopt_reaches_the_caller(am, random_poses, monkeypatch):
     monkeypatch.setattr(WrenchForm, "cons", interrupted)
     with pytest.raises(KeyboardInterrupt):
         optimize_internal_poses(am, random_poses[7][1], options=IPOPT)
+
+
+def test_auto_finishes_an_ipopt_run_that_stopped_unconverged_with_slsqp():
+    """``method="auto"`` on a 16-platform stack: where IPOPT alone stops without converging,
+    auto's result is SLSQP's, converged from IPOPT's best state (``ipopt+slsqp``, both runs'
+    iterations), no worse in max|F| and feasible by the design's own geometry and free-body
+    forces; where IPOPT converges, auto is IPOPT's run. At least one of the two goals (the EE
+    moved 0.2 m aside, or 0.32 m aside and 0.2 m down) exercises the first case."""
+    from assembler_pin.helper_arm import initial_condition
+
+    am16 = AssemblerModel.from_config({"platforms": 16})
+    polished = 0
+    for offset in ([0.2, 0.0, -0.08], [0.32, 0.0, -0.2]):
+        goal = pin.SE3(np.eye(3), am16.home[-1].translation + np.array(offset))
+        start = initial_condition(am16, goal).plates_if_valid()
+        alone = optimize_internal_poses(am16, start, goal, IPOPT)
+        auto = optimize_internal_poses(am16, start, goal, OptimizeOptions(method="auto"))
+        assert alone.method == "ipopt"
+        if alone.success:
+            assert auto.method == "ipopt" and auto.objective_optimized == alone.objective_optimized
+            continue
+        polished += 1
+        assert auto.success and auto.method == "ipopt+slsqp" and auto.iterations > alone.iterations
+        assert auto.optimized.max_abs_force <= alone.optimized.max_abs_force + 1e-9
+        _independently_feasible(am16, auto, goal)
+    assert polished >= 1

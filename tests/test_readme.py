@@ -190,6 +190,11 @@ COMMANDS: list[tuple[str, str, str]] = [
     (r"assembler-pin reproduce --scenario", SLOW, ""),
     (r"assembler-pin bench --quick$", SLOW, ""),
     (r"assembler-pin plan --from", SLOW, ""),
+    (
+        r"printf platforms: 16\\n > p16\.yaml && assembler-pin solve --config p16\.yaml --goal [-\d. ]+ --method auto",
+        SLOW,
+        "",
+    ),
     (r"pip install", "", "installs packages"),
     (r"assembler-pin bench --(truss|speed)$", "", "timings (minutes under --speed)"),
     (r"assembler-pin bench --targets( --json| --map-cells (0|200))?$", "", "minutes of timings (test_bench runs rows)"),

@@ -58,6 +58,48 @@ def optimize_internal_poses(
             chosen state then also keeps every leg within ``max_step`` of it.
     """
     opts, start, goal = _checked_inputs(am, initial, goal, options, motion)
+    result = _optimized(am, start, goal, opts, motion)
+    if _asked_for_auto(options) and result.method == "ipopt" and not result.success:
+        return _polished(am, result, goal, opts, motion)
+    return result
+
+
+def _asked_for_auto(options: OptimizeOptions | None) -> bool:
+    return (options.method if options is not None else OptimizeOptions().method) == "auto"
+
+
+def _polished(
+    am: AssemblerModel, ipopt: OptimizeResult, goal: pin.SE3, opts: OptimizeOptions, motion: MotionTerm | None
+) -> OptimizeResult:
+    """``method="auto"``'s IPOPT run that did not converge, finished by SLSQP from the best
+    state it met (method ``"ipopt+slsqp"``; the counters and times of both runs).
+
+    On long stacks IPOPT's limited-memory Hessian nears the optimum slowly (its objective
+    still moves by 1e-6 relative per iteration at the iteration cap) and SLSQP's active set
+    finishes it in 10-30 iterations (measured at n = 16 and 32, 4 displaced goals each).
+    From a feasible state SLSQP's force rows are capped at its max|F|, so the result is never
+    worse than IPOPT's; when SLSQP fails too, IPOPT's result stands."""
+    polish = _optimized(am, ipopt.optimized.plates, goal, dataclasses.replace(opts, method="slsqp"), motion)
+    if not polish.success:
+        return ipopt
+    return dataclasses.replace(
+        polish,
+        message=one_line(f"{polish.message} (SLSQP from the best state met by {ipopt.solver_message})"),
+        iterations=ipopt.iterations + polish.iterations,
+        evaluations=ipopt.evaluations + polish.evaluations,
+        gradient_evaluations=ipopt.gradient_evaluations + polish.gradient_evaluations,
+        time_s=ipopt.time_s + polish.time_s,
+        initial=ipopt.initial,
+        objective_initial=ipopt.objective_initial,
+        sag_initial=ipopt.sag_initial,
+        method="ipopt+slsqp",
+    )
+
+
+def _optimized(
+    am: AssemblerModel, start: PlateArrays, goal: pin.SE3, opts: OptimizeOptions, motion: MotionTerm | None
+) -> OptimizeResult:
+    """One run of the method of ``opts`` (resolved, not ``auto``) from ``start``."""
     tolerance = opts.ee_tolerance or opts.goal_tolerance
     initial_state = evaluate_state(am, start, goal=goal, tolerance=tolerance)
     problem = Problem(am, start, goal, opts, initial_state.feasible, motion)
