@@ -51,6 +51,7 @@ def interrupt_on_signals(names: Sequence[str] = ("SIGTERM", "SIGHUP")) -> Callab
 
     previous: dict[int, Any] = {}
     previous_hook = sys.unraisablehook
+    hook: _Redelivery | None = None
     if threading.current_thread() is threading.main_thread():
         for name in names:
             sig = getattr(signal, name, None)
@@ -61,7 +62,7 @@ def interrupt_on_signals(names: Sequence[str] = ("SIGTERM", "SIGHUP")) -> Callab
     def restore() -> None:
         for sig, handler in previous.items():
             signal.signal(sig, handler)
-        if previous:
+        if hook is not None:
             sys.unraisablehook = previous_hook
             hook.active = False  # a redelivery still pending is dropped: the program has unwound
 
