@@ -114,3 +114,20 @@ def test_the_screw_start_gives_every_platform_the_same_transform(am):
     assert all(np.allclose(r, rel[0], atol=1e-12) for r in rel)
     assert np.allclose(screw.se3(0).homogeneous, am.home[0].homogeneous)
     assert np.allclose(am.home[0].homogeneous @ np.linalg.matrix_power(rel[0], am.n), goal.homogeneous, atol=1e-12)
+
+
+@pytest.mark.parametrize("xyz", [(0.2, 0.2, 0.5), (-0.2, 0.2, 0.5)])
+def test_a_low_goal_only_a_leaning_stack_reaches_is_solved(am, xyz):
+    """(±0.2, 0.2, 0.5) m: too low for the stack standing up (4 x 0.151 m at the shortest);
+    it reaches them only leaning out past the goal and back, which no start but the lean
+    starts gives. The answer meets every constraint by the design's own geometry and
+    free-body forces, and a middle plate stands out past the goal on its side."""
+    goal = pin.SE3(np.eye(3), np.array(xyz))
+    result = solve(am, goal)
+    assert result.success and result.start.startswith("lean_"), result.message
+    plates = result.optimized.plates
+    assert design_problems(am.config, plates, goal, tol=1e-6) == []
+    forces = design_forces(am.config, plates)
+    assert np.abs(forces).max() == pytest.approx(result.optimized.max_abs_force, rel=1e-9)
+    side = np.array(xyz[:2]) / np.linalg.norm(xyz[:2])
+    assert (plates.p[1:-1, :2] @ side).max() > np.linalg.norm(xyz[:2])
