@@ -91,21 +91,15 @@ def wide_search(am: AssemblerModel, goal: Any, starts: int = SEARCH_STARTS, seed
     optimized from there. Returns the first optimizer result whose state meets every
     constraint (its Pinocchio re-check, :func:`~assembler_pin.state.evaluate_state`), else
     None."""
-    import pinocchio as pin
-
-    from .helper_arm import repair_stack
+    from .helper_arm import perturbed_plates, repair_stack
     from .helper_arm.initial import even_screw_pose
     from .optimize import optimize_internal_poses
 
     rng = np.random.default_rng(seed)
     screw = even_screw_pose(am, goal)
     for k in range(starts):
-        dp, dr = SEARCH_TWISTS[0] if 3 * k < starts else SEARCH_TWISTS[1]
-        plates = (
-            [screw[0]]
-            + [m * pin.exp6(np.concatenate([rng.uniform(-dp, dp, 3), rng.uniform(-dr, dr, 3)])) for m in screw[1:-1]]
-            + [screw[-1]]
-        )
+        twist = SEARCH_TWISTS[0] if 3 * k < starts else SEARCH_TWISTS[1]
+        (plates,) = perturbed_plates(screw, 1, twist=twist, rng=rng)
         repaired, violation = repair_stack(am, plates)
         if violation > 0.0:
             continue

@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import math
 import time
-from collections.abc import Iterator
+from collections.abc import Iterable, Iterator
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
@@ -317,29 +317,33 @@ def optimizer_starts(am: AssemblerModel, goal: pin.SE3, helper_plates: PlateArra
 
 def _fallback_starts(am: AssemblerModel, goal: pin.SE3, around: PlateArrays) -> Iterator[tuple[str, PlateArrays]]:
     """Valid starts near ``around`` (the helper arm's pose, else the screw pose): its internal
-    plates moved by seeded random twists, then repaired onto the leg limits; the copies that
-    cannot be repaired are skipped."""
-    from .helper_arm import perturbed_plates, repair_stack
+    plates moved by seeded random twists, then repaired onto the leg limits (:func:`_repaired`)."""
+    from .helper_arm import perturbed_plates
 
-    for k, plates in enumerate(perturbed_plates(around.as_se3(), FALLBACK_STARTS, seed=_seed_of(around))):
-        repaired, violation = repair_stack(am, plates)
-        if violation <= 0.0:
-            yield f"perturbed_{k}", repaired
+    copies = perturbed_plates(around.as_se3(), FALLBACK_STARTS, seed=_seed_of(around))
+    return _repaired(am, "perturbed", copies)
 
 
 def _lean_starts(am: AssemblerModel, goal: pin.SE3) -> Iterator[tuple[str, PlateArrays]]:
     """The last starts, when no run met every constraint: the lean poses
-    (:func:`~assembler_pin.helper_arm.initial.lean_poses`) repaired onto the leg limits; the
-    ones that cannot be repaired are skipped. On the default stack they solve the low goals
-    (±0.2, 0.2, 0.5) m, which every other start leaves unsolved; on a goal without a valid
-    pose they cost ~0.5 s (12 repairs)."""
-    from .helper_arm import repair_stack
+    (:func:`~assembler_pin.helper_arm.initial.lean_poses`) repaired onto the leg limits
+    (:func:`_repaired`). On the default stack they solve the low goals (±0.2, 0.2, 0.5) m,
+    which every other start leaves unsolved; on a goal without a valid pose they cost ~0.5 s
+    (12 repairs)."""
     from .helper_arm.initial import lean_poses
 
-    for k, plates in enumerate(lean_poses(am, goal)):
+    return _repaired(am, "lean", lean_poses(am, goal))
+
+
+def _repaired(am: AssemblerModel, name: str, poses: Iterable[list[pin.SE3]]) -> Iterator[tuple[str, PlateArrays]]:
+    """``(name_k, pose k repaired onto the leg limits)`` for each of ``poses`` whose repair
+    holds (the others are skipped), lazily: a caller that stops early repairs no more."""
+    from .helper_arm import repair_stack
+
+    for k, plates in enumerate(poses):
         repaired, violation = repair_stack(am, plates)
         if violation <= 0.0:
-            yield f"lean_{k}", repaired
+            yield f"{name}_{k}", repaired
 
 
 def _seed_of(plates: PlateArrays) -> int:

@@ -87,14 +87,22 @@ def repair_stack(
     return pa, float(_leg_hinge(am, pa, 0.0).max())
 
 
-def perturbed_plates(plates: list[pin.SE3], count: int, seed: int = 0) -> list[list[pin.SE3]]:
-    """``count`` copies of ``plates`` with plates 1..n-1 moved by random twists
-    (±5 cm, ±0.3 rad per axis; seeded, so results are reproducible)."""
-    rng = np.random.default_rng(seed)
+def perturbed_plates(
+    plates: list[pin.SE3],
+    count: int,
+    seed: int = 0,
+    twist: tuple[float, float] = (0.05, 0.3),
+    rng: np.random.Generator | None = None,
+) -> list[list[pin.SE3]]:
+    """``count`` copies of ``plates`` with plates 1..n-1 moved by random twists of up to
+    ``twist`` per axis (translation [m], rotation [rad]; default ±5 cm, ±0.3 rad), drawn from
+    ``rng`` when given, else from a generator seeded by ``seed`` (reproducible)."""
+    rng = np.random.default_rng(seed) if rng is None else rng
+    dp, dr = twist
     out = []
     for _ in range(count):
         moved = [m.copy() for m in plates]
         for k in range(1, len(plates) - 1):
-            moved[k] = moved[k] * pin.exp6(np.concatenate([rng.uniform(-0.05, 0.05, 3), rng.uniform(-0.3, 0.3, 3)]))
+            moved[k] = moved[k] * pin.exp6(np.concatenate([rng.uniform(-dp, dp, 3), rng.uniform(-dr, dr, 3)]))
         out.append(moved)
     return out
