@@ -113,7 +113,8 @@ def _interrupt(argv: list[str], cwd: Path, after: float) -> tuple[int | None, st
 @pytest.mark.parametrize(
     "argv, output",
     [
-        (["plan", "--to", *README_GOAL.split(), "--out", "t.csv"], "t.csv"),
+        # 200 output samples a second: still running at 8 s (the default rate ends near 8 s here)
+        (["plan", "--to", *README_GOAL.split(), "--rate", "200", "--out", "t.csv"], "t.csv"),
         (["reproduce", "--out", "rep"], "rep/report.md"),
         # 900 cells: still running when the signal comes (3 cells were done within the 8 s)
         (["map", "--workers", "0", "--grid", "x=-0.1:0.1:30,y=-0.1:0.1:30,z=0.85", "--out", "m"], None),
