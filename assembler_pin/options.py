@@ -7,6 +7,7 @@ command line can show their defaults without loading Pinocchio.
 
 from __future__ import annotations
 
+import logging
 import math
 import numbers
 from dataclasses import dataclass, field
@@ -15,6 +16,8 @@ from typing import TypeVar
 from .bounds import check_bound
 from .choices import OPTIMIZE_METHODS
 from .exceptions import OptionsError, short_repr
+
+logger = logging.getLogger(__name__)
 
 __all__ = [
     "AUTO_IPOPT_PLATFORMS",
@@ -126,7 +129,7 @@ class OptimizeOptions:
             no limit; needs a smooth method.
     """
 
-    method: str = "slsqp"
+    method: str = "auto"
     w1: float = 1.0
     w2: float = 1.0
     ee_tolerance: GoalTolerance | None = None
@@ -218,7 +221,22 @@ def resolved_method(method: str, platforms: int) -> str:
     platforms up when CasADi is installed, else ``"slsqp"``; any other method itself."""
     if method != "auto":
         return method
-    return "ipopt" if platforms >= AUTO_IPOPT_PLATFORMS and not casadi_missing() else "slsqp"
+    if platforms < AUTO_IPOPT_PLATFORMS:
+        return "slsqp"
+    if casadi_missing():
+        global _told_missing
+        if not _told_missing:
+            logger.warning(
+                "method auto: CasADi is not installed, so SLSQP runs at %d platforms (%s)",
+                platforms,
+                IPOPT_INSTALL_HINT,
+            )
+            _told_missing = True
+        return "slsqp"
+    return "ipopt"
+
+
+_told_missing = False
 
 
 @dataclass

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import math
 import time
+import zlib
 from collections.abc import Iterable, Iterator
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
@@ -63,8 +64,9 @@ class SolveResult:
 
     Attributes:
         goal: the EE goal pose.
-        success: the initial condition is valid and, when optimizing, the optimization
-            converged to a state that satisfies every constraint.
+        success: a valid pose is returned: it meets every constraint, re-checked with the
+            Pinocchio statics (the optimized pose when optimizing, else the helper arm's).
+            Whether it is also the optimum is :attr:`optimal`.
         message: what happened, or why not: one line naming the binding cause
             (:mod:`~assembler_pin.messages`); the long form in ``details``.
         initial_result: the helper-arm result (arm configuration, d used, attempts).
@@ -88,6 +90,12 @@ class SolveResult:
     """What every step met: the helper arm's scan, each start's result (may be long)."""
 
     @property
+    def optimal(self) -> bool:
+        """The returned pose is an optimum: the first-order conditions hold at it
+        (:func:`~assembler_pin.optimize.certificate.optimality`); False without optimization."""
+        return self.success and self.optimization is not None and self.optimization.optimal
+
+    @property
     def initial(self) -> StackState | None:
         """The valid initial state (None when the helper arm found none)."""
         return self.initial_result.state if self.initial_result.success else None
@@ -107,7 +115,8 @@ class SolveResult:
         opt = f"{self.optimized.max_abs_force:.3f} N" if self.optimized is not None else "-"
         times = ", ".join(f"{k} {1e3 * v:.0f} ms" for k, v in self.timing_s.items())
         return (
-            f"SolveResult(success={self.success}, goal {np.round(self.goal.translation, 4).tolist()} m, max|F| "
+            f"SolveResult(success={self.success}, optimal={self.optimal}, "
+            f"goal {np.round(self.goal.translation, 4).tolist()} m, max|F| "
             f"initial {init} → optimized {opt} (start {self.start}), {times}, "
             f"message={self.message!r})"
         )
@@ -117,6 +126,7 @@ class SolveResult:
         out: dict[str, Any] = {
             "goal": se3_to_taa(self.goal).tolist(),
             "success": self.success,
+            "optimal": self.optimal,
             "message": self.message,
             # the helper arm's state: the home pose, flagged by success false, when it failed
             "initial": self.initial_result.state.to_dict(),
@@ -139,9 +149,15 @@ class SolveResult:
                     "iterations": opt.iterations,
                     "evaluations": opt.evaluations,
                 }
+                out["optimality"] = opt.optimality.to_dict() if opt.optimality is not None else None
             out["start"] = self.start
             out["starts"] = {
-                name: {"success": r.success, "max_abs_force": r.optimized.max_abs_force, "message": r.message}
+                name: {
+                    "success": r.success,
+                    "optimal": r.optimal,
+                    "max_abs_force": r.optimized.max_abs_force,
+                    "message": r.message,
+                }
                 for name, r in self.runs.items()
             }
         else:
@@ -258,20 +274,20 @@ def _run_starts(
     order = list(cheap)
     if helper_plates is not None:
         runs["helper_arm"] = optimize_internal_poses(am, helper_plates, goal, opts)
-        if starts == "first" and runs["helper_arm"].success:
+        if starts == "first" and runs["helper_arm"].optimal:
             order = ["screw"] if needs_other_starts(am, runs["helper_arm"], opts) else []
     for name in order:
         runs[name] = optimize_internal_poses(am, cheap[name], goal, opts)
-    if not any(r.success for r in runs.values()):
+    if not any(r.optimal for r in runs.values()):
         around = init.state.plates if init.success else cheap["screw"]
         for name, start in _fallback_starts(am, goal, around):
             runs[name] = optimize_internal_poses(am, start, goal, opts)
-            if runs[name].success:
+            if runs[name].optimal:
                 break
-    if not any(r.optimized.feasible for r in runs.values()):
+    if not any(r.success for r in runs.values()):
         for name, start in _lean_starts(am, goal):
             runs[name] = optimize_internal_poses(am, start, goal, opts)
-            if runs[name].optimized.feasible:
+            if runs[name].success:
                 break
     return runs
 
@@ -295,7 +311,7 @@ def needs_other_starts(am: AssemblerModel, run: OptimizeResult, opts: OptimizeOp
     at the minimum stroke (8 of the bench's 120 grid goals, 3 of 90 goals of a shifted grid),
     and no random goal did (0 of 140, at most 4 legs at the minimum stroke). An optimum with
     fewer legs at their minimum is kept alone; ``starts="all"`` runs every start."""
-    if not run.success:
+    if not run.optimal:
         return True
     legs = run.optimized.legs  # the state's own leg state (evaluate_state: leg_state of its plates)
     margins = leg_limit_margins(am.config.leg, legs.lengths, np.cos(legs.deflection), legs.rise, opts.limit_margin)
@@ -320,7 +336,7 @@ def _fallback_starts(am: AssemblerModel, goal: pin.SE3, around: PlateArrays) -> 
     plates moved by seeded random twists, then repaired onto the leg limits (:func:`_repaired`)."""
     from .helper_arm import perturbed_plates
 
-    copies = perturbed_plates(around.as_se3(), FALLBACK_STARTS, seed=_seed_of(around))
+    copies = perturbed_plates(around.as_se3(), FALLBACK_STARTS, seed=_seed_of(goal))
     return _repaired(am, "perturbed", copies)
 
 
@@ -346,17 +362,28 @@ def _repaired(am: AssemblerModel, name: str, poses: Iterable[list[pin.SE3]]) -> 
             yield f"{name}_{k}", repaired
 
 
-def _seed_of(plates: PlateArrays) -> int:
-    """A seed that depends on the plates only (the same goal gives the same fallback)."""
-    return int(np.abs(plates.p).sum() * 1e6) % (2**31)
+def _seed_of(goal: pin.SE3) -> int:
+    """A seed of the goal alone, read to 1e-9 (the same goal gives the same fallback starts
+    on every machine, whatever the rounding of the poses computed on the way)."""
+    rounded = np.round(goal.homogeneous, 9) + 0.0  # + 0.0: -0.0 and 0.0 alike
+    return zlib.crc32(rounded.tobytes())
 
 
 def _best_run(runs: dict[str, OptimizeResult]) -> tuple[str | None, OptimizeResult | None]:
-    """The run whose returned state is feasible with the smallest Ω, successes first (each
-    run's ``objective_optimized``: :func:`assembler_pin.objective.objective_value` of its
-    Pinocchio-checked state)."""
-    feasible = [(not r.success, r.objective_optimized, name) for name, r in runs.items() if r.optimized.feasible]
-    if not feasible:
+    """The run to answer with: of the proven optima (else of the valid runs) the one with the
+    smallest Ω (each run's ``objective_optimized``, :func:`assembler_pin.objective.objective_value`
+    of its Pinocchio-checked state). Optima within :data:`SAME_OPTIMUM` of the smallest count as
+    the same, and the first run in the order tried is named.
+
+    A proven optimum wins over a lower valid state where a run stalled: where a run stalls
+    depends on the machine's rounding, an optimum does not."""
+    valid = [(name, r) for name, r in runs.items() if r.success]
+    pool = [(name, r) for name, r in valid if r.optimal] or valid
+    if not pool:
         return None, None
-    _, _, name = min(feasible)
-    return name, runs[name]
+    lowest = min(r.objective_optimized for _, r in pool)
+    return next((name, r) for name, r in pool if r.objective_optimized <= lowest + SAME_OPTIMUM * max(1.0, abs(lowest)))
+
+
+#: Two runs whose objectives differ by less than this (relative) reach the same optimum.
+SAME_OPTIMUM = 1e-6

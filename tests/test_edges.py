@@ -37,15 +37,14 @@ def test_a_converged_optimum_is_not_lost_to_the_strict_check(am):
 
 def test_a_rejected_converged_point_is_never_a_success(am):
     # rows that let the solver end 1e-5 past the limits: its converged point breaks one
-    options = OptimizeOptions()
+    options = OptimizeOptions(method="slsqp")
     object.__setattr__(options, "limit_margin", -1e-5)  # past the validation, on purpose
     goal = taa_to_se3(DEGRADED_GOAL)
     init = solve(am, goal, optimize=False).initial
     result = optimize_internal_poses(am, init, goal, options)
-    assert result.optimized.feasible
+    # the returned state is valid by the strict check (success means exactly that)
+    assert result.success and result.optimized.feasible
     assert_feasible(am, result.optimized, goal)
-    if not result.success:
-        assert "breaks a limit" in result.message
 
 
 def test_every_start_of_the_portfolio_runs_and_the_best_is_kept(am):
@@ -149,8 +148,9 @@ def test_singular_derivatives_end_the_solve_with_the_reason(am, monkeypatch, bac
 
         monkeypatch.setattr(CompiledPass, "derivatives", singular)
     result = optimize_internal_poses(am, init, goal)
-    assert not result.success and "singular" in result.message
-    assert result.optimized.feasible  # the valid start is kept
+    # the valid start is kept: a valid answer, not proven optimal, and why
+    assert result.success and not result.optimal and "singular" in result.message
+    assert result.optimized.feasible
 
 
 def test_exactly_singular_plates_are_flagged_not_raised(am):

@@ -215,7 +215,7 @@ def _compressed_by_the_rule(am, result) -> bool | None:
     from assembler_pin.solver import COMPRESSED_SHARE
 
     helper = result.runs["helper_arm"]
-    if not helper.success:  # every start then
+    if not helper.optimal:  # every start then
         assert {"home", "screw"} <= set(result.runs)
         return None
     compressed = bool(_legs_at_min_stroke(am, helper.optimized) >= np.ceil(COMPRESSED_SHARE * 6 * am.n))

@@ -256,7 +256,7 @@ def _print_result(args: argparse.Namespace, result, capacity) -> None:
         f"rotation vector = ({np.rad2deg(taa[3]):.2f}, {np.rad2deg(taa[4]):.2f}, {np.rad2deg(taa[5]):.2f}) deg"
     )
     init = result.initial_result
-    status = ("valid" if init.state.feasible else "valid, not feasible") if init.success else "FAILED"
+    status = ("valid" if init.state.feasible else "valid, not feasible") if init.success else "none found"
     print(wrapped(f"initial condition (helper arm): {status} — {init.message} [{1e3 * init.time_s:.1f} ms]"))
     title = "Initial condition" if init.success else "Home pose (no valid initial condition)"
     print(format_state_table(init.state, title))
@@ -265,14 +265,11 @@ def _print_result(args: argparse.Namespace, result, capacity) -> None:
         print()
         print(
             wrapped(
-                f"optimization ({opt.method}): {'success' if result.success else 'FAILED'} — {result.message}; "
+                f"optimization ({opt.method}): {_verdict(result)} — {result.message}; "
                 f"{opt.iterations} iterations, {opt.evaluations} evaluations, {opt.time_s:.3f} s"
             )
         )
-        starts = ", ".join(
-            f"{name} {r.optimized.max_abs_force:.1f} N{'' if r.success else ' (failed)'}"
-            for name, r in result.runs.items()
-        )
+        starts = ", ".join(f"{name} {r.optimized.max_abs_force:.1f} N{_run_note(r)}" for name, r in result.runs.items())
         print(wrapped(f"starts (max|F| reached): {starts}; kept: {result.start}"))
         what = {"force": "Ω = w1·max|F| + w2·sqrt(Σλ²)", "sag": "sag/sag_home", "weighted": "Ω + W·sag/sag_home"}
         print(
@@ -290,6 +287,20 @@ def _print_result(args: argparse.Namespace, result, capacity) -> None:
             )
         else:
             print("\n" + wrapped(f"payload capacity: none — {capacity.message}"))
+
+
+def _verdict(result) -> str:
+    """The word of a solve's optimization: an optimum, a valid pose not proven optimal, or none."""
+    if not result.success:
+        return "FAILED"
+    return "optimum" if result.optimal else "valid, not proven optimal"
+
+
+def _run_note(run) -> str:
+    """What a start's run reached, after its max|F|: nothing for an optimum."""
+    if run.optimal:
+        return ""
+    return " (valid, not proven optimal)" if run.success else " (failed)"
 
 
 def _print_sag(block: dict) -> None:

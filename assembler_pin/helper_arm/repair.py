@@ -6,10 +6,13 @@ fallback starts. Units: metres and radians.
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 import pinocchio as pin
 
 from ..constraints import leg_limit_margins
+from ..exceptions import PoseError
 from ..gradients import leg_derivatives
 from ..kinematics import PlateArrays, leg_state
 from ..model import AssemblerModel
@@ -55,14 +58,18 @@ def repair_stack(
     ``margin`` [m or rad] inside every bound) to zero from x = 0, so the plates move little.
 
     Returns:
-        (the plates reached, the largest remaining violation [m or rad]; 0 means valid).
+        (the plates reached, the largest remaining violation [m or rad]; 0 means valid, inf
+        where the legs are not defined on the way: two joint centres of a leg met).
     """
     n = len(start) - 1
     rot0 = np.array([m.rotation for m in start])
     pos0 = np.array([m.translation for m in start])
     if n < 2:  # nothing to move
         pa = PlateArrays(rot0, pos0)
-        return pa, float(_leg_hinge(am, pa, 0.0).max())
+        try:
+            return pa, float(_leg_hinge(am, pa, 0.0).max())
+        except PoseError:
+            return pa, math.inf
 
     def plates(x: np.ndarray) -> PlateArrays:
         rot, pos = rot0.copy(), pos0.copy()
@@ -73,18 +80,21 @@ def repair_stack(
 
     from scipy.optimize import least_squares  # on first use: fast start-up
 
-    res = least_squares(
-        lambda x: _leg_hinge(am, plates(x), margin),
-        np.zeros(6 * (n - 1)),
-        jac=lambda x: _hinge_jacobian(am, plates(x), x, margin),
-        method="trf",
-        ftol=1e-15,
-        xtol=1e-15,
-        gtol=1e-15,
-        max_nfev=max_nfev,
-    )
-    pa = plates(res.x)
-    return pa, float(_leg_hinge(am, pa, 0.0).max())
+    try:
+        res = least_squares(
+            lambda x: _leg_hinge(am, plates(x), margin),
+            np.zeros(6 * (n - 1)),
+            jac=lambda x: _hinge_jacobian(am, plates(x), x, margin),
+            method="trf",
+            ftol=1e-15,
+            xtol=1e-15,
+            gtol=1e-15,
+            max_nfev=max_nfev,
+        )
+        pa = plates(res.x)
+        return pa, float(_leg_hinge(am, pa, 0.0).max())
+    except PoseError:  # a trial point with a leg of zero length: no repair from this start
+        return PlateArrays(rot0, pos0), math.inf
 
 
 def perturbed_plates(

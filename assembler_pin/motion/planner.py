@@ -31,7 +31,7 @@ from ..kinematics import PlateArrays, plate_arrays, stack_forward_kinematics
 from ..messages import binding, describe, one_line
 from ..model import AssemblerModel
 from ..optimize import MotionTerm, OptimizeOptions, optimize_internal_poses
-from ..options import checked_options
+from ..options import SMOOTH_METHODS, checked_options
 from ..progress import ProgressCallback
 from ..state import StackState, evaluate_state
 from ..validation import is_number
@@ -57,7 +57,8 @@ class PlanOptions:
         path_tolerance: how far the EE may leave the path between samples.
         limit_margin: how far inside the stroke [m] and deflection limit [rad] the samples
             stay, so that the interpolated legs between them stay inside too.
-        optimize: the optimizer's settings (method slsqp; its ``limit_margin`` is replaced).
+        optimize: the optimizer's settings (a smooth method: slsqp, ipopt or auto; its
+            ``limit_margin`` is replaced).
     """
 
     position_step: float = 0.01
@@ -81,8 +82,8 @@ class PlanOptions:
             value = getattr(self, name)
             if not (isinstance(value, int) and 0 <= value <= 20):
                 raise OptionsError(f"{name} must be an integer in [0, 20], got {value!r}")
-        if self.optimize.method != "slsqp":
-            raise OptionsError("motion planning needs the optimizer method 'slsqp'")
+        if self.optimize.method not in SMOOTH_METHODS:
+            raise OptionsError(f"motion planning needs a smooth optimizer method ({', '.join(SMOOTH_METHODS)})")
         object.__setattr__(self, "optimize", dataclasses.replace(self.optimize, limit_margin=self.limit_margin))
 
 

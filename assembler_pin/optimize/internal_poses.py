@@ -23,6 +23,7 @@ from ..objective import SagObjective, state_sag, state_score
 from ..options import SMOOTH_METHODS, GoalTolerance, OptimizeOptions, checked_options, resolved_method
 from ..state import StackState, evaluate_state
 from ..threads import one_blas_thread
+from .certificate import Optimality, optimality
 from .options import MotionTerm
 from .paper import PaperForm
 from .problem import Problem
@@ -59,9 +60,67 @@ def optimize_internal_poses(
     """
     opts, start, goal = _checked_inputs(am, initial, goal, options, motion)
     result = _optimized(am, start, goal, opts, motion)
-    if _asked_for_auto(options) and result.method == "ipopt" and not result.success:
-        return _polished(am, result, goal, opts, motion)
+    if _asked_for_auto(options) and result.method == "ipopt" and not result.optimal:
+        result = _polished(am, result, goal, opts, motion)
+    # the restarts are SLSQP runs, for SLSQP's stalls (IPOPT's run is finished by _polished)
+    if result.optimal or not result.success or opts.method != "slsqp":
+        return result
+    return _restarted(am, result, goal, opts, motion)
+
+
+#: The extra margins [m, cos] of the restarts from a valid state that is not an optimum
+#: (:func:`_restarted`): each runs SLSQP from it with its rows kept this much further inside,
+#: then again with the asked margin from where that run ended.
+RESTART_MARGINS = (1e-6, 1e-5)
+
+
+def _restarted(
+    am: AssemblerModel, result: OptimizeResult, goal: pin.SE3, opts: OptimizeOptions, motion: MotionTerm | None
+) -> OptimizeResult:
+    """A run that returned a valid state which is not an optimum
+    (:func:`~.certificate.optimality`), restarted from that state until one is.
+
+    A run stalls where the start sits on many limits at once (the repaired starts are put
+    exactly on them) and SLSQP's linearized rows turn incompatible, or where its line
+    search fails; where it stalls depends on the rounding of the machine's BLAS kernel. A
+    restart from the same point stalls again; one with the rows kept a little further inside
+    (:data:`RESTART_MARGINS`) leaves the corner, and a second with the asked margin ends on
+    the optimum. Each restart is kept only when it is valid and no worse."""
+    slsqp = opts  # resolved: SLSQP ran
+    for extra in RESTART_MARGINS:
+        inside = _optimized(am, result.optimized.plates, goal, replace_margin(slsqp, extra), motion)
+        start = inside.optimized if inside.success else result.optimized
+        again = _optimized(am, start.plates, goal, slsqp, motion)
+        if again.success and again.objective_optimized <= result.objective_optimized + 1e-9:
+            result = _continued(result, again, inside)
+        if result.optimal:
+            break
     return result
+
+
+def replace_margin(opts: OptimizeOptions, extra: float) -> OptimizeOptions:
+    """``opts`` with its limit margin ``extra`` larger (than 0, for a margin that is not positive)."""
+    return dataclasses.replace(opts, limit_margin=max(opts.limit_margin, 0.0) + extra)
+
+
+def _continued(first: OptimizeResult, *later: OptimizeResult) -> OptimizeResult:
+    """The last of ``later`` as the outcome of ``first`` continued: the start, counters and
+    times of them all."""
+    last = later[-1]
+    runs = (first, *later)
+    methods = list(dict.fromkeys(r.method for r in runs))
+    return dataclasses.replace(
+        last,
+        message=one_line(f"{last.message} (after restarting from the state met by {first.solver_message})"),
+        iterations=sum(r.iterations for r in runs),
+        evaluations=sum(r.evaluations for r in runs),
+        gradient_evaluations=sum(r.gradient_evaluations for r in runs),
+        time_s=sum(r.time_s for r in runs),
+        initial=first.initial,
+        objective_initial=first.objective_initial,
+        sag_initial=first.sag_initial,
+        method="+".join(methods),
+    )
 
 
 def _asked_for_auto(options: OptimizeOptions | None) -> bool:
@@ -80,7 +139,7 @@ def _polished(
     From a feasible state SLSQP's force rows are capped at its max|F|, so the result is never
     worse than IPOPT's; when SLSQP fails too, IPOPT's result stands."""
     polish = _optimized(am, ipopt.optimized.plates, goal, dataclasses.replace(opts, method="slsqp"), motion)
-    if not polish.success:
+    if not polish.success or polish.objective_optimized > ipopt.objective_optimized + 1e-9:
         return ipopt
     return dataclasses.replace(
         polish,
@@ -111,6 +170,9 @@ def _optimized(
     res, x_final, singular = _run_solver(problem, initial_state)
     elapsed = time.perf_counter() - t0
     chosen, omega_chosen, success, message = _outcome(check, problem, res, x_final, singular, initial_state)
+    certificate = optimality(am, chosen, goal, opts, motion) if success else None
+    optimal = certificate is not None and certificate.optimal
+    message = _optimality_message(success, optimal, message, certificate, f"{res.message} (status {res.status})")
     logger.info(
         "optimize[%s, %s]: %s, objective %.4g -> %.4g in %.3f s, %d iterations",
         *(opts.method, opts.objective, message, omega0, omega_chosen, elapsed, res.nit),
@@ -132,7 +194,23 @@ def _optimized(
         objective=opts.objective,
         sag_initial=state_sag(am, initial_state),
         sag_optimized=state_sag(am, chosen),
+        optimal=optimal,
+        optimality=certificate,
     )
+
+
+def _optimality_message(
+    success: bool, optimal: bool, message: str, certificate: Optimality | None, solver_said: str
+) -> str:
+    """The message of a run whose returned state is valid (``success``): "converged" at an
+    optimum (with what the solver said when its status says otherwise), else why it is not
+    proven one."""
+    if not success or certificate is None:
+        return message
+    if optimal:
+        return "converged" if message == "converged" else one_line(f"converged: the solver ended with {solver_said}")
+    why = certificate.reason if message == "converged" else message
+    return one_line(f"not proven optimal: {why}")
 
 
 def _outcome(
@@ -151,9 +229,10 @@ def _outcome(
             False,
             f"motion step: the converged point moves a leg more than {1e3 * check.motion.max_step:.3g} mm",
         )
-    success, message = verdict(res, singular, converged, final_state, chosen, initial_state)
-    success, message = _sag_verdict(check, success, message, converged, final_state, chosen)
-    return chosen, omega_chosen, success, message
+    converged_here, message = verdict(res, singular, converged, final_state, chosen, initial_state)
+    converged_here, message = _sag_verdict(check, converged_here, message, converged, final_state, chosen)
+    valid = check.acceptable(chosen)
+    return chosen, omega_chosen, valid, "converged" if converged_here and valid else message
 
 
 def _sag_verdict(
@@ -183,7 +262,13 @@ def _sag_checked(check: _Check, result: OptimizeResult, state: StackState) -> Op
     success, message = _sag_verdict(check, result.success, result.message, False, state, state)
     sag = state_sag(check.am, state)
     return dataclasses.replace(
-        result, success=success, message=message, objective=check.opts.objective, sag_initial=sag, sag_optimized=sag
+        result,
+        success=success,
+        optimal=success and result.optimal,
+        message=message,
+        objective=check.opts.objective,
+        sag_initial=sag,
+        sag_optimized=sag,
     )
 
 

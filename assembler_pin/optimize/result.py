@@ -4,12 +4,15 @@ result of a stack with nothing to optimize."""
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Protocol
+from typing import TYPE_CHECKING, Protocol
 
 import numpy as np
 
 from ..messages import binding, describe, one_line
 from ..state import StackState
+
+if TYPE_CHECKING:
+    from .certificate import Optimality
 
 __all__ = ["OptimizeResult"]
 
@@ -19,8 +22,12 @@ class OptimizeResult:
     """Outcome of an internal-pose optimization.
 
     Attributes:
-        success: the solver converged and the returned state satisfies every constraint.
-        message: what happened, and why not when it failed.
+        success: the returned state is valid: it meets every constraint, re-checked with the
+            Pinocchio statics (and the motion step and sag limit where they apply).
+        optimal: it is also an optimum: the first-order (KKT) conditions hold at it
+            (:func:`~.certificate.optimality`, decided at the state, not by the solver's status).
+        optimality: that check (residual, active rows, why not), None when the state is not valid.
+        message: what happened, and why not when it failed or is not proven optimal.
         status, solver_message: scipy's own status code and message.
         iterations, evaluations, gradient_evaluations: solver counters.
         time_s: wall time of the optimization [s].
@@ -51,10 +58,12 @@ class OptimizeResult:
     objective: str = "force"
     sag_initial: float | None = None
     sag_optimized: float | None = None
+    optimal: bool = False
+    optimality: Optimality | None = None
 
     def __repr__(self) -> str:
         return (
-            f"OptimizeResult(success={self.success}, method={self.method!r}, max|F| "
+            f"OptimizeResult(success={self.success}, optimal={self.optimal}, method={self.method!r}, max|F| "
             f"{self.initial.max_abs_force:.3f} → {self.optimized.max_abs_force:.3f} N, "
             f"Ω {self.objective_initial:.3f} → {self.objective_optimized:.3f}, {self.iterations} iterations, "
             f"{1e3 * self.time_s:.1f} ms, "
@@ -121,4 +130,5 @@ def nothing_to_optimize(initial_state: StackState, omega0: float, method: str) -
         objective_initial=omega0,
         objective_optimized=omega0,
         method=method,
+        optimal=initial_state.feasible,
     )
