@@ -126,7 +126,6 @@ class SolveResult:
         out: dict[str, Any] = {
             "goal": se3_to_taa(self.goal).tolist(),
             "success": self.success,
-            "optimal": self.optimal,
             "message": self.message,
             # the helper arm's state: the home pose, flagged by success false, when it failed
             "initial": self.initial_result.state.to_dict(),
@@ -162,6 +161,7 @@ class SolveResult:
             }
         else:
             out["timing_s"] = dict(self.timing_s)
+        out["optimal"] = self.optimal  # the returned pose is a certified optimum (docs/contract.md)
         out["details"] = self.details  # the long form of message: every step met (may be long)
         return out
 
@@ -255,7 +255,10 @@ def _no_start_message(init: InitialConditionResult, runs: dict[str, OptimizeResu
     failed, else the binding violation of the closest start (smallest Ω)."""
     if not init.success:
         return one_line(f"{init.message}; no optimizer start reached a feasible pose")
-    closest = min(runs.values(), key=lambda r: r.objective_optimized, default=None)
+    feasible = [r for r in runs.values() if r.optimized.feasible]
+    closest = min(feasible or runs.values(), key=lambda r: r.objective_optimized, default=None)
+    if closest is not None and closest.optimized.feasible:  # kept out by the sag limit or a motion step
+        return one_line(f"{closest.message} (closest of {len(runs)} optimizer starts)")
     worst = None if closest is None else binding(closest.optimized.violations)
     why = describe(worst) if worst is not None else "no feasible pose"
     return one_line(f"{why} (closest of {len(runs)} optimizer starts)")
@@ -284,10 +287,10 @@ def _run_starts(
             runs[name] = optimize_internal_poses(am, start, goal, opts)
             if runs[name].optimal:
                 break
-    if not any(r.success for r in runs.values()):
+    if not any(r.optimized.feasible for r in runs.values()):
         for name, start in _lean_starts(am, goal):
             runs[name] = optimize_internal_poses(am, start, goal, opts)
-            if runs[name].success:
+            if runs[name].optimized.feasible:
                 break
     return runs
 

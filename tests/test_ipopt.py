@@ -335,7 +335,7 @@ def test_auto_finishes_an_ipopt_run_that_stopped_unconverged_with_slsqp():
         alone = optimize_internal_poses(am16, start, goal, IPOPT)
         auto = optimize_internal_poses(am16, start, goal, OptimizeOptions(method="auto"))
         assert alone.method == "ipopt"
-        if alone.success:
+        if alone.optimal:
             assert auto.method == "ipopt" and auto.objective_optimized == alone.objective_optimized
             continue
         polished += 1

@@ -134,7 +134,8 @@ def _stack_on(s: _Search, q: np.ndarray) -> tuple[CarrierStatics | None, str]:
         result = optimize_internal_poses(am, world, s.goal, s.options)  # again, under the world's gravity
         if not result.success:
             return None, f"no valid stack pose under the mounted gravity: {result.message}"
-        world, why = result.optimized.plates.as_se3(), "converged"
+        world = result.optimized.plates.as_se3()
+        why = "converged" if result.optimal else f"valid, {result.message}"
     rel = [pin.SE3.Identity()] + [base.actInv(world[k]) for k in range(1, am.n + 1)]
     return carrier_statics(am, s.carrier, q, rel, goal=s.goal, tolerance=s.tolerance), why
 

@@ -216,7 +216,10 @@ def _plan_compare(args: argparse.Namespace, am: AssemblerModel, options) -> int:
         runs = [("path", path, start)]
     else:
         runs = [(name, EEPath((am.home[-1], scenario(name).goal), args.path), am.home) for name in COMPARE_SCENARIOS]
-    results = [compare_motion(am, path, start, options, rate=args.rate, name=name) for name, path, start in runs]
+    results = [
+        compare_motion(am, path, start, options, rate=args.rate, name=name, time_law=args.time_law)
+        for name, path, start in runs
+    ]
     if args.json:
         print(
             dumps(
@@ -231,7 +234,7 @@ def _plan_compare(args: argparse.Namespace, am: AssemblerModel, options) -> int:
                 ]
             )
         )
-        return 0
+        return _compare_status(results)
     print(
         f"{'path':<24}{'plan':<16}{'peak max|F| N':>14}{'travel m':>9}{'time s':>8}"
         f"{'valid %':>8}{'limits %':>9}{'off path mm':>12}"
@@ -251,4 +254,10 @@ def _plan_compare(args: argparse.Namespace, am: AssemblerModel, options) -> int:
             "the path tolerance at every output sample; limits: legs, joints and forces only"
         )
     )
-    return 0
+    return _compare_status(results)
+
+
+def _compare_status(results) -> int:
+    """0 when every compared path was planned to its end (each ``success``), else 1: the
+    exit status follows the ``success`` fields of the answer."""
+    return 0 if all(c.motion.success for c in results) else 1

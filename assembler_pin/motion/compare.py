@@ -130,6 +130,7 @@ def compare_motion(
     options: PlanOptions | None = None,
     rate: float = 20.0,
     name: str = "path",
+    time_law: str = "auto",
 ) -> MotionComparison:
     """Plan ``path`` with :func:`~assembler_pin.motion.timing.plan_trajectory` and with the
     two simple plans, each timed and checked the same way (see the module docstring).
@@ -140,8 +141,9 @@ def compare_motion(
         options: the planner's settings.
         rate: output samples per second of the three trajectories [Hz].
         name: the path's label in the table.
+        time_law: the time law of our plan (:func:`~assembler_pin.motion.timing.plan_trajectory`).
     """
-    motion = plan_trajectory(am, path, start, options, rate=rate)
+    motion = plan_trajectory(am, path, start, options, rate=rate, time_law=time_law)
     plan = motion.plan
     figures: dict[str, PlanFigures] = {}
     if motion.trajectory is None:

@@ -25,13 +25,13 @@ from dataclasses import dataclass, field
 import numpy as np
 import pinocchio as pin
 
-from ..constraints import GoalTolerance
+from ..constraints import GoalTolerance, leg_limit_margins
 from ..exceptions import OptionsError
 from ..kinematics import PlateArrays, plate_arrays, stack_forward_kinematics
 from ..messages import binding, describe, one_line
 from ..model import AssemblerModel
-from ..optimize import MotionTerm, OptimizeOptions, optimize_internal_poses
-from ..options import SMOOTH_METHODS, checked_options
+from ..optimize import MotionTerm, OptimizeOptions, OptimizeResult, optimize_internal_poses
+from ..options import GEOMETRIC_MARGIN, SMOOTH_METHODS, checked_options
 from ..progress import ProgressCallback
 from ..state import StackState, evaluate_state
 from ..validation import is_number
@@ -49,7 +49,10 @@ class PlanOptions:
 
     Attributes:
         position_step, rotation_step: largest EE move between samples [m], [rad].
-        max_leg_step: largest change of any leg length between samples [m].
+        max_leg_step: largest change of any leg length between samples [m]. The defaults
+            (5 mm, 1°, 5 mm) are steps whose samples interpolate within every limit on the
+            paths of the docs, so that the first plan is the one kept (steps twice as long
+            failed the checks between samples and were planned again).
         w3: weight of the motion term Σ ΔL² [1/m²] (0: force only); it also keeps the
             legs that do not set max|F| from wandering between samples.
         max_refinements: how many times a failing step may be halved.
@@ -61,9 +64,9 @@ class PlanOptions:
             ``limit_margin`` is replaced).
     """
 
-    position_step: float = 0.01
-    rotation_step: float = math.radians(2.0)
-    max_leg_step: float = 0.01
+    position_step: float = 0.005
+    rotation_step: float = math.radians(1.0)
+    max_leg_step: float = 0.005
     w3: float = 100.0
     max_refinements: int = 4
     checks_between: int = 3
@@ -191,10 +194,10 @@ def _step(
     motion = MotionTerm(prev.leg_lengths, opts.max_leg_step, opts.w3)
     result = optimize_internal_poses(am, _with_ee(prev.plates, goal), goal, opts.optimize, motion=motion)
     solve_s = result.time_s
-    if not result.success:
+    if not _kept(am, result, opts):
         second = optimize_internal_poses(am, _spread(prev.plates, goal), goal, opts.optimize, motion=motion)
         solve_s += second.time_s
-        if not second.success:
+        if not _kept(am, second, opts):
             return None, result.message, solve_s, (0.0, 0.0)
         result = second
     state = result.optimized
@@ -206,6 +209,19 @@ def _step(
     if problem:
         return None, problem, solve_s, (dev_p, dev_r)
     return state, "", solve_s, (dev_p, dev_r)
+
+
+def _kept(am: AssemblerModel, result: OptimizeResult, opts: PlanOptions) -> bool:
+    """Whether a sample's run gives a sample: an optimum, or a valid state whose legs keep the
+    plan's ``limit_margin`` inside their limits (a valid state nearer a limit, such as a
+    stalled run's start, could leave it between the samples)."""
+    if not result.success:
+        return False
+    if result.optimal:
+        return True
+    legs = result.optimized.legs
+    rows = leg_limit_margins(am.config.leg, legs.lengths, np.cos(legs.deflection), legs.rise, opts.limit_margin)
+    return bool(np.all(rows >= -GEOMETRIC_MARGIN))
 
 
 def _start_state(

@@ -111,7 +111,7 @@ def _continued(first: OptimizeResult, *later: OptimizeResult) -> OptimizeResult:
     methods = list(dict.fromkeys(r.method for r in runs))
     return dataclasses.replace(
         last,
-        message=one_line(f"{last.message} (after restarting from the state met by {first.solver_message})"),
+        message=one_line(f"{last.message} (restarted from where {first.method} stopped)"),
         iterations=sum(r.iterations for r in runs),
         evaluations=sum(r.evaluations for r in runs),
         gradient_evaluations=sum(r.gradient_evaluations for r in runs),
