@@ -36,7 +36,16 @@ if TYPE_CHECKING:
 
     from .config import LegConfig
 
-__all__ = ["ScenarioOutcome", "force_tables", "run_scenarios", "sag_table", "summary_table", "write_report"]
+__all__ = [
+    "ScenarioOutcome",
+    "findings",
+    "force_tables",
+    "results_markdown",
+    "run_scenarios",
+    "sag_table",
+    "summary_table",
+    "write_report",
+]
 
 logger = logging.getLogger(__name__)
 
@@ -161,9 +170,18 @@ def reference(am: AssemblerModel, result: SolveResult, options: OptimizeOptions 
     return Reference(np.array([p.max_abs_force for p in poses]), best)
 
 
+#: Legs whose |F| is within this fraction of the largest are tied with it: an optimum of the
+#: max|F| objective holds several legs at the maximum, equal to ~1e-8 N, the next one N below.
+TIE_RTOL = 1e-5
+
+
 def _argmax_label(state: StackState) -> str:
-    """``SPj leg i`` of the largest |F| (0-based, :mod:`~assembler_pin.labels`)."""
-    j, i = np.unravel_index(np.abs(state.forces).argmax(), state.forces.shape)
+    """``SPj leg i`` of the largest |F| (0-based, :mod:`~assembler_pin.labels`); among legs
+    tied with it (:data:`TIE_RTOL`) the first by platform, then leg, so that the label does
+    not depend on the last bits of the forces (which differ between BLAS kernels)."""
+    magnitude = np.abs(state.forces)
+    first = np.flatnonzero(magnitude.ravel() >= (1.0 - TIE_RTOL) * magnitude.max())[0]
+    j, i = np.unravel_index(first, magnitude.shape)
     return leg_label(j, i)
 
 
@@ -186,9 +204,10 @@ def figure_title(s: Scenario) -> str:
     )
 
 
-def summary_table(outcomes: Sequence[ScenarioOutcome], markdown: bool = False) -> str:
+def summary_table(outcomes: Sequence[ScenarioOutcome], markdown: bool = False, times: bool = True) -> str:
     """Initial vs optimized max |F| (which leg: ``SPj leg i``, 0-based), reduction, mean |F|
-    and time, beside the paper's figures."""
+    and time, beside the paper's figures; ``times=False`` leaves out the time column (the
+    one figure that depends on the machine)."""
     header = [
         "scenario",
         "initial max|F| [N]",
@@ -226,13 +245,20 @@ def summary_table(outcomes: Sequence[ScenarioOutcome], markdown: bool = False) -
                 f"{time_s:.2f}",
             ]
         )
+    if not times:
+        header, rows = header[:-1], [r[:-1] for r in rows]
     if markdown:
+        return _markdown_table(header, rows)
+    return "\n\n".join(_text_table(header, rows, [c for c in cols if c < len(header)]) for cols in TEXT_GROUPS)
 
-        def md(cells: list[str]) -> str:
-            return "| " + " | ".join(c.replace("|", "\\|") for c in cells) + " |"
 
-        return "\n".join([md(header), "|" + "---|" * len(header)] + [md(r) for r in rows])
-    return "\n\n".join(_text_table(header, rows, cols) for cols in TEXT_GROUPS)
+def _markdown_table(header: list[str], rows: list[list[str]]) -> str:
+    """A markdown table, ``|`` in a cell escaped."""
+
+    def md(cells: list[str]) -> str:
+        return "| " + " | ".join(c.replace("|", "\\|") for c in cells) + " |"
+
+    return "\n".join([md(header), "|" + "---|" * len(header)] + [md(r) for r in rows])
 
 
 #: The summary's columns in the terminal: three tables, each under 100 characters, each
@@ -271,21 +297,112 @@ def _sag_cells(am: AssemblerModel, result: SolveResult | None) -> list[str]:
     return [f"{state.max_abs_force:.1f}", f"{1e3 * state_sag(am, state):.3f}", f"{result.timing_s['optimize']:.2f}"]
 
 
-def sag_table(am: AssemblerModel, outcomes: Sequence[ScenarioOutcome], markdown: bool = False) -> str:
+def _sag_change(force: list[str], sag: list[str]) -> float | None:
+    """The sag's change from the force-optimal to the sag-optimal pose [%], from the table's
+    cells (:func:`_sag_cells`), None when either is missing."""
+    if "—" in (force[1], sag[1]):
+        return None
+    return 100 * (float(sag[1]) / float(force[1]) - 1)
+
+
+def sag_table(
+    am: AssemblerModel, outcomes: Sequence[ScenarioOutcome], markdown: bool = False, times: bool = True
+) -> str:
     """The force-optimal and the sag-optimal pose side by side: max|F| [N], the EE's linear
     sag under its own load [mm] (:func:`~assembler_pin.compliance.sag_and_gradient`) and the
     optimizer's time ``t`` [s] (every start it ran) of each, and the sag's change; the text
-    is under 100 characters wide."""
+    is under 100 characters wide. ``times=False`` leaves out the two time columns."""
     header = ["scenario", "force-opt max|F|", "sag [mm]", "t [s]", "sag-opt max|F|", "sag [mm]", "t [s]", "sag"]
     rows = []
     for o in outcomes:
         force, sag = _sag_cells(am, o.result), _sag_cells(am, o.sag_result)
-        change = "—" if "—" in (force[1], sag[1]) else f"{100 * (float(sag[1]) / float(force[1]) - 1):+.0f}%"
-        rows.append([o.scenario.name, *force, *sag, change])
+        change = _sag_change(force, sag)
+        rows.append([o.scenario.name, *force, *sag, "—" if change is None else f"{change:+.0f}%"])
+    if not times:
+        keep = [k for k, h in enumerate(header) if h != "t [s]"]
+        header, rows = [header[k] for k in keep], [[r[k] for k in keep] for r in rows]
     if markdown:
-        lines = ["| " + " | ".join(header).replace("max|F|", "max\\|F\\|") + " |", "|" + "---|" * len(header)]
-        return "\n".join(lines + ["| " + " | ".join(r) + " |" for r in rows])
+        return _markdown_table(header, rows)
     return _text_table(header, rows, range(len(header)))
+
+
+def results_markdown(am: AssemblerModel, outcomes: Sequence[ScenarioOutcome]) -> str:
+    """What ``assembler-pin reproduce --markdown`` prints and ``docs/results.md`` holds between
+    its markers: the summary table and the sag table in markdown without their time columns,
+    and the ranges the page's prose rests on (:func:`findings`), all from ``outcomes``.
+
+    Nothing in it depends on the machine: the times are left out, every figure is rounded as
+    the tables round it, and a leg tied at the maximum is named by a fixed rule.
+    """
+    cfg = am.config
+    parts = [
+        f"The paper's scenarios on {am.n} platforms, payload {cfg.payload.mass:g} kg at "
+        f"{cfg.payload.offset:g} m (forces in N, tension positive; `SPj leg i` 0-based):",
+        summary_table(outcomes, markdown=True, times=False),
+    ]
+    if any(o.sag_result is not None for o in outcomes):
+        parts += [
+            "Force-optimal and sag-optimal poses: max|F| [N], the EE's sag under its own load [mm] "
+            f"(legs of {cfg.leg.stiffness:g} N/m):",
+            sag_table(am, outcomes, markdown=True, times=False),
+        ]
+    parts.append(findings(am, outcomes))
+    return "\n\n".join(parts)
+
+
+def _span(values: Sequence[float], fmt: str = "{:.0f}", unit: str = "%") -> str:
+    """``"18–45%"``: the smallest and largest of ``values`` as the tables round them."""
+    lo, hi = fmt.format(min(values)), fmt.format(max(values))
+    return f"{lo}{unit}" if lo == hi else f"{lo}–{hi}{unit}"
+
+
+def findings(am: AssemblerModel, outcomes: Sequence[ScenarioOutcome]) -> str:
+    """The ranges over the solved scenarios that ``docs/results.md`` quotes, as a markdown
+    list: reductions (ours and the paper's), the reference columns, the legs at a stroke end,
+    where the mean |F| rises, and the sag-optimal poses against the force-optimal ones."""
+    solved = [o for o in outcomes if o.initial is not None and o.optimized is not None]
+    if not solved:
+        return "- No scenario was solved."
+    count = "all " + str(len(outcomes)) if len(solved) == len(outcomes) else f"{len(solved)} of {len(outcomes)}"
+    lines = [
+        f"- Solved: {count} scenarios. max|F| falls from our start by "
+        f"{_span([100 * (o.reduction or 0.0) for o in solved])}; in the paper, from its start, by "
+        f"{_span([100 * _paper_reduction(o.scenario) for o in solved])}."
+    ]
+    refs = [(o, o.reference) for o in solved if o.reference is not None]
+    if refs:
+        ours = [(o.optimized.max_abs_force, r) for o, r in refs if o.optimized is not None]
+        sizes = _span([r.sample_max_forces.size for _, r in ours], unit="")
+        gaps = [100 * (f / r.multistart_best - 1) for f, r in ours]
+        gap = _span(gaps, "{:+.1f}")
+        lines += [
+            f"- The optimum is below the median random valid pose for the same goal by "
+            f"{_span([100 * (1 - f / r.median) for f, r in ours])}, below the worst by "
+            f"{_span([100 * (1 - f / r.worst) for f, r in ours])} (n = {sizes} poses per goal).",
+            f"- Gap to the multistart: {gap} "
+            + (f"on all {len(refs)}." if len(refs) == len(solved) else f"on {len(refs)} of the {len(solved)} solved."),
+        ]
+    starts = [_legs_at_stroke_end(o.initial, o.stroke) for o in solved if o.initial is not None]
+    ends = [_legs_at_stroke_end(o.optimized, o.stroke) for o in solved if o.optimized is not None]
+    lines.append(
+        f"- Legs at an end of their stroke: {_span(starts, '{:d}', '')} of {6 * am.n} at the start, "
+        f"{_span(ends, '{:d}', '')} at the optimum."
+    )
+    rising = [o.scenario.name for o in solved if o.optimized.mean_abs_force > o.initial.mean_abs_force]  # type: ignore[union-attr]
+    lines.append(
+        f"- The mean |F| rises while max|F| falls in {len(rising)} of {len(solved)}"
+        + (f": {', '.join(rising)}." if rising else ".")
+    )
+    cells = [(_sag_cells(am, o.result), _sag_cells(am, o.sag_result)) for o in solved]
+    pairs = [(force, sag, change) for force, sag in cells if (change := _sag_change(force, sag)) is not None]
+    if pairs:
+        more = [100 * (float(sag[0]) / float(force[0]) - 1) for force, sag, _ in pairs]
+        lines.append(
+            f"- The sag-optimal pose sags {_span([-c for _, _, c in pairs])} less than the force-optimal "
+            f"one, for {_span(more)} more max|F|"
+            + ("." if len(pairs) == len(solved) else f" ({len(pairs)} of the {len(solved)} solved have both).")
+        )
+    return "\n".join(lines)
 
 
 def force_tables(outcome: ScenarioOutcome, markdown: bool = False) -> str:

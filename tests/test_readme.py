@@ -206,6 +206,12 @@ COMMANDS: list[tuple[str, str, str]] = [
     (r"assembler-pin view --home( --host \S+)?$", "", "serves a live page until Ctrl-C (test_viewer.py runs one)"),
     (r"assembler-pin view --plates examples/poses\.json --html \S+$", SLOW, ""),
     (r"assembler-pin reproduce --out", "", "every scenario with the random-pose references (tests/test_reproduce.py)"),
+    (
+        r"assembler-pin reproduce( --markdown)?$",
+        "",
+        "every scenario with the random-pose references (tests/test_results_page.py, in-process)",
+    ),
+    (r"python docs/gen_results\.py( --check)?$", "", "rewrites docs pages (tests/test_results_page.py checks them)"),
     (r"assembler-pin bench( --json --repeat \d+)?$", "", "the full benchmark takes minutes"),
     (r"assembler-pin map ", "", "a Dask map of many cells takes minutes (tests/test_maps.py runs small ones)"),
     (r"assembler-pin solve --goal [-\d. ]+ --carrier ur10$", "", "searches the carrier's joints (test_carrier.py)"),

@@ -8,7 +8,10 @@ from typing import TYPE_CHECKING
 from ..exceptions import CLIError
 
 if TYPE_CHECKING:
-    pass
+    from collections.abc import Sequence
+
+    from ..model import AssemblerModel
+    from ..reproduce import ScenarioOutcome
 from .common import (
     add_optimize_arguments,
     config_from_args,
@@ -28,6 +31,12 @@ def add_parser(add) -> None:
         action="store_true",
         help="skip the sag-optimal solve of each scenario (its table beside the force-optimal pose)",
     )
+    p.add_argument(
+        "--markdown",
+        action="store_true",
+        help="print only the tables and ranges of docs/results.md, in markdown and without the "
+        "times (python docs/gen_results.py puts them there); not with --out",
+    )
     add_optimize_arguments(p)
     p.set_defaults(func=run)
 
@@ -40,7 +49,7 @@ def run(args: argparse.Namespace) -> int:
     """
     from ..bounds import check_bound
     from ..model import AssemblerModel
-    from ..reproduce import force_tables, run_scenarios, sag_table, summary_table, write_report
+    from ..reproduce import results_markdown, run_scenarios
     from ..scenarios import SCENARIOS
 
     names = args.scenario or list(SCENARIOS)
@@ -48,12 +57,26 @@ def run(args: argparse.Namespace) -> int:
     if unknown:
         raise CLIError(f"unknown scenario {', '.join(unknown)}; valid: {', '.join(SCENARIOS)}")
     check_bound("optimize.max_iterations", args.max_iterations, "--max-iterations", CLIError)
+    if args.markdown and args.out:
+        raise CLIError("--markdown prints the docs' tables, --out writes the report: use one of them")
     if args.out:
         writable_parent(args.out, "--out directory")
     options = optimize_options(args)
     am = AssemblerModel.from_config(config_from_args(args))
     with progress_for(args, "reproduce") as prog:
         outcomes = run_scenarios(am, names, options, progress=prog, sag=not args.no_sag)
+    if args.markdown:
+        print(results_markdown(am, outcomes))
+    else:
+        print_tables(am, outcomes, args)
+    solved = all(o.result.success and (o.sag_result is None or o.sag_result.success) for o in outcomes)
+    return 0 if solved else 1
+
+
+def print_tables(am: AssemblerModel, outcomes: Sequence[ScenarioOutcome], args: argparse.Namespace) -> None:
+    """The text tables of ``reproduce`` (summary, sag, forces) and, with ``--out``, the report."""
+    from ..reproduce import force_tables, sag_table, summary_table, write_report
+
     print(
         f"The paper's scenarios on {am.n} platforms, payload {am.config.payload.mass:g} kg "
         f"at {am.config.payload.offset:g} m (forces in N, tension positive)\n"
@@ -71,5 +94,3 @@ def run(args: argparse.Namespace) -> int:
     if args.out:
         path = write_report(am, outcomes, args.out)
         print(f"\nwrote report: {path}")
-    solved = all(o.result.success and (o.sag_result is None or o.sag_result.success) for o in outcomes)
-    return 0 if solved else 1

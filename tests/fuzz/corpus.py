@@ -223,6 +223,11 @@ def _reproduce_cases() -> list[CliCase]:
         _case("reproduce.max_iterations_negative", "reproduce --scenario translation --max-iterations -5"),
         _case("reproduce.method_bogus", "reproduce --method bogus"),
         _case("reproduce.config_bad", "reproduce --scenario translation --config {d}/cfg_9_81.yaml"),
+        _case("reproduce.markdown_with_out", "reproduce --markdown --out {d}/{case}"),
+        _case("reproduce.markdown_with_out_first", "reproduce --out {d}/{case} --scenario translation --markdown"),
+        _case("reproduce.markdown_json", "reproduce --markdown --json"),
+        _case("reproduce.markdown_value", "reproduce --markdown=yes"),
+        _case("reproduce.markdown_scenario_bogus", "reproduce --markdown --scenario bogus"),
     ]
 
 
