@@ -1,0 +1,251 @@
+"""The package's floor plan: every import goes down the layers, and no import cycle.
+
+:data:`LAYERS` is the one statement of the order (docs/architecture.md draws it). A unit is a
+module or subpackage directly under ``assembler_pin``; a unit may import from itself and from
+units of lower layers only. Every ``import`` is parsed with :mod:`ast`, those inside functions
+and under ``if TYPE_CHECKING:`` included, so a cycle cannot hide behind a deferred import.
+"""
+
+from __future__ import annotations
+
+import ast
+from collections import defaultdict
+from pathlib import Path
+
+PACKAGE = Path(__file__).resolve().parents[1] / "assembler_pin"
+
+#: The layers, lowest first; a unit imports only from its own layer's unit and the ones below.
+LAYERS: tuple[tuple[str, ...], ...] = (
+    ("exceptions",),
+    ("config", "config_checks", "options", "choices", "bounds"),
+    (
+        "common",
+        "files",
+        "progress",
+        "threads",
+        "signals",
+        "linalg",
+        "palette",
+        "messages",
+        "validation",
+        "naming",
+        "labels",
+        "scenarios",
+    ),
+    ("model", "platform_model", "geometry", "urdf", "urdf_check", "mjcf"),
+    ("kinematics",),
+    (
+        "statics",
+        "closed_form",
+        "gradients",
+        "statics_kernel",
+        "statics_loops",
+        "pose_kernel",
+        "pose_loops",
+        "home_state",
+    ),
+    ("compliance", "elastic", "elastic_solve", "ee_stiffness", "stiffness_scaling", "constraints", "dynamics"),
+    ("state",),
+    ("helper_arm", "optimize", "objective", "supports", "support_choice", "viz"),
+    ("solver", "capacity", "export"),
+    ("motion", "carrier", "plots", "plan_figure", "workspace_plot"),
+    ("maps", "walk", "simulate", "sim", "reproduce"),
+    ("bench", "bench_speed", "bench_targets", "bench_scaling", "bench_motion"),
+    ("cli",),
+)
+
+#: Modules still at the package root, by the subpackage they belong to (imports among them are
+#: imports within that subpackage).
+UNIT_OF: dict[str, str] = {
+    **dict.fromkeys(("config_checks", "options", "choices", "bounds"), "config"),
+    **dict.fromkeys(
+        ("files", "progress", "threads", "signals", "linalg", "palette", "messages", "validation", "naming", "labels"),
+        "common",
+    ),
+    **dict.fromkeys(("platform_model", "geometry", "urdf", "urdf_check", "mjcf"), "model"),
+    **dict.fromkeys(
+        ("closed_form", "gradients", "statics_kernel", "statics_loops", "pose_kernel", "pose_loops", "home_state"),
+        "statics",
+    ),
+    **dict.fromkeys(("elastic", "elastic_solve", "ee_stiffness", "stiffness_scaling"), "compliance"),
+    "objective": "optimize",
+    "support_choice": "supports",
+    "capacity": "solver",
+    **dict.fromkeys(("plan_figure", "workspace_plot"), "plots"),
+    "sim": "simulate",
+    **dict.fromkeys(("bench_speed", "bench_targets", "bench_scaling", "bench_motion"), "bench"),
+}
+
+#: Imports that go up the layers today, (importer, imported) as dotted module names.
+KNOWN_UPWARD: set[tuple[str, str]] = {
+    ("assembler_pin.compliance", "assembler_pin.bench"),
+    ("assembler_pin.messages", "assembler_pin.constraints"),
+    ("assembler_pin.supports", "assembler_pin.walk.turned"),
+    ("assembler_pin.supports", "assembler_pin.bench"),
+    ("assembler_pin.viz.animation", "assembler_pin.walk"),
+    ("assembler_pin.viz.viewer", "assembler_pin.walk"),
+}
+
+#: Import cycles among modules today, each as its sorted tuple of dotted module names.
+KNOWN_CYCLES: set[tuple[str, ...]] = {
+    tuple(
+        f"assembler_pin.{m}"
+        for m in (
+            "bench",
+            "bench_speed",
+            "capacity",
+            "compliance",
+            "optimize",
+            "optimize.internal_poses",
+            "optimize.ipopt",
+            "optimize.paper",
+            "optimize.problem",
+            "optimize.smooth",
+            "optimize.wrench",
+            "solver",
+            "support_choice",
+            "supports",
+        )
+    ),
+    ("assembler_pin.motion.paths", "assembler_pin.motion.trajfile"),
+    ("assembler_pin.motion.time_law", "assembler_pin.motion.toppra_law"),
+    ("assembler_pin.statics", "assembler_pin.statics_kernel"),
+    ("assembler_pin.walk.plan", "assembler_pin.walk.verify"),
+}
+
+
+def _module_name(path: Path) -> str:
+    parts = path.relative_to(PACKAGE.parent).with_suffix("").parts
+    return ".".join(parts[:-1] if parts[-1] == "__init__" else parts)
+
+
+MODULES = {_module_name(p): p for p in sorted(PACKAGE.rglob("*.py"))}
+
+
+def _targets(importer: str, is_package: bool, node: ast.Import | ast.ImportFrom) -> list[str]:
+    """The package modules one import statement loads (``from x import y`` loads x.y if a module)."""
+    if isinstance(node, ast.Import):
+        return [a.name for a in node.names if a.name.split(".")[0] == "assembler_pin"]
+    if node.level:
+        base = importer.split(".") if is_package else importer.split(".")[:-1]
+        base = base[: len(base) - node.level + 1]
+        module = ".".join([*base, node.module] if node.module else base)
+    else:
+        module = node.module or ""
+    if module.split(".")[0] != "assembler_pin":
+        return []
+    return [f"{module}.{a.name}" if f"{module}.{a.name}" in MODULES else module for a in node.names]
+
+
+def _type_only_lines(tree: ast.Module) -> set[int]:
+    """Lines of the imports under ``if TYPE_CHECKING:`` (read by type checkers, never run)."""
+    lines = set()
+    for node in ast.walk(tree):
+        if isinstance(node, ast.If) and "TYPE_CHECKING" in ast.unparse(node.test):
+            lines |= {n.lineno for n in ast.walk(node) if isinstance(n, ast.Import | ast.ImportFrom)}
+    return lines
+
+
+def import_edges(*, type_only: bool = True) -> list[tuple[str, str, int]]:
+    """Every (importer, imported module, line) of the package, at any depth of the source.
+
+    Args:
+        type_only: include the imports under ``if TYPE_CHECKING:``.
+    """
+    edges = []
+    for name, path in MODULES.items():
+        tree = ast.parse(path.read_text(encoding="utf-8"))
+        skip = set() if type_only else _type_only_lines(tree)
+        for node in ast.walk(tree):
+            if isinstance(node, ast.Import | ast.ImportFrom) and node.lineno not in skip:
+                edges += [(name, t, node.lineno) for t in _targets(name, path.name == "__init__.py", node)]
+    return edges
+
+
+def unit(module: str) -> str:
+    """The unit of a dotted module name: the module or subpackage directly under the package."""
+    parts = module.split(".")
+    return UNIT_OF.get(parts[1], parts[1]) if len(parts) > 1 else ""
+
+
+def layer_of() -> dict[str, int]:
+    return {name: i for i, layer in enumerate(LAYERS) for name in layer}
+
+
+def test_every_unit_has_a_layer():
+    layers = layer_of()
+    units = {m.split(".")[1] for m in MODULES if "." in m}
+    assert units <= set(layers), f"units without a layer in LAYERS: {sorted(units - set(layers))}"
+    assert not set(layers) - units - set(UNIT_OF.values()), f"layers name no unit: {sorted(set(layers) - units)}"
+    assert len(layers) == sum(len(layer) for layer in LAYERS), "a unit is listed twice"
+
+
+def test_no_import_goes_up_the_layers():
+    layers = layer_of()
+    bad = []
+    for importer, imported, line in import_edges():
+        a, b = unit(importer), unit(imported)
+        if not a or a == b:  # the top-level __init__ (lazy names) and imports within a unit
+            continue
+        if layers[UNIT_OF.get(a, a)] <= layers[UNIT_OF.get(b, b)] and (importer, imported) not in KNOWN_UPWARD:
+            bad.append(f"{MODULES[importer].relative_to(PACKAGE.parent)}:{line}: {importer} -> {imported}")
+    assert not bad, "imports against the layers (lowest first):\n" + "\n".join(sorted(bad))
+
+
+def test_known_upward_edges_still_exist():
+    edges = {(a, b) for a, b, _ in import_edges()}
+    assert KNOWN_UPWARD <= edges, f"remove from KNOWN_UPWARD: {sorted(KNOWN_UPWARD - edges)}"
+
+
+def _cycles(graph: dict[str, set[str]]) -> list[tuple[str, ...]]:
+    """The strongly connected components of more than one module (Tarjan, iterative)."""
+    index: dict[str, int] = {}
+    low: dict[str, int] = {}
+    stack: list[str] = []
+    on_stack: set[str] = set()
+    found = []
+    for root in sorted(graph):
+        if root in index:
+            continue
+        work = [(root, iter(sorted(graph[root])))]
+        index[root] = low[root] = len(index)
+        stack.append(root)
+        on_stack.add(root)
+        while work:
+            v, children = work[-1]
+            for w in children:
+                if w not in index:
+                    index[w] = low[w] = len(index)
+                    stack.append(w)
+                    on_stack.add(w)
+                    work.append((w, iter(sorted(graph[w]))))
+                    break
+                if w in on_stack:
+                    low[v] = min(low[v], index[w])
+            else:
+                work.pop()
+                if work:
+                    low[work[-1][0]] = min(low[work[-1][0]], low[v])
+                if low[v] == index[v]:
+                    component = []
+                    while True:
+                        w = stack.pop()
+                        on_stack.discard(w)
+                        component.append(w)
+                        if w == v:
+                            break
+                    if len(component) > 1:
+                        found.append(tuple(sorted(component)))
+    return found
+
+
+def test_no_import_cycle():
+    """No cycle among the modules that run (imports under ``TYPE_CHECKING`` name types only)."""
+    graph: dict[str, set[str]] = defaultdict(set)
+    for importer, imported, _ in import_edges(type_only=False):
+        if importer != imported and importer != "assembler_pin":
+            graph[importer].add(imported)
+            graph.setdefault(imported, set())
+    cycles = set(_cycles(graph))
+    assert cycles <= KNOWN_CYCLES, f"import cycles: {sorted(cycles - KNOWN_CYCLES)}"
+    assert KNOWN_CYCLES <= cycles, f"remove from KNOWN_CYCLES: {sorted(KNOWN_CYCLES - cycles)}"
