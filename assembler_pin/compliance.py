@@ -22,7 +22,6 @@ import numpy.typing as npt
 import pinocchio as pin
 
 from .bounds import BOUNDS, check_bound
-from .ee_stiffness import stiffness
 from .elastic import line_conditions, solve_equilibrium
 from .exceptions import LoadError
 from .gradients import PoseDerivatives
@@ -37,7 +36,6 @@ __all__ = [
     "CompensatedLengths",
     "LoadedPose",
     "SagGradient",
-    "benchmark_stiffness",
     "compensated_lengths",
     "loaded_pose",
     "sag_and_gradient",
@@ -258,30 +256,6 @@ def compensated_lengths(
     else:
         message = stroke or "ok"
     return CompensatedLengths(cmd, geometric, statics.forces, check, error, stroke is None, message == "ok", message)
-
-
-def benchmark_stiffness(am: AssemblerModel, repeat: int = 200) -> dict[str, float]:
-    """Median wall time [s] per call of :func:`~assembler_pin.ee_stiffness.stiffness`,
-    :func:`loaded_pose`, :func:`compensated_lengths` and :func:`sag_and_gradient` at the home
-    pose (and, for scale, :func:`~assembler_pin.statics.solve_statics` and the force
-    objective's derivatives :func:`~assembler_pin.gradients.pose_derivatives`), BLAS on one
-    thread as in the optimizer."""
-    from .bench import median_time_us
-    from .gradients import pose_derivatives
-    from .threads import single_blas_thread
-
-    pa = plate_arrays(am, am.home)
-    lengths = compensated_lengths(am, pa).lengths
-    calls = {
-        "stiffness": lambda: stiffness(am, pa),
-        "loaded_pose": lambda: loaded_pose(am, lengths),
-        "compensated_lengths": lambda: compensated_lengths(am, pa),
-        "sag_and_gradient": lambda: sag_and_gradient(am, pa),
-        "solve_statics": lambda: solve_statics(am, pa),
-        "pose_derivatives": lambda: pose_derivatives(am, pa),
-    }
-    with single_blas_thread():
-        return {name: 1e-6 * median_time_us(call, repeat) for name, call in calls.items()}
 
 
 @dataclass(frozen=True)

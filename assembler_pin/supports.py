@@ -45,7 +45,6 @@ __all__ = [
     "SUPPORTS",
     "EEHeldStatics",
     "TwoPointStatics",
-    "benchmark_supports",
     "ee_held_statics",
     "ee_loaded_pose",
     "held_plates",
@@ -367,19 +366,3 @@ def ee_loaded_pose(am: AssemblerModel, lengths: npt.ArrayLike, ee: pin.SE3) -> L
         lengths=back(got.lengths),
         commanded=rest,
     )
-
-
-def benchmark_supports(am: AssemblerModel, repeat: int = 50) -> dict[str, float]:
-    """Median wall time [s] per call at the home pose of :func:`two_point_statics` and of
-    :func:`~assembler_pin.support_choice.chosen_distribution` (with and without its check)."""
-    from .support_choice import chosen_distribution
-
-    pa = plate_arrays(am, am.home)
-    calls = {
-        "two_point_statics": lambda: two_point_statics(am, pa),
-        "chosen_distribution": lambda: chosen_distribution(am, pa),
-        "chosen_distribution_unchecked": lambda: chosen_distribution(am, pa, verify=False),
-    }
-    from .bench import median_time_us
-
-    return {name: 1e-6 * median_time_us(call, repeat) for name, call in calls.items()}

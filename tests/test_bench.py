@@ -9,8 +9,8 @@ import numpy as np
 import pytest
 from checks import sp_legs
 
-from assembler_pin.bench import random_reachable_plates
-from assembler_pin.bench_scaling import benchmark_platform_count, format_sweep
+from assembler_pin.bench.scaling import benchmark_platform_count, format_sweep
+from assembler_pin.bench.timing import random_reachable_plates
 
 
 def test_random_reachable_plates_are_the_fk_of_their_lengths(am):
@@ -34,7 +34,7 @@ def test_startup_row_runs_each_command_and_names_its_target(monkeypatch):
     import subprocess
     from pathlib import Path
 
-    from assembler_pin import bench_speed
+    from assembler_pin.bench import speed as bench_speed
 
     calls: list[tuple[str, ...]] = []
     real = subprocess.run
@@ -58,7 +58,7 @@ def test_single_statics_row_times_both_paths():
     path and input kind, all positive)."""
     import importlib.util
 
-    from assembler_pin.bench_speed import benchmark_single_statics
+    from assembler_pin.bench.speed import benchmark_single_statics
 
     row = benchmark_single_statics(platforms=(2,), repeat=3, rounds=1)
     paths = ("pinocchio", "kernel") if importlib.util.find_spec("numba") else ("pinocchio",)
@@ -69,7 +69,7 @@ def test_single_statics_row_times_both_paths():
 def test_target_rows_say_met_only_when_the_measured_value_meets_its_target():
     """Each row is read from its group and key and held to its target in its sense; a
     figure not measured (NaN, or absent) is never met, a group not run is left out."""
-    from assembler_pin.bench_targets import format_targets, target_rows
+    from assembler_pin.bench.targets import format_targets, target_rows
 
     doc = {
         "threads": {"threads_identical": True},
@@ -102,7 +102,8 @@ def test_target_rows_say_met_only_when_the_measured_value_meets_its_target():
 def test_the_compiled_optimizer_is_asked_for_only_inside_its_bench_row(monkeypatch):
     """The opt-in row sets ASSEMBLER_PIN_STATICS=numba for its solves only, and gives the
     variable back as it was (unset, or the user's value)."""
-    from assembler_pin import bench_targets, pose_kernel
+    from assembler_pin import pose_kernel
+    from assembler_pin.bench import targets as bench_targets
 
     for before in (None, "numpy"):
         if before is None:
@@ -120,7 +121,7 @@ def test_random_goals_are_reachable_poses_the_solver_finds(am):
     constraint and the goal, checked independently of the package."""
     from checks import design_problems
 
-    from assembler_pin.bench_targets import random_goals
+    from assembler_pin.bench.targets import random_goals
     from assembler_pin.solver import solve
 
     for goal in random_goals(am, 3, seed=1):
@@ -134,7 +135,7 @@ def test_map_memory_row_samples_each_worker_of_a_real_map():
     processes (not their nannies or the resource tracker), each with a plausible resident
     size: more than an interpreter with numpy and Pinocchio loaded, less than the target's
     tenfold."""
-    from assembler_pin.bench_targets import benchmark_map_memory
+    from assembler_pin.bench.targets import benchmark_map_memory
 
     row = benchmark_map_memory(8, workers=2)
     assert row["cells"] == 8 and row["workers_seen"] == 2
@@ -150,7 +151,7 @@ def test_wide_search_answers_with_a_state_that_meets_every_constraint_or_none(am
     import pinocchio as pin
     from checks import design_forces, design_problems
 
-    from assembler_pin.bench_targets import benchmark_wide_search, wide_search
+    from assembler_pin.bench.targets import benchmark_wide_search, wide_search
 
     goal = pin.SE3(np.eye(3), np.array([0.1, 0.0, 0.8]))
     found = wide_search(am, goal, starts=5)

@@ -17,7 +17,7 @@ from checks import design_forces, design_plate_deviation, kinematic_problems
 from test_scaling import whole_stack_forces
 
 import assembler_pin as ap
-from assembler_pin.bench import random_reachable_plates
+from assembler_pin.bench.timing import random_reachable_plates
 from assembler_pin.carrier import (
     CARRIERS,
     Carrier,

@@ -70,7 +70,7 @@ def test_ipopt_long_stack_hessian_start_keeps_the_optimum():
     """From SCALAR2_PLATFORMS up the limited-memory Hessian starts from IPOPT's ``scalar2``
     scale: at n = 16 the answer meets every constraint by the independent checks and is the
     optimum reached with IPOPT's default ``scalar1`` (to 1e-6 relative)."""
-    from assembler_pin.bench_speed import long_stack
+    from assembler_pin.bench.speed import long_stack
     from assembler_pin.optimize import ipopt
 
     am, start = long_stack(ipopt.SCALAR2_PLATFORMS)
@@ -273,7 +273,7 @@ def test_ipopt_sag_limit_and_motion_rows(am, random_poses):
 def test_long_stack_figure_and_its_bench_row(monkeypatch, capsys):
     """The scaling figure on two tiny stacks: every key, IPOPT's optimum no worse than
     SLSQP's; ``bench --speed`` prints it as its ``long_stacks`` group."""
-    from assembler_pin import bench_speed
+    from assembler_pin.bench import speed as bench_speed
     from assembler_pin.cli.app import main
 
     row = bench_speed.benchmark_long_stacks(sizes=(2, 3))

@@ -50,7 +50,7 @@ LAYERS: tuple[tuple[str, ...], ...] = (
     ("solver", "capacity", "export"),
     ("motion", "carrier", "plots", "plan_figure", "workspace_plot"),
     ("maps", "walk", "simulate", "sim", "reproduce"),
-    ("bench", "bench_speed", "bench_targets", "bench_scaling", "bench_motion"),
+    ("bench",),
     ("cli",),
 )
 
@@ -73,40 +73,18 @@ UNIT_OF: dict[str, str] = {
     "capacity": "solver",
     **dict.fromkeys(("plan_figure", "workspace_plot"), "plots"),
     "sim": "simulate",
-    **dict.fromkeys(("bench_speed", "bench_targets", "bench_scaling", "bench_motion"), "bench"),
 }
 
 #: Imports that go up the layers today, (importer, imported) as dotted module names.
 KNOWN_UPWARD: set[tuple[str, str]] = {
-    ("assembler_pin.compliance", "assembler_pin.bench"),
     ("assembler_pin.messages", "assembler_pin.constraints"),
     ("assembler_pin.supports", "assembler_pin.walk.turned"),
-    ("assembler_pin.supports", "assembler_pin.bench"),
     ("assembler_pin.viz.animation", "assembler_pin.walk"),
     ("assembler_pin.viz.viewer", "assembler_pin.walk"),
 }
 
 #: Import cycles among modules today, each as its sorted tuple of dotted module names.
 KNOWN_CYCLES: set[tuple[str, ...]] = {
-    tuple(
-        f"assembler_pin.{m}"
-        for m in (
-            "bench",
-            "bench_speed",
-            "capacity",
-            "compliance",
-            "optimize",
-            "optimize.internal_poses",
-            "optimize.ipopt",
-            "optimize.paper",
-            "optimize.problem",
-            "optimize.smooth",
-            "optimize.wrench",
-            "solver",
-            "support_choice",
-            "supports",
-        )
-    ),
     ("assembler_pin.motion.paths", "assembler_pin.motion.trajfile"),
     ("assembler_pin.motion.time_law", "assembler_pin.motion.toppra_law"),
     ("assembler_pin.statics", "assembler_pin.statics_kernel"),

@@ -16,7 +16,7 @@ import pinocchio as pin
 import pytest
 
 import assembler_pin as ap
-from assembler_pin.bench import random_reachable_plates
+from assembler_pin.bench.timing import random_reachable_plates
 from assembler_pin.capacity import PayloadModels, payload_capacity
 from assembler_pin.cli import main
 from assembler_pin.maps import GridError, parse_grid, read_map, run_map

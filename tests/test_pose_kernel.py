@@ -12,7 +12,7 @@ import pytest
 from checks import design_plate_deviation, twist_moved
 
 from assembler_pin import pose_kernel, pose_loops, solve_statics
-from assembler_pin.bench import random_reachable_plates
+from assembler_pin.bench.timing import random_reachable_plates
 from assembler_pin.config import load_config
 from assembler_pin.exceptions import OptionsError
 from assembler_pin.gradients import pose_derivatives, pose_values

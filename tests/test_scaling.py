@@ -9,7 +9,7 @@ import pytest
 from checks import design_forces, design_problems, home_directions
 
 import assembler_pin as ap
-from assembler_pin.bench import random_reachable_plates
+from assembler_pin.bench.timing import random_reachable_plates
 
 
 def whole_stack_forces(am: ap.AssemblerModel, plates) -> np.ndarray:

@@ -1,7 +1,7 @@
 """Speed work that must not change answers: one BLAS thread in the hot paths, the lazy start
 portfolio, payload models without a model per mass, the compiled statics kernel.
 
-No timing is asserted here (the figures come from :mod:`assembler_pin.bench_speed`); each
+No timing is asserted here (the figures come from :mod:`assembler_pin.bench.speed`); each
 test holds an answer to an independent computation or to the answer of the slower path.
 """
 
@@ -239,7 +239,7 @@ def test_screw_start_runs_only_for_a_compressed_optimum(am):
 def test_solve_starts_bench_reports_the_helper_arms_own_time(am):
     """The grid bench's helper-arm percentiles are the solves' ``timing_s["initial"]``: within
     each solve's total, and the solved count is the solves' own."""
-    from assembler_pin.bench_speed import benchmark_solve_starts
+    from assembler_pin.bench.speed import benchmark_solve_starts
 
     goals = ((0.0, 0.0, 0.8), (0.3, 0.0, 0.6))
     out = benchmark_solve_starts(am, goals, modes=("first",))

@@ -3,7 +3,7 @@
 with the same document as the Pinocchio statics of the home pose.
 
 No timing is asserted here: ``assembler-pin bench --speed`` measures the start-up
-(:func:`assembler_pin.bench_speed.benchmark_startup`).
+(:func:`assembler_pin.bench.speed.benchmark_startup`).
 """
 
 from __future__ import annotations

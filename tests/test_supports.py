@@ -19,8 +19,9 @@ from checks import design_anchors
 from scipy.optimize import linprog, minimize
 
 import assembler_pin as ap
+from assembler_pin.bench.supports import benchmark_supports
 from assembler_pin.support_choice import chosen_distribution
-from assembler_pin.supports import benchmark_supports, held_plates, residual_tolerance, two_point_statics
+from assembler_pin.supports import held_plates, residual_tolerance, two_point_statics
 
 STEP = 1e-20  # complex step
 

@@ -9,7 +9,7 @@ import pinocchio as pin
 import pytest
 
 import assembler_pin as ap
-from assembler_pin.bench import random_reachable_plates
+from assembler_pin.bench.timing import random_reachable_plates
 from assembler_pin.compliance import sag_and_gradient
 from assembler_pin.exceptions import OptionsError
 

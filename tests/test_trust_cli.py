@@ -323,7 +323,7 @@ def _hold_pose():
         lambda am: _hold_pose()(am, am.home, seconds=1e9),
         lambda am: _hold_pose()(am, am.home, samples=10**9),
         lambda am: _hold_pose()(am, am.home, drift_tolerance=0.0),
-        lambda am: __import__("assembler_pin.bench").bench.run_benchmarks(am, repeat=10**9),
+        lambda am: __import__("assembler_pin.bench.calls").bench.calls.run_benchmarks(am, repeat=10**9),
     ],
 )
 def test_the_api_entries_bound_their_counts(am, make):
@@ -499,8 +499,8 @@ def test_reproduce_reports_progress_per_scenario(am, monkeypatch):
 
 
 def test_bench_reports_progress_per_figure(am, monkeypatch):
-    import assembler_pin.bench as bench
-    from assembler_pin.bench import run_benchmarks
+    import assembler_pin.bench.calls as bench
+    from assembler_pin.bench.calls import run_benchmarks
 
     monkeypatch.setattr(bench, "BATCH_STACKS", 40)  # the figures' values are not the point here
     monkeypatch.setattr(bench, "benchmark_initial_condition", lambda am, **kw: {"initial_success_rate": 1.0})

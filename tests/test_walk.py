@@ -306,7 +306,7 @@ def test_six_stacks_carry_a_body_and_its_capacity(am):
 
 # ---------------------------------------------------------------------- bench
 def test_bench_two_point_figures_name_each_call_its_time_and_target():
-    from assembler_pin.bench_speed import TWO_POINT_TARGETS_MS, benchmark_two_point
+    from assembler_pin.bench.speed import TWO_POINT_TARGETS_MS, benchmark_two_point
 
     got = benchmark_two_point(platforms=(4,), repeat=2)
     assert got["n4_two_point_statics_ok"] and got["n4_chosen_distribution_ok"]

@@ -27,8 +27,8 @@ from typing import Any
 
 import numpy as np
 
-from .bench_speed import THREAD_GOALS
-from .model import AssemblerModel
+from ..model import AssemblerModel
+from .speed import THREAD_GOALS
 
 __all__ = [
     "MAP_MEMORY_CELLS",
@@ -91,9 +91,9 @@ def wide_search(am: AssemblerModel, goal: Any, starts: int = SEARCH_STARTS, seed
     optimized from there. Returns the first optimizer result whose state meets every
     constraint (its Pinocchio re-check, :func:`~assembler_pin.state.evaluate_state`), else
     None."""
-    from .helper_arm import perturbed_plates, repair_stack
-    from .helper_arm.initial import even_screw_pose
-    from .optimize import optimize_internal_poses
+    from ..helper_arm import perturbed_plates, repair_stack
+    from ..helper_arm.initial import even_screw_pose
+    from ..optimize import optimize_internal_poses
 
     rng = np.random.default_rng(seed)
     screw = even_screw_pose(am, goal)
@@ -111,10 +111,10 @@ def wide_search(am: AssemblerModel, goal: Any, starts: int = SEARCH_STARTS, seed
 
 def random_goals(am: AssemblerModel, count: int = RANDOM_GOALS, seed: int = 0) -> list:
     """EE poses (``pin.SE3``, world) of ``count`` random stacks with in-stroke legs
-    (:func:`~assembler_pin.bench.random_reachable_plates`): goals known to be reachable."""
+    (:func:`~assembler_pin.bench.timing.random_reachable_plates`): goals known to be reachable."""
     import pinocchio as pin
 
-    from .bench import random_reachable_plates
+    from .timing import random_reachable_plates
 
     rng = np.random.default_rng(seed)
     goals = []
@@ -189,8 +189,8 @@ def benchmark_map_memory(cells: int = MAP_MEMORY_CELLS, workers: int = 2) -> dic
     directory."""
     import tempfile
 
-    from .config import load_config
-    from .maps import parse_grid, run_map
+    from ..config import load_config
+    from ..maps import parse_grid, run_map
 
     side = max(2, round(cells ** (1 / 3)))
     nz = max(1, math.ceil(cells / side**2))
@@ -215,21 +215,21 @@ def benchmark_map_memory(cells: int = MAP_MEMORY_CELLS, workers: int = 2) -> dic
 
 def benchmark_targets(am: AssemblerModel, map_cells: int = MAP_MEMORY_CELLS, quick: bool = False) -> dict[str, Any]:
     """Every figure of :func:`target_rows`, one group per row family (the functions of
-    :mod:`~assembler_pin.bench_speed` and :func:`benchmark_map_memory`), each timed call
+    :mod:`~assembler_pin.bench.speed` and :func:`benchmark_map_memory`), each timed call
     under one BLAS thread. ``map_cells=0`` skips the map. ``quick``: a smoke test of the
     bench (4 random goals, no grid, long stacks of 4 and 8 platforms, small batches), not
     figures."""
     from threadpoolctl import threadpool_limits
 
-    from .bench import LEVEL_GRID
-    from .bench_speed import (
+    from ..options import casadi_missing
+    from .speed import (
         benchmark_long_stacks,
         benchmark_single_statics,
         benchmark_solve_starts,
         benchmark_statics_kernel,
         benchmark_threads,
     )
-    from .options import casadi_missing
+    from .timing import LEVEL_GRID
 
     doc: dict[str, Any] = {"threads": benchmark_threads(am, goals=THREAD_GOALS[:2] if quick else THREAD_GOALS)}
     with threadpool_limits(limits=1):
@@ -258,7 +258,7 @@ def benchmark_targets(am: AssemblerModel, map_cells: int = MAP_MEMORY_CELLS, qui
 def _compiled_optimizer() -> Iterator[None]:
     """The optimizer on its compiled pass (``ASSEMBLER_PIN_STATICS=numba``, opt-in) for the
     duration; the variable's former value is restored."""
-    from .statics_kernel import ENV_VAR
+    from ..statics_kernel import ENV_VAR
 
     before = os.environ.get(ENV_VAR)
     os.environ[ENV_VAR] = "numba"

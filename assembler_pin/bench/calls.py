@@ -14,52 +14,20 @@ from typing import Any
 
 import numpy as np
 
-from .bounds import check_bound
-from .kinematics import PlateArrays, q_from_plates, sp_forward_kinematics, stack_forward_kinematics
-from .model import AssemblerModel
-from .progress import ProgressCallback
-from .statics import solve_statics, solve_statics_batch
+from ..bounds import check_bound
+from ..kinematics import PlateArrays, q_from_plates, sp_forward_kinematics, stack_forward_kinematics
+from ..model import AssemblerModel
+from ..progress import ProgressCallback
+from ..statics import solve_statics, solve_statics_batch
+from .speed import benchmark_startup
+from .timing import LEVEL_GRID, median_time_us, random_reachable_plates
 
 __all__ = [
-    "LEVEL_GRID",
     "benchmark_initial_condition",
     "benchmark_optimization",
     "benchmark_solve_grid",
-    "median_time_us",
-    "random_reachable_plates",
     "run_benchmarks",
 ]
-
-
-def median_time_us(fn: Callable[[], object], repeat: int) -> float:
-    """Median wall time of ``fn()`` over ``repeat`` calls, after one warm-up call [µs]."""
-    fn()
-    times = []
-    for _ in range(repeat):
-        t0 = time.perf_counter()
-        fn()
-        times.append(time.perf_counter() - t0)
-    return statistics.median(times) * 1e6
-
-
-def random_reachable_plates(
-    am: AssemblerModel, rng: np.random.Generator, spread: float = 0.35
-) -> tuple[np.ndarray, PlateArrays]:
-    """Random in-stroke leg lengths and the plate poses they give (by stack FK).
-
-    Args:
-        spread: fraction of the stroke around mid-stroke that lengths are drawn from.
-
-    Returns:
-        (lengths (n, 6) [m], plate poses).
-    """
-    leg = am.config.leg
-    half = 0.5 * spread * (leg.max_length - leg.min_length)
-    while True:
-        lengths = rng.uniform(leg.mid_length - half, leg.mid_length + half, (am.n, 6))
-        fk = stack_forward_kinematics(am, lengths)
-        if fk.success:
-            return lengths, fk.plates
 
 
 #: Stacks per call of the batched statics figure.
@@ -78,7 +46,7 @@ def run_benchmarks(
     helper-arm initial condition (:func:`benchmark_initial_condition`: ``initial_scenarios_ms``,
     ``initial_random_ms`` [ms], ``initial_success_rate``), the CLI start-up in fresh processes
     beside its targets (``cli_help_s``, ``cli_statics_home_json_s``, ``bare_python_s`` [s],
-    medians of 5: :func:`~assembler_pin.bench_speed.benchmark_startup`), then the
+    medians of 5: :func:`~assembler_pin.bench.speed.benchmark_startup`), then the
     optimization of each scenario by both methods (:func:`benchmark_optimization`).
 
     Each per-call figure is the median over ``repeat`` calls (bound ``bench.repeat``),
@@ -124,9 +92,7 @@ def run_benchmarks(
 
 
 def _startup(repeat: int) -> dict[str, float]:
-    """The CLI start-up row (:func:`~assembler_pin.bench_speed.benchmark_startup`)."""
-    from .bench_speed import benchmark_startup
-
+    """The CLI start-up row (:func:`~assembler_pin.bench.speed.benchmark_startup`)."""
     return benchmark_startup(repeat)
 
 
@@ -141,9 +107,9 @@ def benchmark_optimization(am: AssemblerModel, names: list[str] | None = None) -
         ``optimize_slsqp_median_s``, ``optimize_paper_median_s``, ``optimize_speedup_median``;
         ``optimize_objective_not_worse``: fraction of scenarios where slsqp's Ω <= paper's.
     """
-    from .helper_arm import initial_condition
-    from .optimize import OptimizeOptions, optimize_internal_poses
-    from .scenarios import SCENARIOS
+    from ..helper_arm import initial_condition
+    from ..optimize import OptimizeOptions, optimize_internal_poses
+    from ..scenarios import SCENARIOS
 
     per: dict[str, dict[str, float]] = {}
     for name in names or list(SCENARIOS):
@@ -186,8 +152,8 @@ def benchmark_initial_condition(am: AssemblerModel, n_random: int = 20, seed: in
         ``initial_scenarios_ms`` and ``initial_random_ms``: median wall time per goal [ms];
         ``initial_success_rate``: fraction of all those goals solved (kinematically valid).
     """
-    from .helper_arm import initial_condition
-    from .scenarios import SCENARIOS
+    from ..helper_arm import initial_condition
+    from ..scenarios import SCENARIOS
 
     rng = np.random.default_rng(seed)
     scenario_goals = [s.goal for s in SCENARIOS.values()]
@@ -213,16 +179,6 @@ def benchmark_initial_condition(am: AssemblerModel, n_random: int = 20, seed: in
     }
 
 
-#: The level-EE goal grid of :func:`benchmark_solve_grid`: x = -0.4…0.5, y = 0, 0.2,
-#: z = 0.5…1.0 m, steps of 0.1 m, EE parallel to the base.
-LEVEL_GRID = tuple(
-    (round(x, 3), round(y, 3), round(z, 3))
-    for x in np.arange(-0.4, 0.55, 0.1)
-    for y in (0.0, 0.2)
-    for z in np.arange(0.5, 1.05, 0.1)
-)
-
-
 def benchmark_solve_grid(
     am: AssemblerModel, goals: tuple = LEVEL_GRID, progress: ProgressCallback | None = None
 ) -> dict[str, Any]:
@@ -235,7 +191,7 @@ def benchmark_solve_grid(
     """
     import pinocchio as pin
 
-    from .solver import solve
+    from ..solver import solve
 
     times: list[float] = []
     solved_times: list[float] = []

@@ -9,11 +9,11 @@ from typing import Any
 
 import numpy as np
 
-from .bench import median_time_us, random_reachable_plates
-from .kinematics import stack_forward_kinematics
-from .model import AssemblerModel
-from .progress import ProgressCallback
-from .statics import solve_statics
+from ..kinematics import stack_forward_kinematics
+from ..model import AssemblerModel
+from ..progress import ProgressCallback
+from ..statics import solve_statics
+from .timing import median_time_us, random_reachable_plates
 
 __all__ = [
     "MAP_BENCH_GRID",
@@ -37,8 +37,8 @@ def benchmark_platform_count(n: int, repeat: int = 50, seed: int = 0, optimize: 
 
     import pinocchio as pin
 
-    from .helper_arm import initial_condition
-    from .optimize import optimize_internal_poses
+    from ..helper_arm import initial_condition
+    from ..optimize import optimize_internal_poses
 
     t0 = time.perf_counter()
     am = AssemblerModel.from_config({"platforms": n})
@@ -77,7 +77,7 @@ def benchmark_platforms_sweep(
             estimate = previous["optimize_s"] * (n / previous["platforms"]) ** 3
         optimize = estimate is None or estimate <= optimize_limit_s
         code = (
-            "import json; from assembler_pin.bench_scaling import benchmark_platform_count; "
+            "import json; from assembler_pin.bench.scaling import benchmark_platform_count; "
             f"print(json.dumps(benchmark_platform_count({n}, optimize={optimize})))"
         )
         out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
@@ -116,8 +116,8 @@ def benchmark_maps(grid_spec: str = MAP_BENCH_GRID, workers: tuple[int, ...] = (
     """
     import tempfile
 
-    from .config import load_config
-    from .maps import parse_grid, run_map
+    from ..config import load_config
+    from ..maps import parse_grid, run_map
 
     grid = parse_grid(grid_spec)
     rates = {}
