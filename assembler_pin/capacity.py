@@ -36,7 +36,7 @@ from .kinematics import PlateArrays, to_se3
 from .labels import leg_label
 from .messages import one_line
 from .model import AssemblerModel
-from .statics import solve_statics
+from .statics.pinocchio_statics import solve_statics
 from .threads import one_blas_thread
 
 __all__ = [

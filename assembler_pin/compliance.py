@@ -24,11 +24,12 @@ import pinocchio as pin
 from .bounds import BOUNDS, check_bound
 from .elastic import line_conditions, solve_equilibrium
 from .exceptions import LoadError
-from .gradients import PoseDerivatives
 from .kinematics import PlateArrays, leg_vectors, plate_arrays, stack_forward_kinematics
 from .labels import leg_label
 from .model import AssemblerModel
-from .statics import CONDITION_LIMIT, solve_statics
+from .statics.closed_form import CONDITION_LIMIT
+from .statics.derivatives import PoseDerivatives
+from .statics.pinocchio_statics import solve_statics
 from .validation import as_float_array
 
 __all__ = [
@@ -232,7 +233,7 @@ def compensated_lengths(
     am: AssemblerModel, plates: PlateArrays | Sequence | np.ndarray, tolerance: float = 1e-9
 ) -> CompensatedLengths:
     """The commanded lengths ``L - F / k`` whose loaded equilibrium is ``plates`` (to ``tolerance``
-    [m]), ``F`` the statics forces (:func:`~assembler_pin.statics.solve_statics`, tension
+    [m]), ``F`` the statics forces (:func:`~assembler_pin.statics.pinocchio_statics.solve_statics`, tension
     positive) and ``L`` the pose's lengths; confirmed by :func:`loaded_pose`. A leg in
     compression is commanded longer than it ends up, one in tension shorter; ``success`` also
     needs every commanded length within the stroke (a servo cannot be commanded beyond it).
@@ -298,10 +299,10 @@ def sag_and_gradient(
 
     The gradient is exact (adjoint of ``A y = F / k``): ``chart="world"`` gives it per world
     twist ``η_k = (v, ω)`` of plate k (``T_k ← exp6(η_k) T_k``, the columns of
-    :func:`~assembler_pin.gradients.pose_derivatives`, so ``gradient @ B`` is the optimizer's
+    :func:`~assembler_pin.statics.derivatives.pose_derivatives`, so ``gradient @ B`` is the optimizer's
     chart gradient for its ``B``); ``chart="local"`` per body twist ``ξ_k``
     (``T_k ← T_k exp6(ξ_k)``, the optimizer's chart at its reference). ``derivatives``: the
-    pose's :func:`~assembler_pin.gradients.pose_derivatives` when the caller has them already
+    pose's :func:`~assembler_pin.statics.derivatives.pose_derivatives` when the caller has them already
     (the optimizer's force rows), else computed here.
 
     Raises:
@@ -309,7 +310,7 @@ def sag_and_gradient(
         OptionsError: an unknown chart.
     """
     from .exceptions import OptionsError, SingularConfigurationError
-    from .gradients import pose_derivatives
+    from .statics.derivatives import pose_derivatives
 
     if chart not in ("world", "local"):
         raise OptionsError(f"chart must be 'world' or 'local', got {chart!r}")

@@ -24,7 +24,8 @@ from .exceptions import OptionsError, PoseError
 from .kinematics import LegState, PlateArrays
 from .labels import leg_label, platform_label
 from .options import DEFAULT_GOAL_TOLERANCE, GoalTolerance
-from .statics import CONDITION_LIMIT, StaticsResult
+from .statics.closed_form import CONDITION_LIMIT
+from .statics.result import StaticsResult
 
 __all__ = [
     "DEFAULT_GOAL_TOLERANCE",

@@ -1,6 +1,6 @@
 """Inverse dynamics of the stack: the actuator forces that produce a motion of the closed loops.
 
-The equations are those of :mod:`assembler_pin.statics` with Pinocchio's generalized gravity
+The equations are those of :mod:`assembler_pin.statics.pinocchio_statics` with Pinocchio's generalized gravity
 ``g(q)`` replaced by the recursive Newton–Euler torques of the tree,
 
     RNEA(q, v, a) = M(q) a + C(q, v) v + g(q) = Sᵀ τ + J_cᵀ λ,
@@ -9,7 +9,7 @@ where ``v`` and ``a`` are the joint velocities and accelerations of the motion w
 closed (each shaft tip moves with its top-plate anchor), so gravity, the payload and the
 inertia of every plate, motor and shaft are included. The closure Jacobian is the statics'
 one, so the system keeps its block structure: one 24×24 block per platform (its 6 actuator
-forces and 18 ball forces), solved the same way (:func:`~assembler_pin.statics.solve_statics`).
+forces and 18 ball forces), solved the same way (:func:`~assembler_pin.statics.pinocchio_statics.solve_statics`).
 At zero twist and acceleration it is the statics.
 
 Motions are given per plate (world frame, plate k in 0..n):
@@ -38,7 +38,9 @@ from .exceptions import ArgumentError, SingularConfigurationError
 from .kinematics import PlateArrays, leg_vectors, plate_arrays, q_from_arrays
 from .linalg import cross, inverse_or_nan
 from .model import WHOLE_DATA_MAX_PLATFORMS, AssemblerModel, checked_model
-from .statics import CONDITION_LIMIT, StaticsResult, _leg_jacobians_t
+from .statics.closed_form import CONDITION_LIMIT
+from .statics.pinocchio_statics import _leg_jacobians_t
+from .statics.result import StaticsResult
 from .validation import as_float_array
 
 __all__ = [
@@ -60,7 +62,7 @@ class DynamicsResult(StaticsResult):
         base_wrench: (6,) wrench ``[f, m]`` the base mount applies to plate 0, world axes,
             moment about plate 0's origin [N, N·m].
         condition: (n,) 1-norm condition number of each platform's block.
-        singular: a block's condition number exceeds :data:`~assembler_pin.statics.CONDITION_LIMIT`.
+        singular: a block's condition number exceeds :data:`~assembler_pin.statics.closed_form.CONDITION_LIMIT`.
     """
 
 
@@ -175,7 +177,8 @@ def _joint_motion(am: AssemblerModel, pose: _Pose, V: np.ndarray, A: np.ndarray)
 
 def _block_solve(am: AssemblerModel, pose: _Pose, tau: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Actuator forces (tension positive), ball forces and base wrench balancing the tree's
-    generalized forces ``tau`` (nv), block by block (as :func:`~assembler_pin.statics.solve_statics`)."""
+    generalized forces ``tau`` (nv), block by block (as
+    :func:`~assembler_pin.statics.pinocchio_statics.solve_statics`)."""
     own = np.linalg.solve(pose.jac_t, tau[am.leg_idx_v][..., None])[..., 0]
     local = np.matmul(np.stack([pose.axis, own], axis=2), pose.pa.R[1:, None])
     lines = np.matmul(local, am.top_line_map)

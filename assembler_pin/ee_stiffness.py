@@ -33,7 +33,7 @@ from .exceptions import LoadError, PoseError
 from .kinematics import PlateArrays, plate_arrays
 from .linalg import skew
 from .model import AssemblerModel
-from .statics import CONDITION_LIMIT
+from .statics.closed_form import CONDITION_LIMIT
 from .validation import as_float_array
 
 __all__ = ["StiffnessResult", "elastic_compliance", "platform_compliances", "stiffness", "stiffness_from_equilibrium"]
@@ -240,7 +240,7 @@ def stiffness(
 
     Returns:
         A :class:`StiffnessResult`; ``success`` false (NaN matrices) when a platform is singular
-        (leg-line condition number above :data:`~assembler_pin.statics.CONDITION_LIMIT`), the
+        (leg-line condition number above :data:`~assembler_pin.statics.closed_form.CONDITION_LIMIT`), the
         equilibrium does not converge or is not stable.
 
     Raises:

@@ -41,10 +41,10 @@ from dataclasses import dataclass
 import numpy as np
 import pinocchio as pin
 
-from . import closed_form
 from .elastic_solve import block_sweep, held_solve, tangent_solve
 from .linalg import cross, skew
 from .model import AssemblerModel
+from .statics import closed_form
 
 __all__ = [
     "DENSE_MAX_PLATFORMS",
@@ -304,7 +304,7 @@ class Equilibrium:
 def line_conditions(lines: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Inverses (n, 6, 6) and 1-norm condition numbers (n,) of the platforms' leg-line matrices
     (rows ``[u, r × u]`` per leg, world axes at the top plate's origin: ``dL/d(δp, δθ)``), by
-    :func:`~assembler_pin.closed_form.line_conditions` (the statics' condition number, with
+    :func:`~assembler_pin.statics.closed_form.line_conditions` (the statics' condition number, with
     the lines in world axes). A singular matrix gives NaN inverses and an infinite condition
     number."""
     inverse, cond = closed_form.line_conditions(lines)

@@ -4,7 +4,7 @@
 files a user gets from ``assembler-pin export`` — and holds everything that does not
 change with the pose: the Pinocchio ``model``, the point-anchor closure constraints and
 index maps. Per-pose computations live in :mod:`assembler_pin.kinematics` and
-:mod:`assembler_pin.statics`; they take an ``AssemblerModel`` and never write into a
+:mod:`assembler_pin.statics.pinocchio_statics`; they take an ``AssemblerModel`` and never write into a
 ``Data`` it holds: the statics run on per-platform models that own their ``Data``, or on a
 whole-stack ``Data`` the caller creates (:meth:`AssemblerModel.create_data`) and passes.
 
@@ -265,7 +265,7 @@ class AssemblerModel:
     # ------------------------------------------------------------------ helpers
     def create_data(self) -> pin.Data:
         """A new Pinocchio ``Data`` of the whole-stack model, owned by the caller (pass it to
-        :func:`~assembler_pin.statics.solve_statics` as ``data``, or use it to inspect the
+        :func:`~assembler_pin.statics.pinocchio_statics.solve_statics` as ``data``, or use it to inspect the
         model). Refused above :data:`WHOLE_DATA_MAX_PLATFORMS` platforms, where it takes
         gigabytes.
 

@@ -118,9 +118,9 @@ def sag_reference(am: AssemblerModel) -> float:
         OptionsError: the home pose does not sag (no load on the legs): no sag objective.
     """
     from .exceptions import OptionsError
-    from .gradients import pose_values
     from .kinematics import plate_arrays
     from .optimize.sag import linear_sag
+    from .statics.derivatives import pose_values
 
     sag = linear_sag(pose_values(am, plate_arrays(am, am.home)), float(am.config.leg.stiffness))[0]
     if not (np.isfinite(sag) and sag > 0):
@@ -183,10 +183,10 @@ def state_score(
 
 def state_sag(am: AssemblerModel, state: StackState) -> float:
     """The EE's linear sag [m] of a state's plates (inf when a platform is singular), from the
-    closed-form equilibrium of its plates (the pass of :func:`~assembler_pin.gradients.pose_values`
+    closed-form equilibrium of its plates (the pass of :func:`~assembler_pin.statics.derivatives.pose_values`
     without the angles the sag does not read)."""
-    from .closed_form import equilibrium
     from .optimize.sag import equilibrium_sag
+    from .statics.closed_form import equilibrium
 
     plates = state.plates
     eq, _ = equilibrium(am, plates.R, plates.p)

@@ -36,7 +36,7 @@ from .compliance import LoadedPose, loaded_pose, stroke_problem
 from .elastic import elastic_terms, line_conditions
 from .kinematics import PlateArrays, leg_vectors, plate_arrays
 from .model import AssemblerModel
-from .statics import CONDITION_LIMIT
+from .statics.closed_form import CONDITION_LIMIT
 from .supports import (
     SupportAnswer,
     TwoPointStatics,

@@ -36,7 +36,7 @@ from .exceptions import PoseError, SupportError
 from .kinematics import PlateArrays, leg_vectors, plate_arrays, to_se3
 from .model import AssemblerModel
 from .state import StackState
-from .statics import CONDITION_LIMIT
+from .statics.closed_form import CONDITION_LIMIT
 from .validation import as_float_array
 
 __all__ = [
@@ -252,7 +252,7 @@ def two_point_statics(
 
     Returns:
         A :class:`TwoPointStatics`; ``success`` false (NaN forces) for a singular pose (leg-line
-        condition number above :data:`~assembler_pin.statics.CONDITION_LIMIT`), no convergence,
+        condition number above :data:`~assembler_pin.statics.closed_form.CONDITION_LIMIT`), no convergence,
         an unstable equilibrium or a residual above :func:`residual_tolerance`.
 
     Raises:

@@ -102,8 +102,8 @@ def test_target_rows_say_met_only_when_the_measured_value_meets_its_target():
 def test_the_compiled_optimizer_is_asked_for_only_inside_its_bench_row(monkeypatch):
     """The opt-in row sets ASSEMBLER_PIN_STATICS=numba for its solves only, and gives the
     variable back as it was (unset, or the user's value)."""
-    from assembler_pin import pose_kernel
     from assembler_pin.bench import targets as bench_targets
+    from assembler_pin.statics import pose_kernel
 
     for before in (None, "numpy"):
         if before is None:

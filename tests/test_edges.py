@@ -104,7 +104,7 @@ def _patch_values(monkeypatch, backend: str, wrap) -> None:
         monkeypatch.setattr(problem_module, "pose_values", wrap(problem_module.pose_values))
     else:
         monkeypatch.setenv("ASSEMBLER_PIN_STATICS", "numba")
-        from assembler_pin.pose_kernel import CompiledPass
+        from assembler_pin.statics.pose_kernel import CompiledPass
 
         monkeypatch.setattr(CompiledPass, "values", wrap(CompiledPass.values))
 
@@ -145,7 +145,7 @@ def test_singular_derivatives_end_the_solve_with_the_reason(am, monkeypatch, bac
         monkeypatch.setattr(problem_module, "pose_derivatives", singular)
     else:
         monkeypatch.setenv("ASSEMBLER_PIN_STATICS", "numba")
-        from assembler_pin.pose_kernel import CompiledPass
+        from assembler_pin.statics.pose_kernel import CompiledPass
 
         monkeypatch.setattr(CompiledPass, "derivatives", singular)
     result = optimize_internal_poses(am, init, goal)

@@ -8,8 +8,8 @@ import pytest
 from checks import twist_moved
 
 from assembler_pin import solve_statics
-from assembler_pin.gradients import pose_derivatives
 from assembler_pin.kinematics import PlateArrays, leg_state
+from assembler_pin.statics.derivatives import pose_derivatives
 
 
 def _paper_lambda(am, pa: PlateArrays) -> np.ndarray:
@@ -86,7 +86,7 @@ def test_one_pass_values_are_the_free_body_statics_and_feed_the_derivatives(am, 
     derivatives extending that pass equal the ones computed from scratch."""
     from checks import design_forces, design_plate_deviation
 
-    from assembler_pin.gradients import pose_values
+    from assembler_pin.statics.derivatives import pose_values
 
     _, pa = random_poses[pose]
     values = pose_values(am, pa)

@@ -179,9 +179,9 @@ def test_moment_form_is_the_smooth_form_where_the_levels_hold(am, random_poses, 
     """With the moment variables at the poses' own moments (the independent cumulative sum
     of the closed form), the level rows are zero and every other row and the objective are
     :class:`SmoothForm`'s, bit for bit up to rounding."""
-    from assembler_pin.gradients import pose_values
     from assembler_pin.optimize.smooth import SmoothForm
     from assembler_pin.optimize.wrench import MOMENT_SCALE
+    from assembler_pin.statics.derivatives import pose_values
 
     form = _wrench_case(am, random_poses[7][1], case)
     smooth = SmoothForm(form.problem)

@@ -34,16 +34,7 @@ LAYERS: tuple[tuple[str, ...], ...] = (
     ),
     ("model", "platform_model", "geometry", "urdf", "urdf_check", "mjcf"),
     ("kinematics",),
-    (
-        "statics",
-        "closed_form",
-        "gradients",
-        "statics_kernel",
-        "statics_loops",
-        "pose_kernel",
-        "pose_loops",
-        "home_state",
-    ),
+    ("statics",),
     ("compliance", "elastic", "elastic_solve", "ee_stiffness", "stiffness_scaling", "constraints", "dynamics"),
     ("state",),
     ("helper_arm", "optimize", "objective", "supports", "support_choice", "viz"),
@@ -63,10 +54,6 @@ UNIT_OF: dict[str, str] = {
         "common",
     ),
     **dict.fromkeys(("platform_model", "geometry", "urdf", "urdf_check", "mjcf"), "model"),
-    **dict.fromkeys(
-        ("closed_form", "gradients", "statics_kernel", "statics_loops", "pose_kernel", "pose_loops", "home_state"),
-        "statics",
-    ),
     **dict.fromkeys(("elastic", "elastic_solve", "ee_stiffness", "stiffness_scaling"), "compliance"),
     "objective": "optimize",
     "support_choice": "supports",
@@ -87,7 +74,6 @@ KNOWN_UPWARD: set[tuple[str, str]] = {
 KNOWN_CYCLES: set[tuple[str, ...]] = {
     ("assembler_pin.motion.paths", "assembler_pin.motion.trajfile"),
     ("assembler_pin.motion.time_law", "assembler_pin.motion.toppra_law"),
-    ("assembler_pin.statics", "assembler_pin.statics_kernel"),
     ("assembler_pin.walk.plan", "assembler_pin.walk.verify"),
 }
 

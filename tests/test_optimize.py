@@ -152,7 +152,7 @@ def test_compiled_iterates_take_one_call_per_point(am, start, monkeypatch):
     and one for its derivatives (and the start one, for its max|F|: the force cap); the numpy
     pass never runs, and the optimum equals the numpy path's."""
     import assembler_pin.optimize.problem as problem
-    from assembler_pin.pose_kernel import CompiledPass
+    from assembler_pin.statics.pose_kernel import CompiledPass
 
     calls = {"values": 0, "derivatives": 0, "numpy": 0}
     real_values, real_derivatives, real_numpy = CompiledPass.values, CompiledPass.derivatives, problem.pose_values

@@ -1,5 +1,5 @@
 """The compiled pass of the optimizer's points against the numpy reference
-(:mod:`assembler_pin.gradients`), finite differences of the Pinocchio statics and the plain
+(:mod:`assembler_pin.statics.derivatives`), finite differences of the Pinocchio statics and the plain
 kinematics, and its fallback."""
 
 from __future__ import annotations
@@ -11,13 +11,14 @@ import pinocchio as pin
 import pytest
 from checks import design_plate_deviation, twist_moved
 
-from assembler_pin import pose_kernel, pose_loops, solve_statics
+from assembler_pin import solve_statics
 from assembler_pin.bench.timing import random_reachable_plates
 from assembler_pin.config import load_config
 from assembler_pin.exceptions import OptionsError
-from assembler_pin.gradients import pose_derivatives, pose_values
 from assembler_pin.kinematics import PlateArrays, leg_state
 from assembler_pin.model import AssemblerModel
+from assembler_pin.statics import pose_kernel, pose_loops
+from assembler_pin.statics.derivatives import pose_derivatives, pose_values
 
 pytestmark = pytest.mark.skipif(importlib.util.find_spec("numba") is None, reason="no numba")
 

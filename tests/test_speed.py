@@ -15,13 +15,13 @@ import pinocchio as pin
 import pytest
 from threadpoolctl import threadpool_info, threadpool_limits
 
-from assembler_pin import statics_kernel
 from assembler_pin.capacity import KEPT_PAYLOAD_MODELS, PayloadModels, payload_capacity, with_payload
 from assembler_pin.exceptions import OptionsError
 from assembler_pin.helper_arm import arm_cache
 from assembler_pin.model import AssemblerModel
 from assembler_pin.motion import EEPath
 from assembler_pin.solver import solve
+from assembler_pin.statics import kernel as statics_kernel
 from assembler_pin.statics import solve_statics, solve_statics_batch
 
 HAS_NUMBA = importlib.util.find_spec("numba") is not None

@@ -1,5 +1,5 @@
 """Start-up of the command: ``--help`` builds its parser without numerical libraries, and
-``statics --home --json`` answers without numpy or Pinocchio (assembler_pin.home_state),
+``statics --home --json`` answers without numpy or Pinocchio (assembler_pin.statics.home),
 with the same document as the Pinocchio statics of the home pose.
 
 No timing is asserted here: ``assembler-pin bench --speed`` measures the start-up
@@ -23,10 +23,10 @@ from assembler_pin.cli.app import main
 from assembler_pin.cli.statics import _fast_home
 from assembler_pin.config import PayloadConfig, PlateConfig, load_config
 from assembler_pin.geometry import leg_geometry
-from assembler_pin.home_state import SCREEN_CONDITION, home_anchors, home_state_document
 from assembler_pin.model import AssemblerModel
 from assembler_pin.state import evaluate_state
 from assembler_pin.statics import CONDITION_LIMIT
+from assembler_pin.statics.home import SCREEN_CONDITION, home_anchors, home_state_document
 
 HEAVY = ("numpy", "pinocchio", "scipy", "numba", "coal")
 

@@ -1,6 +1,6 @@
 """The compiled single-stack calls of the statics kernel: their pose checks refuse exactly
 what :func:`~assembler_pin.kinematics.plate_arrays` refuses, with its message, and every
-answer they give is Pinocchio's statics (:func:`~assembler_pin.statics.solve_statics`).
+answer they give is Pinocchio's statics (:func:`~assembler_pin.statics.pinocchio_statics.solve_statics`).
 
 The interpreted loops (the numpy-free path of ``statics --home``) are held to Pinocchio on
 moved and turned stacks too, since the compiled kernel is compiled from the same source.
@@ -16,12 +16,12 @@ import numpy as np
 import pinocchio as pin
 import pytest
 
-from assembler_pin import statics_kernel
 from assembler_pin.exceptions import PoseError
 from assembler_pin.kinematics import ORTHONORMAL_TOL, PlateArrays, plate_arrays
 from assembler_pin.model import AssemblerModel
+from assembler_pin.statics import kernel as statics_kernel
 from assembler_pin.statics import solve_statics
-from assembler_pin.statics_loops import Grid, closed_form_pure, constants
+from assembler_pin.statics.loops import Grid, closed_form_pure, constants
 
 pytestmark = pytest.mark.skipif(importlib.util.find_spec("numba") is None, reason="no numba")
 

@@ -86,7 +86,7 @@ def test_a_singular_pose_has_no_sag(am):
 
 
 def test_given_pose_derivatives_give_the_same_answer(am, random_poses):
-    from assembler_pin.gradients import pose_derivatives
+    from assembler_pin.statics.derivatives import pose_derivatives
 
     _, pa = random_poses[4]
     own, given = sag_and_gradient(am, pa), sag_and_gradient(am, pa, derivatives=pose_derivatives(am, pa))

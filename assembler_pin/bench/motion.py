@@ -10,7 +10,7 @@ import numpy as np
 
 from ..kinematics import PlateArrays
 from ..model import AssemblerModel
-from ..statics import solve_statics
+from ..statics.pinocchio_statics import solve_statics
 from .timing import random_reachable_plates
 
 __all__ = ["COMPARE_PATHS", "benchmark_mujoco", "benchmark_time_laws", "format_mujoco", "format_time_laws"]

@@ -12,7 +12,7 @@ import numpy as np
 from ..kinematics import stack_forward_kinematics
 from ..model import AssemblerModel
 from ..progress import ProgressCallback
-from ..statics import solve_statics
+from ..statics.pinocchio_statics import solve_statics
 from .timing import median_time_us, random_reachable_plates
 
 __all__ = [

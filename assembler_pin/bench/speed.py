@@ -137,8 +137,8 @@ def benchmark_statics_kernel(
     (numba import + compile or cache load) [s], one stack from arrays [µs] and stacks per
     second at each batch size (one thread) and the peak of the memory allocated per stack
     [KB] (tracemalloc, a second call); and Pinocchio's single statics [µs] for comparison."""
-    from ..statics import solve_statics
-    from ..statics_kernel import closed_form_forces, kernel_available
+    from ..statics.kernel import closed_form_forces, kernel_available
+    from ..statics.pinocchio_statics import solve_statics
 
     rng = np.random.default_rng(seed)
     samples = [random_reachable_plates(am, rng)[1] for _ in range(20)]
@@ -169,8 +169,8 @@ def benchmark_statics_kernel(
 
 def _statics_calls(am: AssemblerModel, poses: list, has_kernel: bool) -> dict[str, Any]:
     """The calls timed by :func:`benchmark_single_statics`, cycling through ``poses``."""
-    from ..statics import solve_statics
-    from ..statics_kernel import kernel_result
+    from ..statics.kernel import kernel_result
+    from ..statics.pinocchio_statics import solve_statics
 
     counter = iter(range(10**9))
     calls = {"pinocchio": lambda: solve_statics(am, poses[next(counter) % len(poses)])}
@@ -183,13 +183,13 @@ def benchmark_single_statics(
     platforms: tuple[int, ...] = (4, 8, 16), repeat: int = 300, rounds: int = 3, seed: int = 0
 ) -> dict[str, float]:
     """One stack's whole statics per call [µs] at each stack size: Pinocchio's
-    :func:`~assembler_pin.statics.solve_statics` and the compiled kernel's
-    :func:`~assembler_pin.statics_kernel.kernel_result` (the same result), from plate arrays
+    :func:`~assembler_pin.statics.pinocchio_statics.solve_statics` and the compiled kernel's
+    :func:`~assembler_pin.statics.kernel.kernel_result` (the same result), from plate arrays
     and from 4×4 matrices (``..._4x4_us``: their validation included). Medians of ``repeat``
     calls cycling through 20 random reachable poses, the best of ``rounds`` interleaved
     rounds; NaN for the kernel without numba."""
     from ..config import load_config
-    from ..statics_kernel import kernel_available
+    from ..statics.kernel import kernel_available
 
     check_bound("bench.repeat", repeat, "repeat")
     has_kernel = kernel_available()

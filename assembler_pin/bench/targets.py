@@ -258,7 +258,7 @@ def benchmark_targets(am: AssemblerModel, map_cells: int = MAP_MEMORY_CELLS, qui
 def _compiled_optimizer() -> Iterator[None]:
     """The optimizer on its compiled pass (``ASSEMBLER_PIN_STATICS=numba``, opt-in) for the
     duration; the variable's former value is restored."""
-    from ..statics_kernel import ENV_VAR
+    from ..statics.kernel import ENV_VAR
 
     before = os.environ.get(ENV_VAR)
     os.environ[ENV_VAR] = "numba"

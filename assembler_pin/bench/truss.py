@@ -5,10 +5,10 @@ from __future__ import annotations
 
 from ..compliance import compensated_lengths, loaded_pose, sag_and_gradient
 from ..ee_stiffness import stiffness
-from ..gradients import pose_derivatives
 from ..kinematics import plate_arrays
 from ..model import AssemblerModel
-from ..statics import solve_statics
+from ..statics.derivatives import pose_derivatives
+from ..statics.pinocchio_statics import solve_statics
 from ..threads import single_blas_thread
 from .timing import median_time_us
 
@@ -19,8 +19,8 @@ def benchmark_stiffness(am: AssemblerModel, repeat: int = 200) -> dict[str, floa
     """Median wall time [s] per call of :func:`~assembler_pin.ee_stiffness.stiffness`,
     :func:`~assembler_pin.compliance.loaded_pose`, :func:`~assembler_pin.compliance.compensated_lengths` and
     :func:`~assembler_pin.compliance.sag_and_gradient` at the home
-    pose (and, for scale, :func:`~assembler_pin.statics.solve_statics` and the force
-    objective's derivatives :func:`~assembler_pin.gradients.pose_derivatives`), BLAS on one
+    pose (and, for scale, :func:`~assembler_pin.statics.pinocchio_statics.solve_statics` and the force
+    objective's derivatives :func:`~assembler_pin.statics.derivatives.pose_derivatives`), BLAS on one
     thread as in the optimizer."""
     pa = plate_arrays(am, am.home)
     lengths = compensated_lengths(am, pa).lengths

@@ -63,7 +63,7 @@ class JointProblem:
         from ..constraints import leg_limit_margins
         from ..kinematics import leg_state, plate_deviation
         from ..optimize import SINGULAR_FORCE
-        from ..statics import solve_statics
+        from ..statics.pinocchio_statics import solve_statics
 
         key = x.tobytes()
         if key in self._cache:

@@ -4,9 +4,9 @@ and the evaluation of a chart point.
 Every iterate is evaluated by ONE closed-form pass: forces, lengths, deflection cosines, rise
 and plate angles. Where the solver asks for derivatives at that point, a second pass gives
 them. By default the passes are the numpy reference
-(:func:`~assembler_pin.gradients.pose_values`, whose pass
-:func:`~assembler_pin.gradients.pose_derivatives` extends); with ``ASSEMBLER_PIN_STATICS=numba``
-they run compiled (:class:`~assembler_pin.pose_kernel.CompiledPass`, values and derivatives in
+(:func:`~assembler_pin.statics.derivatives.pose_values`, whose pass
+:func:`~assembler_pin.statics.derivatives.pose_derivatives` extends); with ``ASSEMBLER_PIN_STATICS=numba``
+they run compiled (:class:`~assembler_pin.statics.pose_kernel.CompiledPass`, values and derivatives in
 one call each), except in a problem that reads the sag or runs IPOPT. The sag objectives and the sag limit
 read the EE's linear sag of that pass (:func:`.sag.linear_sag`) and, with the
 derivatives, its adjoint gradient (:func:`~assembler_pin.compliance.sag_and_gradient`).
@@ -22,12 +22,12 @@ import numpy as np
 import pinocchio as pin
 
 from ..exceptions import SingularConfigurationError, _SingularIterateError
-from ..gradients import PoseDerivatives, PoseValues, pose_derivatives, pose_values
 from ..kinematics import PlateArrays
 from ..model import AssemblerModel
 from ..objective import SagObjective, motion_cost, omega, sag_reference
 from ..options import GEOMETRIC_MARGIN, SMOOTH_METHODS, OptimizeOptions
-from ..pose_kernel import CompiledPass, use_pose_kernel
+from ..statics.derivatives import PoseDerivatives, PoseValues, pose_derivatives, pose_values
+from ..statics.pose_kernel import CompiledPass, use_pose_kernel
 from .charts import LocalChart, TaaChart
 from .options import MotionTerm
 from .point import ChartDerivatives, Point

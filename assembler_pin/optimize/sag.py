@@ -15,9 +15,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..closed_form import Equilibrium
-from ..gradients import PoseValues
 from ..linalg import cross
+from ..statics.closed_form import Equilibrium
+from ..statics.derivatives import PoseValues
 
 __all__ = ["equilibrium_sag", "linear_sag"]
 
@@ -26,7 +26,7 @@ def linear_sag(values: PoseValues, stiffness: float) -> tuple[float, np.ndarray]
     """(``|δp|`` [m], ``δp`` (3,) [m, world axes]) of the EE origin at a pose.
 
     Args:
-        values: the pose's closed-form pass (:func:`~assembler_pin.gradients.pose_values`).
+        values: the pose's closed-form pass (:func:`~assembler_pin.statics.derivatives.pose_values`).
         stiffness: the legs' axial stiffness k [N/m].
 
     Returns NaN when a platform's lines are singular (no sag is defined there).
@@ -38,7 +38,7 @@ def equilibrium_sag(eq: Equilibrium, ee_position: np.ndarray, stiffness: float) 
     """:func:`linear_sag` from the closed-form equilibrium alone.
 
     Args:
-        eq: the pose's :class:`~assembler_pin.closed_form.Equilibrium` (world frame).
+        eq: the pose's :class:`~assembler_pin.statics.closed_form.Equilibrium` (world frame).
         ee_position: the EE plate's origin, world [m].
         stiffness: the legs' axial stiffness k [N/m].
     """

@@ -4,7 +4,7 @@ x = [poses in the local chart, s]; minimize ``w1·s + w2·sqrt(Σ λ_k²) (+ w3�
 force objective; the sag objectives replace or extend it, :class:`~assembler_pin.objective.SagObjective`)
 subject to ``-s <= F_i <= s``, the force limits (on ``s`` alone when they are equal), every
 leg limit, the EE tolerance, the motion step and the sag limit. Smooth, so SLSQP gets exact gradients
-(:mod:`assembler_pin.gradients`), all from the closed-form pass of each point.
+(:mod:`assembler_pin.statics.derivatives`), all from the closed-form pass of each point.
 """
 
 from __future__ import annotations

@@ -23,15 +23,13 @@ supplies.
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import dataclass
 
 import numpy as np
 import numpy.typing as npt
 import pinocchio as pin
 
-from .closed_form import CONDITION_LIMIT, is_singular, line_conditions
-from .exceptions import ArgumentError, PoseError, SingularConfigurationError
-from .kinematics import (
+from ..exceptions import ArgumentError, PoseError, SingularConfigurationError
+from ..kinematics import (
     LegState,
     PlateArrays,
     checked_rotations,
@@ -40,59 +38,22 @@ from .kinematics import (
     platform_configurations,
     q_from_arrays,
 )
-from .linalg import skew
-from .model import AssemblerModel, checked_model
-from .platform_model import PlatformStatics, stack_gravity_terms
-from .validation import as_float_array
+from ..linalg import skew
+from ..model import AssemblerModel, checked_model
+from ..platform_model import PlatformStatics, stack_gravity_terms
+from ..validation import as_float_array
+from .closed_form import CONDITION_LIMIT, is_singular, line_conditions
+from .kernel import closed_form_forces
+from .result import StaticsResult
 
 __all__ = [
-    "CONDITION_LIMIT",
     "WHOLE_STACK_STATICS_MAX_PLATFORMS",
-    "StaticsResult",
     "checked_data",
     "closure_jacobian_blocks",
     "gravity_terms",
     "solve_statics",
     "solve_statics_batch",
 ]
-
-
-@dataclass(frozen=True)
-class StaticsResult:
-    """Static equilibrium of a pose.
-
-    Attributes:
-        forces: (n, 6) axial actuator forces [N], tension positive (the paper's sign).
-        ball_forces: (n, 6, 3) force the top plate exerts on each shaft tip at the ball
-            joint, world axes [N].
-        base_wrench: (6,) wrench ``[f, m]`` the base mount applies to plate 0, world
-            axes, moment about plate 0's origin [N, N·m].
-        condition: (n,) 1-norm condition number of each platform's statics block.
-        singular: True when a block's condition number exceeds :data:`CONDITION_LIMIT`
-            (the forces are then not trustworthy).
-    """
-
-    forces: np.ndarray
-    ball_forces: np.ndarray
-    base_wrench: np.ndarray
-    condition: np.ndarray
-    singular: bool
-
-    @property
-    def max_abs_force(self) -> float:
-        return float(np.abs(self.forces).max())
-
-    @property
-    def mean_abs_force(self) -> float:
-        return float(np.abs(self.forces).mean())
-
-    def __repr__(self) -> str:
-        n = self.forces.shape[0]
-        return (
-            f"StaticsResult({n} platforms, max|F| {self.max_abs_force:.3f} N, mean|F| {self.mean_abs_force:.3f} N, "
-            f"base force {np.round(self.base_wrench[:3], 3).tolist()} N, worst condition "
-            f"{float(np.max(self.condition)):.3g}{', SINGULAR' if self.singular else ''})"
-        )
 
 
 def _leg_jacobians_t(columns: np.ndarray, top_points: np.ndarray) -> np.ndarray:
@@ -288,14 +249,14 @@ def solve_statics_batch(am: AssemblerModel, plates: npt.ArrayLike, backend: str 
     """Actuator forces of B stacks at once, for maps and sweeps.
 
     Vectorized over the stacks and platforms with the closed-form equilibrium of
-    :func:`~assembler_pin.closed_form.equilibrium` (each leg balances its own weight; each top
+    :func:`~assembler_pin.statics.closed_form.equilibrium` (each leg balances its own weight; each top
     plate the weight above it and the six ball forces), which the tests hold to the
     Pinocchio statics of :func:`solve_statics` to 1e-9 N, singular stacks included.
 
     Args:
         plates: (B, n+1, 4, 4) world poses of the plates of each stack (validated all at once).
         backend: ``auto`` (default), ``numba`` (the compiled kernel) or ``numpy`` (the
-            reference path); see :func:`~assembler_pin.statics_kernel.resolve_backend`.
+            reference path); see :func:`~assembler_pin.statics.kernel.resolve_backend`.
 
     Returns:
         (B, n, 6) forces [N], tension positive; NaN rows for a stack whose statics are
@@ -310,8 +271,6 @@ def solve_statics_batch(am: AssemblerModel, plates: npt.ArrayLike, backend: str 
     B = matrices.shape[0]
     R, p = checked_rotations(matrices.reshape(-1, 4, 4), "pose")
     R, p = R.reshape(B, am.n + 1, 3, 3), p.reshape(B, am.n + 1, 3)
-    from .statics_kernel import closed_form_forces
-
     forces, condition = closed_form_forces(am, R, p, backend)
     singular = ~(condition.max(axis=1) <= CONDITION_LIMIT)  # NaN counts as singular
     return np.where(singular[:, None, None], np.nan, forces)

@@ -1,29 +1,29 @@
 """A compiled kernel of the closed-form statics, for batches of stacks and single stacks.
 
-The equilibrium is the one of :func:`~assembler_pin.closed_form.equilibrium` (each leg
+The equilibrium is the one of :func:`~assembler_pin.statics.closed_form.equilibrium` (each leg
 balances its own weight; the top plate of each platform the weight above it and the six
-ball forces; module docstring of :mod:`assembler_pin.closed_form`), written as plain loops
-over the stacks, platforms and legs in :mod:`~assembler_pin.statics_loops` and compiled
+ball forces; module docstring of :mod:`assembler_pin.statics.closed_form`), written as plain loops
+over the stacks, platforms and legs in :mod:`~assembler_pin.statics.loops` and compiled
 here by numba (``cache=True``: compiled once per install and Python version, then loaded
 from numba's cache). Per platform it solves the 6×6 system in the top plate's own frame
 (moments about its origin) by Gauss–Jordan elimination with partial pivoting; the same
-inverse gives the 1-norm condition number of :func:`~assembler_pin.statics.solve_statics`.
+inverse gives the 1-norm condition number of :func:`~assembler_pin.statics.pinocchio_statics.solve_statics`.
 The loops' callees are inlined into the compiled kernel. numba checks a cached kernel against
 the timestamp of this file only: in a working copy, a change to
-:mod:`~assembler_pin.statics_loops` alone is seen once this file is touched too (or its
+:mod:`~assembler_pin.statics.loops` alone is seen once this file is touched too (or its
 ``__pycache__/statics_kernel.*.nbi`` files are deleted); an install replaces both.
 
-:func:`kernel_result` gives the whole :class:`~assembler_pin.statics.StaticsResult` of one
+:func:`kernel_result` gives the whole :class:`~assembler_pin.statics.result.StaticsResult` of one
 stack (ball forces and base wrench too) from one compiled call that checks the poses first
 (:func:`_rotations_ok_py`, :func:`_exact_poses_py`) and returns the largest condition
 number; poses it does not pass go through :func:`~assembler_pin.kinematics.plate_arrays`,
 which refuses them with its message or checks (and projects) them. The model's arrays the
 kernel reads are built once per model.
 
-The numpy path (:func:`~assembler_pin.closed_form.equilibrium`) stays the reference and the
+The numpy path (:func:`~assembler_pin.statics.closed_form.equilibrium`) stays the reference and the
 fallback: it is used when numba is not installed, when ``ASSEMBLER_PIN_STATICS=numpy`` is
 set in the environment, or with ``backend="numpy"``. The tests hold both, and
-:func:`kernel_result`, to Pinocchio's statics (:func:`~assembler_pin.statics.solve_statics`)
+:func:`kernel_result`, to Pinocchio's statics (:func:`~assembler_pin.statics.pinocchio_statics.solve_statics`)
 to 1e-10 N.
 
 Frames: world poses of plates 0..n; forces [N], tension positive.
@@ -41,13 +41,13 @@ from typing import Any
 
 import numpy as np
 
-from . import statics_loops as loops
+from ..exceptions import OptionsError
+from ..kinematics.poses import ORTHONORMAL_TOL, PlateArrays, plate_arrays
+from ..linalg import cross
+from ..model import AssemblerModel
+from . import loops
 from .closed_form import CONDITION_LIMIT, equilibrium, line_conditions, raise_singular
-from .exceptions import OptionsError
-from .kinematics.poses import ORTHONORMAL_TOL, PlateArrays, plate_arrays
-from .linalg import cross
-from .model import AssemblerModel
-from .statics import StaticsResult
+from .result import StaticsResult
 
 __all__ = [
     "BACKENDS",
@@ -90,10 +90,10 @@ ARRAYS_ROTATION_TOL = 0.5 * ORTHONORMAL_TOL
 
 
 def _kernel_py(R, p, bottom, top, consts, forces, condition, ball, base, full):  # pragma: no cover - compiled
-    """consts: :data:`~assembler_pin.statics_loops.CONSTANT_NAMES`. Fills forces (B, n, 6)
-    and condition (B, n), stack by stack (:func:`~assembler_pin.statics_loops._stack_py`), and
+    """consts: :data:`~assembler_pin.statics.loops.CONSTANT_NAMES`. Fills forces (B, n, 6)
+    and condition (B, n), stack by stack (:func:`~assembler_pin.statics.loops._stack_py`), and
     with ``full`` the ball forces (B, n, 6, 3) and base wrenches (B, 6) too
-    (:func:`~assembler_pin.statics_loops._extras_py`; without, ``ball`` and ``base`` are not read)."""
+    (:func:`~assembler_pin.statics.loops._extras_py`; without, ``ball`` and ``base`` are not read)."""
     B, n = R.shape[0], R.shape[1] - 1
     lev_f, lev_m = np.zeros(n + 1), np.zeros((n + 1, 2))
     t, u, fp, gu = np.zeros((n, 6, 3)), np.zeros((n, 6, 3)), np.zeros((n, 6, 3)), np.zeros((n, 6))
@@ -206,7 +206,7 @@ _one_stack, _det3, _rotations_ok, _exact_poses = _one_stack_py, _det3_py, _rotat
 def _build_kernel() -> Any:
     """Compile (or load from numba's cache) the kernel; False when numba is missing.
 
-    The loops of :mod:`~assembler_pin.statics_loops` are compiled as copies whose globals
+    The loops of :mod:`~assembler_pin.statics.loops` are compiled as copies whose globals
     name the compiled callees, so the interpreted originals keep calling each other."""
     try:
         import numba
@@ -276,7 +276,7 @@ def resolve_backend(backend: str | None = None, stacks: int = 1) -> str:
 class _ModelArrays:
     """What the kernel reads of a model, built once per model (:func:`_model_arrays`):
     the joint centres ``bottom`` / ``top`` (n, 6, 3) in their plates' frames [m] and the
-    constants ``consts`` of :data:`~assembler_pin.statics_loops.CONSTANT_NAMES`, all
+    constants ``consts`` of :data:`~assembler_pin.statics.loops.CONSTANT_NAMES`, all
     C-contiguous float arrays; ``source`` the model's config and geometry they came from."""
 
     __slots__ = ("bottom", "consts", "model", "source", "top")
@@ -320,8 +320,8 @@ def _kernel_ready(a: object, shape: tuple[int, ...]) -> bool:
 
 
 def _numpy_forces(am: AssemblerModel, R: np.ndarray, p: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """The reference path: :func:`~assembler_pin.closed_form.equilibrium` and the condition
-    number of the legs' lines in each top plate's frame (:func:`~assembler_pin.closed_form.line_conditions`)."""
+    """The reference path: :func:`~assembler_pin.statics.closed_form.equilibrium` and the condition
+    number of the legs' lines in each top plate's frame (:func:`~assembler_pin.statics.closed_form.line_conditions`)."""
 
     eq, _ = equilibrium(am, R, p)
     u_local = np.einsum("bjka,bjik->bjia", R[:, 1:], eq.u)
@@ -393,9 +393,9 @@ def kernel_statics(am: AssemblerModel, R: np.ndarray, p: np.ndarray) -> tuple[np
 def kernel_result(
     am: AssemblerModel, plates: PlateArrays | np.ndarray, raise_on_singular: bool = False
 ) -> StaticsResult:
-    """:func:`~assembler_pin.statics.solve_statics` on the compiled kernel: the same
-    :class:`~assembler_pin.statics.StaticsResult` (forces, ball forces, base wrench, condition
-    numbers, the singular flag and error of :data:`~assembler_pin.statics.CONDITION_LIMIT`),
+    """:func:`~assembler_pin.statics.pinocchio_statics.solve_statics` on the compiled kernel: the same
+    :class:`~assembler_pin.statics.result.StaticsResult` (forces, ball forces, base wrench, condition
+    numbers, the singular flag and error of :data:`~assembler_pin.statics.closed_form.CONDITION_LIMIT`),
     which the tests hold to Pinocchio's.
 
     Args:

@@ -3,7 +3,7 @@
 The home pose (:func:`~assembler_pin.geometry.home_plates`: plate 0 at the world origin,
 every plate level, consecutive plates ``home_height`` apart, every leg at mid-stroke)
 follows from the configuration alone, and so do its statics: the closed-form equilibrium of
-:mod:`~assembler_pin.statics_loops`, interpreted on plain floats. This answers the
+:mod:`~assembler_pin.statics.loops`, interpreted on plain floats. This answers the
 command in a fraction of the time that loading numpy and Pinocchio takes.
 
 :func:`home_state_document` gives the same document as
@@ -19,8 +19,8 @@ from __future__ import annotations
 
 import math
 
-from .config import AssemblerConfig
-from .statics_loops import Grid, closed_form_pure, constants
+from ..config import AssemblerConfig
+from .loops import Grid, closed_form_pure, constants
 
 __all__ = ["SCREEN_CONDITION", "home_anchors", "home_state_document"]
 

@@ -4,7 +4,7 @@ The optimizer needs the actuator forces, leg lengths, joint deflections, rise an
 plate angular deviations *and their exact derivatives* with respect to the plate poses.
 Differentiating the Pinocchio system ``g(q) = Sᵀτ + J_cᵀλ`` needs second-order kinematics
 and a correction for the world-fixed closure forces; the same equilibrium written per
-platform in closed form (:mod:`assembler_pin.closed_form`) differentiates in a few
+platform in closed form (:mod:`assembler_pin.statics.closed_form`) differentiates in a few
 vectorized lines, so this module uses it:
 
 * each leg (motor + shaft, a universal joint at the bottom, a ball at the top) balances
@@ -19,7 +19,7 @@ vectorized lines, so this module uses it:
 
 The values come from the closed form and from the one set of leg measures
 (:mod:`assembler_pin.kinematics.legs`); only their derivatives are written here. The tests
-hold these forces to :func:`~assembler_pin.statics.solve_statics` (Pinocchio) and every
+hold these forces to :func:`~assembler_pin.statics.pinocchio_statics.solve_statics` (Pinocchio) and every
 derivative to finite differences of the Pinocchio statics.
 
 Derivatives are taken with respect to a **world twist** ``η_k = (v, ω)`` of each plate
@@ -33,10 +33,10 @@ from typing import Any
 
 import numpy as np
 
+from ..kinematics import PlateArrays, PlateDeviation, legs, plate_deviation
+from ..linalg import cross, skew
+from ..model import AssemblerModel
 from .closed_form import Equilibrium, equilibrium
-from .kinematics import PlateArrays, PlateDeviation, legs, plate_deviation
-from .linalg import cross, skew
-from .model import AssemblerModel
 
 __all__ = [
     "Equilibrium",

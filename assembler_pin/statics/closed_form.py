@@ -1,6 +1,6 @@
 """The closed-form equilibrium of the stack and the condition number of its 6×6 systems.
 
-The equilibrium (module docstring of :mod:`assembler_pin.gradients`):
+The equilibrium (module docstring of :mod:`assembler_pin.statics.derivatives`):
 
 * each leg (motor + shaft, a universal joint at the bottom, a ball at the top) balances
   its own weight: the ball force's component across the leg is
@@ -13,9 +13,9 @@ The equilibrium (module docstring of :mod:`assembler_pin.gradients`):
 This module is the one owner of that equilibrium (:func:`equilibrium`, vectorized over
 batches of stacks and the platforms) and of the condition number every statics path
 reports and judges (:func:`line_conditions`, :data:`CONDITION_LIMIT`,
-:func:`is_singular`): :func:`~assembler_pin.statics.solve_statics`, the numpy path of
-:mod:`~assembler_pin.statics_kernel` and the elastic truss of :mod:`~assembler_pin.elastic`
-call them. (The compiled kernel of :mod:`~assembler_pin.statics_loops` computes the same
+:func:`is_singular`): :func:`~assembler_pin.statics.pinocchio_statics.solve_statics`, the numpy path of
+:mod:`~assembler_pin.statics.kernel` and the elastic truss of :mod:`~assembler_pin.elastic`
+call them. (The compiled kernel of :mod:`~assembler_pin.statics.loops` computes the same
 number by its own Gauss–Jordan elimination; the tests hold the two together.)
 
 Frames: world poses of plates 0..n; forces [N], moments [N·m], lengths [m].
@@ -27,10 +27,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .exceptions import SingularConfigurationError
-from .kinematics import legs
-from .linalg import cross, inverse_or_nan
-from .model import AssemblerModel
+from ..exceptions import SingularConfigurationError
+from ..kinematics import legs
+from ..linalg import cross, inverse_or_nan
+from ..model import AssemblerModel
 
 __all__ = [
     "CONDITION_LIMIT",

@@ -2,16 +2,16 @@
 
 The optimizer reads, at every point it evaluates, the actuator forces, leg lengths,
 deflection cosines, rise and plate angles of the stack and, where it asks for them, their
-derivatives with respect to the world twists of plates 1..n. :mod:`assembler_pin.gradients`
+derivatives with respect to the world twists of plates 1..n. :mod:`assembler_pin.statics.derivatives`
 computes them with numpy (~60 small array calls per point); the loops of
-:mod:`~assembler_pin.pose_loops` compute the same numbers in one call, compiled here by numba
+:mod:`~assembler_pin.statics.pose_loops` compute the same numbers in one call, compiled here by numba
 (``cache=True``: compiled once per install and Python version, ~15 s, then loaded from
 numba's cache on the first call in a process, ~1 s).
 
-The numpy path (:func:`~assembler_pin.gradients.pose_values`,
-:func:`~assembler_pin.gradients.pose_derivatives`) stays the reference and the default: the
+The numpy path (:func:`~assembler_pin.statics.derivatives.pose_values`,
+:func:`~assembler_pin.statics.derivatives.pose_derivatives`) stays the reference and the default: the
 optimizer runs on the compiled pass only when ``ASSEMBLER_PIN_STATICS=numba`` is set in the
-environment (:data:`~assembler_pin.statics_kernel.ENV_VAR`, the switch of the compiled
+environment (:data:`~assembler_pin.statics.kernel.ENV_VAR`, the switch of the compiled
 statics too). Its rounding differs from numpy's, and SLSQP can turn a difference in the last
 digits into another local optimum (8 of the bench's 120 grid goals, better or worse by up to
 10 %): as the default, an answer would depend on whether numba is installed. The tests hold
@@ -33,13 +33,13 @@ from typing import Any
 
 import numpy as np
 
+from ..exceptions import OptionsError
+from ..kinematics import PlateArrays
+from ..model import AssemblerModel
 from . import pose_loops as loops
-from .exceptions import OptionsError
-from .gradients import PoseDerivatives
-from .kinematics import PlateArrays
-from .model import AssemblerModel
-from .statics_kernel import BACKENDS, ENV_VAR
-from .statics_loops import constants
+from .derivatives import PoseDerivatives
+from .kernel import BACKENDS, ENV_VAR
+from .loops import constants
 
 __all__ = ["CompiledPass", "PoseMeasures", "pose_kernel_available", "use_pose_kernel"]
 
@@ -75,7 +75,7 @@ class PoseMeasures:
 def _build_kernel() -> Any:
     """Compile (or load from numba's cache) the pass; False when numba is missing.
 
-    Each loop of :data:`~assembler_pin.pose_loops.PARTS` is compiled as a copy whose globals
+    Each loop of :data:`~assembler_pin.statics.pose_loops.PARTS` is compiled as a copy whose globals
     name the compiled callees, so the interpreted originals keep calling each other."""
     try:
         import numba
@@ -102,7 +102,7 @@ def pose_kernel_available() -> bool:
 
 def use_pose_kernel() -> bool:
     """Whether the optimizer evaluates its points on the compiled pass: only when
-    :data:`~assembler_pin.statics_kernel.ENV_VAR` is ``numba`` (see the module docstring).
+    :data:`~assembler_pin.statics.kernel.ENV_VAR` is ``numba`` (see the module docstring).
 
     Raises:
         OptionsError: the variable is not one of the statics backends, or ``numba`` is asked
@@ -146,7 +146,7 @@ class CompiledPass:
 
     def values(self, pa: PlateArrays) -> PoseMeasures:
         """Forces, lengths, deflection cosines, rise and plate angles of a stack pose (those of
-        :func:`~assembler_pin.gradients.pose_values`); a singular platform gives NaN forces.
+        :func:`~assembler_pin.statics.derivatives.pose_values`); a singular platform gives NaN forces.
 
         Args:
             pa: world poses of plates 0..n (validated, e.g. by
@@ -158,8 +158,8 @@ class CompiledPass:
         return PoseMeasures(pa, *out)
 
     def derivatives(self, pa: PlateArrays) -> PoseDerivatives:
-        """The :class:`~assembler_pin.gradients.PoseDerivatives` of a stack pose (those of
-        :func:`~assembler_pin.gradients.pose_derivatives`): derivatives with respect to the
+        """The :class:`~assembler_pin.statics.derivatives.PoseDerivatives` of a stack pose (those of
+        :func:`~assembler_pin.statics.derivatives.pose_derivatives`): derivatives with respect to the
         world twists of plates 1..n, last axis 6n.
 
         Raises:

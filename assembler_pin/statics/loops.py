@@ -1,12 +1,12 @@
 """The closed-form statics as plain loops: the one source of the compiled kernel and of the
 pure-Python path.
 
-The equilibrium is the one of :func:`~assembler_pin.closed_form.equilibrium` (each leg
+The equilibrium is the one of :func:`~assembler_pin.statics.closed_form.equilibrium` (each leg
 balances its own weight; the top plate of each platform the weight above it and the six
-ball forces; module docstring of :mod:`assembler_pin.closed_form`). The loops below use only
+ball forces; module docstring of :mod:`assembler_pin.statics.closed_form`). The loops below use only
 scalar arithmetic, :mod:`math` and ``x[i, j, ...]`` indexing, so the same code runs
 
-* compiled by numba on numpy arrays (:mod:`~assembler_pin.statics_kernel` compiles copies
+* compiled by numba on numpy arrays (:mod:`~assembler_pin.statics.kernel` compiles copies
   of these functions whose callees are the compiled ones), and
 * interpreted on :class:`Grid` containers, without numpy (:func:`closed_form_pure`): the
   home pose of ``assembler-pin statics --home`` is answered this way, without loading
@@ -22,7 +22,7 @@ from collections.abc import Sequence
 from typing import TYPE_CHECKING
 
 if TYPE_CHECKING:
-    from .config import AssemblerConfig
+    from ..config import AssemblerConfig
 
 __all__ = ["CONSTANT_NAMES", "Grid", "closed_form_pure", "constants"]
 

@@ -1,7 +1,7 @@
 """The optimizer's per-point values and derivatives as plain loops, compiled by
-:mod:`~assembler_pin.pose_kernel`.
+:mod:`~assembler_pin.statics.pose_kernel`.
 
-The quantities and their derivatives are those of :mod:`assembler_pin.gradients` (the numpy
+The quantities and their derivatives are those of :mod:`assembler_pin.statics.derivatives` (the numpy
 reference, whose module docstring states the equilibrium): actuator forces, leg lengths,
 deflection cosines, rise and plate angles, and their derivatives with respect to the
 **world twist** ``η_k = (v, ω)`` of each plate k = 1..n (``T_k ← exp6(η_k) · T_k``), columns
@@ -18,7 +18,7 @@ derivatives have 12 columns, the first six those of plate j (column block j-1, a
 j = 0), the last six those of plate j+1 (block j).
 
 The functions run interpreted as they are (slowly: the tests use them on one small stack) or
-compiled (:mod:`~assembler_pin.pose_kernel` compiles copies whose callees are the compiled ones).
+compiled (:mod:`~assembler_pin.statics.pose_kernel` compiles copies whose callees are the compiled ones).
 
 Frames: world poses of plates 0..n; forces [N, tension positive], lengths [m].
 """
@@ -29,7 +29,7 @@ import math
 
 import numpy as np
 
-from .statics_loops import CONSTANT_NAMES
+from .loops import CONSTANT_NAMES
 
 __all__ = ["CONSTANT_NAMES", "PARTS"]
 
