@@ -86,7 +86,7 @@ class LegConfig:
         max_tension, max_compression: force limits, both positive magnitudes [N].
         max_speed, max_acceleration: limits of a leg's length rate [m/s] and its
             acceleration [m/s²] along a planned motion (:mod:`assembler_pin.motion`).
-        stiffness: axial stiffness of the leg [N/m] (:mod:`assembler_pin.ee_stiffness`).
+        stiffness: axial stiffness of the leg [N/m] (:mod:`assembler_pin.compliance.ee_stiffness`).
     """
 
     min_length: float = 0.20

@@ -20,7 +20,7 @@ Layout (chosen so that both MuJoCo and Pinocchio's MJCF parser load the same fil
   configuration (the home pose), where MuJoCo computes the anchor in the plate's frame.
 * One ``<position>`` actuator per leg on its slide: ``ctrl`` is the commanded pin-to-pin
   length [m] (``ctrlrange`` the stroke), gain the config's ``leg.stiffness`` (so MuJoCo's
-  servo is the leg spring of :mod:`assembler_pin.ee_stiffness`), damping and armature from
+  servo is the leg spring of :mod:`assembler_pin.compliance.ee_stiffness`), damping and armature from
   :func:`actuator_gains`, ``forcerange`` the config's force limits. MuJoCo's actuator force is
   positive when it pushes the shaft out, i.e. compression: the package's leg force (tension
   positive) is its negative.

@@ -117,7 +117,7 @@ class OptimizeOptions:
             more, so that the legs stay inside between its samples).
         goal_tolerance: tolerance the final state is checked against when the EE is fixed.
         objective: what is minimized (:data:`~assembler_pin.choices.OBJECTIVES`,
-            :mod:`assembler_pin.objective`): ``"force"`` Ω (paper eq. 10), ``"sag"`` the EE's
+            :mod:`assembler_pin.optimize.objective`): ``"force"`` Ω (paper eq. 10), ``"sag"`` the EE's
             sag under its own load, ``"weighted"`` Ω plus ``sag_weight`` times the normalized
             sag; ``"sag"`` and ``"weighted"`` need a smooth method (:data:`SMOOTH_METHODS`).
         sag_weight: the weight w of the sag in the weighted objective (bounds key

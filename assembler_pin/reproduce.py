@@ -28,7 +28,7 @@ from .model import AssemblerModel
 from .optimize import OptimizeOptions, optimize_internal_poses
 from .progress import ProgressCallback
 from .scenarios import SCENARIOS, Scenario
-from .solver import SolveResult, solve
+from .solver.pipeline import SolveResult, solve
 from .state import StackState, evaluate_state
 
 if TYPE_CHECKING:
@@ -70,7 +70,7 @@ class Reference:
 
 @dataclass
 class ScenarioOutcome:
-    """One scenario solved: the scenario, its :class:`~assembler_pin.solver.SolveResult`, the
+    """One scenario solved: the scenario, its :class:`~assembler_pin.solver.pipeline.SolveResult`, the
     leg stroke it was solved with and the :class:`Reference` poses (None when not solved)."""
 
     scenario: Scenario
@@ -263,7 +263,7 @@ def _reference_cells(o: ScenarioOutcome) -> list[str]:
 
 def _sag_cells(am: AssemblerModel, result: SolveResult | None) -> list[str]:
     """max|F| [N], EE sag [mm] and optimizer time [s] of a solve's optimum ("—" when none)."""
-    from .objective import state_sag
+    from .optimize.objective import state_sag
 
     if result is None or result.optimized is None or not result.success:
         return ["—", "—", "—"]
@@ -273,7 +273,7 @@ def _sag_cells(am: AssemblerModel, result: SolveResult | None) -> list[str]:
 
 def sag_table(am: AssemblerModel, outcomes: Sequence[ScenarioOutcome], markdown: bool = False) -> str:
     """The force-optimal and the sag-optimal pose side by side: max|F| [N], the EE's linear
-    sag under its own load [mm] (:func:`~assembler_pin.compliance.sag_and_gradient`) and the
+    sag under its own load [mm] (:func:`~assembler_pin.compliance.loaded.sag_and_gradient`) and the
     optimizer's time ``t`` [s] (every start it ran) of each, and the sag's change; the text
     is under 100 characters wide."""
     header = ["scenario", "force-opt max|F|", "sag [mm]", "t [s]", "sag-opt max|F|", "sag [mm]", "t [s]", "sag"]

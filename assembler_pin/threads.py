@@ -3,7 +3,7 @@
 The optimizer's matrices are 24–190 wide: on them OpenBLAS's threads cost more than they
 save (3–13× slower on a 2-core machine), and a threaded reduction sums in another order,
 which moves SLSQP to a different optimum on some goals. Every entry point that runs the
-optimizer or the helper arm (:func:`~assembler_pin.solver.solve`,
+optimizer or the helper arm (:func:`~assembler_pin.solver.pipeline.solve`,
 :func:`~assembler_pin.optimize.optimize_internal_poses`,
 :func:`~assembler_pin.helper_arm.initial_condition`, motion planning, payload capacity, the
 carrier's solve, map cells) runs under :func:`one_blas_thread`, whatever the caller's

@@ -62,12 +62,12 @@ class WorkspaceSlice:
 
 
 def default_state_function(am: AssemblerModel) -> Callable[[pin.SE3], StackState | None]:
-    """``goal -> state``: the optimized state of :func:`assembler_pin.solver.solve` (falling
+    """``goal -> state``: the optimized state of :func:`assembler_pin.solver.pipeline.solve` (falling
     back to its initial state when the optimization gives none), or, without the solve
     module, the helper-arm initial condition. None when no valid state is found."""
     solver_solve: Callable[..., Any] | None
     try:
-        from .solver import solve as solver_solve
+        from .solver.pipeline import solve as solver_solve
     except ImportError:
         solver_solve = None
     if solver_solve is not None:

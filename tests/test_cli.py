@@ -146,7 +146,7 @@ def test_solve_starts_option_reaches_the_solver(capsys):
     """``--starts all`` runs every start of the solver; the default is ``first`` (the home
     start only when the helper arm's run fails); a wrong value is one line, exit 2."""
     from assembler_pin.choices import SOLVE_STARTS
-    from assembler_pin.solver import START_MODES, STARTS
+    from assembler_pin.solver.pipeline import START_MODES, STARTS
 
     assert SOLVE_STARTS == START_MODES and SOLVE_STARTS[0] == "first"
     goal = ["0.1", "0.0", "0.8", "0", "0", "0"]

@@ -35,10 +35,10 @@ LAYERS: tuple[tuple[str, ...], ...] = (
     ("model", "platform_model", "geometry", "urdf", "urdf_check", "mjcf"),
     ("kinematics",),
     ("statics",),
-    ("compliance", "elastic", "elastic_solve", "ee_stiffness", "stiffness_scaling", "constraints", "dynamics"),
+    ("compliance", "constraints", "dynamics"),
     ("state",),
-    ("helper_arm", "optimize", "objective", "supports", "support_choice", "viz"),
-    ("solver", "capacity", "export"),
+    ("helper_arm", "optimize", "supports", "viz"),
+    ("solver", "export"),
     ("motion", "carrier", "plots", "plan_figure", "workspace_plot"),
     ("maps", "walk", "simulate", "sim", "reproduce"),
     ("bench",),
@@ -54,10 +54,6 @@ UNIT_OF: dict[str, str] = {
         "common",
     ),
     **dict.fromkeys(("platform_model", "geometry", "urdf", "urdf_check", "mjcf"), "model"),
-    **dict.fromkeys(("elastic", "elastic_solve", "ee_stiffness", "stiffness_scaling"), "compliance"),
-    "objective": "optimize",
-    "support_choice": "supports",
-    "capacity": "solver",
     **dict.fromkeys(("plan_figure", "workspace_plot"), "plots"),
     "sim": "simulate",
 }
@@ -65,7 +61,6 @@ UNIT_OF: dict[str, str] = {
 #: Imports that go up the layers today, (importer, imported) as dotted module names.
 KNOWN_UPWARD: set[tuple[str, str]] = {
     ("assembler_pin.messages", "assembler_pin.constraints"),
-    ("assembler_pin.supports", "assembler_pin.walk.turned"),
     ("assembler_pin.viz.animation", "assembler_pin.walk"),
     ("assembler_pin.viz.viewer", "assembler_pin.walk"),
 }

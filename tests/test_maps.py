@@ -17,11 +17,11 @@ import pytest
 
 import assembler_pin as ap
 from assembler_pin.bench.timing import random_reachable_plates
-from assembler_pin.capacity import PayloadModels, payload_capacity
 from assembler_pin.cli import main
 from assembler_pin.maps import GridError, parse_grid, read_map, run_map
 from assembler_pin.maps.pictures import map_heatmaps
 from assembler_pin.solver import solve
+from assembler_pin.solver.capacity import PayloadModels, payload_capacity
 
 SMALL = "x=0.2:0.45:2,y=0.05,z=0.75:0.9:2"  # four reachable cells away from the symmetric axis
 

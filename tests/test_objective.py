@@ -13,8 +13,8 @@ from checks import design_anchors, design_forces
 
 import assembler_pin
 from assembler_pin import evaluate_state
-from assembler_pin.objective import motion_cost, objective_value, omega
 from assembler_pin.optimize import MotionTerm
+from assembler_pin.optimize.objective import motion_cost, objective_value, omega
 
 
 def _paper_lambda(cfg, plates) -> np.ndarray:
@@ -74,7 +74,7 @@ def test_the_motion_term_is_w3_times_the_squared_leg_steps(am, random_poses):
 
 def test_omega_is_written_in_objective_py_only():
     """No other module weighs the plate-deviation term itself: every caller goes through
-    :mod:`assembler_pin.objective`."""
+    :mod:`assembler_pin.optimize.objective`."""
     root = Path(assembler_pin.__file__).parent
     pattern = re.compile(r"w2\s*\*\s*(np\.)?sqrt|sqrt\(\s*np\.sum\(\s*(lam|angles|v\.plate_angles)")
     writers = [

@@ -15,12 +15,12 @@ import pinocchio as pin
 import pytest
 from threadpoolctl import threadpool_info, threadpool_limits
 
-from assembler_pin.capacity import KEPT_PAYLOAD_MODELS, PayloadModels, payload_capacity, with_payload
 from assembler_pin.exceptions import OptionsError
 from assembler_pin.helper_arm import arm_cache
 from assembler_pin.model import AssemblerModel
 from assembler_pin.motion import EEPath
 from assembler_pin.solver import solve
+from assembler_pin.solver.capacity import KEPT_PAYLOAD_MODELS, PayloadModels, payload_capacity, with_payload
 from assembler_pin.statics import kernel as statics_kernel
 from assembler_pin.statics import solve_statics, solve_statics_batch
 
@@ -38,11 +38,11 @@ def _goal(xyz) -> pin.SE3:
 # ------------------------------------------------------------------ one BLAS thread
 def test_entry_points_run_under_one_blas_thread():
     """Every entry point that runs the optimizer or the helper arm carries the limit."""
-    from assembler_pin.capacity import payload_capacity as capacity
     from assembler_pin.carrier import solve_on_carrier
     from assembler_pin.helper_arm import initial_condition
     from assembler_pin.motion.timing import plan_trajectory
     from assembler_pin.optimize import optimize_internal_poses
+    from assembler_pin.solver.capacity import payload_capacity as capacity
 
     for fn in (solve, optimize_internal_poses, initial_condition, capacity, plan_trajectory, solve_on_carrier):
         assert getattr(fn, "__wrapped__", None) is not None, fn.__name__
@@ -202,7 +202,7 @@ def test_all_starts_run_every_start(am):
 def _legs_at_min_stroke(am, state) -> int:
     """Legs whose length is within AT_LIMIT of the optimizer's margin above the minimum."""
     from assembler_pin.options import OptimizeOptions
-    from assembler_pin.solver import AT_LIMIT
+    from assembler_pin.solver.pipeline import AT_LIMIT
 
     floor = am.config.leg.min_length + OptimizeOptions().limit_margin + AT_LIMIT
     return int(np.count_nonzero(np.asarray(state.leg_lengths) <= floor))
@@ -212,7 +212,7 @@ def _compressed_by_the_rule(am, result) -> bool | None:
     """Whether the helper arm's optimum counts as compressed (COMPRESSED_SHARE of the legs at
     their minimum stroke, counted from the leg lengths); None when its run failed. Checks
     that the lazy portfolio ran exactly the starts the rule asks for."""
-    from assembler_pin.solver import COMPRESSED_SHARE
+    from assembler_pin.solver.pipeline import COMPRESSED_SHARE
 
     helper = result.runs["helper_arm"]
     if not helper.success:  # every start then

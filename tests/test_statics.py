@@ -181,7 +181,7 @@ def test_every_condition_number_is_numpys_one_norm_condition_of_the_leg_lines(am
     """The statics and the elastic truss report the same condition number: numpy's 1-norm
     condition of the 6×6 matrix whose columns are the legs' lines ``[u; r × u]`` (the statics
     in each top plate's axes, the truss in world axes), rebuilt here from the joint centres."""
-    from assembler_pin.elastic import elastic_terms, line_conditions
+    from assembler_pin.compliance.elastic import elastic_terms, line_conditions
     from assembler_pin.kinematics import leg_state
 
     for _, pa in (random_poses[2], random_poses[3]):

@@ -19,7 +19,7 @@ from scipy.optimize import minimize
 
 import assembler_pin as ap
 from assembler_pin.compliance import compensated_lengths, loaded_pose
-from assembler_pin.ee_stiffness import stiffness
+from assembler_pin.compliance.ee_stiffness import stiffness
 from assembler_pin.exceptions import LoadError
 
 STEP = 1e-20  # complex step
@@ -491,7 +491,7 @@ def test_top_level_names_stay_the_functions_whatever_was_imported():
     import sys
 
     code = (
-        "import assembler_pin as ap, assembler_pin.compliance, assembler_pin.cli.stiffness; "
+        "import assembler_pin as ap, assembler_pin.compliance.loaded, assembler_pin.cli.stiffness; "
         "assert callable(ap.stiffness) and callable(ap.loaded_pose) and callable(ap.compensated_lengths); "
         "assert ap.ee_stiffness.StiffnessResult.__name__ == 'StiffnessResult'"
     )
@@ -539,7 +539,7 @@ def test_cli_stiffness_json_text_and_refusals(capsys, tmp_path, am):
 
 def test_the_block_sweep_of_long_stacks_equals_the_dense_solve(monkeypatch):
     """Above DENSE_MAX_PLATFORMS the tangent is swept block by block: the same answers."""
-    import assembler_pin.elastic as elastic
+    import assembler_pin.compliance.elastic as elastic
 
     am = _model({"platforms": 4})
     pa = _pose(am, "random")

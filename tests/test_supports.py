@@ -20,8 +20,9 @@ from scipy.optimize import linprog, minimize
 
 import assembler_pin as ap
 from assembler_pin.bench.supports import benchmark_supports
-from assembler_pin.support_choice import chosen_distribution
-from assembler_pin.supports import held_plates, residual_tolerance, two_point_statics
+from assembler_pin.supports import held_plates, two_point_statics
+from assembler_pin.supports.choice import chosen_distribution
+from assembler_pin.supports.two_point import residual_tolerance
 
 STEP = 1e-20  # complex step
 
@@ -458,7 +459,7 @@ def test_cli_statics_support_ee_and_both(capsys, am):
 def test_small_simplex_matches_highs_or_declines():
     """The chosen distribution's own simplex against HiGHS on random minimax programs of its
     shape (degenerate ties and infeasible bounds among them): the same optimum, or None."""
-    from assembler_pin.support_choice import _small_simplex
+    from assembler_pin.supports.choice import _small_simplex
 
     rng = np.random.default_rng(3)
     answered = 0

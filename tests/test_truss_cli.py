@@ -60,7 +60,7 @@ def test_statics_stiffness_with_a_carrier_is_refused_in_one_line(capsys):
 
 def test_stiffness_scaling_json_and_figure_are_the_full_models_stiffness(capsys, tmp_path):
     import assembler_pin as ap
-    from assembler_pin.ee_stiffness import elastic_compliance
+    from assembler_pin.compliance.ee_stiffness import elastic_compliance
 
     out = tmp_path / "scaling.png"
     assert main(["stiffness", "--scaling", "--max-platforms", "3", "--out", str(out), "--json"]) == 0
@@ -91,8 +91,8 @@ def test_a_tall_stack_buckles_under_its_own_weight_and_its_springs_stay_defined(
     import dataclasses
 
     import assembler_pin as ap
-    from assembler_pin.ee_stiffness import elastic_compliance
-    from assembler_pin.stiffness_scaling import _truss
+    from assembler_pin.compliance.ee_stiffness import elastic_compliance
+    from assembler_pin.compliance.scaling import _truss
 
     cfg = ap.load_config()
     standing, fallen = (_truss(dataclasses.replace(cfg, platforms=n)) for n in (46, 47))

@@ -8,8 +8,8 @@ import pytest
 import assembler_pin as ap
 from assembler_pin.bounds import BOUNDS
 from assembler_pin.compliance import MAX_WRENCH, compensated_lengths, loaded_pose
+from assembler_pin.compliance.scaling import stiffness_scaling
 from assembler_pin.exceptions import LoadError, OptionsError
-from assembler_pin.stiffness_scaling import stiffness_scaling
 
 
 @pytest.mark.parametrize("scale", [1.0000001, 10.0, 1e300])

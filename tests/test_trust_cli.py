@@ -115,7 +115,7 @@ def test_an_unreachable_goal_is_answered_with_exit_1(capsys):
 
 
 def test_no_payload_capacity_is_exit_1(monkeypatch, capsys):
-    import assembler_pin.capacity as capacity
+    import assembler_pin.solver.capacity as capacity
 
     class NoCapacity:
         success, message = False, "no valid internal pose holds any payload here"
@@ -395,7 +395,7 @@ def test_the_carrier_search_uses_the_given_options(am, monkeypatch):
     """Held carrier: the helper arm and the optimizer get the options; without optimization
     the helper arm's pose is returned as it is, and it reaches the world goal."""
     import assembler_pin.optimize as optimize_mod
-    import assembler_pin.solver as solver_mod
+    import assembler_pin.solver.pipeline as solver_mod
     from assembler_pin.carrier import Carrier, carrier_objective, solve_on_carrier
 
     carrier = Carrier("ur10")

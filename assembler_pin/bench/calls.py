@@ -191,7 +191,7 @@ def benchmark_solve_grid(
     """
     import pinocchio as pin
 
-    from ..solver import solve
+    from ..solver.pipeline import solve
 
     times: list[float] = []
     solved_times: list[float] = []

@@ -23,7 +23,7 @@ def benchmark_mujoco(am: AssemblerModel, n_random: int = 8, seed: int = 42, seco
     ball-joint gap [m] and the wall time of the simulation [s] (``assembler-pin bench --mujoco``)."""
     from ..scenarios import SCENARIOS
     from ..simulate import MujocoStack, hold_pose, mujoco_statics
-    from ..solver import solve
+    from ..solver.pipeline import solve
 
     rng = np.random.default_rng(seed)
     poses: dict[str, PlateArrays] = {"home": PlateArrays.from_se3(am.home)}

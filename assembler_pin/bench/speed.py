@@ -68,7 +68,7 @@ def benchmark_threads(am: AssemblerModel, goals: tuple = THREAD_GOALS, limits: t
     and whether every answer (the optimized plates) is bit-identical across the limits."""
     from threadpoolctl import threadpool_limits
 
-    from ..solver import solve
+    from ..solver.pipeline import solve
 
     out: dict[str, Any] = {}
     answers = []
@@ -90,7 +90,7 @@ def benchmark_solve_starts(
     and max [s], the helper arm's p50 / p90 / p95 (``timing_s["initial"]``) [s], goals solved
     (``{mode}_unsolved``: the others), optimizer runs and time [s], and, for ``first``
     against ``all``, the largest relative loss of Ω and how many goals lose more than 1e-6."""
-    from ..solver import solve
+    from ..solver.pipeline import solve
 
     times: dict[str, list[float]] = {m: [] for m in modes}
     initial: dict[str, list[float]] = {m: [] for m in modes}
@@ -216,7 +216,7 @@ CAPACITY_GOALS = ((0.1, 0.05, 0.75), (0.1, 0.05, 0.9), (0.25, 0.05, 0.75), (0.25
 def benchmark_capacity_memory(am: AssemblerModel, goals: tuple = CAPACITY_GOALS) -> dict:
     """``payload_capacity`` over ``goals`` with one shared :class:`PayloadModels` (as a map's
     worker keeps it): resident memory after each call [MB], payload models kept, time [s]."""
-    from ..capacity import PayloadModels, payload_capacity
+    from ..solver.capacity import PayloadModels, payload_capacity
 
     models = PayloadModels(am)
     out: dict[str, Any] = {"rss_start_mb": rss_mb(), "rss_mb": [], "capacity_kg": [], "models_kept": []}
@@ -299,8 +299,8 @@ TWO_POINT_TARGETS_MS = {"n4_two_point_statics": 1.0, "n64_two_point_statics": 50
 
 def benchmark_two_point(platforms: tuple[int, ...] = (4, 64), repeat: int = 20) -> dict[str, float]:
     """Two-point support per call [ms] at the home pose, both ends welded: the elastic
-    distribution :func:`~assembler_pin.supports.two_point_statics` at each stack size and the
-    chosen distribution :func:`~assembler_pin.support_choice.chosen_distribution` (its check
+    distribution :func:`~assembler_pin.supports.two_point.two_point_statics` at each stack size and the
+    chosen distribution :func:`~assembler_pin.supports.choice.chosen_distribution` (its check
     included) at n = 4, each a median of ``repeat`` calls (``repeat // 4`` at n > 16), wall time
     (``..._ms``) and this process's CPU time (``..._cpu_ms``, which a loaded machine moves much
     less), beside its target (``..._target_ms``, :data:`TWO_POINT_TARGETS_MS`); ``..._ok`` says
@@ -308,8 +308,8 @@ def benchmark_two_point(platforms: tuple[int, ...] = (4, 64), repeat: int = 20) 
     """
     from ..config import load_config
     from ..kinematics import plate_arrays
-    from ..support_choice import chosen_distribution
-    from ..supports import two_point_statics
+    from ..supports.choice import chosen_distribution
+    from ..supports.two_point import two_point_statics
 
     check_bound("bench.repeat", repeat, "repeat")
     out: dict[str, float] = {}

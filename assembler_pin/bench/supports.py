@@ -4,16 +4,17 @@ from __future__ import annotations
 
 from ..kinematics import plate_arrays
 from ..model import AssemblerModel
-from ..support_choice import chosen_distribution
-from ..supports import two_point_statics
+from ..supports.choice import chosen_distribution
+from ..supports.two_point import two_point_statics
 from .timing import median_time_us
 
 __all__ = ["benchmark_supports"]
 
 
 def benchmark_supports(am: AssemblerModel, repeat: int = 50) -> dict[str, float]:
-    """Median wall time [s] per call at the home pose of :func:`~assembler_pin.supports.two_point_statics` and of
-    :func:`~assembler_pin.support_choice.chosen_distribution` (with and without its check)."""
+    """Median wall time [s] per call at the home pose of
+    :func:`~assembler_pin.supports.two_point_statics` and of
+    :func:`~assembler_pin.supports.chosen_distribution` (with and without its check)."""
     pa = plate_arrays(am, am.home)
     calls = {
         "two_point_statics": lambda: two_point_statics(am, pa),

@@ -3,8 +3,8 @@ calls at the home pose."""
 
 from __future__ import annotations
 
-from ..compliance import compensated_lengths, loaded_pose, sag_and_gradient
-from ..ee_stiffness import stiffness
+from ..compliance.ee_stiffness import stiffness
+from ..compliance.loaded import compensated_lengths, loaded_pose, sag_and_gradient
 from ..kinematics import plate_arrays
 from ..model import AssemblerModel
 from ..statics.derivatives import pose_derivatives
@@ -16,12 +16,12 @@ __all__ = ["benchmark_stiffness"]
 
 
 def benchmark_stiffness(am: AssemblerModel, repeat: int = 200) -> dict[str, float]:
-    """Median wall time [s] per call of :func:`~assembler_pin.ee_stiffness.stiffness`,
-    :func:`~assembler_pin.compliance.loaded_pose`, :func:`~assembler_pin.compliance.compensated_lengths` and
-    :func:`~assembler_pin.compliance.sag_and_gradient` at the home
-    pose (and, for scale, :func:`~assembler_pin.statics.pinocchio_statics.solve_statics` and the force
-    objective's derivatives :func:`~assembler_pin.statics.derivatives.pose_derivatives`), BLAS on one
-    thread as in the optimizer."""
+    """Median wall time [s] per call of :func:`~assembler_pin.compliance.stiffness`,
+    :func:`~assembler_pin.compliance.loaded_pose`, :func:`~assembler_pin.compliance.compensated_lengths`
+    and :func:`~assembler_pin.compliance.sag_and_gradient` at the home pose (and, for scale,
+    :func:`~assembler_pin.statics.solve_statics` and the force objective's derivatives
+    :func:`~assembler_pin.statics.derivatives.pose_derivatives`), BLAS on one thread as in the
+    optimizer."""
     pa = plate_arrays(am, am.home)
     lengths = compensated_lengths(am, pa).lengths
     calls = {

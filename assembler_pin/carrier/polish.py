@@ -15,7 +15,7 @@ import pinocchio as pin
 
 from ..kinematics import PlateArrays
 from ..model import AssemblerModel
-from ..objective import omega
+from ..optimize.objective import omega
 from ..options import GoalTolerance, OptimizeOptions
 from .robot import Carrier
 from .statics import CarrierStatics, carrier_statics, carrier_torques

@@ -14,7 +14,7 @@ import pinocchio as pin
 from ..exceptions import OptionsError
 from ..kinematics import to_se3
 from ..model import AssemblerModel
-from ..objective import objective_value
+from ..optimize.objective import objective_value
 from ..options import DEFAULT_GOAL_TOLERANCE, GoalTolerance, HelperArmOptions, OptimizeOptions
 from ..progress import ProgressCallback
 from ..threads import one_blas_thread
@@ -120,7 +120,7 @@ def _stack_on(s: _Search, q: np.ndarray) -> tuple[CarrierStatics | None, str]:
     ``s.optimize``) the force optimization for the goal seen from the base, then optimized
     again under the world's gravity; without ``s.optimize`` the helper arm's pose as it is."""
     from ..optimize import optimize_internal_poses
-    from ..solver import solve
+    from ..solver.pipeline import solve
 
     am = s.am
     base = s.carrier.base_pose(q)

@@ -119,7 +119,7 @@ def sag_options(args: argparse.Namespace, options):
 def _sag_block(am: AssemblerModel, result, options) -> dict:
     """The ``sag`` block of the JSON answer: the objective, the limit and the EE's linear sag
     [m] of the returned pose (world axes), and of the helper arm's pose."""
-    from ..compliance import sag_and_gradient
+    from ..compliance.loaded import sag_and_gradient
     from ..exceptions import SingularConfigurationError
 
     def of(state) -> dict | None:
@@ -147,7 +147,7 @@ def run(args: argparse.Namespace) -> int:
     from ..bounds import check_bound
     from ..choices import SOLVE_STARTS
     from ..model import AssemblerModel
-    from ..solver import solve
+    from ..solver.pipeline import solve
 
     goal = goal_from_args(args)
     _refuse_carrier_options(args)
@@ -165,7 +165,7 @@ def run(args: argparse.Namespace) -> int:
     result = solve(am, goal, optimize=not args.no_optimize, options=options, helper_options=helper, starts=starts)
     capacity = None
     if args.capacity:
-        from ..capacity import payload_capacity
+        from ..solver.capacity import payload_capacity
 
         start = result.optimized.plates if result.success and result.optimized is not None else None
         capacity = payload_capacity(am, goal, start=start)

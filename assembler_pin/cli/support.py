@@ -21,8 +21,8 @@ def add_parser(add) -> None:
 def support_document(am, plates) -> dict:
     """The JSON answer: ``forces`` the elastic distribution of the pose's own lengths, ``chosen``
     the distribution minimizing max|F| with its ``length_offsets``; success when both are."""
-    from ..support_choice import chosen_distribution
-    from ..supports import two_point_statics
+    from ..supports.choice import chosen_distribution
+    from ..supports.two_point import two_point_statics
 
     elastic = two_point_statics(am, plates)
     chosen = chosen_distribution(am, plates)
@@ -56,7 +56,7 @@ def held_statics(am, plates, support: str, as_json: bool) -> int:
         doc = support_document(am, plates)
         print(dumps(doc) if as_json else format_support(doc))
         return 0 if doc["success"] else 1
-    from ..supports import ee_held_statics
+    from ..supports.two_point import ee_held_statics
 
     held = ee_held_statics(am, plates)
     doc = held.to_dict()

@@ -182,9 +182,9 @@ def _check_options(args: argparse.Namespace) -> None:
 def _view_goal(args: argparse.Namespace, am: AssemblerModel, viewer) -> StackState:
     """``view --goal/--scenario``: solve, show initial (ghost) and optimized, maybe animate."""
     try:
-        from ..solver import solve  # lazy: the solver is only needed for --goal
+        from ..solver.pipeline import solve  # lazy: the solver is only needed for --goal
     except ImportError as exc:
-        raise CLIError(f"--goal needs assembler_pin.solver, which cannot be imported: {exc}") from None
+        raise CLIError(f"--goal needs assembler_pin.solver.pipeline, which cannot be imported: {exc}") from None
     if args.scenario:
         from ..kinematics import se3_to_taa
         from ..scenarios import scenario

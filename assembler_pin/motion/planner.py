@@ -213,7 +213,7 @@ def _start_state(
     """The valid state the plan starts from, or (None, why not)."""
     first = path.at(0.0)
     if start is None:
-        from ..solver import solve
+        from ..solver.pipeline import solve
 
         solved = solve(am, first, options=opts.optimize)
         if not solved.success:
@@ -240,7 +240,7 @@ def plan_path(
         path: the EE path (:class:`~assembler_pin.motion.paths.EEPath`).
         start: the stack's state at the path's start (e.g. its current pose, or
             ``am.home`` for a motion from the home pose). Default: the force-optimized
-            solution of the path's first pose (:func:`~assembler_pin.solver.solve`).
+            solution of the path's first pose (:func:`~assembler_pin.solver.pipeline.solve`).
         options: see :class:`PlanOptions`.
         progress: called as ``(permille of the path done, 1000, note)`` after each sample.
     """

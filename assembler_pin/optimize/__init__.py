@@ -9,10 +9,10 @@ variable too, ``T_n = T_goal · exp6(x_n)``, with ``|x_n[3:]| <= rotation tolera
 
 Objective (paper eq. 10): ``Ω = w1·max|F| + w2·sqrt(Σ λ_k²)``, with λ_k the angle between
 ``p_k - p_{k-1}`` and the rest direction of plate k on plate k-1 (eq. 9); written once, in
-:mod:`assembler_pin.objective`.
+:mod:`assembler_pin.optimize.objective`.
 
 Other objectives (``OptimizeOptions.objective``, slsqp only): ``"sag"`` minimizes the EE's
-sag under its own load (legs stretched by F/k, :func:`~assembler_pin.compliance.sag_and_gradient`)
+sag under its own load (legs stretched by F/k, :func:`~assembler_pin.compliance.loaded.sag_and_gradient`)
 over the home pose's sag, every constraint kept (the force limits then are not capped by the
 start's max|F|); ``"weighted"`` minimizes ``Ω + w·sag/sag_home``. ``max_sag`` adds the row
 ``sag <= max_sag`` (:class:`.rows.SagRows`). The sag's gradient is the exact adjoint one.
@@ -52,8 +52,8 @@ nothing better was found, with the reason (:mod:`.result`).
 
 from __future__ import annotations
 
-from ..objective import objective_value
 from .internal_poses import optimize_internal_poses
+from .objective import objective_value
 from .options import METHODS, MotionTerm, OptimizeOptions
 from .point import SINGULAR_FORCE
 from .result import OptimizeResult

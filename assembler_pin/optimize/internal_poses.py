@@ -19,10 +19,10 @@ from ..exceptions import OptionsError, _SingularIterateError
 from ..kinematics import PlateArrays, checked_goal, plate_arrays
 from ..messages import one_line
 from ..model import AssemblerModel, checked_model
-from ..objective import SagObjective, state_sag, state_score
 from ..options import SMOOTH_METHODS, GoalTolerance, OptimizeOptions, checked_options, resolved_method
 from ..state import StackState, evaluate_state
 from ..threads import one_blas_thread
+from .objective import SagObjective, state_sag, state_score
 from .options import MotionTerm
 from .paper import PaperForm
 from .problem import Problem
@@ -244,7 +244,7 @@ class _Check:
         return self.opts.max_sag is None or state_sag(self.am, state) <= self.opts.max_sag
 
     def score(self, state: StackState) -> float:
-        """The objective of the state (:func:`~assembler_pin.objective.state_score`)."""
+        """The objective of the state (:func:`~assembler_pin.optimize.objective.state_score`)."""
         return state_score(self.am, state, self.objective, self.opts.w1, self.opts.w2, self.motion)
 
 

@@ -19,7 +19,7 @@ __all__ = ["METHODS", "MotionTerm", "OptimizeOptions"]
 class MotionTerm:
     """Continuity with the previous sample of a motion.
 
-    Its cost ``w3·Σ (L_i - L_i^prev)²`` is :func:`assembler_pin.objective.motion_cost`.
+    Its cost ``w3·Σ (L_i - L_i^prev)²`` is :func:`assembler_pin.optimize.objective.motion_cost`.
 
     Attributes:
         previous_lengths: (n, 6) leg lengths of the previous sample [m].

@@ -138,7 +138,7 @@ class MotionRows:
 
 class SagRows:
     """``(0.999999·max_sag - sag) / max_sag >= 0``: the EE's linear sag
-    (:func:`~assembler_pin.compliance.sag_and_gradient`) within ``max_sag`` [m], one
+    (:func:`~assembler_pin.compliance.loaded.sag_and_gradient`) within ``max_sag`` [m], one
     dimensionless row (slightly inside the limit the final check applies)."""
 
     SHRINK = 1.0 - 1e-6

@@ -1,6 +1,6 @@
 """The EE's linear sag at an optimizer point, from the closed-form pass alone.
 
-The same measure as :func:`~assembler_pin.compliance.sag_and_gradient` (every leg stretched
+The same measure as :func:`~assembler_pin.compliance.loaded.sag_and_gradient` (every leg stretched
 by ``F / k``, the plates moved by ``y`` with ``A y = F / k``, ``A`` the legs' length
 Jacobian, the EE origin by ``δp = v_n + ω_n × p_n``), without the derivatives: ``A`` is block
 bidiagonal (platform j's legs move with plates j and j+1), so ``y`` follows platform by
@@ -8,7 +8,7 @@ platform, ``K_jᵀ y_{j+1} = F_j / k + Kb_jᵀ y_j`` with ``K_j`` the lines ``[u
 platform j's legs at their top joints and ``Kb_j`` the lines ``[u; b × u]`` at their bottom
 joints (``y_0 = 0``: plate 0 stays). Every line search point of the sag objective is
 evaluated this way; the gradient (at the accepted points) is the adjoint of
-:func:`~assembler_pin.compliance.sag_and_gradient`.
+:func:`~assembler_pin.compliance.loaded.sag_and_gradient`.
 """
 
 from __future__ import annotations

@@ -37,7 +37,6 @@ import numpy as np
 from ..exceptions import _SingularIterateError
 from ..linalg import inverse_or_nan, skew
 from ..model import AssemblerModel
-from ..objective import deviation_term_gradient, motion_cost_gradient
 from ..statics.derivatives import (
     PoseValues,
     _axial_force_derivatives,
@@ -46,6 +45,7 @@ from ..statics.derivatives import (
     _transverse_force_derivatives,
 )
 from .charts import LocalChart
+from .objective import deviation_term_gradient, motion_cost_gradient
 from .point import Point, block_chart
 from .problem import Problem, finite_rows
 from .smooth import SmoothForm

@@ -1,13 +1,13 @@
-"""Two-point support in motion: the stack turned around (:mod:`.turned`) and the inchworm walk
+"""Two-point support in motion: the stack turned around (:mod:`~assembler_pin.supports.turned`) and the inchworm walk
 (:mod:`.plan`, checked by :mod:`.verify`, its samples file :mod:`.samples`), and stacks joined
 to one body (:mod:`.macro`)."""
 
 from __future__ import annotations
 
+from ..supports.turned import TurnedModel, turned_config, turned_model
 from .macro import MacroStatics, macro_capacity, macro_statics
 from .plan import WalkOptions, WalkPhase, WalkResult, checked_footholds, plan_walk, plate_target
 from .samples import WalkSamples, parse_walk_csv, read_walk_csv
-from .turned import TurnedModel, turned_config, turned_model
 from .verify import verify_walk
 
 __all__ = [

@@ -8,7 +8,7 @@ where the base stands at the start; the feet then land in turn, the EE on ``foot
 the base on ``footholds[2]``, the EE on ``footholds[3]`` ... Each step is two phases:
 
 * **reach** (support ``base``: plate 0 held) or **swing** (support ``ee``: plate n held, the
-  stack planned on the turned model, :mod:`assembler_pin.walk.turned`): the free foot lifts
+  stack planned on the turned model, :mod:`assembler_pin.supports.turned`): the free foot lifts
   ``clearance`` off its foothold along the surface normal (not at the first step, which starts
   from the home pose), moves to ``clearance`` above the next foothold (the pre-contact pose)
   and lands, every sample a force-optimal valid pose of
@@ -17,9 +17,9 @@ the base on ``footholds[2]``, the EE on ``footholds[3]`` ... Each step is two ph
 * **transfer** (support ``both``): both feet held at the landed pose, the load moves from the
   old foot to the new: the EE support's wrench ``w`` goes from zero (the base carries all) to
   the whole weight (the EE carries all), or back, in ``transfer_samples`` steps, the forces
-  ``F(w)`` set by length offsets ``−F / k`` (:mod:`assembler_pin.support_choice`); each sample
+  ``F(w)`` set by length offsets ``−F / k`` (:mod:`assembler_pin.supports.choice`); each sample
   within the force limits and the stroke, and the commanded lengths applied through the
-  elastic solve (:func:`~assembler_pin.supports.two_point_statics`) give its forces back. The
+  elastic solve (:func:`~assembler_pin.supports.two_point.two_point_statics`) give its forces back. The
   chosen distribution (min max|F|) of the pose is reported with the phase.
 
 Reach and swing samples are rigid poses (commanded = pin-to-pin lengths), like the package's
@@ -45,10 +45,10 @@ from ..motion.paths import EEPath
 from ..motion.planner import PlanOptions, plan_path
 from ..options import checked_options
 from ..progress import ProgressCallback
-from ..support_choice import CHECK_TOLERANCE, ChosenDistribution, chosen_distribution, force_bounds, held_equilibrium
-from ..supports import two_point_statics
+from ..supports.choice import CHECK_TOLERANCE, ChosenDistribution, chosen_distribution, force_bounds, held_equilibrium
+from ..supports.turned import turned_model
+from ..supports.two_point import two_point_statics
 from .footholds import checked_footholds
-from .turned import turned_model
 from .verify import verify_walk
 
 __all__ = ["WalkOptions", "WalkPhase", "WalkResult", "checked_footholds", "plan_walk", "plate_target"]

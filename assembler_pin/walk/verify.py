@@ -17,9 +17,9 @@ from ..kinematics import PlateArrays, stack_forward_kinematics
 from ..model import AssemblerModel
 from ..motion.guess import on_se3
 from ..state import evaluate_state
-from ..support_choice import CHECK_TOLERANCE, force_bounds
-from ..supports import two_point_statics
-from .turned import turned_model
+from ..supports.choice import CHECK_TOLERANCE, force_bounds
+from ..supports.turned import turned_model
+from ..supports.two_point import two_point_statics
 
 __all__ = ["SAMPLE_TOLERANCE", "verify_walk"]
 

@@ -2,7 +2,7 @@
 
 :func:`stiffness` answers, for plate poses commanded by their leg lengths, how far gravity and
 the payload make the EE sag and how stiff it is there: the 6×6 tangent stiffness of the EE
-plate, the Hessian of the total potential (:mod:`assembler_pin.elastic`) at the loaded
+plate, the Hessian of the total potential (:mod:`assembler_pin.compliance.elastic`) at the loaded
 equilibrium, with the intermediate plates' 6(n−1) coordinates condensed out (static
 condensation: the EE loaded, every other plate free).
 
@@ -27,14 +27,14 @@ import numpy as np
 import numpy.typing as npt
 import pinocchio as pin
 
-from .bounds import check_bound
+from ..bounds import check_bound
+from ..exceptions import LoadError, PoseError
+from ..kinematics import PlateArrays, plate_arrays
+from ..linalg import skew
+from ..model import AssemblerModel
+from ..statics.closed_form import CONDITION_LIMIT
+from ..validation import as_float_array
 from .elastic import Equilibrium, line_conditions, solve_equilibrium
-from .exceptions import LoadError, PoseError
-from .kinematics import PlateArrays, plate_arrays
-from .linalg import skew
-from .model import AssemblerModel
-from .statics.closed_form import CONDITION_LIMIT
-from .validation import as_float_array
 
 __all__ = ["StiffnessResult", "elastic_compliance", "platform_compliances", "stiffness", "stiffness_from_equilibrium"]
 
@@ -234,7 +234,7 @@ def stiffness(
     """The EE's tangent stiffness at the loaded equilibrium of the legs commanded to ``plates``.
 
     The legs (springs of ``leg.stiffness``) are commanded to the lengths of ``plates`` (or to
-    ``lengths`` [m], e.g. :func:`~assembler_pin.compliance.compensated_lengths`, whose loaded
+    ``lengths`` [m], e.g. :func:`~assembler_pin.compliance.loaded.compensated_lengths`, whose loaded
     equilibrium is ``plates`` itself); gravity and the payload load them; Newton finds the
     loaded equilibrium from ``plates`` and the Hessian there is condensed onto the EE.
 

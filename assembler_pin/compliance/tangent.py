@@ -1,7 +1,7 @@
-"""Solving with the tangent stiffness of the elastic truss (:mod:`assembler_pin.elastic`).
+"""Solving with the tangent stiffness of the elastic truss (:mod:`assembler_pin.compliance.elastic`).
 
 The Hessian of the stack's potential is block-tridiagonal over the plates. Given dense (up to
-:data:`~assembler_pin.elastic.DENSE_MAX_PLATFORMS` platforms) it is solved by one LAPACK call,
+:data:`~assembler_pin.compliance.elastic.DENSE_MAX_PLATFORMS` platforms) it is solved by one LAPACK call,
 which also gives the EE's condensed compliance (the EE block of its inverse); given as blocks,
 by one sweep from the base up (:func:`block_sweep`, linear in n). Units: the gradient rows are
 ``[N, N·m]`` of plates 1..n (world axes at each plate's origin), the steps ``[m, rad]``.

@@ -1,6 +1,6 @@
 """The loaded pose of commanded leg lengths, and the lengths to command for a wanted pose.
 
-With legs of axial stiffness ``k = leg.stiffness`` (:mod:`assembler_pin.elastic`), commanding
+With legs of axial stiffness ``k = leg.stiffness`` (:mod:`assembler_pin.compliance.elastic`), commanding
 lengths ``L0`` does not put the plates at the rigid pose of ``L0`` (its forward kinematics):
 gravity, the payload and any wrench on the EE stretch or compress every leg by ``F / k``.
 
@@ -21,16 +21,16 @@ import numpy as np
 import numpy.typing as npt
 import pinocchio as pin
 
-from .bounds import BOUNDS, check_bound
+from ..bounds import BOUNDS, check_bound
+from ..exceptions import LoadError
+from ..kinematics import PlateArrays, leg_vectors, plate_arrays, stack_forward_kinematics
+from ..labels import leg_label
+from ..model import AssemblerModel
+from ..statics.closed_form import CONDITION_LIMIT
+from ..statics.derivatives import PoseDerivatives
+from ..statics.pinocchio_statics import solve_statics
+from ..validation import as_float_array
 from .elastic import line_conditions, solve_equilibrium
-from .exceptions import LoadError
-from .kinematics import PlateArrays, leg_vectors, plate_arrays, stack_forward_kinematics
-from .labels import leg_label
-from .model import AssemblerModel
-from .statics.closed_form import CONDITION_LIMIT
-from .statics.derivatives import PoseDerivatives
-from .statics.pinocchio_statics import solve_statics
-from .validation import as_float_array
 
 __all__ = [
     "MAX_WRENCH",
@@ -124,7 +124,7 @@ def loaded_pose(
     """The plates' elastic equilibrium under gravity, payload and ``wrench`` for commanded lengths.
 
     Newton's method on the plate poses (SE(3) increments, the exact tangent stiffness of
-    :mod:`assembler_pin.elastic`) from the rigid pose of ``lengths``.
+    :mod:`assembler_pin.compliance.elastic`) from the rigid pose of ``lengths``.
 
     Args:
         lengths: (n, 6) commanded (unloaded) pin-to-pin lengths [m].
@@ -309,8 +309,8 @@ def sag_and_gradient(
         PoseError: malformed plates. SingularConfigurationError: a singular platform.
         OptionsError: an unknown chart.
     """
-    from .exceptions import OptionsError, SingularConfigurationError
-    from .statics.derivatives import pose_derivatives
+    from ..exceptions import OptionsError, SingularConfigurationError
+    from ..statics.derivatives import pose_derivatives
 
     if chart not in ("world", "local"):
         raise OptionsError(f"chart must be 'world' or 'local', got {chart!r}")

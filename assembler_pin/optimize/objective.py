@@ -11,7 +11,7 @@ The optimizer's objectives (``OptimizeOptions.objective``, :data:`~assembler_pin
 
 * ``"force"`` — Ω (the default, the paper's);
 * ``"sag"`` — ``sag / sag_ref``: the EE's linear sag under the pose's own load
-  (:func:`~assembler_pin.compliance.sag_and_gradient`) over the reference sag;
+  (:func:`~assembler_pin.compliance.loaded.sag_and_gradient`) over the reference sag;
 * ``"weighted"`` — ``Ω + w·sag / sag_ref``, ``w = sag_weight``.
 
 ``sag_ref`` is the sag of the model's home pose (:func:`sag_reference`): it depends on the
@@ -32,9 +32,15 @@ from typing import TYPE_CHECKING, Protocol
 
 import numpy as np
 
+from ..exceptions import OptionsError
+from ..kinematics import plate_arrays, plate_deviation
+from ..statics.closed_form import equilibrium
+from ..statics.derivatives import pose_values
+from .sag import equilibrium_sag, linear_sag
+
 if TYPE_CHECKING:
-    from .model import AssemblerModel
-    from .state import StackState
+    from ..model import AssemblerModel
+    from ..state import StackState
 
 __all__ = [
     "SagObjective",
@@ -87,8 +93,6 @@ def objective_value(
     am: AssemblerModel, state: StackState, w1: float = 1.0, w2: float = 1.0, motion: _Motion | None = None
 ) -> float:
     """Ω of a state (paper eq. 10), plus the motion term when ``motion`` is given."""
-    from .kinematics import plate_deviation
-
     lam = plate_deviation(am, state.plates).angles
     return omega(state.max_abs_force, lam, w1, w2) + motion_cost(state.leg_lengths, motion)
 
@@ -117,11 +121,6 @@ def sag_reference(am: AssemblerModel) -> float:
     Raises:
         OptionsError: the home pose does not sag (no load on the legs): no sag objective.
     """
-    from .exceptions import OptionsError
-    from .kinematics import plate_arrays
-    from .optimize.sag import linear_sag
-    from .statics.derivatives import pose_values
-
     sag = linear_sag(pose_values(am, plate_arrays(am, am.home)), float(am.config.leg.stiffness))[0]
     if not (np.isfinite(sag) and sag > 0):
         raise OptionsError(f"the home pose has no sag ({sag!r} m): the stack carries no load, no sag objective")
@@ -185,9 +184,6 @@ def state_sag(am: AssemblerModel, state: StackState) -> float:
     """The EE's linear sag [m] of a state's plates (inf when a platform is singular), from the
     closed-form equilibrium of its plates (the pass of :func:`~assembler_pin.statics.derivatives.pose_values`
     without the angles the sag does not read)."""
-    from .optimize.sag import equilibrium_sag
-    from .statics.closed_form import equilibrium
-
     plates = state.plates
     eq, _ = equilibrium(am, plates.R, plates.p)
     sag = equilibrium_sag(eq, plates.p[-1], float(am.config.leg.stiffness))[0]

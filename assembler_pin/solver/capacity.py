@@ -29,15 +29,15 @@ from dataclasses import dataclass, field
 import numpy as np
 import pinocchio as pin
 
-from .bounds import check_bound
-from .exceptions import OptionsError
-from .geometry import DIMENSIONS
-from .kinematics import PlateArrays, to_se3
-from .labels import leg_label
-from .messages import one_line
-from .model import AssemblerModel
-from .statics.pinocchio_statics import solve_statics
-from .threads import one_blas_thread
+from ..bounds import check_bound
+from ..exceptions import OptionsError
+from ..geometry import DIMENSIONS
+from ..kinematics import PlateArrays, to_se3
+from ..labels import leg_label
+from ..messages import one_line
+from ..model import AssemblerModel
+from ..statics.pinocchio_statics import solve_statics
+from ..threads import one_blas_thread
 
 __all__ = [
     "GLOBAL_PROBE",
@@ -75,7 +75,7 @@ def with_payload(am: AssemblerModel, mass: float) -> AssemblerModel:
     body has the other payload's inertia, and its own last-platform model (the helper arms
     are shared: their cache is keyed on the configuration without its payload). No URDF of the
     whole stack is generated and no ``Data`` of the whole stack is created."""
-    from .platform_model import PlatformModel, StackPlan
+    from ..platform_model import PlatformModel, StackPlan
 
     cfg = am.config
     payload = dataclasses.replace(cfg.payload, mass=float(mass))
@@ -204,8 +204,8 @@ class CapacityResult:
 
 def _probe(model: AssemblerModel, goal: pin.SE3, arm: PlateArrays | None) -> PlateArrays | None:
     """A valid pose holding ``model``'s payload from the solver's starts (or None)."""
-    from .optimize import optimize_internal_poses
-    from .solver import optimizer_starts
+    from ..optimize import optimize_internal_poses
+    from .pipeline import optimizer_starts
 
     for start in optimizer_starts(model, goal, arm).values():
         result = optimize_internal_poses(model, start, goal)
@@ -282,7 +282,7 @@ def _valid_start(
     """A valid pose for the goal: ``start``, else the solve at the configured payload (unless
     it is known to fail), else the solve without payload; None when none exists. With it, the
     last solve's message ("" when none ran)."""
-    from .solver import solve
+    from .pipeline import solve
 
     why: list[str] = []
 
@@ -307,7 +307,7 @@ class _ArmStart:
 
     def plates(self) -> PlateArrays | None:
         if not self._plates:
-            from .helper_arm import initial_condition
+            from ..helper_arm import initial_condition
 
             self._plates.append(initial_condition(self.am, self.goal).plates_if_valid())
         return self._plates[0]
@@ -331,7 +331,7 @@ class _Climb:
 
     def run(self, rtol: float, max_iterations: int) -> str:
         """Climb until the gain is below ``rtol`` and no start holds more; the message."""
-        from .optimize import optimize_internal_poses
+        from ..optimize import optimize_internal_poses
 
         while self.iterations < max_iterations and np.isfinite(self.cap) and self.cap >= 0:
             cap = self.cap

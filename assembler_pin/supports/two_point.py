@@ -8,10 +8,10 @@ is (one wrench passed from foot to foot through every platform). Two answers:
 
 * :func:`two_point_statics` — the **elastic distribution**: the nonlinear elastic equilibrium
   of the free plates for commanded lengths ``L0`` (default: the pose's own lengths), plates 0
-  and n fixed at their poses, the legs springs of ``leg.stiffness`` (:mod:`assembler_pin.elastic`,
+  and n fixed at their poses, the legs springs of ``leg.stiffness`` (:mod:`assembler_pin.compliance.elastic`,
   its Newton solve with the EE held): leg forces ``k (L − L0)`` (tension positive) and the two
   support wrenches.
-* :func:`~assembler_pin.support_choice.chosen_distribution` — the **chosen distribution**: the
+* :func:`~assembler_pin.supports.choice.chosen_distribution` — the **chosen distribution**: the
   legs are actuated, so small length offsets set the six internal forces; the one minimizing
   max|F| within the force limits, with the offsets that realize it.
 
@@ -30,14 +30,14 @@ import numpy as np
 import numpy.typing as npt
 import pinocchio as pin
 
-from .compliance import LoadedPose
-from .elastic import elastic_terms, line_conditions, solve_equilibrium
-from .exceptions import PoseError, SupportError
-from .kinematics import PlateArrays, leg_vectors, plate_arrays, to_se3
-from .model import AssemblerModel
-from .state import StackState
-from .statics.closed_form import CONDITION_LIMIT
-from .validation import as_float_array
+from ..compliance.elastic import elastic_terms, line_conditions, solve_equilibrium
+from ..compliance.loaded import LoadedPose
+from ..exceptions import PoseError, SupportError
+from ..kinematics import PlateArrays, leg_vectors, plate_arrays, to_se3
+from ..model import AssemblerModel
+from ..state import StackState
+from ..statics.closed_form import CONDITION_LIMIT
+from ..validation import as_float_array
 
 __all__ = [
     "FAST_STEP",
@@ -97,7 +97,7 @@ def mechanism_message(support: str) -> str | None:
 
 class SupportAnswer:
     """What the answers of a held stack share (:class:`TwoPointStatics`,
-    :class:`~assembler_pin.support_choice.ChosenDistribution`): the support, plates, forces
+    :class:`~assembler_pin.supports.choice.ChosenDistribution`): the support, plates, forces
     (n, 6) [N, tension positive], commanded lengths [m], the two support wrenches [N, N·m],
     the residual, success and message (attributes of the dataclass using it)."""
 
@@ -244,7 +244,7 @@ def two_point_statics(
     """The elastic distribution: plates 0 and n welded at their poses in ``plates``, the legs
     commanded to ``lengths`` (n, 6) [m] (default: the pose's own), gravity and the payload on.
 
-    Newton's method on plates 1..n−1 (:func:`~assembler_pin.elastic.solve_equilibrium` with the
+    Newton's method on plates 1..n−1 (:func:`~assembler_pin.compliance.elastic.solve_equilibrium` with the
     EE held) from ``plates``, stopped at a step of :data:`FAST_STEP` (Newton converges
     quadratically: the error left is far below it); the forces, support wrenches and residual
     are evaluated at its end, and a residual above the tolerance is polished by more steps to
@@ -277,7 +277,7 @@ def two_point_statics(
 @dataclass(frozen=True)
 class EEHeldStatics:
     """The stack held at its EE plate alone (support ``ee``), from the turned model
-    (:mod:`assembler_pin.walk.turned`) held at its base.
+    (:mod:`assembler_pin.supports.turned`) held at its base.
 
     Attributes:
         state: the turned model's :class:`~assembler_pin.state.StackState` of the pose (its
@@ -326,13 +326,13 @@ def _payload_wrench(am: AssemblerModel, pa: PlateArrays) -> np.ndarray:
 
 def ee_held_statics(am: AssemblerModel, plates: PlateArrays | Sequence | np.ndarray) -> EEHeldStatics:
     """The leg forces and limits of the stack held at plate n alone, plate 0 free: the turned
-    model's base-held statics of the same physical pose (:mod:`assembler_pin.walk.turned`).
+    model's base-held statics of the same physical pose (:mod:`assembler_pin.supports.turned`).
 
     Raises:
         PoseError: malformed plates.
     """
-    from .state import evaluate_state
-    from .walk.turned import turned_model
+    from ..state import evaluate_state
+    from .turned import turned_model
 
     pa = plate_arrays(am, plates)
     tm = turned_model(am)
@@ -345,14 +345,14 @@ def ee_held_statics(am: AssemblerModel, plates: PlateArrays | Sequence | np.ndar
 def ee_loaded_pose(am: AssemblerModel, lengths: npt.ArrayLike, ee: pin.SE3) -> LoadedPose:
     """The elastic equilibrium of commanded ``lengths`` (n, 6) [m] (original order) with plate n
     welded at the world pose ``ee`` and plate 0 free: the turned model's
-    :func:`~assembler_pin.compliance.loaded_pose`, its plates, forces and lengths given back
+    :func:`~assembler_pin.compliance.loaded.loaded_pose`, its plates, forces and lengths given back
     in the original's order.
 
     Raises:
         PoseError: malformed lengths or pose.
     """
-    from .compliance import loaded_pose
-    from .walk.turned import turned_model
+    from ..compliance.loaded import loaded_pose
+    from .turned import turned_model
 
     tm = turned_model(am)
     rest = checked_lengths(am, lengths)

@@ -1,9 +1,9 @@
 """How the EE's stiffness and sag scale with the number of platforms (``stiffness --scaling``).
 
 For each n the stack of the configuration with ``platforms = n`` is taken at its home pose,
-its legs commanded to the home lengths: :func:`~assembler_pin.ee_stiffness.stiffness` gives
+its legs commanded to the home lengths: :func:`~assembler_pin.compliance.ee_stiffness.stiffness` gives
 the tangent stiffness at the loaded equilibrium and the sag under gravity and payload; the
-elastic part alone (the legs' springs, :func:`~assembler_pin.ee_stiffness.elastic_compliance`)
+elastic part alone (the legs' springs, :func:`~assembler_pin.compliance.ee_stiffness.elastic_compliance`)
 is given beside it, and stays defined where the loaded stack buckles.
 
 Stiffnesses are under a pure force or moment along one world axis at the EE origin, i.e. the
@@ -20,13 +20,13 @@ from typing import cast
 import numpy as np
 import pinocchio as pin
 
-from .bounds import check_bound
-from .config import AssemblerConfig, load_config
+from ..bounds import check_bound
+from ..config import AssemblerConfig, load_config
+from ..exceptions import OptionsError
+from ..geometry import LegGeometry, home_plates, leg_geometry
+from ..model import AssemblerModel
+from ..progress import ProgressCallback
 from .ee_stiffness import elastic_compliance, stiffness
-from .exceptions import OptionsError
-from .geometry import LegGeometry, home_plates, leg_geometry
-from .model import AssemblerModel
-from .progress import ProgressCallback
 
 __all__ = ["ScalingTable", "scaling_figure", "stiffness_scaling"]
 
@@ -139,7 +139,7 @@ def scaling_figure(table: ScalingTable):
     against n, the first buckling n marked."""
     from matplotlib.figure import Figure
 
-    from .palette import LEG_CYCLE, LIMIT, OPTIMIZED
+    from ..palette import LEG_CYCLE, LIMIT, OPTIMIZED
 
     fig = Figure(figsize=(11, 4.6), layout="constrained")
     ax_k, ax_s = fig.subplots(1, 2)

@@ -1,7 +1,7 @@
 """The chosen distribution of leg forces of a held stack, and the length offsets that realize it.
 
 Equilibrium at a pose. With the leg forces ``T`` (tension positive) the potential's gradient
-at plate m (:mod:`assembler_pin.elastic`, world axes) is ``ĝ_m + Ŵ_{m−1} − Ŵ_m``: ``ĝ_m`` the
+at plate m (:mod:`assembler_pin.compliance.elastic`, world axes) is ``ĝ_m + Ŵ_{m−1} − Ŵ_m``: ``ĝ_m`` the
 weights on it (its gradient with slack legs), ``Ŵ_j = Σ_i T_ji [u, r × u]`` platform j's legs'
 wrench, every moment taken about one point (the EE's origin). A free plate needs it zero, a
 held plate's is its support's wrench. So:
@@ -18,9 +18,9 @@ held plate's is its support's wrench. So:
 program in ``(w, t)`` solved by HiGHS. The
 legs realize it when commanded ``L0 = L − T / k``: the pose is then an exact elastic equilibrium
 with these forces (``k (L − L0) = T``), so the offsets are ``−T / k`` [m]; they are applied
-through :func:`~assembler_pin.supports.two_point_statics` (or the base-held
-:func:`~assembler_pin.compliance.loaded_pose`, the EE-held
-:func:`~assembler_pin.supports.ee_loaded_pose`) to check that the forces come back.
+through :func:`~assembler_pin.supports.two_point.two_point_statics` (or the base-held
+:func:`~assembler_pin.compliance.loaded.loaded_pose`, the EE-held
+:func:`~assembler_pin.supports.two_point.ee_loaded_pose`) to check that the forces come back.
 """
 
 from __future__ import annotations
@@ -32,12 +32,12 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.optimize import linprog
 
-from .compliance import LoadedPose, loaded_pose, stroke_problem
-from .elastic import elastic_terms, line_conditions
-from .kinematics import PlateArrays, leg_vectors, plate_arrays
-from .model import AssemblerModel
-from .statics.closed_form import CONDITION_LIMIT
-from .supports import (
+from ..compliance.elastic import elastic_terms, line_conditions
+from ..compliance.loaded import LoadedPose, loaded_pose, stroke_problem
+from ..kinematics import PlateArrays, leg_vectors, plate_arrays
+from ..model import AssemblerModel
+from ..statics.closed_form import CONDITION_LIMIT
+from .two_point import (
     SupportAnswer,
     TwoPointStatics,
     ee_loaded_pose,
@@ -287,7 +287,7 @@ def _check(
     """Apply the commanded lengths through the elastic solve of the support (held at both ends:
     Newton started from ``pa``, where the forces were chosen): the largest force difference
     [N] and a note (the EE-only support through the turned model,
-    :func:`~assembler_pin.supports.ee_loaded_pose`)."""
+    :func:`~assembler_pin.supports.two_point.ee_loaded_pose`)."""
     got: TwoPointStatics | LoadedPose
     if support == "both":
         got = two_point_statics(am, pa, commanded)
@@ -334,9 +334,9 @@ def chosen_distribution(
     held by ``support`` at ``plates``, and the length offsets that realize them (module doc).
 
     ``loaded`` (default): chosen where the elastic distribution of the pose's own lengths puts
-    the plates (:func:`~assembler_pin.supports.two_point_statics`; the base-held
-    :func:`~assembler_pin.compliance.loaded_pose`; the EE-held
-    :func:`~assembler_pin.supports.ee_loaded_pose`), so the elastic forces are one of the
+    the plates (:func:`~assembler_pin.supports.two_point.two_point_statics`; the base-held
+    :func:`~assembler_pin.compliance.loaded.loaded_pose`; the EE-held
+    :func:`~assembler_pin.supports.two_point.ee_loaded_pose`), so the elastic forces are one of the
     candidates and ``max|F|`` is never above theirs; else at ``plates`` exactly. The offsets are
     the commanded lengths minus the pose's own. Held at one end the forces are unique; held at
     both, HiGHS picks the six internal forces. With ``verify`` the commanded lengths are applied

@@ -1,6 +1,6 @@
 """The stack as an elastic truss: its total potential, gradient and Hessian over the plate poses,
-and the Newton solve of its loaded equilibrium (used by :mod:`assembler_pin.ee_stiffness` and
-:mod:`assembler_pin.compliance`).
+and the Newton solve of its loaded equilibrium (used by :mod:`assembler_pin.compliance.ee_stiffness` and
+:mod:`assembler_pin.compliance.loaded`).
 
 Model. Each leg is a linear spring along its pin-to-pin axis, stiffness ``k = leg.stiffness``
 [N/m], unloaded (commanded) length ``L0``: its tension is ``T = k (L - L0)`` (positive when
@@ -29,7 +29,7 @@ Per leg, with ``d = t - b``, ``u = d / L``, ``a = (0, 0, -g)`` and the leg's lev
 The Hessian is block-tridiagonal over the plates (a leg joins plates j and j+1). Up to
 :data:`DENSE_MAX_PLATFORMS` platforms it is solved as one dense matrix (one LAPACK call, which
 also gives the EE's condensed compliance, the EE block of its inverse); above, by one sweep of
-its blocks from the base up (linear in n); :mod:`assembler_pin.elastic_solve` holds those solves.
+its blocks from the base up (linear in n); :mod:`assembler_pin.compliance.tangent` holds those solves.
 """
 
 from __future__ import annotations
@@ -41,10 +41,10 @@ from dataclasses import dataclass
 import numpy as np
 import pinocchio as pin
 
-from .elastic_solve import block_sweep, held_solve, tangent_solve
-from .linalg import cross, skew
-from .model import AssemblerModel
-from .statics import closed_form
+from ..linalg import cross, skew
+from ..model import AssemblerModel
+from ..statics import closed_form
+from .tangent import block_sweep, held_solve, tangent_solve
 
 __all__ = [
     "DENSE_MAX_PLATFORMS",

@@ -17,18 +17,18 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 import pinocchio as pin
 
-from .constraints import leg_limit_margins
-from .exceptions import ArgumentError, OptionsError
-from .kinematics import PlateArrays, se3_to_taa, to_se3
-from .messages import binding, describe, one_line
-from .model import AssemblerModel, checked_model
-from .optimize import OptimizeOptions, OptimizeResult, optimize_internal_poses
-from .options import checked_options
-from .state import StackState
-from .threads import one_blas_thread
+from ..constraints import leg_limit_margins
+from ..exceptions import ArgumentError, OptionsError
+from ..kinematics import PlateArrays, se3_to_taa, to_se3
+from ..messages import binding, describe, one_line
+from ..model import AssemblerModel, checked_model
+from ..optimize import OptimizeOptions, OptimizeResult, optimize_internal_poses
+from ..options import checked_options
+from ..state import StackState
+from ..threads import one_blas_thread
 
 if TYPE_CHECKING:
-    from .helper_arm import HelperArmOptions, InitialConditionResult
+    from ..helper_arm import HelperArmOptions, InitialConditionResult
 
 __all__ = [
     "AT_LIMIT",
@@ -178,7 +178,7 @@ def solve(
         PoseError: the goal is not a valid SE(3) pose.
         OptionsError: ``starts`` is not one of :data:`START_MODES`.
     """
-    from .helper_arm import initial_condition
+    from ..helper_arm import initial_condition
 
     goal, options, helper_options = _checked_inputs(am, goal, optimize, options, helper_options, starts)
     t0 = time.perf_counter()
@@ -205,7 +205,7 @@ def _checked_inputs(
     starts: str,
 ) -> tuple[pin.SE3, OptimizeOptions, HelperArmOptions]:
     """(goal, options, helper options) of :func:`solve`, or the error naming what is wrong."""
-    from .helper_arm import HelperArmOptions
+    from ..helper_arm import HelperArmOptions
 
     checked_model(am)
     if starts not in START_MODES:
@@ -305,7 +305,7 @@ def needs_other_starts(am: AssemblerModel, run: OptimizeResult, opts: OptimizeOp
 
 def optimizer_starts(am: AssemblerModel, goal: pin.SE3, helper_plates: PlateArrays | None) -> dict[str, PlateArrays]:
     """The optimizer's starts (:data:`STARTS`): plate 0 at home, plate n at the goal."""
-    from .helper_arm.initial import even_screw_pose
+    from ..helper_arm.initial import even_screw_pose
 
     home = list(am.home)
     home[am.n] = goal
@@ -318,7 +318,7 @@ def optimizer_starts(am: AssemblerModel, goal: pin.SE3, helper_plates: PlateArra
 def _fallback_starts(am: AssemblerModel, goal: pin.SE3, around: PlateArrays) -> Iterator[tuple[str, PlateArrays]]:
     """Valid starts near ``around`` (the helper arm's pose, else the screw pose): its internal
     plates moved by seeded random twists, then repaired onto the leg limits (:func:`_repaired`)."""
-    from .helper_arm import perturbed_plates
+    from ..helper_arm import perturbed_plates
 
     copies = perturbed_plates(around.as_se3(), FALLBACK_STARTS, seed=_seed_of(around))
     return _repaired(am, "perturbed", copies)
@@ -330,7 +330,7 @@ def _lean_starts(am: AssemblerModel, goal: pin.SE3) -> Iterator[tuple[str, Plate
     (:func:`_repaired`). On the default stack they solve the low goals (±0.2, 0.2, 0.5) m,
     which every other start leaves unsolved; on a goal without a valid pose they cost ~0.5 s
     (12 repairs)."""
-    from .helper_arm.initial import lean_poses
+    from ..helper_arm.initial import lean_poses
 
     return _repaired(am, "lean", lean_poses(am, goal))
 
@@ -338,7 +338,7 @@ def _lean_starts(am: AssemblerModel, goal: pin.SE3) -> Iterator[tuple[str, Plate
 def _repaired(am: AssemblerModel, name: str, poses: Iterable[list[pin.SE3]]) -> Iterator[tuple[str, PlateArrays]]:
     """``(name_k, pose k repaired onto the leg limits)`` for each of ``poses`` whose repair
     holds (the others are skipped), lazily: a caller that stops early repairs no more."""
-    from .helper_arm import repair_stack
+    from ..helper_arm import repair_stack
 
     for k, plates in enumerate(poses):
         repaired, violation = repair_stack(am, plates)
@@ -353,7 +353,7 @@ def _seed_of(plates: PlateArrays) -> int:
 
 def _best_run(runs: dict[str, OptimizeResult]) -> tuple[str | None, OptimizeResult | None]:
     """The run whose returned state is feasible with the smallest Ω, successes first (each
-    run's ``objective_optimized``: :func:`assembler_pin.objective.objective_value` of its
+    run's ``objective_optimized``: :func:`assembler_pin.optimize.objective.objective_value` of its
     Pinocchio-checked state)."""
     feasible = [(not r.success, r.objective_optimized, name) for name, r in runs.items() if r.optimized.feasible]
     if not feasible:
