@@ -34,14 +34,14 @@ import numpy as np
 import numpy.typing as npt
 import pinocchio as pin
 
+from .common.linalg import cross, inverse_or_nan
+from .common.validation import as_float_array
 from .exceptions import ArgumentError, SingularConfigurationError
 from .kinematics import PlateArrays, leg_vectors, plate_arrays, q_from_arrays
-from .linalg import cross, inverse_or_nan
-from .model import WHOLE_DATA_MAX_PLATFORMS, AssemblerModel, checked_model
+from .model.assembler import WHOLE_DATA_MAX_PLATFORMS, AssemblerModel, checked_model
 from .statics.closed_form import CONDITION_LIMIT
 from .statics.pinocchio_statics import _leg_jacobians_t
 from .statics.result import StaticsResult
-from .validation import as_float_array
 
 __all__ = [
     "DynamicsResult",

@@ -2,8 +2,8 @@
 
 :func:`trajectory_plot` (also importable from :mod:`assembler_pin.plots`) draws one row of
 panels per platform ``SPj`` and one column per quantity, the six legs of the platform in
-six colours named ``SPj leg i`` (:mod:`~assembler_pin.labels`), colours from
-:mod:`~assembler_pin.palette`. Each panel keeps its data's own scale (a limit far from the
+six colours named ``SPj leg i`` (:mod:`~assembler_pin.common.labels`), colours from
+:mod:`~assembler_pin.common.palette`. Each panel keeps its data's own scale (a limit far from the
 data would squash the curves): a limit is drawn only near the data, and the panel's title
 gives the distance from the data to the nearest limit. SI units; forces tension positive.
 """
@@ -17,11 +17,11 @@ import numpy as np
 import numpy.typing as npt
 from matplotlib.figure import Figure
 
-from . import palette
-from .config import LegConfig
-from .labels import leg_label, platform_label
-from .model import AssemblerModel
-from .palette import hex_color
+from .common import palette
+from .common.labels import leg_label, platform_label
+from .common.palette import hex_color
+from .config.schema import LegConfig
+from .model.assembler import AssemblerModel
 from .state import StackState
 
 __all__ = ["LIMIT_VIEW_FRACTION", "trajectory_plot"]

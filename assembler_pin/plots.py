@@ -7,7 +7,7 @@ inline there); :func:`save` writes one to PNG. The workspace slice lives in
 
 Conventions (as everywhere in the package): forces in newtons, **tension positive**;
 positions in metres in the world frame O (z up). Colours are the package's one colour
-language (:mod:`~assembler_pin.palette`): the initial condition green, the optimized pose
+language (:mod:`~assembler_pin.common.palette`): the initial condition green, the optimized pose
 charcoal, the helper arm violet; force scales run blue (compression) ↔ grey (0) ↔ red
 (tension), the viewer's leg colours, so red always means tension. Legends sit outside
 the drawn data.
@@ -26,11 +26,11 @@ from matplotlib.colors import TwoSlopeNorm
 from matplotlib.figure import Figure
 from matplotlib.patches import Patch, Rectangle
 
-from . import palette
-from .config import LegConfig
+from .common import palette
+from .common.labels import leg_label, platform_label
+from .common.palette import hex_color
+from .config.schema import LegConfig
 from .exceptions import AssemblerError
-from .labels import leg_label, platform_label
-from .palette import hex_color
 from .plan_figure import trajectory_plot
 from .state import StackState
 from .workspace_plot import (
@@ -116,7 +116,7 @@ def force_heatmaps(
     """Annotated heatmaps of the actuator forces, leg × platform, side by side.
 
     Rows are legs 0..5, columns platforms SP0..SP(n-1) (0-based, as the arrays:
-    :mod:`~assembler_pin.labels`); each cell is annotated with its force [N]. The
+    :mod:`~assembler_pin.common.labels`); each cell is annotated with its force [N]. The
     colormap is diverging and centred at 0 (red tension, grey 0, blue compression) with one
     symmetric scale for both panels: ±``limit`` if given, else ±max |F| over the states
     shown. With ``leg`` (the leg limits), a leg at a stroke end gets a black frame and
@@ -327,10 +327,10 @@ def pose_views(
 def save(fig: Figure, path: str | Path, dpi: int = 150) -> Path:
     """Write a figure to PNG (parent directories created) and return the path.
 
-    The file is written atomically (:func:`~assembler_pin.files.atomic_path`): an interrupted
+    The file is written atomically (:func:`~assembler_pin.common.files.atomic_path`): an interrupted
     write leaves the previous file, never a truncated one.
     """
-    from .files import atomic_path
+    from .common.files import atomic_path
 
     out = Path(path)
     out.parent.mkdir(parents=True, exist_ok=True)

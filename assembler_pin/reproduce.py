@@ -23,10 +23,10 @@ from typing import TYPE_CHECKING
 import numpy as np
 import pinocchio as pin
 
-from .labels import leg_label, platform_label
-from .model import AssemblerModel
+from .common.labels import leg_label, platform_label
+from .common.progress import ProgressCallback
+from .model.assembler import AssemblerModel
 from .optimize import OptimizeOptions, optimize_internal_poses
-from .progress import ProgressCallback
 from .scenarios import SCENARIOS, Scenario
 from .solver.pipeline import SolveResult, solve
 from .state import StackState, evaluate_state
@@ -34,7 +34,7 @@ from .state import StackState, evaluate_state
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
 
-    from .config import LegConfig
+    from .config.schema import LegConfig
 
 __all__ = ["ScenarioOutcome", "force_tables", "run_scenarios", "sag_table", "summary_table", "write_report"]
 
@@ -162,7 +162,7 @@ def reference(am: AssemblerModel, result: SolveResult, options: OptimizeOptions 
 
 
 def _argmax_label(state: StackState) -> str:
-    """``SPj leg i`` of the largest |F| (0-based, :mod:`~assembler_pin.labels`)."""
+    """``SPj leg i`` of the largest |F| (0-based, :mod:`~assembler_pin.common.labels`)."""
     j, i = np.unravel_index(np.abs(state.forces).argmax(), state.forces.shape)
     return leg_label(j, i)
 
@@ -291,7 +291,7 @@ def sag_table(am: AssemblerModel, outcomes: Sequence[ScenarioOutcome], markdown:
 def force_tables(outcome: ScenarioOutcome, markdown: bool = False) -> str:
     """The 6×n initial and optimized force tables side by side (paper Tables I–II) [N].
 
-    Row ``i``, column ``SPj``: leg ``i`` of platform ``j``, both 0-based (:mod:`~assembler_pin.labels`).
+    Row ``i``, column ``SPj``: leg ``i`` of platform ``j``, both 0-based (:mod:`~assembler_pin.common.labels`).
     """
     if outcome.initial is None or outcome.optimized is None:
         return f"{outcome.scenario.name}: not solved ({outcome.result.message})"
@@ -323,7 +323,7 @@ def write_report(am: AssemblerModel, outcomes: Sequence[ScenarioOutcome], out_di
     together once all are written, ``report.md`` last, so an interrupted run leaves the
     previous report (or none) and never a partial one.
     """
-    from .files import atomic_path
+    from .common.files import atomic_path
 
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)

@@ -17,7 +17,7 @@ import pinocchio as pin
 from .constraints import DEFAULT_GOAL_TOLERANCE, GoalTolerance, Violation, evaluate_constraints
 from .exceptions import OptionsError
 from .kinematics import LegState, PlateArrays, checked_goal, leg_state, plate_arrays
-from .model import AssemblerModel, checked_model
+from .model.assembler import AssemblerModel, checked_model
 from .statics.pinocchio_statics import solve_statics
 from .statics.result import StaticsResult
 

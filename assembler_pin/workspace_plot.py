@@ -17,10 +17,10 @@ import pinocchio as pin
 from matplotlib.colors import Normalize
 from matplotlib.figure import Figure
 
-from . import palette
+from .common import palette
+from .common.palette import hex_color
 from .exceptions import AssemblerError
-from .model import AssemblerModel
-from .palette import hex_color
+from .model.assembler import AssemblerModel
 from .state import StackState
 
 __all__ = [

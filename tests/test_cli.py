@@ -145,7 +145,7 @@ def test_cli_defaults_come_from_the_options_dataclasses():
 def test_solve_starts_option_reaches_the_solver(capsys):
     """``--starts all`` runs every start of the solver; the default is ``first`` (the home
     start only when the helper arm's run fails); a wrong value is one line, exit 2."""
-    from assembler_pin.choices import SOLVE_STARTS
+    from assembler_pin.config.choices import SOLVE_STARTS
     from assembler_pin.solver.pipeline import START_MODES, STARTS
 
     assert SOLVE_STARTS == START_MODES and SOLVE_STARTS[0] == "first"

@@ -15,9 +15,9 @@ import trimesh
 import yourdfpy
 
 from assembler_pin import stack_forward_kinematics
+from assembler_pin.common.naming import names
 from assembler_pin.export import export_model_files
 from assembler_pin.kinematics import q_from_plates
-from assembler_pin.naming import names
 
 
 @pytest.fixture(scope="module")

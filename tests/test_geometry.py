@@ -7,7 +7,7 @@ import pytest
 from checks import design_anchors, home_directions, home_height
 
 import assembler_pin as ap
-from assembler_pin.geometry import reach_bound
+from assembler_pin.model.geometry import reach_bound
 
 
 @pytest.mark.parametrize("config", [{}, {"platforms": 3, "plate": {"node_radius": 0.2, "node_spacing_deg": 12.0}}])

@@ -13,10 +13,10 @@ import pytest
 from checks import design_forces, design_problems
 
 from assembler_pin import AssemblerModel, load_config
+from assembler_pin.config.options import AUTO_IPOPT_PLATFORMS, resolved_method
 from assembler_pin.exceptions import OptionsError
 from assembler_pin.kinematics import PlateArrays
 from assembler_pin.optimize import OptimizeOptions, optimize_internal_poses
-from assembler_pin.options import AUTO_IPOPT_PLATFORMS, resolved_method
 
 casadi = pytest.importorskip("casadi")
 

@@ -15,7 +15,7 @@ import pytest
 
 from assembler_pin import evaluate_state, plots, stack_forward_kinematics
 from assembler_pin.cli import format_state_table
-from assembler_pin.labels import leg_label, platform_label
+from assembler_pin.common.labels import leg_label, platform_label
 from assembler_pin.reproduce import ScenarioOutcome, force_tables, summary_table
 from assembler_pin.scenarios import SCENARIOS
 

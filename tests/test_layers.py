@@ -17,22 +17,9 @@ PACKAGE = Path(__file__).resolve().parents[1] / "assembler_pin"
 #: The layers, lowest first; a unit imports only from its own layer's unit and the ones below.
 LAYERS: tuple[tuple[str, ...], ...] = (
     ("exceptions",),
-    ("config", "config_checks", "options", "choices", "bounds"),
-    (
-        "common",
-        "files",
-        "progress",
-        "threads",
-        "signals",
-        "linalg",
-        "palette",
-        "messages",
-        "validation",
-        "naming",
-        "labels",
-        "scenarios",
-    ),
-    ("model", "platform_model", "geometry", "urdf", "urdf_check", "mjcf"),
+    ("config",),
+    ("common", "scenarios"),
+    ("model",),
     ("kinematics",),
     ("statics",),
     ("compliance", "constraints", "dynamics"),
@@ -48,19 +35,13 @@ LAYERS: tuple[tuple[str, ...], ...] = (
 #: Modules still at the package root, by the subpackage they belong to (imports among them are
 #: imports within that subpackage).
 UNIT_OF: dict[str, str] = {
-    **dict.fromkeys(("config_checks", "options", "choices", "bounds"), "config"),
-    **dict.fromkeys(
-        ("files", "progress", "threads", "signals", "linalg", "palette", "messages", "validation", "naming", "labels"),
-        "common",
-    ),
-    **dict.fromkeys(("platform_model", "geometry", "urdf", "urdf_check", "mjcf"), "model"),
     **dict.fromkeys(("plan_figure", "workspace_plot"), "plots"),
     "sim": "simulate",
 }
 
 #: Imports that go up the layers today, (importer, imported) as dotted module names.
 KNOWN_UPWARD: set[tuple[str, str]] = {
-    ("assembler_pin.messages", "assembler_pin.constraints"),
+    ("assembler_pin.common.messages", "assembler_pin.constraints"),
     ("assembler_pin.viz.animation", "assembler_pin.walk"),
     ("assembler_pin.viz.viewer", "assembler_pin.walk"),
 }

@@ -1,5 +1,5 @@
 """What a person reads when an answer is "not possible": one line of at most 200 characters
-naming the binding cause in the package's vocabulary (:mod:`assembler_pin.messages`), with its
+naming the binding cause in the package's vocabulary (:mod:`assembler_pin.common.messages`), with its
 numbers and units and never NaN; and text answers no wider than 100 characters."""
 
 from __future__ import annotations
@@ -15,8 +15,8 @@ import pytest
 
 from assembler_pin import AssemblerModel, load_config, solve, stack_forward_kinematics
 from assembler_pin.cli import main
+from assembler_pin.common.messages import CAUSES, MAX_LENGTH, binding, describe, one_line
 from assembler_pin.helper_arm import HelperArmOptions, initial_condition
-from assembler_pin.messages import CAUSES, MAX_LENGTH, binding, describe, one_line
 from assembler_pin.motion import EEPath, plan_path
 from assembler_pin.optimize import optimize_internal_poses
 from assembler_pin.reproduce import ScenarioOutcome, summary_table

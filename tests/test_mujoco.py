@@ -29,7 +29,7 @@ from assembler_pin import (
 )
 from assembler_pin.export import export_model_files
 from assembler_pin.kinematics import leg_state
-from assembler_pin.mjcf import MJCF_FILENAME, assembler_mjcf
+from assembler_pin.model.mjcf import MJCF_FILENAME, assembler_mjcf
 from assembler_pin.simulate import MujocoStack, SimulationError, hold_pose, mujoco_statics
 
 

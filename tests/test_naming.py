@@ -4,7 +4,7 @@ import xml.etree.ElementTree as ET
 
 import pytest
 
-from assembler_pin.naming import LEG_PARTS, names, parse_name
+from assembler_pin.common.naming import LEG_PARTS, names, parse_name
 
 
 def test_builders_and_parser_are_inverse():
@@ -26,7 +26,7 @@ def test_foreign_names_are_refused(bad):
 
 def test_every_urdf_link_of_a_leg_or_plate_parses(tmp_path):
     from assembler_pin import load_config
-    from assembler_pin.urdf import assembler_urdf
+    from assembler_pin.model.urdf import assembler_urdf
 
     root = ET.fromstring(assembler_urdf(load_config(None)))
     links = [e.get("name") for e in root.iter("link")]

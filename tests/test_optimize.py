@@ -208,9 +208,9 @@ def test_smooth_form_derivatives_match_finite_differences(start):
 
 
 def test_auto_method_is_slsqp_bit_for_bit_on_short_stacks(am, start):
-    """``method="auto"`` below :data:`~assembler_pin.options.AUTO_IPOPT_PLATFORMS` is SLSQP:
+    """``method="auto"`` below :data:`~assembler_pin.config.options.AUTO_IPOPT_PLATFORMS` is SLSQP:
     the same plates to the last bit, and the result names the method that ran."""
-    from assembler_pin.options import AUTO_IPOPT_PLATFORMS
+    from assembler_pin.config.options import AUTO_IPOPT_PLATFORMS
 
     assert am.n < AUTO_IPOPT_PLATFORMS
     slsqp = optimize_internal_poses(am, start)

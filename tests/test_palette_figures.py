@@ -27,8 +27,9 @@ from matplotlib.colors import to_rgb
 from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 
-from assembler_pin import evaluate_state, palette, plots, scenario, stack_forward_kinematics, viz
-from assembler_pin.labels import leg_label
+from assembler_pin import evaluate_state, plots, scenario, stack_forward_kinematics, viz
+from assembler_pin.common import palette
+from assembler_pin.common.labels import leg_label
 from assembler_pin.motion.trajfile import MARGIN_KINDS, Trajectory
 
 

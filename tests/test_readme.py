@@ -136,7 +136,7 @@ def test_limits_page_is_generated_from_the_bounds_table():
     gen = _generator("gen_limits")
     stale = "docs/limits.md is stale: run python docs/gen_limits.py"
     assert gen.PAGE.read_text(encoding="utf-8") == gen.render(), stale
-    from assembler_pin.bounds import BOUNDS
+    from assembler_pin.config.bounds import BOUNDS
 
     assert all(f"`{key}`" in gen.PAGE.read_text(encoding="utf-8") for key in BOUNDS)
 

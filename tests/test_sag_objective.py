@@ -12,10 +12,10 @@ from checks import design_problems
 
 from assembler_pin import loaded_pose
 from assembler_pin.cli import main
+from assembler_pin.common.messages import CAUSES
 from assembler_pin.exceptions import OptionsError
 from assembler_pin.helper_arm import initial_condition
 from assembler_pin.kinematics import leg_vectors, plate_arrays
-from assembler_pin.messages import CAUSES
 from assembler_pin.optimize import OptimizeOptions, optimize_internal_poses
 from assembler_pin.optimize.problem import Problem
 from assembler_pin.optimize.smooth import SmoothForm

@@ -141,8 +141,8 @@ def test_ipopt_runs_casadis_own_openblas_on_one_thread():
         pytest.skip("casadi is not installed")
     from threadpoolctl import ThreadpoolController
 
+    from assembler_pin.common.threads import single_blas_thread
     from assembler_pin.optimize.ipopt import _casadi
-    from assembler_pin.threads import single_blas_thread
 
     _casadi()
 
@@ -201,7 +201,7 @@ def test_all_starts_run_every_start(am):
 
 def _legs_at_min_stroke(am, state) -> int:
     """Legs whose length is within AT_LIMIT of the optimizer's margin above the minimum."""
-    from assembler_pin.options import OptimizeOptions
+    from assembler_pin.config.options import OptimizeOptions
     from assembler_pin.solver.pipeline import AT_LIMIT
 
     floor = am.config.leg.min_length + OptimizeOptions().limit_margin + AT_LIMIT

@@ -22,8 +22,8 @@ import yaml
 from assembler_pin.cli.app import main
 from assembler_pin.cli.statics import _fast_home
 from assembler_pin.config import PayloadConfig, PlateConfig, load_config
-from assembler_pin.geometry import leg_geometry
 from assembler_pin.model import AssemblerModel
+from assembler_pin.model.geometry import leg_geometry
 from assembler_pin.state import evaluate_state
 from assembler_pin.statics import CONDITION_LIMIT
 from assembler_pin.statics.home import SCREEN_CONDITION, home_anchors, home_state_document

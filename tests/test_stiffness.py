@@ -432,7 +432,7 @@ def ninety_degrees(am):
 
 def test_mjcf_servo_gain_is_the_leg_stiffness():
     mujoco = pytest.importorskip("mujoco")
-    from assembler_pin.mjcf import ACTUATOR_KV, actuator_gains, assembler_mjcf
+    from assembler_pin.model.mjcf import ACTUATOR_KV, actuator_gains, assembler_mjcf
 
     for k in (2e5, 1e6, 5e6):
         m = mujoco.MjModel.from_xml_string(assembler_mjcf(ap.load_config({"platforms": 1, "leg": {"stiffness": k}})))

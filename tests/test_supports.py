@@ -262,7 +262,7 @@ def test_one_end_held_the_forces_are_the_statics_of_that_end(am):
 # ---------------------------------------------------------------------- MuJoCo, both ends welded
 def _welded_mujoco(am):
     mujoco = pytest.importorskip("mujoco")
-    from assembler_pin.mjcf import assembler_mjcf
+    from assembler_pin.model.mjcf import assembler_mjcf
     from assembler_pin.simulate import MujocoStack
 
     stack = MujocoStack(am)

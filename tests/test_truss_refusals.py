@@ -6,9 +6,9 @@ import numpy as np
 import pytest
 
 import assembler_pin as ap
-from assembler_pin.bounds import BOUNDS
 from assembler_pin.compliance import MAX_WRENCH, compensated_lengths, loaded_pose
 from assembler_pin.compliance.scaling import stiffness_scaling
+from assembler_pin.config.bounds import BOUNDS
 from assembler_pin.exceptions import LoadError, OptionsError
 
 

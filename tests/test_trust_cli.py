@@ -24,8 +24,8 @@ import pytest
 
 import assembler_pin as ap
 from assembler_pin.cli import main
+from assembler_pin.common.progress import TerminalProgress
 from assembler_pin.exceptions import OptionsError, SimulationError, SingularConfigurationError
-from assembler_pin.progress import TerminalProgress
 
 REACHABLE = ["0.2", "0.1", "0.85", "0.5", "0.5", "0.5"]
 UNREACHABLE = ["3", "0", "0.8", "0", "0", "0"]
@@ -147,7 +147,7 @@ def test_reproduce_with_an_unsolved_scenario_is_exit_1(monkeypatch, tmp_path, ca
 
 def _interrupt_fsync(monkeypatch) -> None:
     """Every atomic write is cut short after its data reached the temporary file."""
-    import assembler_pin.files as files
+    import assembler_pin.common.files as files
 
     def killed(fd):
         raise KeyboardInterrupt
@@ -584,7 +584,7 @@ def test_an_interrupt_redelivered_after_the_command_unwound_is_dropped():
     restored does not interrupt what runs next."""
     import types
 
-    from assembler_pin.signals import REDELIVERY_DELAY, interrupt_on_signals
+    from assembler_pin.common.signals import REDELIVERY_DELAY, interrupt_on_signals
 
     restore = interrupt_on_signals(("SIGTERM",))
     hook = sys.unraisablehook

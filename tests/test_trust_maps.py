@@ -27,8 +27,8 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 import assembler_pin as ap
-from assembler_pin.bounds import BOUNDS
 from assembler_pin.cli import main
+from assembler_pin.config.bounds import BOUNDS
 from assembler_pin.exceptions import AssemblerError, GridError, MapError
 from assembler_pin.maps import Grid, parse_grid, parse_orientations, read_map, run_map
 from assembler_pin.maps import cells as map_cells

@@ -201,7 +201,7 @@ def test_truncated_or_edited_files_are_refused_in_one_line(traj, tmp_path, name)
 
 @pytest.mark.parametrize("name", ["t.csv", "t.json"])
 def test_an_interrupted_write_leaves_the_old_file_and_no_temporary(traj, tmp_path, monkeypatch, name):
-    import assembler_pin.files as files
+    import assembler_pin.common.files as files
 
     target = tmp_path / name
     target.write_text("previous")
@@ -216,7 +216,7 @@ def test_an_interrupted_write_leaves_the_old_file_and_no_temporary(traj, tmp_pat
 
 
 def test_ctrl_c_while_plan_writes_leaves_no_file(am, traj, short, tmp_path, monkeypatch):
-    import assembler_pin.files as files
+    import assembler_pin.common.files as files
     import assembler_pin.motion.timing as timing
     from assembler_pin.motion.result import MotionResult
 
@@ -234,7 +234,7 @@ def test_ctrl_c_while_plan_writes_leaves_no_file(am, traj, short, tmp_path, monk
 
 
 def test_plan_plot_is_written_atomically(am, traj, short, tmp_path, monkeypatch, capsys):
-    import assembler_pin.files as files
+    import assembler_pin.common.files as files
     import assembler_pin.motion.timing as timing
     from assembler_pin.motion.result import MotionResult
 

@@ -19,9 +19,9 @@ from test_viewer import page_commands, page_end_transforms
 
 from assembler_pin import loaded_pose
 from assembler_pin.cli import main
+from assembler_pin.common.naming import names
 from assembler_pin.exceptions import ViewerError
 from assembler_pin.kinematics import leg_state
-from assembler_pin.naming import names
 from assembler_pin.viz import StackViewer, auto_exaggeration, compliance_ellipsoid
 
 FACTOR = 200.0

@@ -213,7 +213,7 @@ def test_cli_walk_answers_refuses_and_writes_only_valid_files(capsys, tmp_path):
 
 def test_cli_walk_one_step_writes_the_samples_and_the_figure(capsys, tmp_path, am):
     from assembler_pin.cli import main
-    from assembler_pin.naming import names
+    from assembler_pin.common.naming import names
 
     out, png, page = tmp_path / "walk", tmp_path / "walk.png", tmp_path / "walk.html"
     assert main(["walk", "--floor", "0.5", "2", "--out", str(out), "--plot", str(png), "--html", str(page)]) == 0

@@ -15,8 +15,8 @@ import pytest
 from test_viewer import page_commands
 
 import assembler_pin as ap
+from assembler_pin.common.naming import names
 from assembler_pin.exceptions import ViewerError
-from assembler_pin.naming import names
 from assembler_pin.viz import StackViewer, interpolate_states
 from assembler_pin.walk import WalkPhase, WalkResult, turned_model
 from assembler_pin.walk.plan import TURN_OVER

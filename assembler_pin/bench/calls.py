@@ -14,10 +14,10 @@ from typing import Any
 
 import numpy as np
 
-from ..bounds import check_bound
+from ..common.progress import ProgressCallback
+from ..config.bounds import check_bound
 from ..kinematics import PlateArrays, q_from_plates, sp_forward_kinematics, stack_forward_kinematics
-from ..model import AssemblerModel
-from ..progress import ProgressCallback
+from ..model.assembler import AssemblerModel
 from ..statics.pinocchio_statics import solve_statics, solve_statics_batch
 from .speed import benchmark_startup
 from .timing import LEVEL_GRID, median_time_us, random_reachable_plates

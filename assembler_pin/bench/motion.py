@@ -9,7 +9,7 @@ from collections.abc import Callable
 import numpy as np
 
 from ..kinematics import PlateArrays
-from ..model import AssemblerModel
+from ..model.assembler import AssemblerModel
 from ..statics.pinocchio_statics import solve_statics
 from .timing import random_reachable_plates
 

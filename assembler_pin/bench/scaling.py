@@ -9,9 +9,9 @@ from typing import Any
 
 import numpy as np
 
+from ..common.progress import ProgressCallback
 from ..kinematics import stack_forward_kinematics
-from ..model import AssemblerModel
-from ..progress import ProgressCallback
+from ..model.assembler import AssemblerModel
 from ..statics.pinocchio_statics import solve_statics
 from .timing import median_time_us, random_reachable_plates
 
@@ -116,7 +116,7 @@ def benchmark_maps(grid_spec: str = MAP_BENCH_GRID, workers: tuple[int, ...] = (
     """
     import tempfile
 
-    from ..config import load_config
+    from ..config.schema import load_config
     from ..maps import parse_grid, run_map
 
     grid = parse_grid(grid_spec)

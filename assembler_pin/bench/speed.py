@@ -17,8 +17,8 @@ from typing import Any
 
 import numpy as np
 
-from ..bounds import check_bound
-from ..model import AssemblerModel
+from ..config.bounds import check_bound
+from ..model.assembler import AssemblerModel
 from .timing import LEVEL_GRID, median_time_us, random_reachable_plates
 
 __all__ = [
@@ -188,7 +188,7 @@ def benchmark_single_statics(
     and from 4×4 matrices (``..._4x4_us``: their validation included). Medians of ``repeat``
     calls cycling through 20 random reachable poses, the best of ``rounds`` interleaved
     rounds; NaN for the kernel without numba."""
-    from ..config import load_config
+    from ..config.schema import load_config
     from ..statics.kernel import kernel_available
 
     check_bound("bench.repeat", repeat, "repeat")
@@ -306,7 +306,7 @@ def benchmark_two_point(platforms: tuple[int, ...] = (4, 64), repeat: int = 20) 
     less), beside its target (``..._target_ms``, :data:`TWO_POINT_TARGETS_MS`); ``..._ok`` says
     a call succeeded.
     """
-    from ..config import load_config
+    from ..config.schema import load_config
     from ..kinematics import plate_arrays
     from ..supports.choice import chosen_distribution
     from ..supports.two_point import two_point_statics
@@ -347,7 +347,7 @@ def long_stack(n: int) -> tuple[AssemblerModel, Any]:
     leaning 2.3°, at every size); the goal is the start's plate n."""
     import pinocchio as pin
 
-    from ..config import load_config
+    from ..config.schema import load_config
     from ..kinematics import PlateArrays
 
     am = AssemblerModel.from_config(load_config().replace(platforms=n))
@@ -369,8 +369,8 @@ def benchmark_long_stacks(
     exponent p of time per iteration ∝ n^p (least squares over the sizes, of the wall time
     and of the CPU time, the steadier one on a shared machine; target 1.5) and the targets
     of :data:`LONG_STACK_TARGETS_S` beside the times."""
+    from ..config.options import casadi_missing
     from ..optimize import OptimizeOptions, optimize_internal_poses
-    from ..options import casadi_missing
 
     methods = tuple(m for m in methods if m != "ipopt" or not casadi_missing())
     out: dict[str, Any] = {}

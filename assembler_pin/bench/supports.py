@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from ..kinematics import plate_arrays
-from ..model import AssemblerModel
+from ..model.assembler import AssemblerModel
 from ..supports.choice import chosen_distribution
 from ..supports.two_point import two_point_statics
 from .timing import median_time_us

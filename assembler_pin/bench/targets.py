@@ -27,7 +27,7 @@ from typing import Any
 
 import numpy as np
 
-from ..model import AssemblerModel
+from ..model.assembler import AssemblerModel
 from .speed import THREAD_GOALS
 
 __all__ = [
@@ -189,7 +189,7 @@ def benchmark_map_memory(cells: int = MAP_MEMORY_CELLS, workers: int = 2) -> dic
     directory."""
     import tempfile
 
-    from ..config import load_config
+    from ..config.schema import load_config
     from ..maps import parse_grid, run_map
 
     side = max(2, round(cells ** (1 / 3)))
@@ -221,7 +221,7 @@ def benchmark_targets(am: AssemblerModel, map_cells: int = MAP_MEMORY_CELLS, qui
     figures."""
     from threadpoolctl import threadpool_limits
 
-    from ..options import casadi_missing
+    from ..config.options import casadi_missing
     from .speed import (
         benchmark_long_stacks,
         benchmark_single_statics,

@@ -9,7 +9,7 @@ from collections.abc import Callable
 import numpy as np
 
 from ..kinematics import PlateArrays, stack_forward_kinematics
-from ..model import AssemblerModel
+from ..model.assembler import AssemblerModel
 
 __all__ = ["LEVEL_GRID", "median_time_us", "random_reachable_plates"]
 

@@ -3,13 +3,13 @@ calls at the home pose."""
 
 from __future__ import annotations
 
+from ..common.threads import single_blas_thread
 from ..compliance.ee_stiffness import stiffness
 from ..compliance.loaded import compensated_lengths, loaded_pose, sag_and_gradient
 from ..kinematics import plate_arrays
-from ..model import AssemblerModel
+from ..model.assembler import AssemblerModel
 from ..statics.derivatives import pose_derivatives
 from ..statics.pinocchio_statics import solve_statics
-from ..threads import single_blas_thread
 from .timing import median_time_us
 
 __all__ = ["benchmark_stiffness"]

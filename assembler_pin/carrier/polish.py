@@ -13,10 +13,10 @@ import logging
 import numpy as np
 import pinocchio as pin
 
+from ..config.options import GoalTolerance, OptimizeOptions
 from ..kinematics import PlateArrays
-from ..model import AssemblerModel
+from ..model.assembler import AssemblerModel
 from ..optimize.objective import omega
-from ..options import GoalTolerance, OptimizeOptions
 from .robot import Carrier
 from .statics import CarrierStatics, carrier_statics, carrier_torques
 

@@ -11,13 +11,13 @@ import numpy as np
 import numpy.typing as npt
 import pinocchio as pin
 
+from ..common.progress import ProgressCallback
+from ..common.threads import one_blas_thread
+from ..config.options import DEFAULT_GOAL_TOLERANCE, GoalTolerance, HelperArmOptions, OptimizeOptions
 from ..exceptions import OptionsError
 from ..kinematics import to_se3
-from ..model import AssemblerModel
+from ..model.assembler import AssemblerModel
 from ..optimize.objective import objective_value
-from ..options import DEFAULT_GOAL_TOLERANCE, GoalTolerance, HelperArmOptions, OptimizeOptions
-from ..progress import ProgressCallback
-from ..threads import one_blas_thread
 from .robot import Carrier
 from .statics import CarrierStatics, carrier_statics
 
@@ -147,7 +147,7 @@ def _checked_settings(
     w_carrier: float,
 ) -> tuple[OptimizeOptions, int]:
     """(options, joint-optimization iteration limit), or an :class:`OptionsError`."""
-    from ..bounds import check_bound
+    from ..config.bounds import check_bound
 
     if options is not None and not isinstance(options, OptimizeOptions):
         raise OptionsError(f"options must be an OptimizeOptions, got {type(options).__name__}")
@@ -305,7 +305,7 @@ def _verdict(statics: CarrierStatics) -> str:
         share = max(statics.stack_ratio, statics.carrier_ratio)
         return f"reached; {statics.binding} binds at {100 * share:.0f} % of its limit"
     if not statics.state.feasible:
-        from ..messages import binding, describe
+        from ..common.messages import binding, describe
 
         return f"the stack violates its limits: {describe(binding(statics.state.violations))}"
     k = int(np.argmax(statics.torque_ratio))

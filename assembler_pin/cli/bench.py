@@ -71,8 +71,8 @@ def add_parser(add) -> None:
 def run(args: argparse.Namespace) -> int:
     """Median times of the hot computations; progress per figure on a terminal."""
     from ..bench.calls import run_benchmarks
-    from ..bounds import check_bound
-    from ..model import AssemblerModel
+    from ..config.bounds import check_bound
+    from ..model.assembler import AssemblerModel
 
     check_bound("bench.repeat", args.repeat, "--repeat", CLIError)
     if args.map_cells is not None and not args.targets:
@@ -136,7 +136,7 @@ def run(args: argparse.Namespace) -> int:
 def _targets(args: argparse.Namespace, am) -> int:
     """``bench --targets``: the speed targets' table, or one JSON object with the figures."""
     from ..bench.targets import MAP_MEMORY_CELLS, benchmark_targets, format_targets, target_rows
-    from ..bounds import check_bound
+    from ..config.bounds import check_bound
 
     cells = MAP_MEMORY_CELLS if args.map_cells is None else args.map_cells
     if cells:

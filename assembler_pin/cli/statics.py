@@ -61,7 +61,7 @@ def _fast_home(args: argparse.Namespace) -> bool:
 def run(args: argparse.Namespace) -> int:
     if _fast_home(args):
         return 0
-    from ..model import AssemblerModel
+    from ..model.assembler import AssemblerModel
     from ..state import evaluate_state
 
     if args.support != "base" and args.carrier is not None:

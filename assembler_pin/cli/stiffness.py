@@ -36,7 +36,7 @@ def add_parser(add) -> None:
 def run(args: argparse.Namespace) -> int:
     """Exit 0 with the stiffness; 1 when there is none (singular, unstable, no pose for the goal)."""
     from ..compliance.ee_stiffness import stiffness
-    from ..model import AssemblerModel
+    from ..model.assembler import AssemblerModel
 
     if args.scaling:
         return _run_scaling(args)
@@ -75,8 +75,8 @@ def run(args: argparse.Namespace) -> int:
 
 def _run_scaling(args: argparse.Namespace) -> int:
     """``--scaling``: the table (text or JSON) and, with ``--out``, the figure; exit 0."""
-    from ..bounds import check_bound
     from ..compliance.scaling import scaling_figure, stiffness_scaling
+    from ..config.bounds import check_bound
     from ..exceptions import CLIError
     from .common import progress_for
 
@@ -88,7 +88,7 @@ def _run_scaling(args: argparse.Namespace) -> int:
     table = stiffness_scaling(cfg, top, progress=prog)
     doc = table.to_dict()
     if args.out is not None:
-        from ..files import atomic_path
+        from ..common.files import atomic_path
 
         fig = scaling_figure(table)
         with atomic_path(args.out) as tmp:
@@ -143,7 +143,7 @@ def format_stiffness(result: StiffnessResult, am) -> str:
     """A compact text report (lines ≤ 100 characters)."""
     import numpy as np
 
-    from ..labels import platform_label
+    from ..common.labels import platform_label
 
     cfg = am.config
     lines = [

@@ -40,7 +40,7 @@ def support_document(am, plates) -> dict:
 
 def run(args: argparse.Namespace) -> int:
     """Exit 0 with both distributions; 1 when there is none (singular pose, no convergence)."""
-    from ..model import AssemblerModel
+    from ..model.assembler import AssemblerModel
 
     am = AssemblerModel.from_config(config_from_args(args))
     plates = plates_from_args(args, am, "give --plates FILE (or - for stdin) or --home")
@@ -68,7 +68,7 @@ def format_ee(held) -> str:
     """The EE-held statics as text (lines ≤ 100 characters)."""
     import numpy as np
 
-    from ..labels import platform_label
+    from ..common.labels import platform_label
 
     verdict = "feasible" if held.feasible else f"{len(held.violations)} violations: {held.violations[0]}"
     lines = [
@@ -85,7 +85,7 @@ def format_support(doc: dict) -> str:
     """A compact text report (lines ≤ 100 characters)."""
     import numpy as np
 
-    from ..labels import platform_label
+    from ..common.labels import platform_label
 
     if not doc["success"]:
         return f"support both: {doc['message']}"

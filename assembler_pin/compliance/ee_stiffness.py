@@ -27,13 +27,13 @@ import numpy as np
 import numpy.typing as npt
 import pinocchio as pin
 
-from ..bounds import check_bound
+from ..common.linalg import skew
+from ..common.validation import as_float_array
+from ..config.bounds import check_bound
 from ..exceptions import LoadError, PoseError
 from ..kinematics import PlateArrays, plate_arrays
-from ..linalg import skew
-from ..model import AssemblerModel
+from ..model.assembler import AssemblerModel
 from ..statics.closed_form import CONDITION_LIMIT
-from ..validation import as_float_array
 from .elastic import Equilibrium, line_conditions, solve_equilibrium
 
 __all__ = ["StiffnessResult", "elastic_compliance", "platform_compliances", "stiffness", "stiffness_from_equilibrium"]

@@ -41,8 +41,8 @@ from dataclasses import dataclass
 import numpy as np
 import pinocchio as pin
 
-from ..linalg import cross, skew
-from ..model import AssemblerModel
+from ..common.linalg import cross, skew
+from ..model.assembler import AssemblerModel
 from ..statics import closed_form
 from .tangent import block_sweep, held_solve, tangent_solve
 

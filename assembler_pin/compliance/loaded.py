@@ -21,15 +21,15 @@ import numpy as np
 import numpy.typing as npt
 import pinocchio as pin
 
-from ..bounds import BOUNDS, check_bound
+from ..common.labels import leg_label
+from ..common.validation import as_float_array
+from ..config.bounds import BOUNDS, check_bound
 from ..exceptions import LoadError
 from ..kinematics import PlateArrays, leg_vectors, plate_arrays, stack_forward_kinematics
-from ..labels import leg_label
-from ..model import AssemblerModel
+from ..model.assembler import AssemblerModel
 from ..statics.closed_form import CONDITION_LIMIT
 from ..statics.derivatives import PoseDerivatives
 from ..statics.pinocchio_statics import solve_statics
-from ..validation import as_float_array
 from .elastic import line_conditions, solve_equilibrium
 
 __all__ = [

@@ -20,12 +20,12 @@ from typing import cast
 import numpy as np
 import pinocchio as pin
 
-from ..bounds import check_bound
-from ..config import AssemblerConfig, load_config
+from ..common.progress import ProgressCallback
+from ..config.bounds import check_bound
+from ..config.schema import AssemblerConfig, load_config
 from ..exceptions import OptionsError
-from ..geometry import LegGeometry, home_plates, leg_geometry
-from ..model import AssemblerModel
-from ..progress import ProgressCallback
+from ..model.assembler import AssemblerModel
+from ..model.geometry import LegGeometry, home_plates, leg_geometry
 from .ee_stiffness import elastic_compliance, stiffness
 
 __all__ = ["ScalingTable", "scaling_figure", "stiffness_scaling"]
@@ -139,7 +139,7 @@ def scaling_figure(table: ScalingTable):
     against n, the first buckling n marked."""
     from matplotlib.figure import Figure
 
-    from ..palette import LEG_CYCLE, LIMIT, OPTIMIZED
+    from ..common.palette import LEG_CYCLE, LIMIT, OPTIMIZED
 
     fig = Figure(figsize=(11, 4.6), layout="constrained")
     ax_k, ax_s = fig.subplots(1, 2)

@@ -13,10 +13,10 @@ import numpy as np
 import numpy.typing as npt
 import pinocchio as pin
 
-from ..config import AssemblerConfig
+from ..common.naming import names
+from ..config.schema import AssemblerConfig
 from ..constraints import leg_limit_margins
 from ..exceptions import OptionsError
-from ..naming import names
 from .limits import cached_leg_geometry, cluster_limits, relative_leg_measures
 from .options import HelperArmOptions
 from .urdf import helper_arm_urdf

@@ -14,14 +14,14 @@ import numpy as np
 import numpy.typing as npt
 import pinocchio as pin
 
+from ..common.messages import binding, describe, number
+from ..common.threads import one_blas_thread
+from ..config.options import checked_options
 from ..constraints import GoalTolerance, evaluate_constraints
-from ..geometry import reach_bound
 from ..kinematics import PlateArrays, leg_state, to_se3
-from ..messages import binding, describe, number
-from ..model import AssemblerModel
-from ..options import checked_options
+from ..model.assembler import AssemblerModel
+from ..model.geometry import reach_bound
 from ..state import StackState, evaluate_state
-from ..threads import one_blas_thread
 from .cache import ArmCache, arm_cache
 from .limits import cluster_limits, height_range
 from .link_lengths import link_length_scan

@@ -11,7 +11,7 @@ import pinocchio as pin
 
 from ..constraints import leg_limit_margins
 from ..kinematics import PlateArrays, leg_state
-from ..model import AssemblerModel
+from ..model.assembler import AssemblerModel
 from ..statics.derivatives import leg_derivatives
 
 __all__ = ["perturbed_plates", "repair_stack"]

@@ -16,13 +16,13 @@ from typing import TypedDict
 
 import numpy as np
 
+from ..common.labels import leg_label
 from ..compliance.ee_stiffness import stiffness
-from ..config import AssemblerConfig, config_from_dict
+from ..config.schema import AssemblerConfig, config_from_dict
 from ..constraints import leg_limit_margins
 from ..exceptions import AssemblerError
 from ..helper_arm import HelperArmOptions
-from ..labels import leg_label
-from ..model import AssemblerModel
+from ..model.assembler import AssemblerModel
 from ..optimize import OptimizeOptions
 from ..solver.capacity import PayloadModels, payload_capacity
 from ..solver.pipeline import solve

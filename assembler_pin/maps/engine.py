@@ -27,10 +27,10 @@ from collections.abc import Iterator, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
-from ..bounds import check_bound
-from ..config import AssemblerConfig
+from ..common.progress import ProgressCallback
+from ..config.bounds import check_bound
+from ..config.schema import AssemblerConfig
 from ..exceptions import AssemblerError, MapError
-from ..progress import ProgressCallback
 from .cells import COLUMNS, cell_key, compute_batch, config_hash, config_key, solver_hash
 from .cluster import check_scheduler, client_for, stop
 from .grid import Cell, Grid

@@ -26,7 +26,7 @@ import numpy.typing as npt
 
 from ..helper_arm import initial_condition
 from ..kinematics import stack_forward_kinematics
-from ..model import AssemblerModel
+from ..model.assembler import AssemblerModel
 from ..state import evaluate_state
 from .guess import on_se3
 from .paths import EEPath

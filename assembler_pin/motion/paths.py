@@ -25,10 +25,10 @@ from pathlib import Path
 import numpy as np
 import pinocchio as pin
 
-from ..bounds import BOUNDS, check_bound
-from ..choices import PATH_KINDS
+from ..common.files import read_text_bounded
+from ..config.bounds import BOUNDS, check_bound
+from ..config.choices import PATH_KINDS
 from ..exceptions import AssemblerError, PathError
-from ..files import read_text_bounded
 from ..kinematics import taa_to_se3, to_se3
 
 __all__ = ["PATH_KINDS", "EEPath", "PathError", "interpolate_pose", "read_waypoints"]

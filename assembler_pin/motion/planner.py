@@ -25,16 +25,15 @@ from dataclasses import dataclass, field
 import numpy as np
 import pinocchio as pin
 
+from ..common.messages import binding, describe, one_line
+from ..common.progress import ProgressCallback
+from ..config.options import checked_options, is_number
 from ..constraints import GoalTolerance
 from ..exceptions import OptionsError
 from ..kinematics import PlateArrays, plate_arrays, stack_forward_kinematics
-from ..messages import binding, describe, one_line
-from ..model import AssemblerModel
+from ..model.assembler import AssemblerModel
 from ..optimize import MotionTerm, OptimizeOptions, optimize_internal_poses
-from ..options import checked_options
-from ..progress import ProgressCallback
 from ..state import StackState, evaluate_state
-from ..validation import is_number
 from .guess import on_se3
 from .paths import EEPath
 

@@ -17,11 +17,11 @@ from __future__ import annotations
 import numpy as np
 import pinocchio as pin
 
+from ..common.progress import ProgressCallback
 from ..constraints import GoalTolerance, leg_limit_margins
 from ..exceptions import TrajectoryError
 from ..kinematics import PlateArrays, se3_to_taa, stack_forward_kinematics, taa_to_se3
-from ..model import AssemblerModel
-from ..progress import ProgressCallback
+from ..model.assembler import AssemblerModel
 from ..state import StackState, evaluate_state
 from .guess import on_se3
 from .trajfile import MARGIN_KINDS, Trajectory

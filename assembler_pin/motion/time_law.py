@@ -113,7 +113,7 @@ def _quintic(tau: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
 
 def _row_counts(durations: list[float], rate: float) -> list[int]:
     """Output intervals of each piece, after checking the duration and row bounds."""
-    from ..bounds import BOUNDS
+    from ..config.bounds import BOUNDS
 
     total = sum(durations)
     limit = BOUNDS["plan.duration"].high

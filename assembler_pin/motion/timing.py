@@ -27,13 +27,13 @@ import time
 
 import numpy as np
 
-from ..bounds import check_bound
+from ..common.messages import one_line
+from ..common.progress import ProgressCallback
+from ..common.threads import one_blas_thread
+from ..config.bounds import check_bound
+from ..config.options import checked_options
 from ..exceptions import PathError, TrajectoryError
-from ..messages import one_line
-from ..model import AssemblerModel
-from ..options import checked_options
-from ..progress import ProgressCallback
-from ..threads import one_blas_thread
+from ..model.assembler import AssemblerModel
 from .paths import EEPath
 from .planner import PlanOptions, PlanResult
 from .result import MotionResult, first_bad_row, plan_prefix, rows_prefix, verify_trajectory

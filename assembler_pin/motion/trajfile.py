@@ -37,10 +37,10 @@ from pathlib import Path
 
 import numpy as np
 
-from ..bounds import check_bound
+from ..common.files import read_text_bounded, write_atomic
+from ..common.naming import names
+from ..config.bounds import check_bound
 from ..exceptions import AssemblerError, TrajectoryError
-from ..files import read_text_bounded, write_atomic
-from ..naming import names
 
 __all__ = [
     "FORMAT",

@@ -26,7 +26,7 @@ Methods:
   analytic derivatives, solved by IPOPT (through CasADi) on the constraint Jacobian's
   structural sparsity (platform j's legs move with plates j and j+1, its forces with plates
   j..n); every point IPOPT evaluates is tracked, so the best feasible one is never lost.
-* ``"auto"``: IPOPT from :data:`~assembler_pin.options.AUTO_IPOPT_PLATFORMS` platforms up
+* ``"auto"``: IPOPT from :data:`~assembler_pin.config.options.AUTO_IPOPT_PLATFORMS` platforms up
   when CasADi is installed, SLSQP otherwise (the result's ``method`` names the one that ran).
 * ``"paper"`` (:mod:`.paper`): the paper's literal formulation — the non-smooth ``max`` in
   the objective, the poses as TAA vectors in the world frame, gradients by scipy's finite

@@ -15,13 +15,13 @@ from dataclasses import dataclass
 import numpy as np
 import pinocchio as pin
 
+from ..common.messages import one_line
+from ..common.threads import one_blas_thread
+from ..config.options import SMOOTH_METHODS, GoalTolerance, OptimizeOptions, checked_options, resolved_method
 from ..exceptions import OptionsError, _SingularIterateError
 from ..kinematics import PlateArrays, checked_goal, plate_arrays
-from ..messages import one_line
-from ..model import AssemblerModel, checked_model
-from ..options import SMOOTH_METHODS, GoalTolerance, OptimizeOptions, checked_options, resolved_method
+from ..model.assembler import AssemblerModel, checked_model
 from ..state import StackState, evaluate_state
-from ..threads import one_blas_thread
 from .objective import SagObjective, state_sag, state_score
 from .options import MotionTerm
 from .paper import PaperForm

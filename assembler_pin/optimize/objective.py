@@ -7,7 +7,7 @@ and w2 [1/rad] the weights (both 1 in the paper).
 Along a motion the paper's "minimum required movement" adds ``w3·Σ (L_i - L_i^prev)²``
 (L the leg lengths [m], w3 [1/m²]).
 
-The optimizer's objectives (``OptimizeOptions.objective``, :data:`~assembler_pin.choices.OBJECTIVES`):
+The optimizer's objectives (``OptimizeOptions.objective``, :data:`~assembler_pin.config.choices.OBJECTIVES`):
 
 * ``"force"`` — Ω (the default, the paper's);
 * ``"sag"`` — ``sag / sag_ref``: the EE's linear sag under the pose's own load
@@ -39,7 +39,7 @@ from ..statics.derivatives import pose_values
 from .sag import equilibrium_sag, linear_sag
 
 if TYPE_CHECKING:
-    from ..model import AssemblerModel
+    from ..model.assembler import AssemblerModel
     from ..state import StackState
 
 __all__ = [

@@ -1,4 +1,4 @@
-"""The optimizer's settings: :class:`~assembler_pin.options.OptimizeOptions` and the
+"""The optimizer's settings: :class:`~assembler_pin.config.options.OptimizeOptions` and the
 continuity term of a motion (:class:`MotionTerm`)."""
 
 from __future__ import annotations
@@ -8,9 +8,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..config.options import METHODS, OptimizeOptions, is_number
 from ..exceptions import OptionsError
-from ..options import METHODS, OptimizeOptions
-from ..validation import is_number
 
 __all__ = ["METHODS", "MotionTerm", "OptimizeOptions"]
 

@@ -21,10 +21,10 @@ from typing import cast
 import numpy as np
 import pinocchio as pin
 
+from ..config.options import GEOMETRIC_MARGIN, SMOOTH_METHODS, OptimizeOptions
 from ..exceptions import SingularConfigurationError, _SingularIterateError
 from ..kinematics import PlateArrays
-from ..model import AssemblerModel
-from ..options import GEOMETRIC_MARGIN, SMOOTH_METHODS, OptimizeOptions
+from ..model.assembler import AssemblerModel
 from ..statics.derivatives import PoseDerivatives, PoseValues, pose_derivatives, pose_values
 from ..statics.pose_kernel import CompiledPass, use_pose_kernel
 from .charts import LocalChart, TaaChart

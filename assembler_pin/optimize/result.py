@@ -8,7 +8,7 @@ from typing import Protocol
 
 import numpy as np
 
-from ..messages import binding, describe, one_line
+from ..common.messages import binding, describe, one_line
 from ..state import StackState
 
 __all__ = ["OptimizeResult"]

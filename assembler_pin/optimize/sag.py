@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..linalg import cross
+from ..common.linalg import cross
 from ..statics.closed_form import Equilibrium
 from ..statics.derivatives import PoseValues
 

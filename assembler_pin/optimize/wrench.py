@@ -34,9 +34,9 @@ from typing import cast
 
 import numpy as np
 
+from ..common.linalg import inverse_or_nan, skew
 from ..exceptions import _SingularIterateError
-from ..linalg import inverse_or_nan, skew
-from ..model import AssemblerModel
+from ..model.assembler import AssemblerModel
 from ..statics.derivatives import (
     PoseValues,
     _axial_force_derivatives,

@@ -1,4 +1,4 @@
-"""The stack in MuJoCo: the exported MJCF (:mod:`assembler_pin.mjcf`) set to our poses, its
+"""The stack in MuJoCo: the exported MJCF (:mod:`assembler_pin.model.mjcf`) set to our poses, its
 statics from MuJoCo's own gravity and constraint Jacobian, and a held pose simulated.
 
 Two independent checks of :func:`~assembler_pin.statics.pinocchio_statics.solve_statics` come from here:
@@ -9,7 +9,7 @@ Two independent checks of :func:`~assembler_pin.statics.pinocchio_statics.solve_
 * :func:`hold_pose` — the position actuators are commanded to our leg lengths and MuJoCo
   integrates until the stack is still: the forces the actuators end up exerting, and how far
   the end effector sagged. It differs from the exact statics by the compliance of the
-  position loop (:data:`~assembler_pin.mjcf.ACTUATOR_KP`) and of MuJoCo's soft constraints.
+  position loop (:data:`~assembler_pin.model.mjcf.ACTUATOR_KP`) and of MuJoCo's soft constraints.
   With the actuators' force limits (``forcerange``) a pose whose forces exceed them cannot be
   held: the stack sags and :attr:`HoldResult.held` is false.
 

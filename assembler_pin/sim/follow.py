@@ -12,9 +12,9 @@ from typing import Any
 import numpy as np
 import pinocchio as pin
 
-from ..bounds import check_bound
+from ..config.bounds import check_bound
 from ..exceptions import SimulationError
-from ..model import AssemblerModel
+from ..model.assembler import AssemblerModel
 from .hold import HOLD_DRIFT_TOLERANCE, _pose_errors, _saturated
 from .stack import MujocoStack
 

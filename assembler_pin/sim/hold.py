@@ -14,11 +14,11 @@ from dataclasses import dataclass, field
 import numpy as np
 import pinocchio as pin
 
-from ..bounds import check_bound
+from ..config.bounds import check_bound
+from ..config.options import is_number
 from ..exceptions import SimulationError
 from ..kinematics import PlateArrays
-from ..model import AssemblerModel
-from ..options import is_number
+from ..model.assembler import AssemblerModel
 from .stack import MujocoStack
 
 __all__ = ["HOLD_DRIFT_TOLERANCE", "HOLD_ROTATION_TOLERANCE", "HoldResult", "hold_pose"]
@@ -173,7 +173,7 @@ def hold_pose(
         The time series and the verdict (:class:`HoldResult`).
 
     Raises:
-        SimulationError: a count or duration outside its bound (:data:`~assembler_pin.bounds.BOUNDS`).
+        SimulationError: a count or duration outside its bound (:data:`~assembler_pin.config.bounds.BOUNDS`).
     """
     check_bound("simulate.seconds", seconds, "seconds", SimulationError)
     check_bound("simulate.samples", samples, "samples", SimulationError)

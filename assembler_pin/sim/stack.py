@@ -1,4 +1,4 @@
-"""The stack's MJCF (:mod:`assembler_pin.mjcf`) loaded in MuJoCo, set to our poses, and its
+"""The stack's MJCF (:mod:`assembler_pin.model.mjcf`) loaded in MuJoCo, set to our poses, and its
 statics from MuJoCo's own gravity and constraint Jacobian (:func:`mujoco_statics`).
 
 Forces are the package's: tension positive [N]; poses are world poses [m].
@@ -14,10 +14,10 @@ from typing import Any
 import numpy as np
 import pinocchio as pin
 
+from ..common.naming import names
 from ..exceptions import SimulationError, SingularConfigurationError
 from ..kinematics import PlateArrays, leg_vectors, plate_arrays, q_from_arrays
-from ..model import AssemblerModel
-from ..naming import names
+from ..model.assembler import AssemblerModel
 
 __all__ = ["MujocoStack", "MujocoStatics", "mujoco_statics"]
 
@@ -63,7 +63,7 @@ class MujocoStack:
     """
 
     def __init__(self, am: AssemblerModel) -> None:
-        from ..mjcf import assembler_mjcf
+        from ..model.mjcf import assembler_mjcf
 
         mujoco = _mujoco()
         self.am = am

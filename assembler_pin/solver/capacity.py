@@ -29,15 +29,15 @@ from dataclasses import dataclass, field
 import numpy as np
 import pinocchio as pin
 
-from ..bounds import check_bound
+from ..common.labels import leg_label
+from ..common.messages import one_line
+from ..common.threads import one_blas_thread
+from ..config.bounds import check_bound
 from ..exceptions import OptionsError
-from ..geometry import DIMENSIONS
 from ..kinematics import PlateArrays, to_se3
-from ..labels import leg_label
-from ..messages import one_line
-from ..model import AssemblerModel
+from ..model.assembler import AssemblerModel
+from ..model.geometry import DIMENSIONS
 from ..statics.pinocchio_statics import solve_statics
-from ..threads import one_blas_thread
 
 __all__ = [
     "GLOBAL_PROBE",
@@ -62,7 +62,7 @@ logger = logging.getLogger(__name__)
 
 def _payload_inertia(mass: float, offset: float) -> pin.Inertia:
     """The payload's inertia in the EE plate's frame, as the URDF writes it: a box of
-    :data:`~assembler_pin.geometry.DIMENSIONS` ``payload_size`` and ``mass`` [kg] centred
+    :data:`~assembler_pin.model.geometry.DIMENSIONS` ``payload_size`` and ``mass`` [kg] centred
     ``offset`` [m] above the plate's origin."""
     own = np.full(3, mass * DIMENSIONS.payload_size**2 / 6.0)
     return pin.SE3(np.eye(3), np.array([0.0, 0.0, offset])).act(pin.Inertia(mass, np.zeros(3), np.diag(own)))
@@ -75,7 +75,7 @@ def with_payload(am: AssemblerModel, mass: float) -> AssemblerModel:
     body has the other payload's inertia, and its own last-platform model (the helper arms
     are shared: their cache is keyed on the configuration without its payload). No URDF of the
     whole stack is generated and no ``Data`` of the whole stack is created."""
-    from ..platform_model import PlatformModel, StackPlan
+    from ..model.platform import PlatformModel, StackPlan
 
     cfg = am.config
     payload = dataclasses.replace(cfg.payload, mass=float(mass))

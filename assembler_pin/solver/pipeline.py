@@ -17,15 +17,15 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 import pinocchio as pin
 
+from ..common.messages import binding, describe, one_line
+from ..common.threads import one_blas_thread
+from ..config.options import checked_options
 from ..constraints import leg_limit_margins
 from ..exceptions import ArgumentError, OptionsError
 from ..kinematics import PlateArrays, se3_to_taa, to_se3
-from ..messages import binding, describe, one_line
-from ..model import AssemblerModel, checked_model
+from ..model.assembler import AssemblerModel, checked_model
 from ..optimize import OptimizeOptions, OptimizeResult, optimize_internal_poses
-from ..options import checked_options
 from ..state import StackState
-from ..threads import one_blas_thread
 
 if TYPE_CHECKING:
     from ..helper_arm import HelperArmOptions, InitialConditionResult
@@ -66,7 +66,7 @@ class SolveResult:
         success: the initial condition is valid and, when optimizing, the optimization
             converged to a state that satisfies every constraint.
         message: what happened, or why not: one line naming the binding cause
-            (:mod:`~assembler_pin.messages`); the long form in ``details``.
+            (:mod:`~assembler_pin.common.messages`); the long form in ``details``.
         initial_result: the helper-arm result (arm configuration, d used, attempts).
         optimization: the optimizer's result from the winning start (None with
             ``optimize=False`` or when no start gave a feasible state).

@@ -27,10 +27,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..common.linalg import cross, inverse_or_nan
 from ..exceptions import SingularConfigurationError
 from ..kinematics import legs
-from ..linalg import cross, inverse_or_nan
-from ..model import AssemblerModel
+from ..model.assembler import AssemblerModel
 
 __all__ = [
     "CONDITION_LIMIT",

@@ -33,9 +33,9 @@ from typing import Any
 
 import numpy as np
 
+from ..common.linalg import cross, skew
 from ..kinematics import PlateArrays, PlateDeviation, legs, plate_deviation
-from ..linalg import cross, skew
-from ..model import AssemblerModel
+from ..model.assembler import AssemblerModel
 from .closed_form import Equilibrium, equilibrium
 
 __all__ = [

@@ -1,6 +1,6 @@
 """The state of the home pose without Pinocchio or numpy: ``assembler-pin statics --home --json``.
 
-The home pose (:func:`~assembler_pin.geometry.home_plates`: plate 0 at the world origin,
+The home pose (:func:`~assembler_pin.model.geometry.home_plates`: plate 0 at the world origin,
 every plate level, consecutive plates ``home_height`` apart, every leg at mid-stroke)
 follows from the configuration alone, and so do its statics: the closed-form equilibrium of
 :mod:`~assembler_pin.statics.loops`, interpreted on plain floats. This answers the
@@ -19,7 +19,7 @@ from __future__ import annotations
 
 import math
 
-from ..config import AssemblerConfig
+from ..config.schema import AssemblerConfig
 from .loops import Grid, closed_form_pure, constants
 
 __all__ = ["SCREEN_CONDITION", "home_anchors", "home_state_document"]
@@ -36,8 +36,8 @@ Vec = list[float]
 
 def home_anchors(cfg: AssemblerConfig) -> tuple[list[list[Vec]], list[list[Vec]]]:
     """Bottom and top joint centres (n, 6, 3) in their plate's frame [m]: the rule of
-    :func:`~assembler_pin.geometry.leg_geometry` (module docstring of
-    :mod:`~assembler_pin.geometry`) on plain floats."""
+    :func:`~assembler_pin.model.geometry.leg_geometry` (module docstring of
+    :mod:`~assembler_pin.model.geometry`) on plain floats."""
     r, half, third = cfg.plate.node_radius, 0.5 * cfg.node_spacing, math.radians(60.0)
 
     def point(angle: float) -> Vec:

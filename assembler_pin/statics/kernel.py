@@ -41,10 +41,10 @@ from typing import Any
 
 import numpy as np
 
+from ..common.linalg import cross
 from ..exceptions import OptionsError
 from ..kinematics.poses import ORTHONORMAL_TOL, PlateArrays, plate_arrays
-from ..linalg import cross
-from ..model import AssemblerModel
+from ..model.assembler import AssemblerModel
 from . import loops
 from .closed_form import CONDITION_LIMIT, equilibrium, line_conditions, raise_singular
 from .result import StaticsResult

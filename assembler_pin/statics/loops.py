@@ -22,7 +22,7 @@ from collections.abc import Sequence
 from typing import TYPE_CHECKING
 
 if TYPE_CHECKING:
-    from ..config import AssemblerConfig
+    from ..config.schema import AssemblerConfig
 
 __all__ = ["CONSTANT_NAMES", "Grid", "closed_form_pure", "constants"]
 

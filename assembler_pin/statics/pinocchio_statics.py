@@ -28,6 +28,8 @@ import numpy as np
 import numpy.typing as npt
 import pinocchio as pin
 
+from ..common.linalg import skew
+from ..common.validation import as_float_array
 from ..exceptions import ArgumentError, PoseError, SingularConfigurationError
 from ..kinematics import (
     LegState,
@@ -38,10 +40,8 @@ from ..kinematics import (
     platform_configurations,
     q_from_arrays,
 )
-from ..linalg import skew
-from ..model import AssemblerModel, checked_model
-from ..platform_model import PlatformStatics, stack_gravity_terms
-from ..validation import as_float_array
+from ..model.assembler import AssemblerModel, checked_model
+from ..model.platform import PlatformStatics, stack_gravity_terms
 from .closed_form import CONDITION_LIMIT, is_singular, line_conditions
 from .kernel import closed_form_forces
 from .result import StaticsResult
@@ -60,7 +60,7 @@ def _leg_jacobians_t(columns: np.ndarray, top_points: np.ndarray) -> np.ndarray:
     """Transposed closure Jacobian blocks of the legs' own joints.
 
     ``columns`` (n, 6, 3, 6) are the world-frame Jacobian columns ``[v, ω]`` of each leg's
-    (ux, uy, actuator) joints (:class:`~assembler_pin.platform_model.PlatformStatics`) at the
+    (ux, uy, actuator) joints (:class:`~assembler_pin.model.platform.PlatformStatics`) at the
     pose whose world ball-joint centres are ``top_points`` (n, 6, 3). The closure of leg
     (j, i) is the shaft tip minus the top plate's anchor, in world axes; only leg (j, i)'s own
     joints and plate j+1's free-flyer move one of the two points without the other. A joint
@@ -139,7 +139,7 @@ def gravity_terms(
     Args:
         pa, vec, lengths: validated plate poses, their leg vectors (n, 6, 3) and lengths (n, 6) [m].
         data: None: one small model per platform, top down
-            (:func:`~assembler_pin.platform_model.stack_gravity_terms`, each owning its
+            (:func:`~assembler_pin.model.platform.stack_gravity_terms`, each owning its
             ``Data``); a ``Data`` of the whole-stack model, owned by the caller:
             ``pin.computeGeneralizedGravity`` and ``pin.computeJointJacobians`` on it (its
             contents are overwritten). Both give the same terms (the tests hold them together).

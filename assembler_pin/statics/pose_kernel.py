@@ -35,7 +35,7 @@ import numpy as np
 
 from ..exceptions import OptionsError
 from ..kinematics import PlateArrays
-from ..model import AssemblerModel
+from ..model.assembler import AssemblerModel
 from . import pose_loops as loops
 from .derivatives import PoseDerivatives
 from .kernel import BACKENDS, ENV_VAR

@@ -35,7 +35,7 @@ from scipy.optimize import linprog
 from ..compliance.elastic import elastic_terms, line_conditions
 from ..compliance.loaded import LoadedPose, loaded_pose, stroke_problem
 from ..kinematics import PlateArrays, leg_vectors, plate_arrays
-from ..model import AssemblerModel
+from ..model.assembler import AssemblerModel
 from ..statics.closed_form import CONDITION_LIMIT
 from .two_point import (
     SupportAnswer,

@@ -33,10 +33,10 @@ import numpy as np
 import numpy.typing as npt
 import pinocchio as pin
 
-from ..config import AssemblerConfig, LegConfig, PayloadConfig
+from ..config.schema import AssemblerConfig, LegConfig, PayloadConfig
 from ..constraints import Violation
 from ..kinematics import PlateArrays, leg_vectors, plate_arrays
-from ..model import AssemblerModel
+from ..model.assembler import AssemblerModel
 
 __all__ = ["TurnedModel", "turned_config", "turned_model"]
 

@@ -30,14 +30,14 @@ import numpy as np
 import numpy.typing as npt
 import pinocchio as pin
 
+from ..common.validation import as_float_array
 from ..compliance.elastic import elastic_terms, line_conditions, solve_equilibrium
 from ..compliance.loaded import LoadedPose
 from ..exceptions import PoseError, SupportError
 from ..kinematics import PlateArrays, leg_vectors, plate_arrays, to_se3
-from ..model import AssemblerModel
+from ..model.assembler import AssemblerModel
 from ..state import StackState
 from ..statics.closed_form import CONDITION_LIMIT
-from ..validation import as_float_array
 
 __all__ = [
     "FAST_STEP",

@@ -22,12 +22,12 @@ import numpy as np
 import numpy.typing as npt
 import pinocchio as pin
 
-from ..bounds import check_bound
 from ..compliance.ee_stiffness import stiffness
 from ..compliance.loaded import LoadedPose, loaded_pose
+from ..config.bounds import check_bound
 from ..exceptions import ConvergenceError, ViewerError
 from ..kinematics import PlateArrays, leg_state
-from ..model import AssemblerModel
+from ..model.assembler import AssemblerModel
 from .colors import material
 
 __all__ = [

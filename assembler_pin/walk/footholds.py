@@ -23,11 +23,11 @@ from typing import cast
 import numpy as np
 import pinocchio as pin
 
-from ..bounds import check_bound
+from ..common.files import read_text_bounded
+from ..config.bounds import check_bound
 from ..exceptions import AssemblerError, WalkError
-from ..files import read_text_bounded
 from ..kinematics import taa_to_se3, to_se3
-from ..model import AssemblerModel
+from ..model.assembler import AssemblerModel
 
 __all__ = ["FootholdFile", "checked_footholds", "floor_footholds", "parse_footholds", "read_footholds"]
 

@@ -31,7 +31,7 @@ from scipy.optimize import linprog
 
 from ..exceptions import WalkError
 from ..kinematics import PlateArrays, leg_vectors, plate_arrays
-from ..model import AssemblerModel
+from ..model.assembler import AssemblerModel
 from ..supports.choice import force_bounds, held_equilibrium
 
 __all__ = ["MacroStatics", "macro_capacity", "macro_statics"]

@@ -37,14 +37,14 @@ from dataclasses import dataclass, field
 import numpy as np
 import pinocchio as pin
 
-from ..bounds import check_bound
+from ..common.progress import ProgressCallback
+from ..config.bounds import check_bound
+from ..config.options import checked_options
 from ..exceptions import WalkError
 from ..kinematics import PlateArrays, leg_vectors, plate_arrays
-from ..model import AssemblerModel
+from ..model.assembler import AssemblerModel
 from ..motion.paths import EEPath
 from ..motion.planner import PlanOptions, plan_path
-from ..options import checked_options
-from ..progress import ProgressCallback
 from ..supports.choice import CHECK_TOLERANCE, ChosenDistribution, chosen_distribution, force_bounds, held_equilibrium
 from ..supports.turned import turned_model
 from ..supports.two_point import two_point_statics

@@ -14,7 +14,7 @@ import numpy as np
 import pinocchio as pin
 
 from ..kinematics import PlateArrays, stack_forward_kinematics
-from ..model import AssemblerModel
+from ..model.assembler import AssemblerModel
 from ..motion.guess import on_se3
 from ..state import evaluate_state
 from ..supports.choice import CHECK_TOLERANCE, force_bounds

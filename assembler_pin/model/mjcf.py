@@ -45,9 +45,9 @@ from dataclasses import dataclass
 import numpy as np
 import pinocchio as pin
 
-from .config import AssemblerConfig
+from ..common.naming import names
+from ..config.schema import AssemblerConfig
 from .geometry import DIMENSIONS, LEGS_PER_PLATFORM, LegGeometry, leg_geometry
-from .naming import names
 from .urdf import MATERIALS, cylinder_inertia, node_points, xml_document, xml_number, xml_vector
 
 __all__ = [

@@ -6,7 +6,7 @@ platform j depend only on its own pose and the load from above, so each platform
 computed on a small model of its own — its bottom plate (free-flyer root), its six legs
 (universal joint + prismatic actuator, motor and shaft) and its top plate, plus the payload
 on the last platform — loaded from the 1-platform URDF the package generates
-(:func:`~assembler_pin.urdf.assembler_urdf`), nv = 30.
+(:func:`~assembler_pin.model.urdf.assembler_urdf`), nv = 30.
 
 Every platform of a stack is the same platform turned about z: platform j's nodes sit at
 90° + 60°·j + 120°·m in both of its plates' frames, so in plate frames turned by
@@ -27,9 +27,9 @@ from dataclasses import dataclass
 import numpy as np
 import pinocchio as pin
 
-from .config import AssemblerConfig, PayloadConfig
+from ..common.naming import names
+from ..config.schema import AssemblerConfig, PayloadConfig
 from .geometry import LEGS_PER_PLATFORM, leg_geometry
-from .naming import names
 from .urdf import assembler_urdf
 
 __all__ = ["PLATFORM_TURN", "PlatformModel", "PlatformStatics", "StackPlan", "platform_turns", "stack_gravity_terms"]

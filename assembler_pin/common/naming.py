@@ -5,7 +5,7 @@ Indices are 0-based: plate ``k`` in 0..n (plate 0 the base, plate n the EE plate
 platform ``j`` in 0..n-1 (between plates j and j+1), leg ``i`` in 0..5 of its platform.
 The URDF, the MJCF, the meshcat scene, the trajectory CSV columns and the helper arm all use
 these names, so a name written by one surface is read back by another. How a person reads
-a platform or a leg (``SP1 leg 2``, the same 0-based numbers) is :mod:`~assembler_pin.labels`.
+a platform or a leg (``SP1 leg 2``, the same 0-based numbers) is :mod:`~assembler_pin.common.labels`.
 """
 
 from __future__ import annotations

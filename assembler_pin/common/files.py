@@ -54,7 +54,7 @@ def read_text_bounded(path: Path, bound_key: str, what: str, error: type[Excepti
     """The UTF-8 text of the input file ``path``, refused in one line (``error``) when it is
     missing or unreadable, empty, larger than its row ``bound_key`` of the limits table, or not
     UTF-8. ``what`` names the file in the message (``"trajectory"``, ``"waypoint file"``)."""
-    from .bounds import check_bound
+    from ..config.bounds import check_bound
 
     try:
         size = path.stat().st_size

@@ -3,7 +3,7 @@
 The exported ``assembler.urdf`` and ``assembler.yaml`` say the same things twice: every mass,
 inertia, centre of mass, joint origin (the geometry), joint limit and the platform count of
 the URDF follows from the sidecar's ``assembler_config``. :func:`urdf_disagreements` reads both
-URDFs — the one given and the one :func:`~assembler_pin.urdf.assembler_urdf` writes for the
+URDFs — the one given and the one :func:`~assembler_pin.model.urdf.assembler_urdf` writes for the
 sidecar's configuration — element by element (links and joints by name; numbers to a relative
 tolerance of 1e-9) and lists every difference with the configuration keys it depends on.
 The sidecar's keys that are not in a URDF (gravity, speed limits) are taken from it as they are.
@@ -18,7 +18,7 @@ import xml.etree.ElementTree as ET
 import numpy as np
 import pinocchio as pin
 
-from .exceptions import ModelFileError, short_repr
+from ..exceptions import ModelFileError, short_repr
 
 __all__ = ["NUMBER_TOL", "parse_urdf", "urdf_disagreements", "urdf_facts"]
 

@@ -55,4 +55,4 @@ def check_names(table: Iterable[str], names: tuple[str, ...], what: str) -> None
     """Raise ``RuntimeError`` at import when a table's keys differ from its declared names."""
     keys = tuple(table)
     if keys != names:
-        raise RuntimeError(f"{what} {keys} differ from assembler_pin.choices {names}")
+        raise RuntimeError(f"{what} {keys} differ from assembler_pin.config.choices {names}")

@@ -11,12 +11,12 @@ import dataclasses
 import math
 from typing import TYPE_CHECKING, Any
 
+from ..exceptions import ConfigError, short_repr
 from .bounds import check_bound
-from .exceptions import ConfigError, short_repr
 from .options import is_number
 
 if TYPE_CHECKING:
-    from .config import AssemblerConfig
+    from .schema import AssemblerConfig
 
 __all__ = ["LIMITS", "MAX_MESSAGE", "check", "shorten", "validate"]
 

@@ -35,9 +35,9 @@ import numpy as np
 import pinocchio as pin
 import yaml
 
-from .config import AssemblerConfig
+from ..common.naming import names
+from ..config.schema import AssemblerConfig
 from .geometry import DIMENSIONS, LEGS_PER_PLATFORM, LegGeometry, leg_geometry
-from .naming import names
 
 __all__ = [
     "SIDECAR_FILENAME",

@@ -12,7 +12,7 @@ import math
 import numbers
 from dataclasses import dataclass
 
-from .exceptions import OptionsError
+from ..exceptions import OptionsError
 
 __all__ = ["BOUNDS", "Bound", "check_bound", "limits_markdown"]
 

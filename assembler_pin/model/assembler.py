@@ -21,11 +21,11 @@ from pathlib import Path
 import numpy as np
 import pinocchio as pin
 
-from .config import AssemblerConfig, PayloadConfig, load_config, load_yaml, read_text_file
-from .exceptions import ArgumentError, ConfigError, ModelFileError, short_repr
+from ..common.naming import names
+from ..config.schema import AssemblerConfig, PayloadConfig, load_config, load_yaml, read_text_file
+from ..exceptions import ArgumentError, ConfigError, ModelFileError, short_repr
 from .geometry import LEGS_PER_PLATFORM, LegGeometry, home_plates, leg_geometry
-from .naming import names
-from .platform_model import PlatformModel, StackPlan
+from .platform import PlatformModel, StackPlan
 from .urdf import SIDECAR_FILENAME, URDF_FILENAME, assembler_urdf, closure_sidecar
 from .urdf_check import parse_urdf, urdf_disagreements
 
@@ -63,10 +63,10 @@ class AssemblerModel:
       :meth:`create_data` makes a ``Data`` of it for a caller (stacks up to 8 platforms),
       ``data`` is one kept for inspection (no computation uses it).
     * ``platform_models``: the per-platform models the statics run on
-      (:mod:`~assembler_pin.platform_model`).
+      (:mod:`~assembler_pin.model.platform`).
     * ``constraint_models`` / ``constraint_datas``: the 6n point-anchor closures as
       ``pin.StdVec_ConstraintModel`` / ``StdVec_ConstraintData``, ordered ``[j, i]``.
-    * ``geometry``: :class:`~assembler_pin.geometry.LegGeometry`.
+    * ``geometry``: :class:`~assembler_pin.model.geometry.LegGeometry`.
     * ``plate_joint_ids`` (n+1): joint of plate k (root free-flyer for plate 0).
     * ``plate_idx_q`` / ``plate_idx_v`` (n+1): first q / v index of each plate joint.
     * ``leg_idx_q`` / ``leg_idx_v`` (n, 6, 3): q / v indices of (ux, uy, actuator).
@@ -84,7 +84,7 @@ class AssemblerModel:
     platform_models: tuple[PlatformModel, PlatformModel] = field(init=False, repr=False)
     """The models every computation runs on: (inner platforms, last platform with the payload)."""
     stack_plan: StackPlan = field(init=False, repr=False)
-    """Their constants for this stack (:class:`~assembler_pin.platform_model.StackPlan`)."""
+    """Their constants for this stack (:class:`~assembler_pin.model.platform.StackPlan`)."""
 
     def __repr__(self) -> str:
         return (
@@ -160,7 +160,7 @@ class AssemblerModel:
 
         The two files must agree: every mass, inertia, centre of mass, joint origin, joint
         limit and the platform count of the URDF are compared with what the sidecar's
-        ``assembler_config`` gives (:mod:`~assembler_pin.urdf_check`, relative tolerance 1e-9).
+        ``assembler_config`` gives (:mod:`~assembler_pin.model.urdf_check`, relative tolerance 1e-9).
 
         Args:
             urdf_path: the URDF file, or a directory holding ``assembler.urdf``.

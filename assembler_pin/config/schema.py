@@ -43,9 +43,8 @@ from typing import Any, ClassVar
 
 import yaml
 
-from .config_checks import LIMITS as LIMITS  # re-exported: the documented magnitudes
-from .config_checks import MAX_MESSAGE, check, shorten, validate
-from .exceptions import ConfigError, short_repr
+from ..exceptions import ConfigError, short_repr
+from .checks import MAX_MESSAGE, check, shorten, validate
 from .options import is_number
 
 __all__ = [

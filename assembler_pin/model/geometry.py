@@ -19,7 +19,7 @@ from dataclasses import dataclass
 import numpy as np
 import pinocchio as pin
 
-from .config import AssemblerConfig
+from ..config.schema import AssemblerConfig
 
 __all__ = [
     "LEGS_PER_PLATFORM",

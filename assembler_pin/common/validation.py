@@ -11,10 +11,10 @@ from typing import Any
 
 import numpy as np
 
-from .exceptions import PoseError, short_repr
-from .options import is_number
+from ..config.options import is_number
+from ..exceptions import PoseError, short_repr
 
-__all__ = ["MAX_NESTING", "as_float_array", "is_number"]
+__all__ = ["MAX_NESTING", "as_float_array"]
 
 #: Deepest list nesting accepted in an array argument (a (B, n+1, 4, 4) batch is 4 deep).
 MAX_NESTING = 6

@@ -38,7 +38,7 @@ from typing import TYPE_CHECKING
 from .labels import leg_label, platform_label
 
 if TYPE_CHECKING:
-    from .constraints import Violation
+    from ..constraints import Violation
 
 __all__ = ["CAUSES", "MAX_LENGTH", "binding", "describe", "finite_text", "number", "one_line"]
 

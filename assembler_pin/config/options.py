@@ -12,9 +12,9 @@ import numbers
 from dataclasses import dataclass, field
 from typing import TypeVar
 
+from ..exceptions import OptionsError, short_repr
 from .bounds import check_bound
 from .choices import OPTIMIZE_METHODS
-from .exceptions import OptionsError, short_repr
 
 __all__ = [
     "AUTO_IPOPT_PLATFORMS",
@@ -116,7 +116,7 @@ class OptimizeOptions:
             optimizer keeps the legs (default :data:`GEOMETRIC_MARGIN`; a motion plan keeps
             more, so that the legs stay inside between its samples).
         goal_tolerance: tolerance the final state is checked against when the EE is fixed.
-        objective: what is minimized (:data:`~assembler_pin.choices.OBJECTIVES`,
+        objective: what is minimized (:data:`~assembler_pin.config.choices.OBJECTIVES`,
             :mod:`assembler_pin.optimize.objective`): ``"force"`` Ω (paper eq. 10), ``"sag"`` the EE's
             sag under its own load, ``"weighted"`` Ω plus ``sag_weight`` times the normalized
             sag; ``"sag"`` and ``"weighted"`` need a smooth method (:data:`SMOOTH_METHODS`).
@@ -176,7 +176,7 @@ class OptimizeOptions:
                 raise OptionsError(f"{name} must be a GoalTolerance of two finite numbers > 0 (m, rad), got {shown}")
 
     def _check_sag_options(self) -> None:
-        """``objective`` one of :data:`~assembler_pin.choices.OBJECTIVES`, ``sag_weight`` and
+        """``objective`` one of :data:`~assembler_pin.config.choices.OBJECTIVES`, ``sag_weight`` and
         ``max_sag`` within their bounds rows, and the sag needing the smooth method."""
         from .choices import OBJECTIVES
 
