@@ -55,9 +55,9 @@ _LAZY: dict[str, str] = {
     "EEPath": ".motion",
     "PlanOptions": ".motion",
     "plan_trajectory": ".motion.timing",
-    "MotionResult": ".motion.timing",
-    "Trajectory": ".motion.timing",
-    "read_trajectory": ".motion.timing",
+    "MotionResult": ".motion.result",
+    "Trajectory": ".motion.trajfile",
+    "read_trajectory": ".motion.trajfile",
     # scenarios and errors
     "scenario": ".scenarios",
     "SCENARIOS": ".scenarios",
@@ -91,7 +91,9 @@ if TYPE_CHECKING:  # for type checkers and IDEs: the same names, imported eagerl
     from .kinematics import PlateArrays, stack_forward_kinematics
     from .model import AssemblerModel
     from .motion import EEPath, PlanOptions
-    from .motion.timing import MotionResult, Trajectory, plan_trajectory, read_trajectory
+    from .motion.result import MotionResult
+    from .motion.timing import plan_trajectory
+    from .motion.trajfile import Trajectory, read_trajectory
     from .optimize import OptimizeOptions, OptimizeResult, optimize_internal_poses
     from .scenarios import SCENARIOS, scenario
     from .solver import SolveResult, payload_capacity, solve

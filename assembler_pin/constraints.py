@@ -28,9 +28,7 @@ from .statics.closed_form import CONDITION_LIMIT
 from .statics.result import StaticsResult
 
 __all__ = [
-    "DEFAULT_GOAL_TOLERANCE",
     "LEG_LIMIT_ROWS",
-    "GoalTolerance",
     "Violation",
     "evaluate_constraints",
     "leg_limit_margins",

@@ -25,7 +25,7 @@ import pinocchio as pin
 from .config.choices import SCENARIO_NAMES, check_names
 from .exceptions import UnknownScenarioError
 
-__all__ = ["SCENARIOS", "Scenario", "UnknownScenarioError", "scenario"]
+__all__ = ["SCENARIOS", "Scenario", "scenario"]
 
 
 @dataclass(frozen=True)

@@ -14,7 +14,8 @@ from dataclasses import dataclass, field
 import numpy as np
 import pinocchio as pin
 
-from .constraints import DEFAULT_GOAL_TOLERANCE, GoalTolerance, Violation, evaluate_constraints
+from .config.options import DEFAULT_GOAL_TOLERANCE, GoalTolerance
+from .constraints import Violation, evaluate_constraints
 from .exceptions import OptionsError
 from .kinematics import LegState, PlateArrays, checked_goal, leg_state, plate_arrays
 from .model.assembler import AssemblerModel, checked_model

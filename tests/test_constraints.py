@@ -6,7 +6,7 @@ import numpy as np
 import pinocchio as pin
 
 from assembler_pin import AssemblerModel, evaluate_state, load_config
-from assembler_pin.constraints import GoalTolerance
+from assembler_pin.config.options import GoalTolerance
 from assembler_pin.kinematics import PlateArrays, plate_arrays
 
 

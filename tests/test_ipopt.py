@@ -112,7 +112,7 @@ def _wrench_case(am, start, case):
     motion step (every row family)."""
     import dataclasses
 
-    from assembler_pin.constraints import GoalTolerance
+    from assembler_pin.config.options import GoalTolerance
     from assembler_pin.optimize import MotionTerm
     from assembler_pin.optimize.wrench import WrenchForm
     from assembler_pin.state import evaluate_state

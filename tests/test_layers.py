@@ -26,18 +26,11 @@ LAYERS: tuple[tuple[str, ...], ...] = (
     ("state",),
     ("helper_arm", "optimize", "supports", "viz"),
     ("solver", "export"),
-    ("motion", "carrier", "plots", "plan_figure", "workspace_plot"),
-    ("maps", "walk", "simulate", "sim", "reproduce"),
+    ("motion", "carrier", "plots"),
+    ("maps", "walk", "simulate", "reproduce"),
     ("bench",),
     ("cli",),
 )
-
-#: Modules still at the package root, by the subpackage they belong to (imports among them are
-#: imports within that subpackage).
-UNIT_OF: dict[str, str] = {
-    **dict.fromkeys(("plan_figure", "workspace_plot"), "plots"),
-    "sim": "simulate",
-}
 
 #: Imports that go up the layers today, (importer, imported) as dotted module names.
 KNOWN_UPWARD: set[tuple[str, str]] = {
@@ -48,7 +41,6 @@ KNOWN_UPWARD: set[tuple[str, str]] = {
 
 #: Import cycles among modules today, each as its sorted tuple of dotted module names.
 KNOWN_CYCLES: set[tuple[str, ...]] = {
-    ("assembler_pin.motion.paths", "assembler_pin.motion.trajfile"),
     ("assembler_pin.motion.time_law", "assembler_pin.motion.toppra_law"),
     ("assembler_pin.walk.plan", "assembler_pin.walk.verify"),
 }
@@ -105,7 +97,7 @@ def import_edges(*, type_only: bool = True) -> list[tuple[str, str, int]]:
 def unit(module: str) -> str:
     """The unit of a dotted module name: the module or subpackage directly under the package."""
     parts = module.split(".")
-    return UNIT_OF.get(parts[1], parts[1]) if len(parts) > 1 else ""
+    return parts[1] if len(parts) > 1 else ""
 
 
 def layer_of() -> dict[str, int]:
@@ -116,7 +108,7 @@ def test_every_unit_has_a_layer():
     layers = layer_of()
     units = {m.split(".")[1] for m in MODULES if "." in m}
     assert units <= set(layers), f"units without a layer in LAYERS: {sorted(units - set(layers))}"
-    assert not set(layers) - units - set(UNIT_OF.values()), f"layers name no unit: {sorted(set(layers) - units)}"
+    assert set(layers) <= units, f"layers name no unit: {sorted(set(layers) - units)}"
     assert len(layers) == sum(len(layer) for layer in LAYERS), "a unit is listed twice"
 
 
@@ -127,7 +119,7 @@ def test_no_import_goes_up_the_layers():
         a, b = unit(importer), unit(imported)
         if not a or a == b:  # the top-level __init__ (lazy names) and imports within a unit
             continue
-        if layers[UNIT_OF.get(a, a)] <= layers[UNIT_OF.get(b, b)] and (importer, imported) not in KNOWN_UPWARD:
+        if layers[a] <= layers[b] and (importer, imported) not in KNOWN_UPWARD:
             bad.append(f"{MODULES[importer].relative_to(PACKAGE.parent)}:{line}: {importer} -> {imported}")
     assert not bad, "imports against the layers (lowest first):\n" + "\n".join(sorted(bad))
 

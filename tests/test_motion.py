@@ -19,17 +19,11 @@ from test_viewer import page_commands
 
 from assembler_pin import evaluate_state, scenario, stack_forward_kinematics
 from assembler_pin.cli import main
-from assembler_pin.exceptions import OptionsError
+from assembler_pin.exceptions import OptionsError, TrajectoryError
 from assembler_pin.motion import EEPath, PathError, PlanOptions, interpolate_pose, plan_path, read_waypoints
 from assembler_pin.motion.compare import compare_motion
-from assembler_pin.motion.timing import (
-    TrajectoryError,
-    plan_trajectory,
-    read_trajectory,
-    time_parametrize,
-    trajectory_states,
-    verify_trajectory,
-)
+from assembler_pin.motion.result import verify_trajectory
+from assembler_pin.motion.timing import plan_trajectory, read_trajectory, time_parametrize, trajectory_states
 from assembler_pin.plots import trajectory_plot
 from assembler_pin.viz import FORCE_BAND_LEVELS
 

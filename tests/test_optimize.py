@@ -10,7 +10,7 @@ import pytest
 from checks import assert_feasible, design_objective, design_problems
 
 from assembler_pin import AssemblerModel, load_config
-from assembler_pin.constraints import GoalTolerance
+from assembler_pin.config.options import GoalTolerance
 from assembler_pin.optimize import OptimizeOptions, optimize_internal_poses
 
 HAS_NUMBA = importlib.util.find_spec("numba") is not None

@@ -23,14 +23,9 @@ from assembler_pin import AssemblerModel, solve_statics, stack_forward_kinematic
 from assembler_pin.cli import main
 from assembler_pin.exceptions import PathError, SimulationError, TrajectoryError
 from assembler_pin.motion import EEPath, PlanOptions, plan_path, read_waypoints
-from assembler_pin.motion.timing import (
-    check_trajectory,
-    plan_trajectory,
-    read_trajectory,
-    time_parametrize,
-    trajectory_states,
-    verify_trajectory,
-)
+from assembler_pin.motion.result import verify_trajectory
+from assembler_pin.motion.rows import check_trajectory
+from assembler_pin.motion.timing import plan_trajectory, read_trajectory, time_parametrize, trajectory_states
 from assembler_pin.motion.trajfile import VERSION, rows_digest
 
 HYPO = settings(max_examples=40, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])

@@ -139,7 +139,7 @@ def goal_from_args(args: argparse.Namespace):
 
 
 def optimize_options(args: argparse.Namespace):
-    from ..constraints import GoalTolerance
+    from ..config.options import GoalTolerance
     from ..optimize import OptimizeOptions
 
     ee = None

@@ -86,7 +86,7 @@ def _pictures(args: argparse.Namespace, table, configs: list, doc: dict) -> None
     am = AssemblerModel.from_config(configs[0][1])
     if args.png:
         from ..maps.pictures import map_heatmaps
-        from ..plots import save
+        from ..plots.figures import save
 
         doc["png"] = str(save(map_heatmaps(table, am, configs[0][0]), args.png))
     if args.html:

@@ -160,7 +160,7 @@ def _write_outputs(args: argparse.Namespace, am: AssemblerModel, motion, prog) -
     if args.plot and traj is not None:
         from ..common.files import atomic_path
         from ..motion.timing import trajectory_states
-        from ..plots import trajectory_plot
+        from ..plots.trajectory import trajectory_plot
 
         times, states = trajectory_states(am, traj, 200, progress=prog)
         title = "planned motion" if args.to is None else "home → goal" if args.from_ is None else "--from → --to"

@@ -133,7 +133,7 @@ def plot_walk(walk, path: str) -> None:
     import matplotlib.pyplot as plt
     import numpy as np
 
-    from ..plots import save
+    from ..plots.figures import save
 
     fig, ax = plt.subplots(figsize=(8, 3.2))
     start = 0

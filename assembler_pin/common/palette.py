@@ -1,6 +1,6 @@
 """The package's one colour language: every colour a figure, page or viewer scene draws with.
 
-One meaning per colour, the same in the matplotlib figures (:mod:`~assembler_pin.plots`),
+One meaning per colour, the same in the matplotlib figures (:mod:`~assembler_pin.plots.figures`),
 the Meshcat pages (:mod:`~assembler_pin.viz`) and the maps:
 
 ==========================  ===========  =====================================================

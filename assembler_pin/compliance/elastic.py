@@ -44,19 +44,17 @@ import pinocchio as pin
 from ..common.linalg import cross, skew
 from ..model.assembler import AssemblerModel
 from ..statics import closed_form
-from .tangent import block_sweep, held_solve, tangent_solve
+from .tangent import held_solve, tangent_solve
 
 __all__ = [
     "DENSE_MAX_PLATFORMS",
     "MAX_STEP",
     "ElasticTerms",
     "Equilibrium",
-    "block_sweep",
     "elastic_terms",
     "exp3_batch",
     "line_conditions",
     "solve_equilibrium",
-    "tangent_solve",
 ]
 
 _I3 = np.eye(3)

@@ -19,7 +19,7 @@ from ..constraints import leg_limit_margins
 from ..kinematics.legs import relative_leg_measures
 from ..model.geometry import LegGeometry, leg_geometry
 
-__all__ = ["cached_leg_geometry", "cluster_limits", "height_range", "relative_leg_measures"]
+__all__ = ["cached_leg_geometry", "cluster_limits", "height_range"]
 
 _AXIS_COUNT = 24  # horizontal tilt axes tried by cluster_limits (every 15 degrees)
 _BISECTION_TOL = 1e-10  # [rad] and [m]

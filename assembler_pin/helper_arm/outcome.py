@@ -16,11 +16,11 @@ import numpy as np
 import pinocchio as pin
 
 from ..common.messages import binding, describe, number, one_line
+from ..config.options import HelperArmOptions
 from ..kinematics import PlateArrays
 from ..model.assembler import AssemblerModel
 from ..state import StackState, evaluate_state
 from .limits import height_range
-from .options import HelperArmOptions
 
 __all__ = ["Candidate", "InitialConditionResult", "Scan", "failure_result", "success_result", "why_not"]
 

@@ -25,7 +25,7 @@ import pinocchio as pin
 from ..config.bounds import BOUNDS, check_bound
 from ..exceptions import GridError
 
-__all__ = ["Cell", "Grid", "GridError", "parse_grid", "parse_orientations"]
+__all__ = ["Cell", "Grid", "parse_grid", "parse_orientations"]
 
 _AXES = ("x", "y", "z")
 MAX_CELLS = int(BOUNDS["map.cells"].high)

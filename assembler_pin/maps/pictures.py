@@ -27,7 +27,7 @@ from ..common.palette import (
 )
 from ..exceptions import AssemblerError
 from ..model.assembler import AssemblerModel
-from ..plots import draw_state
+from ..plots.figures import draw_state
 from ..state import evaluate_state
 
 __all__ = [

@@ -45,7 +45,6 @@ __all__ = [
     "assembler_urdf",
     "closure_sidecar",
     "cylinder_inertia",
-    "names",
     "node_points",
     "xml_number",
     "xml_vector",

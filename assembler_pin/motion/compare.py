@@ -31,7 +31,9 @@ from ..state import evaluate_state
 from .guess import on_se3
 from .paths import EEPath
 from .planner import PlanOptions, PlanResult
-from .timing import MotionResult, Trajectory, plan_trajectory, time_parametrize
+from .result import MotionResult
+from .timing import plan_trajectory, time_parametrize
+from .trajfile import Trajectory
 
 __all__ = ["METHODS", "MotionComparison", "PlanFigures", "compare_motion"]
 

@@ -31,7 +31,7 @@ from ..config.choices import PATH_KINDS
 from ..exceptions import AssemblerError, PathError
 from ..kinematics import taa_to_se3, to_se3
 
-__all__ = ["PATH_KINDS", "EEPath", "PathError", "interpolate_pose", "read_waypoints"]
+__all__ = ["EEPath", "interpolate_pose", "read_waypoints"]
 
 
 def interpolate_pose(a: pin.SE3, b: pin.SE3, t: float, kind: str = "screw") -> pin.SE3:

@@ -27,8 +27,7 @@ import pinocchio as pin
 
 from ..common.messages import binding, describe, one_line
 from ..common.progress import ProgressCallback
-from ..config.options import checked_options, is_number
-from ..constraints import GoalTolerance
+from ..config.options import GoalTolerance, checked_options, is_number
 from ..exceptions import OptionsError
 from ..kinematics import PlateArrays, plate_arrays, stack_forward_kinematics
 from ..model.assembler import AssemblerModel

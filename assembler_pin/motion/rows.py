@@ -18,7 +18,8 @@ import numpy as np
 import pinocchio as pin
 
 from ..common.progress import ProgressCallback
-from ..constraints import GoalTolerance, leg_limit_margins
+from ..config.options import GoalTolerance
+from ..constraints import leg_limit_margins
 from ..exceptions import TrajectoryError
 from ..kinematics import PlateArrays, se3_to_taa, stack_forward_kinematics, taa_to_se3
 from ..model.assembler import AssemblerModel

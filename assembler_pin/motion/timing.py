@@ -37,20 +37,15 @@ from ..model.assembler import AssemblerModel
 from .paths import EEPath
 from .planner import PlanOptions, PlanResult
 from .result import MotionResult, first_bad_row, plan_prefix, rows_prefix, verify_trajectory
-from .rows import check_trajectory, trajectory_states
+from .rows import trajectory_states
 from .time_law import TIME_LAWS, TimingProblem, time_law
 from .trajfile import Trajectory, read_trajectory
 
 __all__ = [
-    "MotionResult",
-    "Trajectory",
-    "TrajectoryError",
-    "check_trajectory",
     "plan_trajectory",
     "read_trajectory",
     "time_parametrize",
     "trajectory_states",
-    "verify_trajectory",
 ]
 
 

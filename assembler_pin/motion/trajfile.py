@@ -21,7 +21,7 @@ the motion's part) and ``feasible`` (1). Version 3 added ``time_law``, the ``F_*
 ``margin_force_dynamic``; older files are refused with a request to plan again.
 
 :func:`read_trajectory` checks the format (types, names, counts, checksum, finite numbers,
-times increasing from 0); :func:`~assembler_pin.motion.timing.check_trajectory` then holds
+times increasing from 0); :func:`~assembler_pin.motion.rows.check_trajectory` then holds
 every row to the model (stroke, speeds, and the EE against stack FK of its lengths).
 """
 
@@ -208,7 +208,7 @@ def rows_digest(rows: np.ndarray) -> str:
 def read_trajectory(path: str | os.PathLike[str]) -> Trajectory:
     """A trajectory file written by :meth:`Trajectory.write` (CSV or JSON by suffix), checked
     as a format: names, types, row count, checksum, finite values, times increasing from 0,
-    every row valid. Hold it to a model with :func:`~assembler_pin.motion.timing.check_trajectory`.
+    every row valid. Hold it to a model with :func:`~assembler_pin.motion.rows.check_trajectory`.
 
     Raises:
         TrajectoryError: one line naming the file and what is wrong with it.
@@ -302,8 +302,8 @@ def _is_num(x: object) -> bool:
 
 def _check_meta(meta: object) -> dict:
     """The file's meta with every key of the right type and range, or a TrajectoryError."""
+    from ..config.choices import PATH_KINDS
     from ..kinematics import checked_rotations
-    from .paths import PATH_KINDS
 
     if not isinstance(meta, dict):
         raise TrajectoryError("meta must be a JSON object")

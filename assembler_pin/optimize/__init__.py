@@ -52,9 +52,10 @@ nothing better was found, with the reason (:mod:`.result`).
 
 from __future__ import annotations
 
+from ..config.options import METHODS, OptimizeOptions
 from .internal_poses import optimize_internal_poses
 from .objective import objective_value
-from .options import METHODS, MotionTerm, OptimizeOptions
+from .options import MotionTerm
 from .point import SINGULAR_FORCE
 from .result import OptimizeResult
 

@@ -25,7 +25,7 @@ from ..exceptions import OptionsError
 from .problem import Problem
 from .wrench import WrenchForm
 
-__all__ = ["casadi_missing", "ipopt_options", "run_ipopt", "values_callback"]
+__all__ = ["ipopt_options", "run_ipopt", "values_callback"]
 
 logger = logging.getLogger(__name__)
 

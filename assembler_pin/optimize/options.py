@@ -8,10 +8,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..config.options import METHODS, OptimizeOptions, is_number
+from ..config.options import is_number
 from ..exceptions import OptionsError
 
-__all__ = ["METHODS", "MotionTerm", "OptimizeOptions"]
+__all__ = ["MotionTerm"]
 
 
 @dataclass(frozen=True)

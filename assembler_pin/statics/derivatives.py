@@ -39,11 +39,9 @@ from ..model.assembler import AssemblerModel
 from .closed_form import Equilibrium, equilibrium
 
 __all__ = [
-    "Equilibrium",
     "LegDerivatives",
     "PoseDerivatives",
     "PoseValues",
-    "equilibrium",
     "leg_derivatives",
     "pose_derivatives",
     "pose_values",

@@ -29,9 +29,7 @@ import math
 
 import numpy as np
 
-from .loops import CONSTANT_NAMES
-
-__all__ = ["CONSTANT_NAMES", "PARTS"]
+__all__ = ["PARTS"]
 
 # ``consts`` below: the constants of :data:`~assembler_pin.statics_loops.CONSTANT_NAMES`
 # (gravity [m/s²], motor and shaft mass [kg], their CoM offsets [m], plate mass [kg],

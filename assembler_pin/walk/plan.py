@@ -51,7 +51,7 @@ from ..supports.two_point import two_point_statics
 from .footholds import checked_footholds
 from .verify import verify_walk
 
-__all__ = ["WalkOptions", "WalkPhase", "WalkResult", "checked_footholds", "plan_walk", "plate_target"]
+__all__ = ["WalkOptions", "WalkPhase", "WalkResult", "plan_walk", "plate_target"]
 
 logger = logging.getLogger(__name__)
 

@@ -112,7 +112,7 @@ def follow_trajectory(
     tolerance: float = HOLD_DRIFT_TOLERANCE,
     stack: MujocoStack | None = None,
 ) -> FollowResult:
-    """Run a trajectory (:class:`~assembler_pin.motion.timing.Trajectory`) on MuJoCo's
+    """Run a trajectory (:class:`~assembler_pin.motion.trajfile.Trajectory`) on MuJoCo's
     position actuators: the stack starts at rest at the first sample (rebuilt by stack FK),
     the commands are the leg lengths interpolated linearly in time at every 1 ms step, and
     the EE is compared with the trajectory's at each of its samples; then it settles for
@@ -124,7 +124,7 @@ def follow_trajectory(
 
     Raises:
         SimulationError: a duration over the ``simulate.seconds`` bound, or bad settings.
-        TrajectoryError: a row that fails :func:`~assembler_pin.motion.timing.check_trajectory`
+        TrajectoryError: a row that fails :func:`~assembler_pin.motion.rows.check_trajectory`
             (every row is held to the model before the first step).
     """
     from ..motion.timing import trajectory_states

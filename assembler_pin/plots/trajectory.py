@@ -1,6 +1,6 @@
 """The figure of a planned motion: leg lengths, speeds, accelerations and forces over time.
 
-:func:`trajectory_plot` (also importable from :mod:`assembler_pin.plots`) draws one row of
+:func:`trajectory_plot` (also importable from :mod:`assembler_pin.plots.figures`) draws one row of
 panels per platform ``SPj`` and one column per quantity, the six legs of the platform in
 six colours named ``SPj leg i`` (:mod:`~assembler_pin.common.labels`), colours from
 :mod:`~assembler_pin.common.palette`. Each panel keeps its data's own scale (a limit far from the
@@ -17,12 +17,12 @@ import numpy as np
 import numpy.typing as npt
 from matplotlib.figure import Figure
 
-from .common import palette
-from .common.labels import leg_label, platform_label
-from .common.palette import hex_color
-from .config.schema import LegConfig
-from .model.assembler import AssemblerModel
-from .state import StackState
+from ..common import palette
+from ..common.labels import leg_label, platform_label
+from ..common.palette import hex_color
+from ..config.schema import LegConfig
+from ..model.assembler import AssemblerModel
+from ..state import StackState
 
 __all__ = ["LIMIT_VIEW_FRACTION", "trajectory_plot"]
 
@@ -146,7 +146,7 @@ def trajectory_plot(
     Samples that violate a constraint are shaded yellow.
 
     Args:
-        traj: a :class:`~assembler_pin.motion.timing.Trajectory`.
+        traj: a :class:`~assembler_pin.motion.trajfile.Trajectory`.
         states: the stack at some of its samples (e.g. from
             :func:`~assembler_pin.motion.timing.trajectory_states`) for the per-leg forces;
             without them the force column shows the trajectory's max|F| only (first row).

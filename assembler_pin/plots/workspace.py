@@ -1,6 +1,6 @@
 """The workspace slice: max |F| over EE positions on a grid in a world plane, and its figure.
 
-Every name is importable from :mod:`assembler_pin.plots` too. Positions in metres (world
+Every name is importable from :mod:`assembler_pin.plots.figures` too. Positions in metres (world
 frame), forces in newtons.
 """
 
@@ -17,11 +17,11 @@ import pinocchio as pin
 from matplotlib.colors import Normalize
 from matplotlib.figure import Figure
 
-from .common import palette
-from .common.palette import hex_color
-from .exceptions import AssemblerError
-from .model.assembler import AssemblerModel
-from .state import StackState
+from ..common import palette
+from ..common.palette import hex_color
+from ..exceptions import AssemblerError
+from ..model.assembler import AssemblerModel
+from ..state import StackState
 
 __all__ = [
     "WorkspaceSlice",
@@ -67,7 +67,7 @@ def default_state_function(am: AssemblerModel) -> Callable[[pin.SE3], StackState
     module, the helper-arm initial condition. None when no valid state is found."""
     solver_solve: Callable[..., Any] | None
     try:
-        from .solver.pipeline import solve as solver_solve
+        from ..solver.pipeline import solve as solver_solve
     except ImportError:
         solver_solve = None
     if solver_solve is not None:
@@ -78,7 +78,7 @@ def default_state_function(am: AssemblerModel) -> Callable[[pin.SE3], StackState
             return res.optimized if res.optimized is not None else res.initial
 
         return by_solve
-    from .helper_arm import initial_condition
+    from ..helper_arm import initial_condition
 
     def by_arm(goal: pin.SE3) -> StackState | None:
         res = initial_condition(am, goal)

@@ -3,7 +3,7 @@
 Every function returns a :class:`matplotlib.figure.Figure` built without pyplot's global
 state (so it works headless, with any backend, and in notebooks: a Figure displays
 inline there); :func:`save` writes one to PNG. The workspace slice lives in
-:mod:`~assembler_pin.workspace_plot` (its names are importable from here).
+:mod:`~assembler_pin.plots.workspace`, the trajectory figure in :mod:`~assembler_pin.plots.trajectory`.
 
 Conventions (as everywhere in the package): forces in newtons, **tension positive**;
 positions in metres in the world frame O (z up). Colours are the package's one colour
@@ -26,37 +26,23 @@ from matplotlib.colors import TwoSlopeNorm
 from matplotlib.figure import Figure
 from matplotlib.patches import Patch, Rectangle
 
-from .common import palette
-from .common.labels import leg_label, platform_label
-from .common.palette import hex_color
-from .config.schema import LegConfig
-from .exceptions import AssemblerError
-from .plan_figure import trajectory_plot
-from .state import StackState
-from .workspace_plot import (
-    WorkspaceSlice,
-    compute_workspace_slice,
-    default_state_function,
-    plot_workspace_slice,
-    workspace_slice,
-)
+from ..common import palette
+from ..common.labels import leg_label, platform_label
+from ..common.palette import hex_color
+from ..config.schema import LegConfig
+from ..exceptions import AssemblerError
+from ..state import StackState
 
 __all__ = [
     "INITIAL_COLOR",
     "OPTIMIZED_LEG_COLOR",
     "OPTIMIZED_PLATE_COLOR",
-    "WorkspaceSlice",
-    "compute_workspace_slice",
-    "default_state_function",
     "draw_state",
     "force_bars",
     "force_heatmaps",
     "leg_flags",
-    "plot_workspace_slice",
     "pose_views",
     "save",
-    "trajectory_plot",
-    "workspace_slice",
 ]
 
 logger = logging.getLogger(__name__)
@@ -330,7 +316,7 @@ def save(fig: Figure, path: str | Path, dpi: int = 150) -> Path:
     The file is written atomically (:func:`~assembler_pin.common.files.atomic_path`): an interrupted
     write leaves the previous file, never a truncated one.
     """
-    from .common.files import atomic_path
+    from ..common.files import atomic_path
 
     out = Path(path)
     out.parent.mkdir(parents=True, exist_ok=True)
