@@ -23,10 +23,13 @@ from typing import TYPE_CHECKING
 import numpy as np
 import pinocchio as pin
 
+from .common.files import atomic_path
 from .common.labels import leg_label, platform_label
 from .common.progress import ProgressCallback
+from .helper_arm import perturbed_plates, repair_stack
 from .model.assembler import AssemblerModel
 from .optimize import OptimizeOptions, optimize_internal_poses
+from .optimize.objective import state_sag
 from .scenarios import SCENARIOS, Scenario
 from .solver.pipeline import SolveResult, solve
 from .state import StackState, evaluate_state
@@ -131,8 +134,6 @@ def random_valid_poses(
     """Up to ``count`` random feasible poses for ``goal``: the internal plates of ``around``
     moved by seeded random twists (±5 cm, ±0.3 rad per axis), repaired onto the leg limits,
     and kept when every constraint (forces included) holds; at most ``3·count`` draws."""
-    from .helper_arm import perturbed_plates, repair_stack
-
     poses = []
     for plates in perturbed_plates(around.plates.as_se3(), 3 * count, seed=seed):
         repaired, violation = repair_stack(am, plates)
@@ -263,8 +264,6 @@ def _reference_cells(o: ScenarioOutcome) -> list[str]:
 
 def _sag_cells(am: AssemblerModel, result: SolveResult | None) -> list[str]:
     """max|F| [N], EE sag [mm] and optimizer time [s] of a solve's optimum ("—" when none)."""
-    from .optimize.objective import state_sag
-
     if result is None or result.optimized is None or not result.success:
         return ["—", "—", "—"]
     state = result.optimized
@@ -323,8 +322,6 @@ def write_report(am: AssemblerModel, outcomes: Sequence[ScenarioOutcome], out_di
     together once all are written, ``report.md`` last, so an interrupted run leaves the
     previous report (or none) and never a partial one.
     """
-    from .common.files import atomic_path
-
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     with contextlib.ExitStack() as files:
@@ -341,7 +338,7 @@ def write_report(am: AssemblerModel, outcomes: Sequence[ScenarioOutcome], out_di
 
 def _report_text(am: AssemblerModel, outcomes: Sequence[ScenarioOutcome], target: Callable[[str], Path]) -> str:
     """The markdown of the report; each figure is saved to ``target(file name)``."""
-    from . import plots
+    from . import plots  # delays matplotlib
 
     leg = am.config.leg
     parts = [
@@ -383,7 +380,7 @@ def _report_text(am: AssemblerModel, outcomes: Sequence[ScenarioOutcome], target
 def _figures(o: ScenarioOutcome, leg: LegConfig) -> Iterator[tuple[str, Figure]]:
     """A solved scenario's figures, one at a time: (kind, figure) for its views, force bars
     and force heatmaps."""
-    from . import plots
+    from . import plots  # delays matplotlib
 
     s, heading = o.scenario, figure_title(o.scenario)
     arm = o.result.initial_result.arm_points

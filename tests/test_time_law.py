@@ -13,8 +13,8 @@ from assembler_pin.dynamics import inverse_dynamics_from_lengths
 from assembler_pin.exceptions import ConfigError, TrajectoryError
 from assembler_pin.kinematics import stack_forward_kinematics
 from assembler_pin.motion import EEPath, PlanOptions, plan_path
-from assembler_pin.motion.time_law import QuinticLaw, TimingProblem, time_law
-from assembler_pin.motion.timing import plan_trajectory, time_parametrize, trajectory_states
+from assembler_pin.motion.time_law import QuinticLaw, TimingProblem
+from assembler_pin.motion.timing import plan_trajectory, time_law, time_parametrize, trajectory_states
 from assembler_pin.motion.trajfile import read_trajectory
 
 

@@ -19,7 +19,7 @@ from assembler_pin.common.naming import names
 from assembler_pin.exceptions import ViewerError
 from assembler_pin.viz import StackViewer, interpolate_states
 from assembler_pin.walk import WalkPhase, WalkResult, turned_model
-from assembler_pin.walk.plan import TURN_OVER
+from assembler_pin.walk.footholds import TURN_OVER
 
 FPS = 5.0
 

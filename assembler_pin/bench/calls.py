@@ -16,8 +16,12 @@ import numpy as np
 
 from ..common.progress import ProgressCallback
 from ..config.bounds import check_bound
+from ..helper_arm import initial_condition
 from ..kinematics import PlateArrays, q_from_plates, sp_forward_kinematics, stack_forward_kinematics
 from ..model.assembler import AssemblerModel
+from ..optimize import OptimizeOptions, optimize_internal_poses
+from ..scenarios import SCENARIOS
+from ..solver.pipeline import solve
 from ..statics.pinocchio_statics import solve_statics, solve_statics_batch
 from .speed import benchmark_startup
 from .timing import LEVEL_GRID, median_time_us, random_reachable_plates
@@ -107,10 +111,6 @@ def benchmark_optimization(am: AssemblerModel, names: list[str] | None = None) -
         ``optimize_slsqp_median_s``, ``optimize_paper_median_s``, ``optimize_speedup_median``;
         ``optimize_objective_not_worse``: fraction of scenarios where slsqp's Ω <= paper's.
     """
-    from ..helper_arm import initial_condition
-    from ..optimize import OptimizeOptions, optimize_internal_poses
-    from ..scenarios import SCENARIOS
-
     per: dict[str, dict[str, float]] = {}
     for name in names or list(SCENARIOS):
         goal = SCENARIOS[name].goal
@@ -152,9 +152,6 @@ def benchmark_initial_condition(am: AssemblerModel, n_random: int = 20, seed: in
         ``initial_scenarios_ms`` and ``initial_random_ms``: median wall time per goal [ms];
         ``initial_success_rate``: fraction of all those goals solved (kinematically valid).
     """
-    from ..helper_arm import initial_condition
-    from ..scenarios import SCENARIOS
-
     rng = np.random.default_rng(seed)
     scenario_goals = [s.goal for s in SCENARIOS.values()]
     random_goals = [random_reachable_plates(am, rng, spread=0.7)[1].se3(am.n) for _ in range(n_random)]
@@ -190,8 +187,6 @@ def benchmark_solve_grid(
         each start gave the kept optimum; ``grid_unsolved``: the goals without a feasible pose.
     """
     import pinocchio as pin
-
-    from ..solver.pipeline import solve
 
     times: list[float] = []
     solved_times: list[float] = []

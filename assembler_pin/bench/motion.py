@@ -10,6 +10,12 @@ import numpy as np
 
 from ..kinematics import PlateArrays
 from ..model.assembler import AssemblerModel
+from ..motion import EEPath, plan_path
+from ..motion.timing import _law_duration, _problem
+from ..motion.toppra_law import OptimalLaw
+from ..scenarios import SCENARIOS, scenario
+from ..simulate import MujocoStack, hold_pose, mujoco_statics
+from ..solver.pipeline import solve
 from ..statics.pinocchio_statics import solve_statics
 from .timing import random_reachable_plates
 
@@ -21,10 +27,6 @@ def benchmark_mujoco(am: AssemblerModel, n_random: int = 8, seed: int = 42, seco
     pose): the inverse statics' gap [N], the held pose's gap as a fraction of the tolerance
     max(1% of max|F|, 0.5 N), the same at MuJoCo's settled pose, the EE sag [m], the largest
     ball-joint gap [m] and the wall time of the simulation [s] (``assembler-pin bench --mujoco``)."""
-    from ..scenarios import SCENARIOS
-    from ..simulate import MujocoStack, hold_pose, mujoco_statics
-    from ..solver.pipeline import solve
-
     rng = np.random.default_rng(seed)
     poses: dict[str, PlateArrays] = {"home": PlateArrays.from_se3(am.home)}
     for k in range(n_random):
@@ -85,11 +87,6 @@ def benchmark_time_laws(am: AssemblerModel, names: tuple[str, ...] = COMPARE_PAT
     import dataclasses
 
     from scipy.interpolate import PchipInterpolator
-
-    from ..motion import EEPath, plan_path
-    from ..motion.timing import _law_duration, _problem
-    from ..motion.toppra_law import OptimalLaw
-    from ..scenarios import scenario
 
     rows = []
     leg = am.config.leg

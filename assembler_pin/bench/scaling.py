@@ -10,8 +10,12 @@ from typing import Any
 import numpy as np
 
 from ..common.progress import ProgressCallback
+from ..config.schema import load_config
+from ..helper_arm import initial_condition
 from ..kinematics import stack_forward_kinematics
+from ..maps import parse_grid, run_map
 from ..model.assembler import AssemblerModel
+from ..optimize import optimize_internal_poses
 from ..statics.pinocchio_statics import solve_statics
 from .timing import median_time_us, random_reachable_plates
 
@@ -36,9 +40,6 @@ def benchmark_platform_count(n: int, repeat: int = 50, seed: int = 0, optimize: 
     import resource
 
     import pinocchio as pin
-
-    from ..helper_arm import initial_condition
-    from ..optimize import optimize_internal_poses
 
     t0 = time.perf_counter()
     am = AssemblerModel.from_config({"platforms": n})
@@ -115,9 +116,6 @@ def benchmark_maps(grid_spec: str = MAP_BENCH_GRID, workers: tuple[int, ...] = (
     Each run starts from an empty output directory and includes starting the local cluster.
     """
     import tempfile
-
-    from ..config.schema import load_config
-    from ..maps import parse_grid, run_map
 
     grid = parse_grid(grid_spec)
     rates = {}

@@ -18,7 +18,17 @@ from typing import Any
 import numpy as np
 
 from ..config.bounds import check_bound
+from ..config.options import casadi_missing
+from ..config.schema import load_config
+from ..kinematics import PlateArrays, plate_arrays
 from ..model.assembler import AssemblerModel
+from ..optimize import OptimizeOptions, optimize_internal_poses
+from ..solver.capacity import PayloadModels, payload_capacity
+from ..solver.pipeline import solve
+from ..statics.kernel import closed_form_forces, kernel_available, kernel_result
+from ..statics.pinocchio_statics import solve_statics
+from ..supports.choice import chosen_distribution
+from ..supports.two_point import two_point_statics
 from .timing import LEVEL_GRID, median_time_us, random_reachable_plates
 
 __all__ = [
@@ -68,8 +78,6 @@ def benchmark_threads(am: AssemblerModel, goals: tuple = THREAD_GOALS, limits: t
     and whether every answer (the optimized plates) is bit-identical across the limits."""
     from threadpoolctl import threadpool_limits
 
-    from ..solver.pipeline import solve
-
     out: dict[str, Any] = {}
     answers = []
     for limit in limits:
@@ -90,8 +98,6 @@ def benchmark_solve_starts(
     and max [s], the helper arm's p50 / p90 / p95 (``timing_s["initial"]``) [s], goals solved
     (``{mode}_unsolved``: the others), optimizer runs and time [s], and, for ``first``
     against ``all``, the largest relative loss of Ω and how many goals lose more than 1e-6."""
-    from ..solver.pipeline import solve
-
     times: dict[str, list[float]] = {m: [] for m in modes}
     initial: dict[str, list[float]] = {m: [] for m in modes}
     objectives: dict[str, list[float]] = {m: [] for m in modes}
@@ -137,9 +143,6 @@ def benchmark_statics_kernel(
     (numba import + compile or cache load) [s], one stack from arrays [µs] and stacks per
     second at each batch size (one thread) and the peak of the memory allocated per stack
     [KB] (tracemalloc, a second call); and Pinocchio's single statics [µs] for comparison."""
-    from ..statics.kernel import closed_form_forces, kernel_available
-    from ..statics.pinocchio_statics import solve_statics
-
     rng = np.random.default_rng(seed)
     samples = [random_reachable_plates(am, rng)[1] for _ in range(20)]
     R1, p1 = samples[0].R[None], samples[0].p[None]
@@ -169,9 +172,6 @@ def benchmark_statics_kernel(
 
 def _statics_calls(am: AssemblerModel, poses: list, has_kernel: bool) -> dict[str, Any]:
     """The calls timed by :func:`benchmark_single_statics`, cycling through ``poses``."""
-    from ..statics.kernel import kernel_result
-    from ..statics.pinocchio_statics import solve_statics
-
     counter = iter(range(10**9))
     calls = {"pinocchio": lambda: solve_statics(am, poses[next(counter) % len(poses)])}
     if has_kernel:
@@ -188,9 +188,6 @@ def benchmark_single_statics(
     and from 4×4 matrices (``..._4x4_us``: their validation included). Medians of ``repeat``
     calls cycling through 20 random reachable poses, the best of ``rounds`` interleaved
     rounds; NaN for the kernel without numba."""
-    from ..config.schema import load_config
-    from ..statics.kernel import kernel_available
-
     check_bound("bench.repeat", repeat, "repeat")
     has_kernel = kernel_available()
     out: dict[str, float] = {}
@@ -216,8 +213,6 @@ CAPACITY_GOALS = ((0.1, 0.05, 0.75), (0.1, 0.05, 0.9), (0.25, 0.05, 0.75), (0.25
 def benchmark_capacity_memory(am: AssemblerModel, goals: tuple = CAPACITY_GOALS) -> dict:
     """``payload_capacity`` over ``goals`` with one shared :class:`PayloadModels` (as a map's
     worker keeps it): resident memory after each call [MB], payload models kept, time [s]."""
-    from ..solver.capacity import PayloadModels, payload_capacity
-
     models = PayloadModels(am)
     out: dict[str, Any] = {"rss_start_mb": rss_mb(), "rss_mb": [], "capacity_kg": [], "models_kept": []}
     t0 = time.perf_counter()
@@ -306,11 +301,6 @@ def benchmark_two_point(platforms: tuple[int, ...] = (4, 64), repeat: int = 20) 
     less), beside its target (``..._target_ms``, :data:`TWO_POINT_TARGETS_MS`); ``..._ok`` says
     a call succeeded.
     """
-    from ..config.schema import load_config
-    from ..kinematics import plate_arrays
-    from ..supports.choice import chosen_distribution
-    from ..supports.two_point import two_point_statics
-
     check_bound("bench.repeat", repeat, "repeat")
     out: dict[str, float] = {}
     for n in platforms:
@@ -347,9 +337,6 @@ def long_stack(n: int) -> tuple[AssemblerModel, Any]:
     leaning 2.3°, at every size); the goal is the start's plate n."""
     import pinocchio as pin
 
-    from ..config.schema import load_config
-    from ..kinematics import PlateArrays
-
     am = AssemblerModel.from_config(load_config().replace(platforms=n))
     step = pin.SE3(np.eye(3), np.array([0.0, 0.0, am.config.home_height]))
     step = step * pin.exp6(np.array(LONG_STACK_BEND) * 8.0 / n)
@@ -369,9 +356,6 @@ def benchmark_long_stacks(
     exponent p of time per iteration ∝ n^p (least squares over the sizes, of the wall time
     and of the CPU time, the steadier one on a shared machine; target 1.5) and the targets
     of :data:`LONG_STACK_TARGETS_S` beside the times."""
-    from ..config.options import casadi_missing
-    from ..optimize import OptimizeOptions, optimize_internal_poses
-
     methods = tuple(m for m in methods if m != "ipopt" or not casadi_missing())
     out: dict[str, Any] = {}
     per_iteration: dict[str, list[tuple[int, float, float]]] = {m: [] for m in methods}

@@ -27,8 +27,23 @@ from typing import Any
 
 import numpy as np
 
+from ..config.options import casadi_missing
+from ..config.schema import load_config
+from ..helper_arm import perturbed_plates, repair_stack
+from ..helper_arm.initial import even_screw_pose
+from ..maps import parse_grid, run_map
 from ..model.assembler import AssemblerModel
-from .speed import THREAD_GOALS
+from ..optimize import optimize_internal_poses
+from ..statics.kernel import ENV_VAR
+from .speed import (
+    THREAD_GOALS,
+    benchmark_long_stacks,
+    benchmark_single_statics,
+    benchmark_solve_starts,
+    benchmark_statics_kernel,
+    benchmark_threads,
+)
+from .timing import LEVEL_GRID, random_reachable_plates
 
 __all__ = [
     "MAP_MEMORY_CELLS",
@@ -91,10 +106,6 @@ def wide_search(am: AssemblerModel, goal: Any, starts: int = SEARCH_STARTS, seed
     optimized from there. Returns the first optimizer result whose state meets every
     constraint (its Pinocchio re-check, :func:`~assembler_pin.state.evaluate_state`), else
     None."""
-    from ..helper_arm import perturbed_plates, repair_stack
-    from ..helper_arm.initial import even_screw_pose
-    from ..optimize import optimize_internal_poses
-
     rng = np.random.default_rng(seed)
     screw = even_screw_pose(am, goal)
     for k in range(starts):
@@ -113,8 +124,6 @@ def random_goals(am: AssemblerModel, count: int = RANDOM_GOALS, seed: int = 0) -
     """EE poses (``pin.SE3``, world) of ``count`` random stacks with in-stroke legs
     (:func:`~assembler_pin.bench.timing.random_reachable_plates`): goals known to be reachable."""
     import pinocchio as pin
-
-    from .timing import random_reachable_plates
 
     rng = np.random.default_rng(seed)
     goals = []
@@ -189,9 +198,6 @@ def benchmark_map_memory(cells: int = MAP_MEMORY_CELLS, workers: int = 2) -> dic
     directory."""
     import tempfile
 
-    from ..config.schema import load_config
-    from ..maps import parse_grid, run_map
-
     side = max(2, round(cells ** (1 / 3)))
     nz = max(1, math.ceil(cells / side**2))
     spec = f"x=-0.4:0.5:{side},y=0:0.3:{side},z=0.55:1.0:{nz}"
@@ -221,16 +227,6 @@ def benchmark_targets(am: AssemblerModel, map_cells: int = MAP_MEMORY_CELLS, qui
     figures."""
     from threadpoolctl import threadpool_limits
 
-    from ..config.options import casadi_missing
-    from .speed import (
-        benchmark_long_stacks,
-        benchmark_single_statics,
-        benchmark_solve_starts,
-        benchmark_statics_kernel,
-        benchmark_threads,
-    )
-    from .timing import LEVEL_GRID
-
     doc: dict[str, Any] = {"threads": benchmark_threads(am, goals=THREAD_GOALS[:2] if quick else THREAD_GOALS)}
     with threadpool_limits(limits=1):
         goals = random_goals(am, 4 if quick else RANDOM_GOALS)
@@ -258,8 +254,6 @@ def benchmark_targets(am: AssemblerModel, map_cells: int = MAP_MEMORY_CELLS, qui
 def _compiled_optimizer() -> Iterator[None]:
     """The optimizer on its compiled pass (``ASSEMBLER_PIN_STATICS=numba``, opt-in) for the
     duration; the variable's former value is restored."""
-    from ..statics.kernel import ENV_VAR
-
     before = os.environ.get(ENV_VAR)
     os.environ[ENV_VAR] = "numba"
     try:

@@ -8,12 +8,16 @@ package writes goes through :func:`write_atomic` or :func:`atomic_path`.
 from __future__ import annotations
 
 import contextlib
+import json
 import os
 import tempfile
 from collections.abc import Iterator
 from pathlib import Path
 
-__all__ = ["atomic_path", "read_text_bounded", "write_atomic"]
+from ..config.bounds import check_bound
+from ..exceptions import AssemblerError, TrajectoryError
+
+__all__ = ["atomic_path", "read_text_bounded", "strict_json", "write_atomic"]
 
 
 @contextlib.contextmanager
@@ -54,8 +58,6 @@ def read_text_bounded(path: Path, bound_key: str, what: str, error: type[Excepti
     """The UTF-8 text of the input file ``path``, refused in one line (``error``) when it is
     missing or unreadable, empty, larger than its row ``bound_key`` of the limits table, or not
     UTF-8. ``what`` names the file in the message (``"trajectory"``, ``"waypoint file"``)."""
-    from ..config.bounds import check_bound
-
     try:
         size = path.stat().st_size
         if size == 0:
@@ -66,3 +68,25 @@ def read_text_bounded(path: Path, bound_key: str, what: str, error: type[Excepti
         raise error(f"cannot read {what} '{path}': {exc.strerror or exc}") from None
     except UnicodeDecodeError:
         raise error(f"{what} '{path}' is not UTF-8 text") from None
+
+
+def strict_json(text: str, error: type[AssemblerError] = TrajectoryError) -> object:
+    """JSON without NaN/Infinity constants or duplicate keys; ``error`` (one line) when not."""
+
+    def pairs(items: list[tuple[str, object]]) -> dict:
+        keys = [k for k, _ in items]
+        if len(set(keys)) != len(keys):
+            raise error(f"duplicate key {next(k for k in keys if keys.count(k) > 1)!r}"[:120])
+        return dict(items)
+
+    def constant(name: str) -> object:
+        raise error(f"{name} is not a number a file may hold")
+
+    try:
+        return json.loads(text, object_pairs_hook=pairs, parse_constant=constant)
+    except AssemblerError:
+        raise
+    except json.JSONDecodeError as exc:
+        raise error(f"not valid JSON ({exc.msg} at line {exc.lineno} column {exc.colno}): truncated?") from None
+    except (RecursionError, ValueError) as exc:  # deep nesting, an integer of thousands of digits
+        raise error(f"not a valid file ({type(exc).__name__}: nested too deeply or a number too long)") from None

@@ -33,14 +33,33 @@ from __future__ import annotations
 import math
 import re
 from collections.abc import Iterable
-from typing import TYPE_CHECKING
+from typing import Protocol, TypeVar
 
 from .labels import leg_label, platform_label
 
-if TYPE_CHECKING:
-    from ..constraints import Violation
+__all__ = ["CAUSES", "MAX_LENGTH", "Violating", "binding", "describe", "finite_text", "number", "one_line"]
 
-__all__ = ["CAUSES", "MAX_LENGTH", "binding", "describe", "finite_text", "number", "one_line"]
+
+class Violating(Protocol):
+    """What a message reads of a violated limit (:class:`assembler_pin.constraints.Violation`
+    has it): its kind, where (platform and leg, ``None`` for the EE or the whole platform),
+    the offending value, the limit and how far past it, in the limit's SI unit."""
+
+    @property
+    def kind(self) -> str: ...
+    @property
+    def platform(self) -> int | None: ...
+    @property
+    def leg(self) -> int | None: ...
+    @property
+    def value(self) -> float: ...
+    @property
+    def limit(self) -> float: ...
+    @property
+    def amount(self) -> float: ...
+
+
+_V = TypeVar("_V", bound=Violating)
 
 #: The longest failure message [characters].
 MAX_LENGTH = 200
@@ -87,7 +106,7 @@ def number(value: float, unit: str = "", digits: int = 4) -> str:
     return f"{text} {unit}".rstrip() if unit not in ("°",) else f"{text}°"
 
 
-def describe(v: Violation | None) -> str:
+def describe(v: Violating | None) -> str:
     """One violation in the failure vocabulary, with its value, its limit and how far past,
     e.g. ``leg stroke: SP3 leg 0 length 1824 mm, limit 350 mm (1474 mm over)``; ``None``
     (what :func:`binding` gives for no violation) reads ``no limit violated``."""
@@ -111,14 +130,14 @@ def describe(v: Violation | None) -> str:
     return f"{cause}: {where} {what} {value}, limit {limit} ({over} {side})"
 
 
-def binding(violations: Iterable[Violation]) -> Violation | None:
+def binding(violations: Iterable[_V]) -> _V | None:
     """The violation a message names: goal errors and leg stroke first, then the largest
     relative amount (how far past the limit, over the limit)."""
     vs = list(violations)
     if not vs:
         return None
 
-    def key(v: Violation) -> tuple[int, float]:
+    def key(v: _V) -> tuple[int, float]:
         rank = _PRIORITY.index(v.kind) if v.kind in _PRIORITY else len(_PRIORITY)
         rel = v.amount / abs(v.limit) if v.limit and math.isfinite(v.limit) else math.inf
         return rank, -rel if math.isfinite(rel) else -math.inf

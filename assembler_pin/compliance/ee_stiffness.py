@@ -34,7 +34,7 @@ from ..exceptions import LoadError, PoseError
 from ..kinematics import PlateArrays, plate_arrays
 from ..model.assembler import AssemblerModel
 from ..statics.closed_form import CONDITION_LIMIT
-from .elastic import Equilibrium, line_conditions, solve_equilibrium
+from .elastic import Equilibrium, elastic_terms, line_conditions, solve_equilibrium
 
 __all__ = ["StiffnessResult", "elastic_compliance", "platform_compliances", "stiffness", "stiffness_from_equilibrium"]
 
@@ -214,8 +214,6 @@ def elastic_compliance(am: AssemblerModel, plates: PlateArrays | Sequence | np.n
     """(6, 6) the EE's compliance of the legs' springs alone at the pose ``plates`` (no loads,
     no equilibrium: ``Σ k ∇L ∇Lᵀ`` condensed), world axes at the EE origin, ``[v, ω]`` [m/N,
     rad/N; m/(N·m), rad/(N·m)]; NaN when a platform is singular."""
-    from .elastic import elastic_terms
-
     pa = plate_arrays(am, plates)
     k = float(am.config.leg.stiffness)
     lines = elastic_terms(am, pa.R, pa.p, None, k, hessian=False).lines

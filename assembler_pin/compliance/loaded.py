@@ -24,11 +24,11 @@ import pinocchio as pin
 from ..common.labels import leg_label
 from ..common.validation import as_float_array
 from ..config.bounds import BOUNDS, check_bound
-from ..exceptions import LoadError
+from ..exceptions import LoadError, OptionsError, SingularConfigurationError
 from ..kinematics import PlateArrays, leg_vectors, plate_arrays, stack_forward_kinematics
 from ..model.assembler import AssemblerModel
 from ..statics.closed_form import CONDITION_LIMIT
-from ..statics.derivatives import PoseDerivatives
+from ..statics.derivatives import PoseDerivatives, pose_derivatives
 from ..statics.pinocchio_statics import solve_statics
 from .elastic import line_conditions, solve_equilibrium
 
@@ -309,9 +309,6 @@ def sag_and_gradient(
         PoseError: malformed plates. SingularConfigurationError: a singular platform.
         OptionsError: an unknown chart.
     """
-    from ..exceptions import OptionsError, SingularConfigurationError
-    from ..statics.derivatives import pose_derivatives
-
     if chart not in ("world", "local"):
         raise OptionsError(f"chart must be 'world' or 'local', got {chart!r}")
     pa = plate_arrays(am, plates)

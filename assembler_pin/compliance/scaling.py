@@ -20,6 +20,7 @@ from typing import cast
 import numpy as np
 import pinocchio as pin
 
+from ..common.palette import LEG_CYCLE, LIMIT, OPTIMIZED
 from ..common.progress import ProgressCallback
 from ..config.bounds import check_bound
 from ..config.schema import AssemblerConfig, load_config
@@ -138,8 +139,6 @@ def scaling_figure(table: ScalingTable):
     """Log-log figure: the three stiffnesses (loaded solid, springs alone dashed) and the sag
     against n, the first buckling n marked."""
     from matplotlib.figure import Figure
-
-    from ..common.palette import LEG_CYCLE, LIMIT, OPTIMIZED
 
     fig = Figure(figsize=(11, 4.6), layout="constrained")
     ax_k, ax_s = fig.subplots(1, 2)

@@ -14,7 +14,7 @@ from typing import TypeVar
 
 from ..exceptions import OptionsError, short_repr
 from .bounds import check_bound
-from .choices import OPTIMIZE_METHODS
+from .choices import OBJECTIVES, OPTIMIZE_METHODS
 
 __all__ = [
     "AUTO_IPOPT_PLATFORMS",
@@ -178,8 +178,6 @@ class OptimizeOptions:
     def _check_sag_options(self) -> None:
         """``objective`` one of :data:`~assembler_pin.config.choices.OBJECTIVES`, ``sag_weight`` and
         ``max_sag`` within their bounds rows, and the sag needing the smooth method."""
-        from .choices import OBJECTIVES
-
         if not isinstance(self.objective, str) or self.objective not in OBJECTIVES:
             raise OptionsError(f"objective must be one of {', '.join(OBJECTIVES)}, got {short_repr(self.objective)}")
         check_bound("optimize.sag_weight", self.sag_weight, "sag_weight")

@@ -7,6 +7,7 @@ from matplotlib import colormaps
 from matplotlib.colors import ListedColormap
 from matplotlib.figure import Figure
 
+from ..common.files import write_atomic
 from ..common.palette import (
     CAPACITY_CMAP,
     FORCE_MAGNITUDE_CMAP,
@@ -235,8 +236,6 @@ def capacity_bar_html(lo: float, hi: float) -> str:
 def write_map_page(viewer, table, path, config: str | None = None) -> tuple[float, float]:
     """The map's standalone page: the cells over the stack, a title, and the capacity colour
     bar (:func:`capacity_bar_html`), written atomically to ``path``. Returns the scale [kg]."""
-    from ..common.files import write_atomic
-
     lo, hi = show_map_points(viewer, table, config=config)
     viewer.set_title(f"Capability map: payload capacity {lo:.2f} (dark) – {hi:.2f} kg (yellow); grey: not reachable")
     html = viewer.static_html().replace("</body>", capacity_bar_html(lo, hi) + "\n</body>", 1)

@@ -32,6 +32,7 @@ from ..exceptions import OptionsError
 from ..kinematics import PlateArrays, plate_arrays, stack_forward_kinematics
 from ..model.assembler import AssemblerModel
 from ..optimize import MotionTerm, OptimizeOptions, optimize_internal_poses
+from ..solver.pipeline import solve
 from ..state import StackState, evaluate_state
 from .guess import on_se3
 from .paths import EEPath
@@ -211,8 +212,6 @@ def _start_state(
     """The valid state the plan starts from, or (None, why not)."""
     first = path.at(0.0)
     if start is None:
-        from ..solver.pipeline import solve
-
         solved = solve(am, first, options=opts.optimize)
         if not solved.success:
             return None, one_line(f"{solved.message}, at the path's start")

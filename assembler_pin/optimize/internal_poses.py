@@ -22,6 +22,7 @@ from ..exceptions import OptionsError, _SingularIterateError
 from ..kinematics import PlateArrays, checked_goal, plate_arrays
 from ..model.assembler import AssemblerModel, checked_model
 from ..state import StackState, evaluate_state
+from .ipopt import run_ipopt
 from .objective import SagObjective, state_sag, state_score
 from .options import MotionTerm
 from .paper import PaperForm
@@ -255,8 +256,6 @@ def _run_solver(problem: Problem, initial_state: StackState) -> tuple[SolverResu
 
     opts = problem.opts
     if opts.method == "ipopt":
-        from .ipopt import run_ipopt
-
         ipopt_result, singular = run_ipopt(problem, SmoothForm(problem).x0(initial_state))
         return ipopt_result, ipopt_result.x[:-1], singular
     form = SmoothForm(problem) if opts.method == "slsqp" else PaperForm(problem)

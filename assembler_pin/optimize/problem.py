@@ -182,7 +182,7 @@ class Problem:
         Raises:
             _SingularIterateError: the pose is singular there.
         """
-        from ..compliance.loaded import sag_and_gradient
+        from ..compliance.loaded import sag_and_gradient  # delays scipy
 
         p, d = self.point(x_pose), self.derivatives(x_pose)
         if self._sag_grad is None or self._sag_grad[0] is not d:

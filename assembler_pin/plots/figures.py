@@ -27,6 +27,7 @@ from matplotlib.figure import Figure
 from matplotlib.patches import Patch, Rectangle
 
 from ..common import palette
+from ..common.files import atomic_path
 from ..common.labels import leg_label, platform_label
 from ..common.palette import hex_color
 from ..config.schema import LegConfig
@@ -316,8 +317,6 @@ def save(fig: Figure, path: str | Path, dpi: int = 150) -> Path:
     The file is written atomically (:func:`~assembler_pin.common.files.atomic_path`): an interrupted
     write leaves the previous file, never a truncated one.
     """
-    from ..common.files import atomic_path
-
     out = Path(path)
     out.parent.mkdir(parents=True, exist_ok=True)
     with atomic_path(out) as tmp:

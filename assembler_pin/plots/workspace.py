@@ -9,7 +9,6 @@ from __future__ import annotations
 import logging
 from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Any
 
 import numpy as np
 import numpy.typing as npt
@@ -21,6 +20,7 @@ from ..common import palette
 from ..common.palette import hex_color
 from ..exceptions import AssemblerError
 from ..model.assembler import AssemblerModel
+from ..solver.pipeline import solve
 from ..state import StackState
 
 __all__ = [
@@ -62,29 +62,15 @@ class WorkspaceSlice:
 
 
 def default_state_function(am: AssemblerModel) -> Callable[[pin.SE3], StackState | None]:
-    """``goal -> state``: the optimized state of :func:`assembler_pin.solver.pipeline.solve` (falling
-    back to its initial state when the optimization gives none), or, without the solve
-    module, the helper-arm initial condition. None when no valid state is found."""
-    solver_solve: Callable[..., Any] | None
-    try:
-        from ..solver.pipeline import solve as solver_solve
-    except ImportError:
-        solver_solve = None
-    if solver_solve is not None:
-        solve = solver_solve
+    """``goal -> state``: the optimized state of :func:`assembler_pin.solver.solve` (falling
+    back to its initial state when the optimization gives none). None when no valid state is
+    found."""
 
-        def by_solve(goal: pin.SE3) -> StackState | None:
-            res = solve(am, goal)
-            return res.optimized if res.optimized is not None else res.initial
+    def by_solve(goal: pin.SE3) -> StackState | None:
+        res = solve(am, goal)
+        return res.optimized if res.optimized is not None else res.initial
 
-        return by_solve
-    from ..helper_arm import initial_condition
-
-    def by_arm(goal: pin.SE3) -> StackState | None:
-        res = initial_condition(am, goal)
-        return res.state if res.success else None
-
-    return by_arm
+    return by_solve
 
 
 _AXES = {"x": 0, "y": 1, "z": 2}

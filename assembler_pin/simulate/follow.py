@@ -15,6 +15,7 @@ import pinocchio as pin
 from ..config.bounds import check_bound
 from ..exceptions import SimulationError
 from ..model.assembler import AssemblerModel
+from ..motion.timing import trajectory_states
 from .hold import HOLD_DRIFT_TOLERANCE, _pose_errors, _saturated
 from .stack import MujocoStack
 
@@ -127,8 +128,6 @@ def follow_trajectory(
         TrajectoryError: a row that fails :func:`~assembler_pin.motion.rows.check_trajectory`
             (every row is held to the model before the first step).
     """
-    from ..motion.timing import trajectory_states
-
     _check_follow_inputs(traj, settle, tolerance)
     _, first = trajectory_states(am, traj, frames=2)  # every row held to stack FK of its lengths
     stack = stack or MujocoStack(am)

@@ -18,6 +18,7 @@ from ..common.naming import names
 from ..exceptions import SimulationError, SingularConfigurationError
 from ..kinematics import PlateArrays, leg_vectors, plate_arrays, q_from_arrays
 from ..model.assembler import AssemblerModel
+from ..model.mjcf import assembler_mjcf
 
 __all__ = ["MujocoStack", "MujocoStatics", "mujoco_statics"]
 
@@ -63,8 +64,6 @@ class MujocoStack:
     """
 
     def __init__(self, am: AssemblerModel) -> None:
-        from ..model.mjcf import assembler_mjcf
-
         mujoco = _mujoco()
         self.am = am
         self.mujoco = mujoco

@@ -34,10 +34,14 @@ from ..common.messages import one_line
 from ..common.threads import one_blas_thread
 from ..config.bounds import check_bound
 from ..exceptions import OptionsError
+from ..helper_arm import initial_condition
 from ..kinematics import PlateArrays, to_se3
 from ..model.assembler import AssemblerModel
 from ..model.geometry import DIMENSIONS
+from ..model.platform import PlatformModel, StackPlan
+from ..optimize import optimize_internal_poses
 from ..statics.pinocchio_statics import solve_statics
+from .pipeline import optimizer_starts, solve
 
 __all__ = [
     "GLOBAL_PROBE",
@@ -75,8 +79,6 @@ def with_payload(am: AssemblerModel, mass: float) -> AssemblerModel:
     body has the other payload's inertia, and its own last-platform model (the helper arms
     are shared: their cache is keyed on the configuration without its payload). No URDF of the
     whole stack is generated and no ``Data`` of the whole stack is created."""
-    from ..model.platform import PlatformModel, StackPlan
-
     cfg = am.config
     payload = dataclasses.replace(cfg.payload, mass=float(mass))
     variant = copy.copy(am)
@@ -204,9 +206,6 @@ class CapacityResult:
 
 def _probe(model: AssemblerModel, goal: pin.SE3, arm: PlateArrays | None) -> PlateArrays | None:
     """A valid pose holding ``model``'s payload from the solver's starts (or None)."""
-    from ..optimize import optimize_internal_poses
-    from .pipeline import optimizer_starts
-
     for start in optimizer_starts(model, goal, arm).values():
         result = optimize_internal_poses(model, start, goal)
         if result.success:
@@ -282,8 +281,6 @@ def _valid_start(
     """A valid pose for the goal: ``start``, else the solve at the configured payload (unless
     it is known to fail), else the solve without payload; None when none exists. With it, the
     last solve's message ("" when none ran)."""
-    from .pipeline import solve
-
     why: list[str] = []
 
     def solved(mass: float) -> PlateArrays | None:
@@ -307,8 +304,6 @@ class _ArmStart:
 
     def plates(self) -> PlateArrays | None:
         if not self._plates:
-            from ..helper_arm import initial_condition
-
             self._plates.append(initial_condition(self.am, self.goal).plates_if_valid())
         return self._plates[0]
 
@@ -331,8 +326,6 @@ class _Climb:
 
     def run(self, rtol: float, max_iterations: int) -> str:
         """Climb until the gain is below ``rtol`` and no start holds more; the message."""
-        from ..optimize import optimize_internal_poses
-
         while self.iterations < max_iterations and np.isfinite(self.cap) and self.cap >= 0:
             cap = self.cap
             result = optimize_internal_poses(self.models.at(cap), self.plates, self.goal)

@@ -22,13 +22,15 @@ from ..common.threads import one_blas_thread
 from ..config.options import checked_options
 from ..constraints import leg_limit_margins
 from ..exceptions import ArgumentError, OptionsError
+from ..helper_arm import HelperArmOptions, initial_condition, perturbed_plates, repair_stack
+from ..helper_arm.initial import even_screw_pose, lean_poses
 from ..kinematics import PlateArrays, se3_to_taa, to_se3
 from ..model.assembler import AssemblerModel, checked_model
 from ..optimize import OptimizeOptions, OptimizeResult, optimize_internal_poses
 from ..state import StackState
 
 if TYPE_CHECKING:
-    from ..helper_arm import HelperArmOptions, InitialConditionResult
+    from ..helper_arm import InitialConditionResult
 
 __all__ = [
     "AT_LIMIT",
@@ -178,8 +180,6 @@ def solve(
         PoseError: the goal is not a valid SE(3) pose.
         OptionsError: ``starts`` is not one of :data:`START_MODES`.
     """
-    from ..helper_arm import initial_condition
-
     goal, options, helper_options = _checked_inputs(am, goal, optimize, options, helper_options, starts)
     t0 = time.perf_counter()
     init = initial_condition(am, goal, helper_options)
@@ -205,8 +205,6 @@ def _checked_inputs(
     starts: str,
 ) -> tuple[pin.SE3, OptimizeOptions, HelperArmOptions]:
     """(goal, options, helper options) of :func:`solve`, or the error naming what is wrong."""
-    from ..helper_arm import HelperArmOptions
-
     checked_model(am)
     if starts not in START_MODES:
         raise OptionsError(f"starts must be one of {', '.join(START_MODES)}, got {starts!r}")
@@ -305,8 +303,6 @@ def needs_other_starts(am: AssemblerModel, run: OptimizeResult, opts: OptimizeOp
 
 def optimizer_starts(am: AssemblerModel, goal: pin.SE3, helper_plates: PlateArrays | None) -> dict[str, PlateArrays]:
     """The optimizer's starts (:data:`STARTS`): plate 0 at home, plate n at the goal."""
-    from ..helper_arm.initial import even_screw_pose
-
     home = list(am.home)
     home[am.n] = goal
     starts = {"home": PlateArrays.from_se3(home), "screw": PlateArrays.from_se3(even_screw_pose(am, goal))}
@@ -318,8 +314,6 @@ def optimizer_starts(am: AssemblerModel, goal: pin.SE3, helper_plates: PlateArra
 def _fallback_starts(am: AssemblerModel, goal: pin.SE3, around: PlateArrays) -> Iterator[tuple[str, PlateArrays]]:
     """Valid starts near ``around`` (the helper arm's pose, else the screw pose): its internal
     plates moved by seeded random twists, then repaired onto the leg limits (:func:`_repaired`)."""
-    from ..helper_arm import perturbed_plates
-
     copies = perturbed_plates(around.as_se3(), FALLBACK_STARTS, seed=_seed_of(around))
     return _repaired(am, "perturbed", copies)
 
@@ -330,16 +324,12 @@ def _lean_starts(am: AssemblerModel, goal: pin.SE3) -> Iterator[tuple[str, Plate
     (:func:`_repaired`). On the default stack they solve the low goals (±0.2, 0.2, 0.5) m,
     which every other start leaves unsolved; on a goal without a valid pose they cost ~0.5 s
     (12 repairs)."""
-    from ..helper_arm.initial import lean_poses
-
     return _repaired(am, "lean", lean_poses(am, goal))
 
 
 def _repaired(am: AssemblerModel, name: str, poses: Iterable[list[pin.SE3]]) -> Iterator[tuple[str, PlateArrays]]:
     """``(name_k, pose k repaired onto the leg limits)`` for each of ``poses`` whose repair
     holds (the others are skipped), lazily: a caller that stops early repairs no more."""
-    from ..helper_arm import repair_stack
-
     for k, plates in enumerate(poses):
         repaired, violation = repair_stack(am, plates)
         if violation <= 0.0:

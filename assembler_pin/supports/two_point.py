@@ -32,12 +32,13 @@ import pinocchio as pin
 
 from ..common.validation import as_float_array
 from ..compliance.elastic import elastic_terms, line_conditions, solve_equilibrium
-from ..compliance.loaded import LoadedPose
+from ..compliance.loaded import LoadedPose, loaded_pose
 from ..exceptions import PoseError, SupportError
 from ..kinematics import PlateArrays, leg_vectors, plate_arrays, to_se3
 from ..model.assembler import AssemblerModel
-from ..state import StackState
+from ..state import StackState, evaluate_state
 from ..statics.closed_form import CONDITION_LIMIT
+from .turned import turned_model
 
 __all__ = [
     "FAST_STEP",
@@ -331,9 +332,6 @@ def ee_held_statics(am: AssemblerModel, plates: PlateArrays | Sequence | np.ndar
     Raises:
         PoseError: malformed plates.
     """
-    from ..state import evaluate_state
-    from .turned import turned_model
-
     pa = plate_arrays(am, plates)
     tm = turned_model(am)
     state = evaluate_state(tm.model, tm.plates(pa))
@@ -351,9 +349,6 @@ def ee_loaded_pose(am: AssemblerModel, lengths: npt.ArrayLike, ee: pin.SE3) -> L
     Raises:
         PoseError: malformed lengths or pose.
     """
-    from ..compliance.loaded import loaded_pose
-    from .turned import turned_model
-
     tm = turned_model(am)
     rest = checked_lengths(am, lengths)
     got = loaded_pose(tm.model, tm.turned_legs(rest), base=to_se3(ee, "EE pose") * tm.flip)

@@ -24,6 +24,7 @@ import numpy.typing as npt
 import pinocchio as pin
 from pinocchio.visualize import MeshcatVisualizer
 
+from ..common.files import write_atomic
 from ..config.choices import FORCE_SCALES
 from ..exceptions import AssemblerError, ViewerError
 from ..kinematics import PlateArrays, q_from_plates
@@ -289,8 +290,6 @@ class StackScene:
             self.frame()
         html = self.meshcat.static_html().replace("</body>", self.overlay_html() + "\n</body>", 1)
         if path is not None:
-            from ..common.files import write_atomic
-
             write_atomic(path, html)
             logger.info("wrote %s (%d bytes)", path, len(html))
         return html

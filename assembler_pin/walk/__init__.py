@@ -5,9 +5,9 @@ to one body (:mod:`.macro`)."""
 from __future__ import annotations
 
 from ..supports.turned import TurnedModel, turned_config, turned_model
-from .footholds import checked_footholds
+from .footholds import checked_footholds, plate_target
 from .macro import MacroStatics, macro_capacity, macro_statics
-from .plan import WalkOptions, WalkPhase, WalkResult, plan_walk, plate_target
+from .plan import WalkOptions, WalkPhase, WalkResult, plan_walk
 from .samples import WalkSamples, parse_walk_csv, read_walk_csv
 from .verify import verify_walk
 

@@ -48,16 +48,12 @@ from ..motion.planner import PlanOptions, plan_path
 from ..supports.choice import CHECK_TOLERANCE, ChosenDistribution, chosen_distribution, force_bounds, held_equilibrium
 from ..supports.turned import turned_model
 from ..supports.two_point import two_point_statics
-from .footholds import checked_footholds
+from .footholds import checked_footholds, plate_target
 from .verify import verify_walk
 
-__all__ = ["WalkOptions", "WalkPhase", "WalkResult", "plan_walk", "plate_target"]
+__all__ = ["WalkOptions", "WalkPhase", "WalkResult", "plan_walk"]
 
 logger = logging.getLogger(__name__)
-
-#: Turns a foothold frame into the pose of the EE plate standing on it (its +z into the
-#: surface): a half turn about the foothold's y, the stack arriving along its x.
-TURN_OVER = pin.SE3(pin.exp3(np.array([0.0, math.pi, 0.0])), np.zeros(3))
 
 
 def _walk_plan_options() -> PlanOptions:
@@ -171,12 +167,6 @@ class WalkResult:
             "phases": [p.to_dict() for p in self.phases],
             "units": "N (tension positive), m; plates world frame",
         }
-
-
-def plate_target(foothold: pin.SE3, foot: str) -> pin.SE3:
-    """The world pose of a foot's plate standing on ``foothold``: the base plate is the
-    foothold frame, the EE plate the frame turned over about its y (``foothold · Ry(π)``)."""
-    return foothold if foot == "base" else foothold * TURN_OVER
 
 
 def _other(foot: str) -> str:
@@ -346,7 +336,7 @@ def plan_walk(
 
     Args:
         footholds: world frames (pin.SE3 or 4×4) [m]: ``footholds[0]`` the base's at the start,
-            then the EE's, the base's ... (see :func:`plate_target`).
+            then the EE's, the base's ... (see :func:`~assembler_pin.walk.footholds.plate_target`).
         start: the physical plates at the start (plate 0 on ``footholds[0]``); default the home
             pose standing on it.
         options: :class:`WalkOptions`.

@@ -20,6 +20,7 @@ from ..state import evaluate_state
 from ..supports.choice import CHECK_TOLERANCE, force_bounds
 from ..supports.turned import turned_model
 from ..supports.two_point import two_point_statics
+from .footholds import plate_target
 
 __all__ = ["SAMPLE_TOLERANCE", "verify_walk"]
 
@@ -80,8 +81,6 @@ def _transfer_sample(am: AssemblerModel, phase, i: int) -> str:
 def verify_walk(am: AssemblerModel, walk) -> list[str]:
     """Every problem found in a :class:`~assembler_pin.walk.plan.WalkResult` (module doc),
     each naming its phase and sample; empty when every sample checks."""
-    from .plan import plate_target
-
     out: list[str] = []
     previous = None
     for k, phase in enumerate(walk.phases):
