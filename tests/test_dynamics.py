@@ -12,12 +12,15 @@ not of the mechanism.
 
 from __future__ import annotations
 
+import threading
+from concurrent.futures import ThreadPoolExecutor
+
 import mujoco
 import numpy as np
 import pinocchio as pin
 import pytest
 
-from assembler_pin import solve_statics
+from assembler_pin import AssemblerModel, solve_statics
 from assembler_pin.dynamics import (
     inverse_dynamics,
     inverse_dynamics_from_lengths,
@@ -182,3 +185,37 @@ def test_bad_motion_arrays_are_refused(am):
         inverse_dynamics(am, am.home, zero, np.full((am.n + 1, 6), np.nan))
     with pytest.raises(ArgumentError, match="rates"):
         inverse_dynamics_from_lengths(am, am.home, np.zeros(3), np.zeros((am.n, 6)))
+
+
+def test_two_threads_on_one_model_get_the_single_threaded_forces(random_poses):
+    """inverse_dynamics never writes the model's own Data: two threads calling it on one model
+    at once give, pose by pose, the forces of the calls made one after another."""
+    model = AssemblerModel.from_config()
+    rng = np.random.default_rng(7)
+    cases = [
+        (plates, rng.normal(size=(model.n, 6)) * 0.05, rng.normal(size=(model.n, 6))) for _, plates in random_poses
+    ]
+    expected = [inverse_dynamics(model, *case).forces for case in cases]
+    start = threading.Barrier(2)
+
+    def run(order: list[int]) -> dict[int, np.ndarray]:
+        start.wait()
+        return {k: inverse_dynamics(model, *cases[k]).forces for k in order * 5}
+
+    with ThreadPoolExecutor(2) as pool:
+        forward = pool.submit(run, list(range(len(cases))))
+        backward = pool.submit(run, list(reversed(range(len(cases)))))
+        results = [forward.result(), backward.result()]
+    for got in results:
+        for k, want in enumerate(expected):
+            np.testing.assert_array_equal(got[k], want)
+    assert model._data is None  # the model's own Data was never made, let alone written
+
+
+def test_a_callers_data_gives_the_same_forces(am, random_poses):
+    plates = random_poses[0][1]
+    twist, accel = np.full((am.n, 6), 0.01), np.full((am.n, 6), 0.2)
+    want = inverse_dynamics(am, plates, twist, accel).forces
+    np.testing.assert_array_equal(inverse_dynamics(am, plates, twist, accel, data=am.create_data()).forces, want)
+    with pytest.raises(ArgumentError, match="data must be"):
+        inverse_dynamics(am, plates, twist, accel, data=object())

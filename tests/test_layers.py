@@ -9,6 +9,7 @@ and under ``if TYPE_CHECKING:`` included, so a cycle cannot hide behind a deferr
 from __future__ import annotations
 
 import ast
+import re
 from collections import defaultdict
 from pathlib import Path
 
@@ -103,6 +104,12 @@ def test_every_unit_has_a_layer():
     assert units <= set(layers), f"units without a layer in LAYERS: {sorted(units - set(layers))}"
     assert set(layers) <= units, f"layers name no unit: {sorted(set(layers) - units)}"
     assert len(layers) == sum(len(layer) for layer in LAYERS), "a unit is listed twice"
+
+
+def test_the_architecture_page_shows_these_layers():
+    page = (PACKAGE.parent / "docs" / "architecture.md").read_text(encoding="utf-8")
+    shown = [tuple(re.findall(r"`(\w+)`", line)) for line in re.findall(r"^\d+\. (.+)$", page, re.MULTILINE)]
+    assert shown == list(LAYERS), "docs/architecture.md's numbered list of layers differs from LAYERS"
 
 
 def test_no_import_goes_up_the_layers():

@@ -269,7 +269,7 @@ def _looped(plan, times: int):
 
 
 def test_durations_and_row_counts_out_of_bounds_are_refused_before_allocating(am, short, monkeypatch):
-    import assembler_pin.motion.planner as planner
+    import assembler_pin.motion.timing as timing_module
     from assembler_pin.config import load_config
 
     looped = _looped(short, 5)  # 5 x 827 s at 1e-4 m/s and m/s^2
@@ -292,7 +292,7 @@ def test_durations_and_row_counts_out_of_bounds_are_refused_before_allocating(am
         cfg.replace(leg=dataclasses.replace(cfg.leg, max_speed=1e-4, max_acceleration=1e-4))
     )
     longer = _looped(short, 12)  # long enough for the time-optimal law too to pass the 3600 s
-    monkeypatch.setattr(planner, "plan_path", lambda *a, **k: longer)
+    monkeypatch.setattr(timing_module, "plan_path", lambda *a, **k: longer)
     t0 = time.perf_counter()
     motion = plan_trajectory(slow, longer.path, start=slow.home, rate=10.0)
     assert not motion.success and motion.trajectory is None and "would take" in motion.reason
