@@ -37,8 +37,6 @@ from collections.abc import Sequence
 from dataclasses import dataclass, field
 from typing import IO
 
-from ..exceptions import ViewerError
-
 __all__ = ["DEFAULT_HOST", "SET_OVERLAY", "ServerProcess", "connect", "main", "start_server"]
 
 DEFAULT_HOST = "127.0.0.1"
@@ -173,6 +171,8 @@ def start_server(host: str = DEFAULT_HOST, port: int | None = None, timeout: flo
         server.stop()
         raise
     if "zmq_url" not in urls or "web_url" not in urls:
+        from ..exceptions import ViewerError  # script: run without its package (runpy), see main()
+
         server._stderr = None  # read it once the server has ended, then close it here
         server.stop()
         with stderr:
@@ -187,6 +187,8 @@ def start_server(host: str = DEFAULT_HOST, port: int | None = None, timeout: flo
 
 def _check_host_and_port(host: str, port: int | None) -> None:
     """Refuse a host this machine cannot listen on, or a port out of range (ViewerError)."""
+    from ..exceptions import ViewerError  # script: run without its package (runpy), see main()
+
     allowed = "e.g. 127.0.0.1 (this machine only) or 0.0.0.0 (every interface)"
     if port is not None:
         try:
