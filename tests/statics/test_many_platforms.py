@@ -4,30 +4,11 @@ solve, stacks of 1..8 platforms solved end to end, and a 64-platform stack."""
 from __future__ import annotations
 
 import numpy as np
-import pinocchio as pin
 import pytest
-from checks import design_forces, design_problems, home_directions
+from checks import design_forces, design_problems, home_directions, whole_stack_forces
 
 import assembler_pin as ap
 from assembler_pin.bench.timing import random_reachable_plates
-
-
-def whole_stack_forces(am: ap.AssemblerModel, plates) -> np.ndarray:
-    """Actuator forces from the whole-stack Pinocchio model: g(q) = Sᵀτ + J_cᵀλ with Pinocchio's
-    own constraint Jacobian of the 6n ball joints, solved as one dense system (rows of every
-    joint but the root). Tension positive."""
-    model, data = am.model, am.data
-    q = ap.kinematics.q_from_plates(am, plates)
-    g = pin.computeGeneralizedGravity(model, data, q)
-    pin.computeJointJacobians(model, data, q)
-    for cm, cd in zip(am.constraint_models, am.constraint_datas, strict=True):
-        cm.calc(model, data, cd)
-    jc = pin.getConstraintsJacobian(model, data, am.constraint_models, am.constraint_datas)
-    select = np.zeros((6 * am.n, model.nv))
-    select[np.arange(6 * am.n), am.leg_idx_v[:, :, 2].ravel()] = 1.0
-    system = np.hstack([select.T, jc.T])[6:]
-    tau = np.linalg.solve(system, g[6:])[: 6 * am.n]
-    return -tau.reshape(am.n, 6)
 
 
 @pytest.mark.parametrize("n", [1, 2, 3, 4, 5, 6])

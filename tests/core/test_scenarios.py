@@ -9,7 +9,7 @@ from __future__ import annotations
 import numpy as np
 import pinocchio as pin
 import pytest
-from test_helper_arm import check_result
+from checks import check_result
 
 from assembler_pin import SCENARIOS, AssemblerError, initial_condition, scenario
 from assembler_pin.scenarios import Scenario

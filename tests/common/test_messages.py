@@ -23,7 +23,7 @@ from assembler_pin.reproduce import ScenarioOutcome, summary_table
 from assembler_pin.scenarios import SCENARIOS
 from assembler_pin.state import evaluate_state
 
-EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
+EXAMPLES = Path(__file__).resolve().parents[2] / "examples"
 FAR = np.array([0.3, 0.0, 10.0])  # beyond any span of the stack: answered before the scan
 HIGH = np.array([0.3, 0.0, 2.5])  # within the span, beyond the helper arm: the scan fails
 QUICK = HelperArmOptions(max_attempts=2, repair_starts=0)  # the scan alone, no repair

@@ -15,7 +15,7 @@ from assembler_pin.cli import main
 from assembler_pin.export import export_model_files
 from assembler_pin.kinematics import q_from_plates
 
-REPO_URDF = Path(__file__).resolve().parents[1] / "urdf"
+REPO_URDF = Path(__file__).resolve().parents[2] / "urdf"
 
 
 def test_repository_urdf_matches_export(tmp_path):

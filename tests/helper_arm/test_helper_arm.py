@@ -14,7 +14,7 @@ from pathlib import Path
 import numpy as np
 import pinocchio as pin
 import pytest
-from checks import design_anchors, kinematic_problems, sp_legs
+from checks import check_result, design_anchors, kinematic_problems, sp_legs
 
 from assembler_pin import HelperArmOptions, initial_condition, stack_forward_kinematics
 from assembler_pin.cli import main
@@ -87,23 +87,6 @@ def sp_valid_about_mid(cfg, R: np.ndarray, d: float) -> bool:
     return True
 
 
-def check_result(am, result) -> None:
-    """A successful result: stack FK of its lengths gives its plates and the goal; every
-    kinematic constraint holds when recomputed independently."""
-    assert result.success, result.message
-    n = am.n
-    assert result.leg_lengths.shape == (n, 6)
-    fk = stack_forward_kinematics(am, result.leg_lengths, guess=result.state.plates)
-    assert fk.success, fk.message
-    ee = fk.plates.se3(n)
-    assert np.linalg.norm(ee.translation - result.goal.translation) < 1e-9
-    assert np.linalg.norm(pin.log3(result.goal.rotation.T @ ee.rotation)) < 1e-9
-    np.testing.assert_allclose(fk.plates.p, result.state.plates.p, atol=1e-9)
-    assert kinematic_problems(am.config, result.state.plates, result.goal) == []
-    kinds = {v.kind for v in result.state.violations}
-    assert not kinds - {"tension", "compression"}
-
-
 # ---------------------------------------------------------------------- the model
 def test_urdf_loads_with_3n_joints_and_derived_limits(am):
     cfg = am.config
@@ -116,7 +99,7 @@ def test_urdf_loads_with_3n_joints_and_derived_limits(am):
     np.testing.assert_allclose(model.upperPositionLimit, expected, rtol=0, atol=1e-14)
     np.testing.assert_allclose(model.lowerPositionLimit, -expected, rtol=0, atol=1e-14)
     # the repository file is this model
-    repo = pin.buildModelFromUrdf(str(Path(__file__).parents[1] / "urdf" / "helper_arm.urdf"))
+    repo = pin.buildModelFromUrdf(str(Path(__file__).parents[2] / "urdf" / "helper_arm.urdf"))
     np.testing.assert_allclose(repo.upperPositionLimit, expected, atol=1e-14)
 
 

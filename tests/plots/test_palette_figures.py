@@ -264,7 +264,7 @@ def _rgb(material: dict) -> np.ndarray:
 def test_viewer_payload_stays_orange_beside_the_ghost(am, bent_plates, tmp_path):
     """The ghost's payload is an opaque orange wireframe: nothing translucent green lies over
     the payload to tint it olive. (Materials of the page's scene; headless Chromium is used
-    by tests/test_viewer.py where installed.)"""
+    by tests/viz/test_viewer.py where installed.)"""
     from assembler_pin.carrier import Carrier
 
     with viz.StackViewer(am) as v:

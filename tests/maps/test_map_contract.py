@@ -36,7 +36,7 @@ from assembler_pin.maps import cluster as map_cluster
 
 FAR = "x=3:3.2:2,y=0,z=0.8"  # two cells out of reach: answered at once
 FUZZ = settings(max_examples=200, deadline=None, suppress_health_check=[HealthCheck.too_slow])
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 
 
 def _run(out: Path, spec: str = FAR, cfg=None, **kw):

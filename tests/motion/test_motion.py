@@ -15,7 +15,7 @@ import numpy as np
 import pinocchio as pin
 import pytest
 from checks import kinematic_problems
-from test_viewer import page_commands
+from pages import page_commands
 
 from assembler_pin import evaluate_state, scenario, stack_forward_kinematics
 from assembler_pin.cli import main

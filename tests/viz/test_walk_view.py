@@ -12,7 +12,7 @@ from __future__ import annotations
 import numpy as np
 import pinocchio as pin
 import pytest
-from test_viewer import page_commands
+from pages import page_commands
 
 import assembler_pin as ap
 from assembler_pin.common.naming import names

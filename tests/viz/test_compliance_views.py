@@ -14,8 +14,8 @@ import re
 import numpy as np
 import pinocchio as pin
 import pytest
+from pages import page_commands, page_end_transforms
 from scipy.spatial.transform import Rotation
-from test_viewer import page_commands, page_end_transforms
 
 from assembler_pin import loaded_pose
 from assembler_pin.cli import main

@@ -23,6 +23,7 @@ import matplotlib.image as mpimg
 import numpy as np
 import pinocchio as pin
 import pytest
+from pages import page_commands, page_end_transforms
 
 import assembler_pin as ap
 from assembler_pin import evaluate_state, stack_forward_kinematics
@@ -164,36 +165,6 @@ def test_animation_in_static_html(am, viewer, bent, tmp_path):
     times = [k["time"] for k in tracks[0]["clip"]["tracks"][0]["keys"]]
     assert times == list(range(5))
     assert (tmp_path / "anim.html").stat().st_size > 100_000
-
-
-def page_end_transforms(html: str) -> dict[str, np.ndarray]:
-    """The 4×4 transform of every meshcat path once a static page has run its commands
-    and played its animation to the end.
-
-    As meshcat's viewer does: a ``set_animation`` replaces the previous one, an animation
-    with ``play`` runs once and stays on its last frame (``clampWhenFinished``), and its
-    ``position``/``quaternion`` tracks then override the node's last ``set_transform``.
-    """
-    transforms: dict[str, np.ndarray] = {}
-    animation = None
-    for cmd in page_commands(html):
-        if cmd["type"] == "set_transform":
-            transforms[cmd["path"]] = np.array(cmd["matrix"], dtype=float).reshape(4, 4).T  # column-major
-        elif cmd["type"] == "set_animation":
-            animation = cmd
-        elif cmd["type"] == "delete":
-            transforms = {p: T for p, T in transforms.items() if not (p + "/").startswith(cmd["path"] + "/")}
-    if animation is not None and animation["options"]["play"]:
-        for clip in animation["animations"]:
-            last = {track["name"]: track["keys"][-1]["value"] for track in clip["clip"]["tracks"]}
-            T = transforms.get(clip["path"], np.eye(4)).copy()
-            if ".position" in last:
-                T[:3, 3] = last[".position"]
-            if ".quaternion" in last:
-                x, y, z, w = last[".quaternion"]
-                T[:3, :3] = pin.Quaternion(w, x, y, z).toRotationMatrix()
-            transforms[clip["path"]] = T
-    return transforms
 
 
 def _leg_geometry_offsets(viewer: StackViewer, transforms: dict[str, np.ndarray], state) -> np.ndarray:
@@ -409,17 +380,6 @@ def test_cli_view_goal_writes_comparison(tmp_path):
     assert any(p.startswith("/meshcat/assembler_initial/visuals/") for p in paths)  # initial, ghost
     clusters = [p for p in paths if p.startswith("/meshcat/helper_arm/cluster")]
     assert len(clusters) == 4  # n joint clusters of the helper arm
-
-
-def page_commands(html: str) -> list[dict]:
-    """The meshcat drawing commands embedded in a static page (msgpack, base64)."""
-    import base64
-    import re
-
-    import umsgpack
-
-    blobs = re.findall(r"data:application/octet-binary;base64,([A-Za-z0-9+/=]+)", html)
-    return [umsgpack.unpackb(base64.b64decode(blob)) for blob in blobs]
 
 
 def page_paths(html: str) -> set[str]:

@@ -13,8 +13,7 @@ import math
 import numpy as np
 import pinocchio as pin
 import pytest
-from checks import design_anchors, kinematic_problems, sp_legs
-from test_supports import HeldStack, _ee_held_reference
+from checks import HeldStack, design_anchors, ee_held_reference, kinematic_problems, sp_legs
 
 import assembler_pin as ap
 from assembler_pin.walk import WalkOptions, WalkResult, plan_walk, plate_target, verify_walk
@@ -107,7 +106,7 @@ def test_a_foothold_out_of_reach_is_an_answer_not_a_walk(am):
 def test_transfer_moves_the_load_from_one_foot_to_the_other(am, landed, stance):
     phase = _transfer_phase(am, landed, stance, 1, WalkOptions(transfer_samples=5))
     assert phase.complete and phase.support == "both" and len(phase.plates) == 5
-    ends = (_base_held_reference(am, landed), _ee_held_reference(am, landed))
+    ends = (_base_held_reference(am, landed), ee_held_reference(am, landed))
     first, last = ends if stance == "base" else ends[::-1]
     scale = np.abs(first).max()
     assert np.abs(phase.forces[0] - first).max() <= 1e-9 * scale
@@ -169,7 +168,7 @@ def test_three_step_walk_across_the_floor_is_valid_at_every_sample(am, three_ste
                 assert np.abs(phase.lengths[i] - previous).max() <= 0.02 + 1e-9  # no jump between samples
             previous = phase.lengths[i]
             if phase.kind != "transfer" and (i % 6 == 0 or i == len(phase.plates) - 1):
-                ref = _base_held_reference(am, pa) if phase.support == "base" else _ee_held_reference(am, pa)
+                ref = _base_held_reference(am, pa) if phase.support == "base" else ee_held_reference(am, pa)
                 assert np.abs(phase.forces[i] - ref).max() <= 1e-9 * max(1.0, np.abs(ref).max()), (phase.kind, i)
         if phase.kind == "reach":
             ee_on = feet[phase.step]
@@ -232,7 +231,7 @@ def test_cli_walk_one_step_writes_the_samples_and_the_figure(capsys, tmp_path, a
     ]
     assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     # the page: one frame per sample; plate 0 stays on foothold 0, plate n lands on foothold 1
-    from test_viewer import page_commands
+    from pages import page_commands
 
     anim = [c for c in page_commands(page.read_text()) if c["type"] == "set_animation"][-1]
     clips = {

@@ -13,8 +13,7 @@ import json
 import numpy as np
 import pinocchio as pin
 import pytest
-from checks import design_forces, design_plate_deviation, kinematic_problems
-from test_scaling import whole_stack_forces
+from checks import design_forces, design_plate_deviation, kinematic_problems, whole_stack_forces
 
 import assembler_pin as ap
 from assembler_pin.bench.timing import random_reachable_plates
