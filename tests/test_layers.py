@@ -150,6 +150,27 @@ def test_imports_inside_library_functions_name_what_they_delay():
     assert not bad, "imports inside functions that delay no heavy library:\n" + "\n".join(bad)
 
 
+#: Names a module other than a package's ``__init__`` may re-export: the motion notebook imports
+#: them from there.
+RE_EXPORTS = {("assembler_pin.motion.timing", "read_trajectory"), ("assembler_pin.motion.timing", "trajectory_states")}
+
+
+def test_only_packages_re_export():
+    """One home per name: a module's ``__all__`` lists only what it defines (a package's
+    ``__init__`` gathers the names of its modules)."""
+    bad = []
+    for name, path in MODULES.items():
+        if path.name == "__init__.py":
+            continue
+        tree = ast.parse(path.read_text(encoding="utf-8"))
+        imported = {a.asname or a.name for n in tree.body if isinstance(n, ast.ImportFrom) for a in n.names}
+        for node in tree.body:
+            if isinstance(node, ast.Assign) and any(getattr(t, "id", "") == "__all__" for t in node.targets):
+                exported = ast.literal_eval(node.value)
+                bad += [f"{name}.{n}" for n in exported if n in imported and (name, n) not in RE_EXPORTS]
+    assert not bad, f"names re-exported outside a package's __init__: {bad}"
+
+
 def _cycles(graph: dict[str, set[str]]) -> list[tuple[str, ...]]:
     """The strongly connected components of more than one module (Tarjan, iterative)."""
     index: dict[str, int] = {}

@@ -13,7 +13,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from ..exceptions import CLIError
-from .plate_file import MAX_JSON_BYTES, plates_from_file, read_json  # noqa: F401 (re-exported)
+from .plate_file import plates_from_file
 
 if TYPE_CHECKING:
     import numpy as np

@@ -1,7 +1,7 @@
 """What :func:`~assembler_pin.helper_arm.initial_condition` answers: its result, the arm
 poses it keeps as repair starts, what its scan met, and the messages of success and failure.
 
-Every name is importable from :mod:`assembler_pin.helper_arm.initial` too. Lengths in metres,
+Lengths in metres,
 angles in radians, times in seconds.
 """
 

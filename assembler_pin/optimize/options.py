@@ -1,5 +1,5 @@
-"""The optimizer's settings: :class:`~assembler_pin.config.options.OptimizeOptions` and the
-continuity term of a motion (:class:`MotionTerm`)."""
+"""The continuity term of a motion (:class:`MotionTerm`); the optimizer's options are
+:class:`~assembler_pin.config.options.OptimizeOptions`."""
 
 from __future__ import annotations
 

@@ -1,6 +1,6 @@
 """The figure of a planned motion: leg lengths, speeds, accelerations and forces over time.
 
-:func:`trajectory_plot` (also importable from :mod:`assembler_pin.plots.figures`) draws one row of
+:func:`trajectory_plot` (also importable from :mod:`assembler_pin.plots`) draws one row of
 panels per platform ``SPj`` and one column per quantity, the six legs of the platform in
 six colours named ``SPj leg i`` (:mod:`~assembler_pin.common.labels`), colours from
 :mod:`~assembler_pin.common.palette`. Each panel keeps its data's own scale (a limit far from the

@@ -1,6 +1,6 @@
 """The workspace slice: max |F| over EE positions on a grid in a world plane, and its figure.
 
-Every name is importable from :mod:`assembler_pin.plots.figures` too. Positions in metres (world
+Every name is importable from :mod:`assembler_pin.plots` too. Positions in metres (world
 frame), forces in newtons.
 """
 

@@ -17,8 +17,7 @@ MuJoCo's actuator force is positive when it pushes the shaft out (compression); 
 are the package's: tension positive.
 
 Modules: :mod:`.stack` (:class:`MujocoStack`, :func:`mujoco_statics`), :mod:`.hold`
-(:func:`hold_pose`), :mod:`.follow` (:func:`follow_trajectory`). Every name is importable from
-``assembler_pin.simulate`` too, the former module.
+(:func:`hold_pose`), :mod:`.follow` (:func:`follow_trajectory`).
 """
 
 from __future__ import annotations

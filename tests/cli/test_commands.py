@@ -167,7 +167,7 @@ def test_solve_starts_option_reaches_the_solver(capsys):
 def test_a_plate_file_is_refused_by_the_librarys_own_pose_check(am, tmp_path, entry):
     """A plate file's bad matrix gets the very refusal the library gives the same poses (one
     pose check, one message), naming the same plate."""
-    from assembler_pin.cli.common import plates_from_file
+    from assembler_pin.cli.plate_file import plates_from_file
     from assembler_pin.exceptions import CLIError, PoseError
     from assembler_pin.kinematics import plate_arrays
 

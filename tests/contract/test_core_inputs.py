@@ -22,7 +22,7 @@ from hypothesis import strategies as st
 import assembler_pin as ap
 from assembler_pin import exceptions
 from assembler_pin.cli import main
-from assembler_pin.cli.common import plates_from_file
+from assembler_pin.cli.plate_file import plates_from_file
 from assembler_pin.exceptions import (
     AssemblerError,
     CLIError,
