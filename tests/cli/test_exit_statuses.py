@@ -394,14 +394,13 @@ def test_solve_on_a_carrier_refuses_what_cannot_apply(capsys):
 def test_the_carrier_search_uses_the_given_options(am, monkeypatch):
     """Held carrier: the helper arm and the optimizer get the options; without optimization
     the helper arm's pose is returned as it is, and it reaches the world goal."""
-    import assembler_pin.optimize as optimize_mod
-    import assembler_pin.solver.pipeline as solver_mod
+    import assembler_pin.carrier.solve as carrier_solve_mod
     from assembler_pin.carrier import Carrier, carrier_objective, solve_on_carrier
 
     carrier = Carrier("ur10")
     goal = carrier.base_pose(carrier.upright_q) * ap.scenario("translation").goal
     calls: dict[str, list] = {"solve": [], "optimize": []}
-    real_solve, real_opt = solver_mod.solve, optimize_mod.optimize_internal_poses
+    real_solve, real_opt = carrier_solve_mod.solve, carrier_solve_mod.optimize_internal_poses
 
     def solve(am_, goal_, optimize=True, options=None, helper_options=None):
         calls["solve"].append((optimize, options, helper_options))
@@ -411,8 +410,8 @@ def test_the_carrier_search_uses_the_given_options(am, monkeypatch):
         calls["optimize"].append(options)
         return real_opt(am_, start, goal_, options)
 
-    monkeypatch.setattr(solver_mod, "solve", solve)
-    monkeypatch.setattr(optimize_mod, "optimize_internal_poses", optimize)
+    monkeypatch.setattr(carrier_solve_mod, "solve", solve)
+    monkeypatch.setattr(carrier_solve_mod, "optimize_internal_poses", optimize)
     options = ap.OptimizeOptions(w1=2.0, w2=0.5, max_iterations=150)
     helper = ap.HelperArmOptions(max_attempts=9, d_step=0.02)
     kwargs = {"move_carrier": False, "options": options, "helper_options": helper}
