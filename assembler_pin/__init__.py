@@ -42,11 +42,11 @@ _LAZY: dict[str, str] = {
     "OptimizeResult": ".optimize",
     "solve": ".solver",
     "SolveResult": ".solver",
-    "payload_capacity": ".capacity",
+    "payload_capacity": ".solver",
     # dynamics
     "inverse_dynamics": ".dynamics",
     # the compliant truss, two-point support, walking
-    "stiffness": ".ee_stiffness",
+    "stiffness": ".compliance",
     "loaded_pose": ".compliance",
     "compensated_lengths": ".compliance",
     "two_point_statics": ".supports",
@@ -55,9 +55,9 @@ _LAZY: dict[str, str] = {
     "EEPath": ".motion",
     "PlanOptions": ".motion",
     "plan_trajectory": ".motion.timing",
-    "MotionResult": ".motion.timing",
-    "Trajectory": ".motion.timing",
-    "read_trajectory": ".motion.timing",
+    "MotionResult": ".motion.result",
+    "Trajectory": ".motion.trajfile",
+    "read_trajectory": ".motion.trajfile",
     # scenarios and errors
     "scenario": ".scenarios",
     "SCENARIOS": ".scenarios",
@@ -83,20 +83,20 @@ def __dir__() -> list[str]:
 
 
 if TYPE_CHECKING:  # for type checkers and IDEs: the same names, imported eagerly
-    from .capacity import payload_capacity
-    from .compliance import compensated_lengths, loaded_pose
+    from .compliance import compensated_lengths, loaded_pose, stiffness
     from .config import AssemblerConfig, load_config
     from .dynamics import inverse_dynamics
-    from .ee_stiffness import stiffness
     from .exceptions import AssemblerError
     from .helper_arm import HelperArmOptions, initial_condition
     from .kinematics import PlateArrays, stack_forward_kinematics
     from .model import AssemblerModel
     from .motion import EEPath, PlanOptions
-    from .motion.timing import MotionResult, Trajectory, plan_trajectory, read_trajectory
+    from .motion.result import MotionResult
+    from .motion.timing import plan_trajectory
+    from .motion.trajfile import Trajectory, read_trajectory
     from .optimize import OptimizeOptions, OptimizeResult, optimize_internal_poses
     from .scenarios import SCENARIOS, scenario
-    from .solver import SolveResult, solve
+    from .solver import SolveResult, payload_capacity, solve
     from .state import StackState, evaluate_state
     from .statics import StaticsResult, solve_statics
     from .supports import two_point_statics

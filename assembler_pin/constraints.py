@@ -19,17 +19,16 @@ from dataclasses import asdict, dataclass
 import numpy as np
 import pinocchio as pin
 
-from .config import AssemblerConfig, LegConfig
+from .common.labels import leg_label, platform_label
+from .config.options import DEFAULT_GOAL_TOLERANCE, GoalTolerance
+from .config.schema import AssemblerConfig, LegConfig
 from .exceptions import OptionsError, PoseError
 from .kinematics import LegState, PlateArrays
-from .labels import leg_label, platform_label
-from .options import DEFAULT_GOAL_TOLERANCE, GoalTolerance
-from .statics import CONDITION_LIMIT, StaticsResult
+from .statics.closed_form import CONDITION_LIMIT
+from .statics.result import StaticsResult
 
 __all__ = [
-    "DEFAULT_GOAL_TOLERANCE",
     "LEG_LIMIT_ROWS",
-    "GoalTolerance",
     "Violation",
     "evaluate_constraints",
     "leg_limit_margins",
@@ -67,7 +66,7 @@ class Violation:
         return asdict(self)
 
     def __str__(self) -> str:
-        """``max_length at SP1 leg 2: 0.36 (limit 0.35)`` — 0-based, as :mod:`~assembler_pin.labels`."""
+        """``max_length at SP1 leg 2: 0.36 (limit 0.35)`` — 0-based, as :mod:`~assembler_pin.common.labels`."""
         if self.platform is None:
             where = "end effector"
         elif self.leg is None:

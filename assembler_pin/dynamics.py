@@ -1,6 +1,6 @@
 """Inverse dynamics of the stack: the actuator forces that produce a motion of the closed loops.
 
-The equations are those of :mod:`assembler_pin.statics` with Pinocchio's generalized gravity
+The equations are those of :mod:`assembler_pin.statics.pinocchio_statics` with Pinocchio's generalized gravity
 ``g(q)`` replaced by the recursive Newton–Euler torques of the tree,
 
     RNEA(q, v, a) = M(q) a + C(q, v) v + g(q) = Sᵀ τ + J_cᵀ λ,
@@ -9,7 +9,7 @@ where ``v`` and ``a`` are the joint velocities and accelerations of the motion w
 closed (each shaft tip moves with its top-plate anchor), so gravity, the payload and the
 inertia of every plate, motor and shaft are included. The closure Jacobian is the statics'
 one, so the system keeps its block structure: one 24×24 block per platform (its 6 actuator
-forces and 18 ball forces), solved the same way (:func:`~assembler_pin.statics.solve_statics`).
+forces and 18 ball forces), solved the same way (:func:`~assembler_pin.statics.pinocchio_statics.solve_statics`).
 At zero twist and acceleration it is the statics.
 
 Motions are given per plate (world frame, plate k in 0..n):
@@ -22,11 +22,15 @@ or by the leg lengths' first two time derivatives (:func:`plate_motion_from_leng
 rest). Forces: [N], tension positive (the paper's sign), as the statics.
 
 The whole-stack Pinocchio model is used (stacks of up to
-:data:`~assembler_pin.model.WHOLE_DATA_MAX_PLATFORMS` platforms).
+:data:`~assembler_pin.model.WHOLE_DATA_MAX_PLATFORMS` platforms). Its ``Data`` is the caller's
+(``data=``, as for :func:`~assembler_pin.statics.solve_statics`) or, by default, one kept per
+thread and model; the model's own ``am.data`` is never written, so threads may share a model.
 """
 
 from __future__ import annotations
 
+import threading
+import weakref
 from collections.abc import Sequence
 from dataclasses import dataclass
 
@@ -34,12 +38,14 @@ import numpy as np
 import numpy.typing as npt
 import pinocchio as pin
 
+from .common.linalg import cross, inverse_or_nan
+from .common.validation import as_float_array
 from .exceptions import ArgumentError, SingularConfigurationError
 from .kinematics import PlateArrays, leg_vectors, plate_arrays, q_from_arrays
-from .linalg import cross, inverse_or_nan
-from .model import WHOLE_DATA_MAX_PLATFORMS, AssemblerModel, checked_model
-from .statics import CONDITION_LIMIT, StaticsResult, _leg_jacobians_t
-from .validation import as_float_array
+from .model.assembler import WHOLE_DATA_MAX_PLATFORMS, AssemblerModel, checked_model
+from .statics.closed_form import CONDITION_LIMIT
+from .statics.pinocchio_statics import _leg_jacobians_t, checked_data
+from .statics.result import StaticsResult
 
 __all__ = [
     "DynamicsResult",
@@ -60,7 +66,7 @@ class DynamicsResult(StaticsResult):
         base_wrench: (6,) wrench ``[f, m]`` the base mount applies to plate 0, world axes,
             moment about plate 0's origin [N, N·m].
         condition: (n,) 1-norm condition number of each platform's block.
-        singular: a block's condition number exceeds :data:`~assembler_pin.statics.CONDITION_LIMIT`.
+        singular: a block's condition number exceeds :data:`~assembler_pin.statics.closed_form.CONDITION_LIMIT`.
     """
 
 
@@ -69,6 +75,7 @@ class _Pose:
     """What every solve at one pose shares: q, the legs and the factorized blocks."""
 
     pa: PlateArrays
+    data: pin.Data  # the whole-stack Data the Pinocchio calls of this pose write
     q: np.ndarray
     top: np.ndarray  # (n, 6, 3) world ball-joint centres [m]
     bottom: np.ndarray  # (n, 6, 3) world bottom joint centres [m]
@@ -90,14 +97,34 @@ def _whole_stack(am: AssemblerModel) -> None:
         )
 
 
-def _pose(am: AssemblerModel, plates: PlateArrays | Sequence | np.ndarray) -> _Pose:
-    """Configuration, joint Jacobians and the per-platform blocks at a pose."""
+#: Per thread: id(model) -> (weak reference to the model, its whole-stack Data).
+_local = threading.local()
+
+
+def _thread_data(am: AssemblerModel) -> pin.Data:
+    """A whole-stack ``Data`` of ``am`` that only this thread writes: made on first use
+    (:meth:`~assembler_pin.model.AssemblerModel.create_data`, ~0.1 s) and kept while the
+    model lives."""
+    cache: dict[int, tuple[weakref.ref, pin.Data]] = _local.__dict__.setdefault("data", {})
+    ref, data = cache.get(id(am), (None, None))
+    if ref is None or ref() is not am or data is None:
+        for key in [k for k, (r, _) in cache.items() if r() is None]:
+            del cache[key]
+        data = am.create_data()
+        cache[id(am)] = (weakref.ref(am), data)
+    return data
+
+
+def _pose(am: AssemblerModel, plates: PlateArrays | Sequence | np.ndarray, data: pin.Data | None) -> _Pose:
+    """Configuration, joint Jacobians and the per-platform blocks at a pose, computed on
+    ``data`` (default: this thread's, :func:`_thread_data`)."""
     checked_model(am)
     _whole_stack(am)
+    data = _thread_data(am) if data is None else checked_data(am, data)
     pa = plate_arrays(am, plates)
     bottom, top, vec, lengths = leg_vectors(am, pa)
     q = q_from_arrays(am, pa, vec, lengths)
-    J = pin.computeJointJacobians(am.model, am.data, q)
+    J = pin.computeJointJacobians(am.model, data, q)
     leg_columns = J.T[am.leg_idx_v]  # (n, 6, 3, 6)
     try:
         jac_t = _leg_jacobians_t(leg_columns, top)
@@ -114,7 +141,7 @@ def _pose(am: AssemblerModel, plates: PlateArrays | Sequence | np.ndarray) -> _P
     inverse_t = inverse_or_nan(lines_t)
     condition = np.abs(lines_t).sum(axis=2).max(axis=1) * np.abs(inverse_t).sum(axis=2).max(axis=1)
     world_lines = np.concatenate([axis, cross(top, axis)], axis=-1)
-    return _Pose(pa, q, top, bottom, vec, lengths, axis, leg_columns, jac_t, inverse_t, condition, world_lines)
+    return _Pose(pa, data, q, top, bottom, vec, lengths, axis, leg_columns, jac_t, inverse_t, condition, world_lines)
 
 
 def _spatial(pa: PlateArrays, twists: np.ndarray, accelerations: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -175,7 +202,8 @@ def _joint_motion(am: AssemblerModel, pose: _Pose, V: np.ndarray, A: np.ndarray)
 
 def _block_solve(am: AssemblerModel, pose: _Pose, tau: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Actuator forces (tension positive), ball forces and base wrench balancing the tree's
-    generalized forces ``tau`` (nv), block by block (as :func:`~assembler_pin.statics.solve_statics`)."""
+    generalized forces ``tau`` (nv), block by block (as
+    :func:`~assembler_pin.statics.pinocchio_statics.solve_statics`)."""
     own = np.linalg.solve(pose.jac_t, tau[am.leg_idx_v][..., None])[..., 0]
     local = np.matmul(np.stack([pose.axis, own], axis=2), pose.pa.R[1:, None])
     lines = np.matmul(local, am.top_line_map)
@@ -201,6 +229,7 @@ def inverse_dynamics(
     twists: npt.ArrayLike,
     accelerations: npt.ArrayLike,
     raise_on_singular: bool = False,
+    data: pin.Data | None = None,
 ) -> DynamicsResult:
     """Actuator forces producing the plates' motion (see the module docstring).
 
@@ -211,12 +240,15 @@ def inverse_dynamics(
         accelerations: (n+1, 6) or (n, 6) ``[p̈_k, ω̇_k]`` [m/s², rad/s²].
         raise_on_singular: raise :class:`SingularConfigurationError` instead of a result
             flagged ``singular``.
+        data: a Pinocchio ``Data`` of the whole-stack model that the caller owns
+            (``am.create_data()``), written by the call; default: one kept per thread for
+            this model (``am.data`` is never written).
 
     Raises:
-        ArgumentError: arrays of the wrong shape or not finite, or a stack over
-            :data:`~assembler_pin.model.WHOLE_DATA_MAX_PLATFORMS` platforms.
+        ArgumentError: arrays of the wrong shape or not finite, a ``data`` of another
+            model, or a stack over :data:`~assembler_pin.model.WHOLE_DATA_MAX_PLATFORMS` platforms.
     """
-    pose = _pose(am, plates)
+    pose = _pose(am, plates, data)
     V, A = _spatial(pose.pa, _checked_motion(am, twists, "twists"), _checked_motion(am, accelerations, "accelerations"))
     return _result(am, pose, V, A, raise_on_singular)
 
@@ -232,7 +264,7 @@ def _result(am: AssemblerModel, pose: _Pose, V: np.ndarray, A: np.ndarray, raise
             worst,
         )
     v, a = _joint_motion(am, pose, V, A)
-    tau = pin.rnea(am.model, am.data, pose.q, v, a)
+    tau = pin.rnea(am.model, pose.data, pose.q, v, a)
     forces, ball, base = _block_solve(am, pose, tau)
     return DynamicsResult(forces, ball, base, pose.condition, singular)
 
@@ -267,11 +299,12 @@ def plate_motion_from_lengths(
     plates: PlateArrays | Sequence | np.ndarray,
     rates: npt.ArrayLike,
     accels: npt.ArrayLike,
+    data: pin.Data | None = None,
 ) -> tuple[np.ndarray, np.ndarray]:
     """Plate twists and accelerations (n+1, 6), world, classical (module docstring), of the
     stack at ``plates`` whose legs change at ``rates`` [m/s] and ``accels`` [m/s²] (n, 6),
-    the base at rest."""
-    pose = _pose(am, plates)
+    the base at rest; ``data`` as for :func:`inverse_dynamics`."""
+    pose = _pose(am, plates, data)
     V, A = _spatial_from_lengths(pose, _checked_rates(am, rates, "rates"), _checked_rates(am, accels, "accels"))
     p = pose.pa.p
     pdot = V[:, :3] + cross(V[:, 3:], p)
@@ -285,10 +318,12 @@ def inverse_dynamics_from_lengths(
     rates: npt.ArrayLike,
     accels: npt.ArrayLike,
     raise_on_singular: bool = False,
+    data: pin.Data | None = None,
 ) -> DynamicsResult:
     """:func:`inverse_dynamics` of the motion whose leg lengths change at ``rates`` [m/s] and
-    ``accels`` [m/s²] (n, 6) at the pose ``plates`` (the base at rest)."""
-    pose = _pose(am, plates)
+    ``accels`` [m/s²] (n, 6) at the pose ``plates`` (the base at rest); ``data`` as for
+    :func:`inverse_dynamics`."""
+    pose = _pose(am, plates, data)
     V, A = _spatial_from_lengths(pose, _checked_rates(am, rates, "rates"), _checked_rates(am, accels, "accels"))
     return _result(am, pose, V, A, raise_on_singular)
 
@@ -298,6 +333,7 @@ def path_force_coefficients(
     plates: PlateArrays | Sequence | np.ndarray,
     d_lengths: npt.ArrayLike,
     dd_lengths: npt.ArrayLike,
+    data: pin.Data | None = None,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Leg forces along a path ``L(s)`` at one point, as ``F = a s̈ + b ṡ² + c``.
 
@@ -305,22 +341,25 @@ def path_force_coefficients(
         plates: the pose at the point; d_lengths: (n, 6) ``L'(s)``; dd_lengths: (n, 6)
             ``L''(s)``, or (k, n, 6) for k values of it (e.g. both one-sided values at a
             knot of a C¹ spline).
+        data: a Pinocchio ``Data`` of the whole-stack model that the caller owns
+            (``am.create_data()``), written by the call; default: one kept per thread for
+            this model (``am.data`` is never written).
 
     Returns:
         (a, b, c) [N]: ``c`` (n, 6) the statics, ``a`` (n, 6) the forces of ``L̈ = L'`` at rest,
         ``b`` (n, 6) or (k, n, 6) those of ``L̇ = L'``, ``L̈ = L''`` (both less ``c``). The
         forces are affine in ``L̈`` and quadratic in ``L̇``, so this is exact.
     """
-    pose = _pose(am, plates)
+    pose = _pose(am, plates, data)
     d1 = _checked_rates(am, d_lengths, "d_lengths")
     dd = as_float_array(dd_lengths, "dd_lengths")
     many = dd.ndim == 3
     d2s = [_checked_rates(am, x, "dd_lengths") for x in (dd if many else [dd])]
     zero = np.zeros(am.model.nv)
-    c = _block_solve(am, pose, pin.rnea(am.model, am.data, pose.q, zero, zero))[0]
+    c = _block_solve(am, pose, pin.rnea(am.model, pose.data, pose.q, zero, zero))[0]
     out = []
     for rates, accels in [(np.zeros_like(d1), d1)] + [(d1, d2) for d2 in d2s]:
         V, A = _spatial_from_lengths(pose, rates, accels)
         v, a = _joint_motion(am, pose, V, A)
-        out.append(_block_solve(am, pose, pin.rnea(am.model, am.data, pose.q, v, a))[0] - c)
+        out.append(_block_solve(am, pose, pin.rnea(am.model, pose.data, pose.q, v, a))[0] - c)
     return out[0], (np.array(out[1:]) if many else out[1]), c

@@ -5,20 +5,20 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from .config import AssemblerConfig
-from .files import write_atomic
+from .common.files import write_atomic
+from .config.schema import AssemblerConfig
 from .helper_arm import HELPER_ARM_URDF_FILENAME, helper_arm_urdf
-from .mjcf import MJCF_FILENAME, assembler_mjcf
-from .urdf import SIDECAR_FILENAME, URDF_FILENAME, assembler_urdf, closure_sidecar
+from .model.mjcf import MJCF_FILENAME, assembler_mjcf
+from .model.urdf import SIDECAR_FILENAME, URDF_FILENAME, assembler_urdf, closure_sidecar
 
 __all__ = ["export_model_files"]
 
 
 def export_model_files(cfg: AssemblerConfig, out_dir: str | Path, mjcf: bool = False) -> dict[str, Path]:
     """Write the stack URDF, its closure sidecar and the helper arm's URDF into ``out_dir``;
-    with ``mjcf``, also the MuJoCo model ``assembler.xml`` (:mod:`assembler_pin.mjcf`).
+    with ``mjcf``, also the MuJoCo model ``assembler.xml`` (:mod:`assembler_pin.model.mjcf`).
 
-    Each file is written atomically (:func:`~assembler_pin.files.write_atomic`): an
+    Each file is written atomically (:func:`~assembler_pin.common.files.write_atomic`): an
     interrupted export leaves every file either as it was or complete.
 
     Returns:

@@ -23,18 +23,21 @@ from typing import TYPE_CHECKING
 import numpy as np
 import pinocchio as pin
 
-from .labels import leg_label, platform_label
-from .model import AssemblerModel
+from .common.files import atomic_path
+from .common.labels import leg_label, platform_label
+from .common.progress import ProgressCallback
+from .helper_arm import perturbed_plates, repair_stack
+from .model.assembler import AssemblerModel
 from .optimize import OptimizeOptions, optimize_internal_poses
-from .progress import ProgressCallback
+from .optimize.objective import state_sag
 from .scenarios import SCENARIOS, Scenario
-from .solver import SolveResult, solve
+from .solver.pipeline import SolveResult, solve
 from .state import StackState, evaluate_state
 
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
 
-    from .config import LegConfig
+    from .config.schema import LegConfig
 
 __all__ = [
     "ScenarioOutcome",
@@ -79,7 +82,7 @@ class Reference:
 
 @dataclass
 class ScenarioOutcome:
-    """One scenario solved: the scenario, its :class:`~assembler_pin.solver.SolveResult`, the
+    """One scenario solved: the scenario, its :class:`~assembler_pin.solver.pipeline.SolveResult`, the
     leg stroke it was solved with and the :class:`Reference` poses (None when not solved)."""
 
     scenario: Scenario
@@ -140,8 +143,6 @@ def random_valid_poses(
     """Up to ``count`` random feasible poses for ``goal``: the internal plates of ``around``
     moved by seeded random twists (±5 cm, ±0.3 rad per axis), repaired onto the leg limits,
     and kept when every constraint (forces included) holds; at most ``3·count`` draws."""
-    from .helper_arm import perturbed_plates, repair_stack
-
     poses = []
     for plates in perturbed_plates(around.plates.as_se3(), 3 * count, seed=seed):
         repaired, violation = repair_stack(am, plates)
@@ -176,7 +177,7 @@ TIE_RTOL = 1e-5
 
 
 def _argmax_label(state: StackState) -> str:
-    """``SPj leg i`` of the largest |F| (0-based, :mod:`~assembler_pin.labels`); among legs
+    """``SPj leg i`` of the largest |F| (0-based, :mod:`~assembler_pin.common.labels`); among legs
     tied with it (:data:`TIE_RTOL`) the first by platform, then leg, so that the label does
     not depend on the last bits of the forces (which differ between BLAS kernels)."""
     magnitude = np.abs(state.forces)
@@ -289,8 +290,6 @@ def _reference_cells(o: ScenarioOutcome) -> list[str]:
 
 def _sag_cells(am: AssemblerModel, result: SolveResult | None) -> list[str]:
     """max|F| [N], EE sag [mm] and optimizer time [s] of a solve's optimum ("—" when none)."""
-    from .objective import state_sag
-
     if result is None or result.optimized is None or not result.success:
         return ["—", "—", "—"]
     state = result.optimized
@@ -309,7 +308,7 @@ def sag_table(
     am: AssemblerModel, outcomes: Sequence[ScenarioOutcome], markdown: bool = False, times: bool = True
 ) -> str:
     """The force-optimal and the sag-optimal pose side by side: max|F| [N], the EE's linear
-    sag under its own load [mm] (:func:`~assembler_pin.compliance.sag_and_gradient`) and the
+    sag under its own load [mm] (:func:`~assembler_pin.compliance.loaded.sag_and_gradient`) and the
     optimizer's time ``t`` [s] (every start it ran) of each, and the sag's change; the text
     is under 100 characters wide. ``times=False`` leaves out the two time columns."""
     header = ["scenario", "force-opt max|F|", "sag [mm]", "t [s]", "sag-opt max|F|", "sag [mm]", "t [s]", "sag"]
@@ -408,7 +407,7 @@ def findings(am: AssemblerModel, outcomes: Sequence[ScenarioOutcome]) -> str:
 def force_tables(outcome: ScenarioOutcome, markdown: bool = False) -> str:
     """The 6×n initial and optimized force tables side by side (paper Tables I–II) [N].
 
-    Row ``i``, column ``SPj``: leg ``i`` of platform ``j``, both 0-based (:mod:`~assembler_pin.labels`).
+    Row ``i``, column ``SPj``: leg ``i`` of platform ``j``, both 0-based (:mod:`~assembler_pin.common.labels`).
     """
     if outcome.initial is None or outcome.optimized is None:
         return f"{outcome.scenario.name}: not solved ({outcome.result.message})"
@@ -440,8 +439,6 @@ def write_report(am: AssemblerModel, outcomes: Sequence[ScenarioOutcome], out_di
     together once all are written, ``report.md`` last, so an interrupted run leaves the
     previous report (or none) and never a partial one.
     """
-    from .files import atomic_path
-
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     with contextlib.ExitStack() as files:
@@ -458,7 +455,7 @@ def write_report(am: AssemblerModel, outcomes: Sequence[ScenarioOutcome], out_di
 
 def _report_text(am: AssemblerModel, outcomes: Sequence[ScenarioOutcome], target: Callable[[str], Path]) -> str:
     """The markdown of the report; each figure is saved to ``target(file name)``."""
-    from . import plots
+    from . import plots  # delays matplotlib
 
     leg = am.config.leg
     parts = [
@@ -500,7 +497,7 @@ def _report_text(am: AssemblerModel, outcomes: Sequence[ScenarioOutcome], target
 def _figures(o: ScenarioOutcome, leg: LegConfig) -> Iterator[tuple[str, Figure]]:
     """A solved scenario's figures, one at a time: (kind, figure) for its views, force bars
     and force heatmaps."""
-    from . import plots
+    from . import plots  # delays matplotlib
 
     s, heading = o.scenario, figure_title(o.scenario)
     arm = o.result.initial_result.arm_points

@@ -22,10 +22,10 @@ from dataclasses import dataclass
 import numpy as np
 import pinocchio as pin
 
-from .choices import SCENARIO_NAMES, check_names
+from .config.choices import SCENARIO_NAMES, check_names
 from .exceptions import UnknownScenarioError
 
-__all__ = ["SCENARIOS", "Scenario", "UnknownScenarioError", "scenario"]
+__all__ = ["SCENARIOS", "Scenario", "scenario"]
 
 
 @dataclass(frozen=True)

@@ -14,11 +14,13 @@ from dataclasses import dataclass, field
 import numpy as np
 import pinocchio as pin
 
-from .constraints import DEFAULT_GOAL_TOLERANCE, GoalTolerance, Violation, evaluate_constraints
+from .config.options import DEFAULT_GOAL_TOLERANCE, GoalTolerance
+from .constraints import Violation, evaluate_constraints
 from .exceptions import OptionsError
 from .kinematics import LegState, PlateArrays, checked_goal, leg_state, plate_arrays
-from .model import AssemblerModel, checked_model
-from .statics import StaticsResult, solve_statics
+from .model.assembler import AssemblerModel, checked_model
+from .statics.pinocchio_statics import solve_statics
+from .statics.result import StaticsResult
 
 __all__ = ["StackState", "evaluate_state"]
 
@@ -108,7 +110,7 @@ def evaluate_state(
         goal: optional EE goal to check plate n against.
         tolerance: EE goal tolerance.
         data: a whole-stack Pinocchio ``Data`` the caller owns, for the statics
-            (:func:`~assembler_pin.statics.solve_statics`); default one model per platform.
+            (:func:`~assembler_pin.statics.pinocchio_statics.solve_statics`); default one model per platform.
     """
     checked_model(am)
     if goal is not None:

@@ -4,7 +4,7 @@ of the picture's caption in README.md and docs/index.md, from one run of the fiv
 
 Run from the repository root: ``python docs/gen_results.py`` (rewrites the block and the
 captions; it solves the five scenarios, some seconds) or ``python docs/gen_results.py --check``
-(exit status 1 when one of them is stale). tests/test_results_page.py makes the same check.
+(exit status 1 when one of them is stale). tests/core/test_results_page.py makes the same check.
 """
 
 from __future__ import annotations

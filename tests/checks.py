@@ -10,7 +10,9 @@ from __future__ import annotations
 
 import numpy as np
 import pinocchio as pin
+from scipy.optimize import minimize
 
+import assembler_pin as ap
 from assembler_pin import solve_statics, stack_forward_kinematics
 
 
@@ -205,3 +207,154 @@ def design_problems(cfg, plates, goal: pin.SE3 | None = None, tol: float = 1e-9)
     if forces.min() < -cfg.leg.max_compression:
         out.append(f"compression {forces.min():.3f} N")
     return out
+
+
+# ------------------------------------------------ references shared across test folders
+
+STEP = 1e-20  # complex step
+
+
+def _cayley_minus_identity(a: np.ndarray) -> np.ndarray:
+    """``cayley(a) − I`` (..., 3, 3) of Cayley parameters a (..., 3), real or complex: the
+    rotation ``(I − A)⁻¹(I + A)`` (exactly orthogonal), written without cancelling digits."""
+    K = np.zeros((*a.shape, 3), dtype=a.dtype)
+    K[..., 0, 1], K[..., 0, 2], K[..., 1, 2] = -a[..., 2], a[..., 1], -a[..., 0]
+    K[..., 1, 0], K[..., 2, 0], K[..., 2, 1] = a[..., 2], -a[..., 1], a[..., 0]
+    s = 2.0 / (1.0 + (a * a).sum(-1))
+    return s[..., None, None] * (K + K @ K)
+
+
+class HeldStack:
+    """The potential of the stack with plates 0 and n fixed, over x (6(n−1)): per free plate a
+    translation and Cayley parameters, ``p = p_ref + δp``, ``R = cayley(a) R_ref``; the springs'
+    stretch is measured from the reference pose so that no digits cancel near the minimum."""
+
+    def __init__(self, cfg, R, p, rest, free: slice = slice(1, -1)):
+        self.cfg, self.n, self.k = cfg, cfg.platforms, cfg.leg.stiffness
+        self.free = free  # the plates that move: 1..n−1 (both ends held), 0..n−1 (the EE held)
+        self.count = len(range(cfg.platforms + 1)[free])
+        self.R, self.p = np.array(R, float), np.array(p, float)
+        anchors = [design_anchors(cfg, j) for j in range(self.n)]
+        self.bottom = np.array([np.asarray(b) @ self.R[j].T for j, (b, _) in enumerate(anchors)])  # world arms
+        self.top = np.array([np.asarray(t) @ self.R[j + 1].T for j, (_, t) in enumerate(anchors)])
+        self.d_ref = self.top + self.p[1:, None] - self.bottom - self.p[:-1, None]
+        self.L_ref = np.sqrt((self.d_ref**2).sum(-1))
+        self.offset = self.L_ref - np.asarray(rest, float)  # the springs' stretch at the reference
+
+    def _moves(self, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Plate translations (B, n+1, 3) and ``R R_ref⁻¹ − I`` (B, n+1, 3, 3); held plates stay."""
+        B = x.shape[0]
+        xs = x.reshape(B, self.count, 6)
+        dp = np.zeros((B, self.n + 1, 3), dtype=x.dtype)
+        dR = np.zeros((B, self.n + 1, 3, 3), dtype=x.dtype)
+        dp[:, self.free] = xs[..., :3]
+        dR[:, self.free] = _cayley_minus_identity(xs[..., 3:])
+        return dp, dR
+
+    def energy(self, x: np.ndarray) -> np.ndarray:
+        """V(x) − V(0) [J] for a batch x (B, 6(n−1)), real or complex."""
+        cfg, leg, g, n = self.cfg, self.cfg.leg, self.cfg.gravity, self.n
+        dp, dR = self._moves(x)
+        move_b = dp[:, :-1, None] + np.einsum("bjkl,jil->bjik", dR[:, :-1], self.bottom)
+        move_t = dp[:, 1:, None] + np.einsum("bjkl,jil->bjik", dR[:, 1:], self.top)
+        dd = move_t - move_b
+        d = self.d_ref + dd
+        dL = (dd * (d + self.d_ref)).sum(-1) / (np.sqrt((d * d).sum(-1)) + self.L_ref)  # L − L_ref
+        springs = 0.5 * self.k * (dL * (dL + 2 * self.offset)).sum((1, 2))
+        du = d / (self.L_ref + dL)[..., None] - self.d_ref / self.L_ref[..., None]
+        motors = leg.motor_mass * g * (move_b[..., 2] + leg.motor_com * du[..., 2]).sum((1, 2))
+        shafts = leg.shaft_mass * g * (move_t[..., 2] - leg.shaft_com * du[..., 2]).sum((1, 2))
+        plates = cfg.plate.mass * g * dp[..., 2].sum(1)
+        lever = self.R[n] @ np.array([0.0, 0.0, cfg.payload.offset])
+        payload = cfg.payload.mass * g * (dp[:, -1, 2] + (dR[:, -1] @ lever)[:, 2])
+        return springs + motors + shafts + plates + payload
+
+    def gradient(self, x: np.ndarray) -> np.ndarray:
+        return self.energy(x[None] + 1j * STEP * np.eye(x.size)).imag / STEP
+
+    def minimum(self) -> np.ndarray:
+        """scipy's trust-region minimum, polished by Newton steps on the exact gradient (the energy
+        values cannot resolve the last digits near the minimum)."""
+        m = 6 * (self.n - 1)
+        h = 1e-7
+        H = np.array([(self.gradient(h * e) - self.gradient(-h * e)) / (2 * h) for e in np.eye(m)])
+        H = 0.5 * (H + H.T)
+        res = minimize(
+            lambda x: float(self.energy(x[None])[0].real),
+            np.zeros(m),
+            jac=self.gradient,
+            hess=lambda x: H,
+            method="trust-exact",
+            options={"gtol": 1e-10},
+        )
+        x = res.x
+        for _ in range(20):
+            grad = self.gradient(x)
+            if np.abs(grad).max() < 1e-12:
+                break
+            x = x - np.linalg.solve(H, grad)
+        assert np.abs(self.gradient(x)).max() < 1e-11, res.message
+        return x
+
+    def forces(self, x: np.ndarray) -> np.ndarray:
+        """Leg forces k (L − L0) [N] at x."""
+        dp, dR = self._moves(x[None])
+        move_b = dp[:, :-1, None] + np.einsum("bjkl,jil->bjik", dR[:, :-1], self.bottom)
+        move_t = dp[:, 1:, None] + np.einsum("bjkl,jil->bjik", dR[:, 1:], self.top)
+        dd = (move_t - move_b)[0]
+        d = self.d_ref + dd
+        dL = (dd * (d + self.d_ref)).sum(-1) / (np.sqrt((d * d).sum(-1)) + self.L_ref)
+        return self.k * (dL + self.offset)
+
+
+# ---------------------------------------------------------------------- the EE held alone: the turned model
+def ee_held_reference(am, pa) -> np.ndarray:
+    """The leg forces (n, 6) [N] that balance plates 0..n−1 with plate n held, by virtual work:
+    the reference potential's gradient over the free plates is affine in the forces (commanded
+    L − F/k), so equilibrium is a 6n × 6n linear system (nothing of the package's statics)."""
+    n, k = am.n, am.config.leg.stiffness
+    L = ap.kinematics.leg_state(am, pa).lengths
+    zero = np.zeros(6 * n)
+    g0 = HeldStack(am.config, pa.R, pa.p, L, free=slice(0, n)).gradient(zero)
+    A = np.array(
+        [
+            HeldStack(am.config, pa.R, pa.p, L - e.reshape(n, 6) / k, free=slice(0, n)).gradient(zero) - g0
+            for e in np.eye(6 * n)
+        ]
+    ).T
+    return np.linalg.solve(A, -g0).reshape(n, 6)
+
+
+def whole_stack_forces(am: ap.AssemblerModel, plates) -> np.ndarray:
+    """Actuator forces from the whole-stack Pinocchio model: g(q) = Sᵀτ + J_cᵀλ with Pinocchio's
+    own constraint Jacobian of the 6n ball joints, solved as one dense system (rows of every
+    joint but the root). Tension positive."""
+    model, data = am.model, am.data
+    q = ap.kinematics.q_from_plates(am, plates)
+    g = pin.computeGeneralizedGravity(model, data, q)
+    pin.computeJointJacobians(model, data, q)
+    for cm, cd in zip(am.constraint_models, am.constraint_datas, strict=True):
+        cm.calc(model, data, cd)
+    jc = pin.getConstraintsJacobian(model, data, am.constraint_models, am.constraint_datas)
+    select = np.zeros((6 * am.n, model.nv))
+    select[np.arange(6 * am.n), am.leg_idx_v[:, :, 2].ravel()] = 1.0
+    system = np.hstack([select.T, jc.T])[6:]
+    tau = np.linalg.solve(system, g[6:])[: 6 * am.n]
+    return -tau.reshape(am.n, 6)
+
+
+def check_result(am, result) -> None:
+    """A successful result: stack FK of its lengths gives its plates and the goal; every
+    kinematic constraint holds when recomputed independently."""
+    assert result.success, result.message
+    n = am.n
+    assert result.leg_lengths.shape == (n, 6)
+    fk = stack_forward_kinematics(am, result.leg_lengths, guess=result.state.plates)
+    assert fk.success, fk.message
+    ee = fk.plates.se3(n)
+    assert np.linalg.norm(ee.translation - result.goal.translation) < 1e-9
+    assert np.linalg.norm(pin.log3(result.goal.rotation.T @ ee.rotation)) < 1e-9
+    np.testing.assert_allclose(fk.plates.p, result.state.plates.p, atol=1e-9)
+    assert kinematic_problems(am.config, result.state.plates, result.goal) == []
+    kinds = {v.kind for v in result.state.violations}
+    assert not kinds - {"tension", "compression"}

@@ -2,7 +2,8 @@
 
 Tiers (markers registered in pyproject.toml): every test runs by default; ``-m "not slow"``
 is the fast tier. :func:`pytest_collection_modifyitems` marks by module and by the measured
-list ``tests/slow_tests.txt``, so no test file carries tier decorators of its own.
+list ``tests/slow_tests.txt`` (tests named by file name and test name, so a file moved to
+another folder stays in its tier), so no test file carries tier decorators of its own.
 """
 
 from __future__ import annotations
@@ -85,7 +86,8 @@ SLOW_LIST = Path(__file__).with_name("slow_tests.txt")
 
 
 def read_slow_list(path: Path = SLOW_LIST) -> set[str]:
-    """Node ids of the slow tier (``tests/x.py::name`` or ``tests/x.py::name[params]``)."""
+    """The tests of the slow tier, ``test_x.py::name`` or ``test_x.py::name[params]`` (the file
+    name without its folder: file names are unique across tests/)."""
     ids = set()
     for line in path.read_text(encoding="utf-8").splitlines():
         entry = line.split("  #", 1)[0].strip()
@@ -97,7 +99,7 @@ def read_slow_list(path: Path = SLOW_LIST) -> set[str]:
 def tier_markers(item: pytest.Item, slow_ids: set[str]) -> list[str]:
     """The tier markers of one collected test: by module, by name, and by the slow list."""
     path = Path(str(item.path))
-    nodeid = item.nodeid.replace("\\", "/")
+    key = f"{path.name}::{item.nodeid.split('::', 1)[1]}" if "::" in item.nodeid else path.name
     marks = []
     if path.suffix == ".ipynb":
         marks += ["notebook", "slow"]
@@ -107,7 +109,7 @@ def tier_markers(item: pytest.Item, slow_ids: set[str]) -> list[str]:
         marks.append("dask")
     if "browser" in item.name:
         marks.append("browser")
-    if nodeid in slow_ids or nodeid.split("[", 1)[0] in slow_ids:
+    if key in slow_ids or key.split("[", 1)[0] in slow_ids:
         marks.append("slow")
     return list(dict.fromkeys(marks))
 

@@ -13,7 +13,7 @@ import yaml
 
 from assembler_pin import AssemblerModel, load_config
 from assembler_pin.cli import main
-from assembler_pin.cli.common import plates_from_file
+from assembler_pin.cli.plate_file import plates_from_file
 from assembler_pin.config import AssemblerConfig
 from assembler_pin.kinematics import plate_arrays, taa_to_se3
 from assembler_pin.motion.paths import read_waypoints

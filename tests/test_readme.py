@@ -136,7 +136,7 @@ def test_limits_page_is_generated_from_the_bounds_table():
     gen = _generator("gen_limits")
     stale = "docs/limits.md is stale: run python docs/gen_limits.py"
     assert gen.PAGE.read_text(encoding="utf-8") == gen.render(), stale
-    from assembler_pin.bounds import BOUNDS
+    from assembler_pin.config.bounds import BOUNDS
 
     assert all(f"`{key}`" in gen.PAGE.read_text(encoding="utf-8") for key in BOUNDS)
 
@@ -205,20 +205,24 @@ COMMANDS: list[tuple[str, str, str]] = [
     (r"python -m mujoco\.viewer", "", "needs a display"),
     (r"assembler-pin view --home( --host \S+)?$", "", "serves a live page until Ctrl-C (test_viewer.py runs one)"),
     (r"assembler-pin view --plates examples/poses\.json --html \S+$", SLOW, ""),
-    (r"assembler-pin reproduce --out", "", "every scenario with the random-pose references (tests/test_reproduce.py)"),
+    (
+        r"assembler-pin reproduce --out",
+        "",
+        "every scenario with its random-pose references (core/test_reproduce.py)",
+    ),
     (
         r"assembler-pin reproduce( --markdown)?$",
         "",
-        "every scenario with the random-pose references (tests/test_results_page.py, in-process)",
+        "every scenario with its random-pose references (core/test_results_page.py, in-process)",
     ),
-    (r"python docs/gen_results\.py( --check)?$", "", "rewrites docs pages (tests/test_results_page.py checks them)"),
+    (r"python docs/gen_results\.py( --check)?$", "", "rewrites docs pages (core/test_results_page.py checks them)"),
     (r"assembler-pin bench( --json --repeat \d+)?$", "", "the full benchmark takes minutes"),
-    (r"assembler-pin map ", "", "a Dask map of many cells takes minutes (tests/test_maps.py runs small ones)"),
+    (r"assembler-pin map ", "", "a Dask map of many cells takes minutes (tests/maps/test_maps.py runs small ones)"),
     (r"assembler-pin solve --goal [-\d. ]+ --carrier ur10$", "", "searches the carrier's joints (test_carrier.py)"),
-    (r"assembler-pin plan --to", "", "plans a motion of 50-130 samples (tests/test_motion.py)"),
+    (r"assembler-pin plan --to", "", "plans a motion of 50-130 samples (tests/motion/test_motion.py)"),
     (r"assembler-pin plan --waypoints examples/waypoints\.json", "", "plans three waypoints"),
-    (r"assembler-pin walk ", "", "plans a walk of several steps, minutes (tests/test_walk.py runs one)"),
-    (r"assembler-pin simulate --trajectory", "", "needs a planned trajectory (tests/test_mujoco.py runs one)"),
+    (r"assembler-pin walk ", "", "plans a walk of several steps, minutes (tests/walk/test_walk.py runs one)"),
+    (r"assembler-pin simulate --trajectory", "", "needs a planned trajectory (tests/simulate/test_mujoco.py runs one)"),
 ]
 
 

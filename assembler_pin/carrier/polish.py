@@ -13,10 +13,13 @@ import logging
 import numpy as np
 import pinocchio as pin
 
-from ..kinematics import PlateArrays
-from ..model import AssemblerModel
-from ..objective import omega
-from ..options import GoalTolerance, OptimizeOptions
+from ..config.options import GoalTolerance, OptimizeOptions
+from ..constraints import leg_limit_margins
+from ..kinematics import PlateArrays, leg_state, plate_deviation
+from ..model.assembler import AssemblerModel
+from ..optimize import SINGULAR_FORCE
+from ..optimize.objective import omega
+from ..statics.pinocchio_statics import solve_statics
 from .robot import Carrier
 from .statics import CarrierStatics, carrier_statics, carrier_torques
 
@@ -60,11 +63,6 @@ class JointProblem:
 
     def vector(self, x: np.ndarray) -> np.ndarray:
         """[Ω_c, constraint rows (>= 0)...] at x (cached)."""
-        from ..constraints import leg_limit_margins
-        from ..kinematics import leg_state, plate_deviation
-        from ..optimize import SINGULAR_FORCE
-        from ..statics import solve_statics
-
         key = x.tobytes()
         if key in self._cache:
             return self._cache[key]

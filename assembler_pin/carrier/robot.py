@@ -17,8 +17,8 @@ import numpy as np
 import numpy.typing as npt
 import pinocchio as pin
 
-from ..bounds import check_bound
-from ..choices import CARRIER_NAMES, check_names
+from ..config.bounds import check_bound
+from ..config.choices import CARRIER_NAMES, check_names
 from ..exceptions import AssemblerError, OptionsError, PoseError, UnknownCarrierError
 from ..kinematics import to_se3
 

@@ -11,13 +11,18 @@ import numpy as np
 import numpy.typing as npt
 import pinocchio as pin
 
+from ..common.messages import binding, describe
+from ..common.progress import ProgressCallback
+from ..common.threads import one_blas_thread
+from ..config.bounds import check_bound
+from ..config.options import DEFAULT_GOAL_TOLERANCE, GoalTolerance, HelperArmOptions, OptimizeOptions
 from ..exceptions import OptionsError
 from ..kinematics import to_se3
-from ..model import AssemblerModel
-from ..objective import objective_value
-from ..options import DEFAULT_GOAL_TOLERANCE, GoalTolerance, HelperArmOptions, OptimizeOptions
-from ..progress import ProgressCallback
-from ..threads import one_blas_thread
+from ..model.assembler import AssemblerModel
+from ..optimize import optimize_internal_poses
+from ..optimize.objective import objective_value
+from ..solver.pipeline import solve
+from .polish import joint_polish
 from .robot import Carrier
 from .statics import CarrierStatics, carrier_statics
 
@@ -119,9 +124,6 @@ def _stack_on(s: _Search, q: np.ndarray) -> tuple[CarrierStatics | None, str]:
     """The stack for the world goal with the carrier held at ``q``: the helper arm and (with
     ``s.optimize``) the force optimization for the goal seen from the base, then optimized
     again under the world's gravity; without ``s.optimize`` the helper arm's pose as it is."""
-    from ..optimize import optimize_internal_poses
-    from ..solver import solve
-
     am = s.am
     base = s.carrier.base_pose(q)
     first = solve(am, base.actInv(s.goal), optimize=s.optimize, options=s.options, helper_options=s.helper)
@@ -148,8 +150,6 @@ def _checked_settings(
     w_carrier: float,
 ) -> tuple[OptimizeOptions, int]:
     """(options, joint-optimization iteration limit), or an :class:`OptionsError`."""
-    from ..bounds import check_bound
-
     if options is not None and not isinstance(options, OptimizeOptions):
         raise OptionsError(f"options must be an OptimizeOptions, got {type(options).__name__}")
     if helper_options is not None and not isinstance(helper_options, HelperArmOptions):
@@ -279,8 +279,6 @@ def _polish(
 ) -> tuple[CarrierStatics, str]:
     """The joint optimization from the best placement: (the state kept, a note for the
     message, empty when the polished point is kept); its candidate row is appended."""
-    from .polish import joint_polish
-
     polished, q, why = joint_polish(s.am, s.carrier, s.goal, best, s.w_carrier, s.options, max_iterations, s.tolerance)
     better = polished is not None and s.score(polished) < s.score(best)
     if polished is None:
@@ -306,8 +304,6 @@ def _verdict(statics: CarrierStatics) -> str:
         share = max(statics.stack_ratio, statics.carrier_ratio)
         return f"reached; {statics.binding} binds at {100 * share:.0f} % of its limit"
     if not statics.state.feasible:
-        from ..messages import binding, describe
-
         return f"the stack violates its limits: {describe(binding(statics.state.violations))}"
     k = int(np.argmax(statics.torque_ratio))
     return (

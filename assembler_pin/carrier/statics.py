@@ -10,10 +10,10 @@ import numpy as np
 import numpy.typing as npt
 import pinocchio as pin
 
+from ..config.options import DEFAULT_GOAL_TOLERANCE, GoalTolerance
 from ..exceptions import OptionsError, PoseError
 from ..kinematics import PlateArrays, plate_arrays
-from ..model import AssemblerModel
-from ..options import DEFAULT_GOAL_TOLERANCE, GoalTolerance
+from ..model.assembler import AssemblerModel
 from ..state import StackState, evaluate_state
 from .robot import Carrier
 

@@ -88,7 +88,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     traceback only with ``-v``); 130 / 143: interrupted by Ctrl-C / SIGTERM (one line).
     Warnings of the numerical libraries are logged at debug level, never printed.
     """
-    from ..signals import forget_interrupt, interrupt_on_signals
+    from ..common.signals import forget_interrupt, interrupt_on_signals
 
     command = "assembler-pin"
     restore_signals = interrupt_on_signals(("SIGTERM",))

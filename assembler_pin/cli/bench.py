@@ -70,22 +70,22 @@ def add_parser(add) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Median times of the hot computations; progress per figure on a terminal."""
-    from ..bench import run_benchmarks
-    from ..bounds import check_bound
-    from ..model import AssemblerModel
+    from ..bench.calls import run_benchmarks
+    from ..config.bounds import check_bound
+    from ..model.assembler import AssemblerModel
 
     check_bound("bench.repeat", args.repeat, "--repeat", CLIError)
     if args.map_cells is not None and not args.targets:
         raise CLIError("--map-cells applies to bench --targets only")
     if args.platforms_sweep:
-        from ..bench_scaling import benchmark_platforms_sweep, format_sweep
+        from ..bench.scaling import benchmark_platforms_sweep, format_sweep
 
         with progress_for(args, "bench: platforms") as prog:
             rows = benchmark_platforms_sweep(progress=prog)
         print(dumps(rows) if args.json else format_sweep(rows))
         return 0
     if args.maps:
-        from ..bench_scaling import benchmark_maps, format_maps
+        from ..bench.scaling import benchmark_maps, format_maps
 
         result = benchmark_maps()
         print(dumps(result) if args.json else format_maps(result))
@@ -96,13 +96,13 @@ def run(args: argparse.Namespace) -> int:
     if args.truss or args.speed:
         return _extra_figures(args, am)
     if args.time_laws:
-        from ..bench_motion import benchmark_time_laws, format_time_laws
+        from ..bench.motion import benchmark_time_laws, format_time_laws
 
         rows = benchmark_time_laws(am)
         print(dumps(rows) if args.json else format_time_laws(rows))
         return 0
     if args.mujoco:
-        from ..bench_motion import benchmark_mujoco, format_mujoco
+        from ..bench.motion import benchmark_mujoco, format_mujoco
 
         rows = benchmark_mujoco(am)
         print(dumps(rows) if args.json else format_mujoco(rows))
@@ -110,7 +110,7 @@ def run(args: argparse.Namespace) -> int:
     with progress_for(args, "bench") as prog:
         results = run_benchmarks(am, repeat=args.repeat, optimize=not args.no_optimize, quick=args.quick, progress=prog)
     if args.grid:
-        from ..bench import benchmark_solve_grid
+        from ..bench.calls import benchmark_solve_grid
 
         with progress_for(args, "bench: grid") as prog:
             results.update(benchmark_solve_grid(am, progress=prog))
@@ -135,8 +135,8 @@ def run(args: argparse.Namespace) -> int:
 
 def _targets(args: argparse.Namespace, am) -> int:
     """``bench --targets``: the speed targets' table, or one JSON object with the figures."""
-    from ..bench_targets import MAP_MEMORY_CELLS, benchmark_targets, format_targets, target_rows
-    from ..bounds import check_bound
+    from ..bench.targets import MAP_MEMORY_CELLS, benchmark_targets, format_targets, target_rows
+    from ..config.bounds import check_bound
 
     cells = MAP_MEMORY_CELLS if args.map_cells is None else args.map_cells
     if cells:
@@ -155,14 +155,13 @@ def _extra_figures(args: argparse.Namespace, am) -> int:
     """``bench --truss`` and ``bench --speed``: one figure per line, or one JSON object."""
     doc: dict = {}
     if args.truss:
-        from ..compliance import benchmark_stiffness
-        from ..supports import benchmark_supports
+        from ..bench.supports import benchmark_supports
+        from ..bench.truss import benchmark_stiffness
 
         doc["stiffness"] = benchmark_stiffness(am)
         doc["supports"] = benchmark_supports(am)
     if args.speed:
-        from ..bench import LEVEL_GRID
-        from ..bench_speed import (
+        from ..bench.speed import (
             benchmark_capacity_memory,
             benchmark_long_stacks,
             benchmark_single_statics,
@@ -172,6 +171,7 @@ def _extra_figures(args: argparse.Namespace, am) -> int:
             benchmark_threads,
             benchmark_two_point,
         )
+        from ..bench.timing import LEVEL_GRID
 
         doc["threads"] = benchmark_threads(am)
         doc["starts"] = benchmark_solve_starts(am, LEVEL_GRID[::12])

@@ -13,13 +13,13 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from ..exceptions import CLIError
-from .plate_file import MAX_JSON_BYTES, plates_from_file, read_json  # noqa: F401 (re-exported)
+from .plate_file import plates_from_file
 
 if TYPE_CHECKING:
     import numpy as np
 
-    from ..config import AssemblerConfig
-    from ..model import AssemblerModel
+    from ..config.schema import AssemblerConfig
+    from ..model.assembler import AssemblerModel
     from ..state import StackState
 
 
@@ -52,7 +52,7 @@ def writable_parent(path: str, what: str) -> Path:
 
 
 def config_from_args(args: argparse.Namespace) -> AssemblerConfig:
-    from ..config import load_config
+    from ..config.schema import load_config
 
     return load_config(args.config) if args.config else load_config()
 
@@ -93,11 +93,11 @@ def format_state_table(state: StackState, title: str = "") -> str:
     """A readable table of a state: forces and lengths per actuator, then summary lines.
 
     Row ``i``, column ``SPj`` is leg ``i`` of platform ``j``, both 0-based
-    (:mod:`~assembler_pin.labels`), the indices of ``forces[j, i]`` and of the JSON.
+    (:mod:`~assembler_pin.common.labels`), the indices of ``forces[j, i]`` and of the JSON.
     """
     import numpy as np
 
-    from ..labels import leg_label, platform_label
+    from ..common.labels import leg_label, platform_label
 
     n = state.forces.shape[0]
     lines = [title] if title else []
@@ -122,7 +122,7 @@ def format_state_table(state: StackState, title: str = "") -> str:
     else:
         lines.append(f"feasible: NO — {len(state.violations)} violation(s):")
         lines += [f"  - {v}" for v in state.violations]
-    from ..messages import finite_text
+    from ..common.messages import finite_text
 
     return finite_text("\n".join(lines))
 
@@ -139,7 +139,7 @@ def goal_from_args(args: argparse.Namespace):
 
 
 def optimize_options(args: argparse.Namespace):
-    from ..constraints import GoalTolerance
+    from ..config.options import GoalTolerance
     from ..optimize import OptimizeOptions
 
     ee = None
@@ -163,7 +163,7 @@ def optimize_options(args: argparse.Namespace):
 
 def add_carrier_arguments(p: argparse.ArgumentParser, note: str = "") -> None:
     """``--carrier NAME``, ``--carrier-q`` and ``--mount``, read by :func:`carrier_from_args`."""
-    from ..choices import CARRIER_NAMES
+    from ..config.choices import CARRIER_NAMES
 
     p.add_argument(
         "--carrier",
@@ -234,7 +234,7 @@ def add_goal_arguments(group: argparse._MutuallyExclusiveGroup, note: str = "") 
 
 def add_optimize_arguments(p: argparse.ArgumentParser) -> None:
     """The optimizer's options; defaults and choices come from :class:`OptimizeOptions`."""
-    from ..options import METHODS, OptimizeOptions
+    from ..config.options import METHODS, OptimizeOptions
 
     d = OptimizeOptions()
     p.add_argument(
@@ -268,7 +268,7 @@ def add_optimize_arguments(p: argparse.ArgumentParser) -> None:
 
 def add_helper_arm_arguments(p: argparse.ArgumentParser) -> None:
     """The helper arm's options; defaults come from :class:`HelperArmOptions`."""
-    from ..options import HelperArmOptions
+    from ..config.options import HelperArmOptions
 
     d = HelperArmOptions()
     p.add_argument(
@@ -297,6 +297,6 @@ def finite_range(values: np.ndarray) -> list[float] | None:
 
 def progress_for(args: argparse.Namespace, label: str):
     """The progress display of a subcommand: on stderr when it is a terminal, unless ``--quiet``."""
-    from ..progress import TerminalProgress
+    from ..common.progress import TerminalProgress
 
     return TerminalProgress(label, enabled=False if getattr(args, "quiet", False) else None)

@@ -10,7 +10,7 @@ from ..exceptions import CLIError
 from .common import config_from_args, dumps, finite_range, progress_for, wrapped, writable_parent
 
 if TYPE_CHECKING:
-    from ..config import AssemblerConfig
+    from ..config.schema import AssemblerConfig
 
 
 def add_parser(add) -> None:
@@ -49,7 +49,7 @@ def add_parser(add) -> None:
 
 def _check_options(args: argparse.Namespace):
     """The grid of ``--grid``/``--orientations``, every other option checked before any work."""
-    from ..bounds import check_bound
+    from ..config.bounds import check_bound
     from ..maps import parse_grid
     from ..maps.cluster import check_scheduler
 
@@ -69,7 +69,7 @@ def _check_options(args: argparse.Namespace):
 
 
 def _configs(args: argparse.Namespace) -> list[tuple[str, AssemblerConfig]]:
-    from ..config import load_config
+    from ..config.schema import load_config
 
     if not args.sweep:
         return [(Path(args.config).stem if args.config else "default", config_from_args(args))]
@@ -81,12 +81,12 @@ def _configs(args: argparse.Namespace) -> list[tuple[str, AssemblerConfig]]:
 
 def _pictures(args: argparse.Namespace, table, configs: list, doc: dict) -> None:
     """The ``--png`` heatmaps and the ``--html`` point cloud of the first configuration."""
-    from ..model import AssemblerModel
+    from ..model.assembler import AssemblerModel
 
     am = AssemblerModel.from_config(configs[0][1])
     if args.png:
         from ..maps.pictures import map_heatmaps
-        from ..plots import save
+        from ..plots.figures import save
 
         doc["png"] = str(save(map_heatmaps(table, am, configs[0][0]), args.png))
     if args.html:

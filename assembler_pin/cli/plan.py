@@ -8,7 +8,7 @@ from typing import TYPE_CHECKING
 from ..exceptions import CLIError
 
 if TYPE_CHECKING:
-    from ..model import AssemblerModel
+    from ..model.assembler import AssemblerModel
 from .common import (
     config_from_args,
     dumps,
@@ -118,8 +118,8 @@ def run(args: argparse.Namespace) -> int:
     Exit status 0 when the motion reaches the end of the path with every row valid, 1 when
     it does not (the answer is printed and ``--out`` holds the valid prefix, if any).
     """
-    from ..bounds import check_bound
-    from ..model import AssemblerModel
+    from ..config.bounds import check_bound
+    from ..model.assembler import AssemblerModel
     from ..motion import PlanOptions
     from ..motion.timing import plan_trajectory
 
@@ -158,9 +158,9 @@ def _write_outputs(args: argparse.Namespace, am: AssemblerModel, motion, prog) -
     if args.out and traj is not None:
         doc["out"] = str(traj.write(args.out))
     if args.plot and traj is not None:
-        from ..files import atomic_path
+        from ..common.files import atomic_path
         from ..motion.timing import trajectory_states
-        from ..plots import trajectory_plot
+        from ..plots.trajectory import trajectory_plot
 
         times, states = trajectory_states(am, traj, 200, progress=prog)
         title = "planned motion" if args.to is None else "home → goal" if args.from_ is None else "--from → --to"

@@ -47,8 +47,8 @@ def run(args: argparse.Namespace) -> int:
     Exit 0 when every scenario is solved, 1 when one is not (its row says why); progress
     per scenario on a terminal. The report is written only once every scenario is done.
     """
-    from ..bounds import check_bound
-    from ..model import AssemblerModel
+    from ..config.bounds import check_bound
+    from ..model.assembler import AssemblerModel
     from ..reproduce import results_markdown, run_scenarios
     from ..scenarios import SCENARIOS
 

@@ -9,7 +9,7 @@ from typing import TYPE_CHECKING
 from ..exceptions import CLIError
 
 if TYPE_CHECKING:
-    from ..model import AssemblerModel
+    from ..model.assembler import AssemblerModel
 from .common import (
     add_pose_source,
     config_from_args,
@@ -43,9 +43,9 @@ def run(args: argparse.Namespace) -> int:
     (exit 0 when held, 1 when not: the answer is printed either way)."""
     import numpy as np
 
-    from ..bounds import check_bound
-    from ..labels import leg_label
-    from ..model import AssemblerModel
+    from ..common.labels import leg_label
+    from ..config.bounds import check_bound
+    from ..model.assembler import AssemblerModel
     from ..simulate import hold_pose
     from ..state import evaluate_state
 

@@ -8,7 +8,7 @@ from typing import TYPE_CHECKING
 from ..exceptions import CLIError
 
 if TYPE_CHECKING:
-    from ..model import AssemblerModel
+    from ..model.assembler import AssemblerModel
 from .common import (
     add_carrier_arguments,
     add_goal_arguments,
@@ -53,8 +53,8 @@ def add_parser(add) -> None:
 
 
 def _add_starts_argument(p: argparse.ArgumentParser) -> None:
-    """``--starts first|all`` (:data:`~assembler_pin.choices.SOLVE_STARTS`), passed to ``solve(starts=...)``."""
-    from ..choices import SOLVE_STARTS
+    """``--starts first|all`` (:data:`~assembler_pin.config.choices.SOLVE_STARTS`), passed to ``solve(starts=...)``."""
+    from ..config.choices import SOLVE_STARTS
 
     p.add_argument(
         "--starts",
@@ -66,9 +66,9 @@ def _add_starts_argument(p: argparse.ArgumentParser) -> None:
 
 
 def add_sag_arguments(p: argparse.ArgumentParser) -> None:
-    """``--objective``, ``--sag-weight`` and ``--max-sag`` (:class:`~assembler_pin.options.OptimizeOptions`)."""
-    from ..choices import OBJECTIVES
-    from ..options import OptimizeOptions
+    """``--objective``, ``--sag-weight`` and ``--max-sag`` (:class:`~assembler_pin.config.options.OptimizeOptions`)."""
+    from ..config.choices import OBJECTIVES
+    from ..config.options import OptimizeOptions
 
     d = OptimizeOptions()
     p.add_argument(
@@ -97,7 +97,7 @@ def sag_options(args: argparse.Namespace, options):
     (one line naming the option when refused)."""
     import dataclasses
 
-    from ..bounds import check_bound
+    from ..config.bounds import check_bound
     from ..exceptions import OptionsError
 
     if args.sag_weight is not None:
@@ -119,7 +119,7 @@ def sag_options(args: argparse.Namespace, options):
 def _sag_block(am: AssemblerModel, result, options) -> dict:
     """The ``sag`` block of the JSON answer: the objective, the limit and the EE's linear sag
     [m] of the returned pose (world axes), and of the helper arm's pose."""
-    from ..compliance import sag_and_gradient
+    from ..compliance.loaded import sag_and_gradient
     from ..exceptions import SingularConfigurationError
 
     def of(state) -> dict | None:
@@ -144,10 +144,10 @@ def run(args: argparse.Namespace) -> int:
     """Internal poses for an EE goal: helper-arm initial condition, then (by default) the
     force optimization. Exit 0 when solved; an unreachable goal is an answer too (printed,
     success false), with exit status 1, as is ``--capacity`` finding no capacity."""
-    from ..bounds import check_bound
-    from ..choices import SOLVE_STARTS
-    from ..model import AssemblerModel
-    from ..solver import solve
+    from ..config.bounds import check_bound
+    from ..config.choices import SOLVE_STARTS
+    from ..model.assembler import AssemblerModel
+    from ..solver.pipeline import solve
 
     goal = goal_from_args(args)
     _refuse_carrier_options(args)
@@ -165,7 +165,7 @@ def run(args: argparse.Namespace) -> int:
     result = solve(am, goal, optimize=not args.no_optimize, options=options, helper_options=helper, starts=starts)
     capacity = None
     if args.capacity:
-        from ..capacity import payload_capacity
+        from ..solver.capacity import payload_capacity
 
         start = result.optimized.plates if result.success and result.optimized is not None else None
         capacity = payload_capacity(am, goal, start=start)
@@ -189,7 +189,7 @@ def run(args: argparse.Namespace) -> int:
 def _write_plates(path: str, result) -> str | None:
     """Write the solved pose (optimized, else the helper arm's) as a plate file, atomically;
     nothing when the goal was not solved (a file holds valid content only)."""
-    from ..files import write_atomic
+    from ..common.files import write_atomic
 
     state = result.optimized if result.optimized is not None else result.initial
     if not result.success or state is None:
@@ -200,8 +200,8 @@ def _write_plates(path: str, result) -> str | None:
 
 def helper_options(args: argparse.Namespace):
     """The helper arm's options of ``--d-step`` and ``--max-attempts``, bounds checked."""
-    from ..bounds import check_bound
-    from ..options import HelperArmOptions
+    from ..config.bounds import check_bound
+    from ..config.options import HelperArmOptions
 
     check_bound("helper.max_attempts", args.max_attempts, "--max-attempts", CLIError)
     check_bound("helper.d_step", args.d_step, "--d-step", CLIError)
@@ -215,7 +215,7 @@ def _check_scan_length(am: AssemblerModel, helper) -> None:
     """The helper arm's scan, (height range) / ``--d-step`` link lengths, within its bound."""
     import math
 
-    from ..bounds import check_bound
+    from ..config.bounds import check_bound
     from ..helper_arm import height_range
 
     lo, hi = height_range(am.config)

@@ -45,12 +45,12 @@ _FAST_HOME_DEFAULTS = {"support": "base"}
 
 
 def _fast_home(args: argparse.Namespace) -> bool:
-    """Answer ``statics --home --json`` without Pinocchio (:mod:`~assembler_pin.home_state`)
+    """Answer ``statics --home --json`` without Pinocchio (:mod:`~assembler_pin.statics.home`)
     when no other option is given and the home pose is strictly inside every limit."""
     given = {k: v for k, v in vars(args).items() if k not in _FAST_HOME_ARGS and v and v != _FAST_HOME_DEFAULTS.get(k)}
     if not (args.home and args.json) or given:
         return False
-    from ..home_state import home_state_document
+    from ..statics.home import home_state_document
 
     doc = home_state_document(config_from_args(args))
     if doc is not None:
@@ -61,7 +61,7 @@ def _fast_home(args: argparse.Namespace) -> bool:
 def run(args: argparse.Namespace) -> int:
     if _fast_home(args):
         return 0
-    from ..model import AssemblerModel
+    from ..model.assembler import AssemblerModel
     from ..state import evaluate_state
 
     if args.support != "base" and args.carrier is not None:

@@ -8,7 +8,7 @@ from typing import TYPE_CHECKING
 from .common import add_goal_arguments, add_pose_source, config_from_args, dumps, goal_from_args, plates_from_args
 
 if TYPE_CHECKING:
-    from ..ee_stiffness import StiffnessResult
+    from ..compliance.ee_stiffness import StiffnessResult
     from ..kinematics import PlateArrays
 
 
@@ -35,8 +35,8 @@ def add_parser(add) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Exit 0 with the stiffness; 1 when there is none (singular, unstable, no pose for the goal)."""
-    from ..ee_stiffness import stiffness
-    from ..model import AssemblerModel
+    from ..compliance.ee_stiffness import stiffness
+    from ..model.assembler import AssemblerModel
 
     if args.scaling:
         return _run_scaling(args)
@@ -47,7 +47,7 @@ def run(args: argparse.Namespace) -> int:
     am = AssemblerModel.from_config(config_from_args(args))
     plates: PlateArrays | list
     if args.goal is not None or args.goal_deg is not None:
-        from ..solver import solve
+        from ..solver.pipeline import solve
 
         solved = solve(am, goal_from_args(args))
         if not solved.success:
@@ -62,7 +62,7 @@ def run(args: argparse.Namespace) -> int:
         )
     lengths = None
     if args.compensated:
-        from ..compliance import compensated_lengths
+        from ..compliance.loaded import compensated_lengths
 
         lengths = compensated_lengths(am, plates).lengths
     result = stiffness(am, plates, lengths=lengths)
@@ -75,9 +75,9 @@ def run(args: argparse.Namespace) -> int:
 
 def _run_scaling(args: argparse.Namespace) -> int:
     """``--scaling``: the table (text or JSON) and, with ``--out``, the figure; exit 0."""
-    from ..bounds import check_bound
+    from ..compliance.scaling import scaling_figure, stiffness_scaling
+    from ..config.bounds import check_bound
     from ..exceptions import CLIError
-    from ..stiffness_scaling import scaling_figure, stiffness_scaling
     from .common import progress_for
 
     top = int(check_bound("config.platforms", args.max_platforms, "--max-platforms", CLIError))
@@ -88,7 +88,7 @@ def _run_scaling(args: argparse.Namespace) -> int:
     table = stiffness_scaling(cfg, top, progress=prog)
     doc = table.to_dict()
     if args.out is not None:
-        from ..files import atomic_path
+        from ..common.files import atomic_path
 
         fig = scaling_figure(table)
         with atomic_path(args.out) as tmp:
@@ -128,7 +128,7 @@ def stiffness_blocks(am, plates) -> tuple[dict, bool, str]:
     """The ``sag`` and ``stiffness`` blocks that ``statics --stiffness`` adds to its JSON
     (``stiffness``: the object of ``stiffness --json``; ``sag``: its sag block), whether there
     is a stiffness, and the text report."""
-    from ..ee_stiffness import stiffness
+    from ..compliance.ee_stiffness import stiffness
 
     result = stiffness(am, plates)
     doc = result.to_dict()
@@ -143,7 +143,7 @@ def format_stiffness(result: StiffnessResult, am) -> str:
     """A compact text report (lines ≤ 100 characters)."""
     import numpy as np
 
-    from ..labels import platform_label
+    from ..common.labels import platform_label
 
     cfg = am.config
     lines = [

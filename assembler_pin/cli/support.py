@@ -21,8 +21,8 @@ def add_parser(add) -> None:
 def support_document(am, plates) -> dict:
     """The JSON answer: ``forces`` the elastic distribution of the pose's own lengths, ``chosen``
     the distribution minimizing max|F| with its ``length_offsets``; success when both are."""
-    from ..support_choice import chosen_distribution
-    from ..supports import two_point_statics
+    from ..supports.choice import chosen_distribution
+    from ..supports.two_point import two_point_statics
 
     elastic = two_point_statics(am, plates)
     chosen = chosen_distribution(am, plates)
@@ -40,7 +40,7 @@ def support_document(am, plates) -> dict:
 
 def run(args: argparse.Namespace) -> int:
     """Exit 0 with both distributions; 1 when there is none (singular pose, no convergence)."""
-    from ..model import AssemblerModel
+    from ..model.assembler import AssemblerModel
 
     am = AssemblerModel.from_config(config_from_args(args))
     plates = plates_from_args(args, am, "give --plates FILE (or - for stdin) or --home")
@@ -56,7 +56,7 @@ def held_statics(am, plates, support: str, as_json: bool) -> int:
         doc = support_document(am, plates)
         print(dumps(doc) if as_json else format_support(doc))
         return 0 if doc["success"] else 1
-    from ..supports import ee_held_statics
+    from ..supports.two_point import ee_held_statics
 
     held = ee_held_statics(am, plates)
     doc = held.to_dict()
@@ -68,7 +68,7 @@ def format_ee(held) -> str:
     """The EE-held statics as text (lines ≤ 100 characters)."""
     import numpy as np
 
-    from ..labels import platform_label
+    from ..common.labels import platform_label
 
     verdict = "feasible" if held.feasible else f"{len(held.violations)} violations: {held.violations[0]}"
     lines = [
@@ -85,7 +85,7 @@ def format_support(doc: dict) -> str:
     """A compact text report (lines ≤ 100 characters)."""
     import numpy as np
 
-    from ..labels import platform_label
+    from ..common.labels import platform_label
 
     if not doc["success"]:
         return f"support both: {doc['message']}"

@@ -11,7 +11,7 @@ from typing import TYPE_CHECKING
 from ..exceptions import CLIError
 
 if TYPE_CHECKING:
-    from ..model import AssemblerModel
+    from ..model.assembler import AssemblerModel
     from ..state import StackState
 from .common import (
     add_carrier_arguments,
@@ -31,7 +31,7 @@ def add_parser(add) -> None:
     add_goal_arguments(src, " (shows the initial and optimized poses)")
     src.add_argument("--plates", metavar="FILE", help='JSON {"plates": [n+1 4x4]} file, or - for stdin')
     src.add_argument("--home", action="store_true", help="show the home pose")
-    from ..choices import FORCE_SCALES, SCENARIO_NAMES
+    from ..config.choices import FORCE_SCALES, SCENARIO_NAMES
 
     src.add_argument(
         "--scenario", choices=SCENARIO_NAMES, help="solve a scenario's goal and show its initial and optimized poses"
@@ -161,7 +161,7 @@ DEFAULT_ELLIPSOID_FORCE = 100.0
 def _check_options(args: argparse.Namespace) -> None:
     """Refuse, before anything is computed, counts and factors out of their bounds and
     options given without the one they qualify (CLIError: one line, exit 2)."""
-    from ..bounds import check_bound
+    from ..config.bounds import check_bound
 
     check_bound("view.animate", args.animate, "--animate", CLIError)
     check_bound("view.frames", args.frames, "--frames", CLIError)
@@ -182,9 +182,9 @@ def _check_options(args: argparse.Namespace) -> None:
 def _view_goal(args: argparse.Namespace, am: AssemblerModel, viewer) -> StackState:
     """``view --goal/--scenario``: solve, show initial (ghost) and optimized, maybe animate."""
     try:
-        from ..solver import solve  # lazy: the solver is only needed for --goal
+        from ..solver.pipeline import solve  # lazy: the solver is only needed for --goal
     except ImportError as exc:
-        raise CLIError(f"--goal needs assembler_pin.solver, which cannot be imported: {exc}") from None
+        raise CLIError(f"--goal needs assembler_pin.solver.pipeline, which cannot be imported: {exc}") from None
     if args.scenario:
         from ..kinematics import se3_to_taa
         from ..scenarios import scenario
@@ -250,7 +250,7 @@ def _serve(args: argparse.Namespace, viewer) -> int:
     import time
     import webbrowser
 
-    from ..signals import forget_interrupt
+    from ..common.signals import forget_interrupt
 
     if args.html:
         path = Path(args.html).resolve()
@@ -272,8 +272,8 @@ def _serve(args: argparse.Namespace, viewer) -> int:
 
 def run(args: argparse.Namespace) -> int:
     """Show a pose in Meshcat: write a standalone page (--html) or serve until Ctrl-C."""
-    from ..model import AssemblerModel
-    from ..signals import forget_interrupt, interrupt_on_signals
+    from ..common.signals import forget_interrupt, interrupt_on_signals
+    from ..model.assembler import AssemblerModel
     from ..viz import StackViewer
 
     _check_options(args)

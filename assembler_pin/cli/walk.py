@@ -60,8 +60,8 @@ def _footholds(args: argparse.Namespace):
 def run(args: argparse.Namespace) -> int:
     """Exit 0 when the walk reaches its last foothold, 1 when it cannot (the valid prefix is
     still printed and written), 2 for refused input."""
-    from ..bounds import check_bound
-    from ..model import AssemblerModel
+    from ..config.bounds import check_bound
+    from ..model.assembler import AssemblerModel
     from ..walk import WalkOptions, plan_walk
 
     am = AssemblerModel.from_config(config_from_args(args))
@@ -102,7 +102,7 @@ def walk_rows(am, walk) -> tuple[list[str], list[list[object]]]:
 def write_walk(am, walk, out: Path) -> None:
     """``walk.json`` (the answer) and ``walk.csv`` (the samples, read back by
     :func:`~assembler_pin.walk.samples.read_walk_csv`) in ``out``, each atomically."""
-    from ..files import write_atomic
+    from ..common.files import write_atomic
     from ..walk.samples import walk_csv
 
     out.mkdir(parents=True, exist_ok=True)
@@ -133,7 +133,7 @@ def plot_walk(walk, path: str) -> None:
     import matplotlib.pyplot as plt
     import numpy as np
 
-    from ..plots import save
+    from ..plots.figures import save
 
     fig, ax = plt.subplots(figsize=(8, 3.2))
     start = 0

@@ -79,11 +79,13 @@ and its result). Measured success rates
 are in the README.
 """
 
+from ..config.options import HelperArmOptions
+from ..kinematics.legs import relative_leg_measures
 from .arm import ArmIKProblem, ArmIKResult, HelperArm
 from .cache import ArmCache, arm_cache
-from .initial import KINEMATIC_VIOLATIONS, Candidate, InitialConditionResult, initial_condition
-from .limits import cluster_limits, height_range, relative_leg_measures
-from .options import HelperArmOptions
+from .initial import KINEMATIC_VIOLATIONS, initial_condition
+from .limits import cluster_limits, height_range
+from .outcome import Candidate, InitialConditionResult
 from .repair import perturbed_plates, repair_stack
 from .urdf import HELPER_ARM_URDF_FILENAME, helper_arm_urdf
 

@@ -13,12 +13,13 @@ import numpy as np
 import numpy.typing as npt
 import pinocchio as pin
 
-from ..config import AssemblerConfig
+from ..common.naming import names
+from ..config.options import HelperArmOptions
+from ..config.schema import AssemblerConfig
 from ..constraints import leg_limit_margins
 from ..exceptions import OptionsError
-from ..naming import names
-from .limits import cached_leg_geometry, cluster_limits, relative_leg_measures
-from .options import HelperArmOptions
+from ..kinematics.legs import relative_leg_measures
+from .limits import cached_leg_geometry, cluster_limits
 from .urdf import helper_arm_urdf
 
 __all__ = ["ArmIKProblem", "ArmIKResult", "HelperArm"]

@@ -15,8 +15,8 @@ import dataclasses
 import threading
 from collections import OrderedDict
 
-from ..config import AssemblerConfig, PayloadConfig
-from ..model import AssemblerModel
+from ..config.schema import AssemblerConfig, PayloadConfig
+from ..model.assembler import AssemblerModel
 from .arm import HelperArm
 
 __all__ = ["KEPT_ARMS", "KEPT_CONFIGURATIONS", "ArmCache", "arm_cache", "arm_key"]

@@ -14,26 +14,22 @@ import numpy as np
 import numpy.typing as npt
 import pinocchio as pin
 
-from ..constraints import GoalTolerance, evaluate_constraints
-from ..geometry import reach_bound
+from ..common.messages import binding, describe, number
+from ..common.threads import one_blas_thread
+from ..config.options import GoalTolerance, HelperArmOptions, checked_options
+from ..constraints import evaluate_constraints
 from ..kinematics import PlateArrays, leg_state, to_se3
-from ..messages import binding, describe, number
-from ..model import AssemblerModel
-from ..options import checked_options
+from ..model.assembler import AssemblerModel
+from ..model.geometry import reach_bound
 from ..state import StackState, evaluate_state
-from ..threads import one_blas_thread
 from .cache import ArmCache, arm_cache
 from .limits import cluster_limits, height_range
 from .link_lengths import link_length_scan
-from .options import HelperArmOptions
 from .outcome import Candidate, InitialConditionResult, Scan, failure_result, success_result, why_not
 from .repair import perturbed_plates, repair_stack
 
 __all__ = [
     "KINEMATIC_VIOLATIONS",
-    "Candidate",
-    "InitialConditionResult",
-    "arm_cache",
     "even_screw_pose",
     "initial_condition",
     "lean_poses",

@@ -14,12 +14,12 @@ import math
 
 import numpy as np
 
-from ..config import AssemblerConfig
+from ..config.schema import AssemblerConfig
 from ..constraints import leg_limit_margins
-from ..geometry import LegGeometry, leg_geometry
 from ..kinematics.legs import relative_leg_measures
+from ..model.geometry import LegGeometry, leg_geometry
 
-__all__ = ["cached_leg_geometry", "cluster_limits", "height_range", "relative_leg_measures"]
+__all__ = ["cached_leg_geometry", "cluster_limits", "height_range"]
 
 _AXIS_COUNT = 24  # horizontal tilt axes tried by cluster_limits (every 15 degrees)
 _BISECTION_TOL = 1e-10  # [rad] and [m]
@@ -28,7 +28,7 @@ _BISECTION_TOL = 1e-10  # [rad] and [m]
 # ---------------------------------------------------------------------- SP validity
 @functools.lru_cache(maxsize=64)
 def cached_leg_geometry(cfg: AssemblerConfig) -> LegGeometry:
-    """:func:`~assembler_pin.geometry.leg_geometry`, cached per configuration (immutable)."""
+    """:func:`~assembler_pin.model.geometry.leg_geometry`, cached per configuration (immutable)."""
     return leg_geometry(cfg)
 
 

@@ -1,7 +1,7 @@
 """What :func:`~assembler_pin.helper_arm.initial_condition` answers: its result, the arm
 poses it keeps as repair starts, what its scan met, and the messages of success and failure.
 
-Every name is importable from :mod:`assembler_pin.helper_arm.initial` too. Lengths in metres,
+Lengths in metres,
 angles in radians, times in seconds.
 """
 
@@ -15,12 +15,12 @@ from dataclasses import dataclass, field
 import numpy as np
 import pinocchio as pin
 
+from ..common.messages import binding, describe, number, one_line
+from ..config.options import HelperArmOptions
 from ..kinematics import PlateArrays
-from ..messages import binding, describe, number, one_line
-from ..model import AssemblerModel
+from ..model.assembler import AssemblerModel
 from ..state import StackState, evaluate_state
 from .limits import height_range
-from .options import HelperArmOptions
 
 __all__ = ["Candidate", "InitialConditionResult", "Scan", "failure_result", "success_result", "why_not"]
 
@@ -38,7 +38,7 @@ class InitialConditionResult:
             translation, EE at the goal, no singular platform). Force limits are *not*
             required: they are reported in ``state`` (``state.feasible`` requires them too).
         message: what happened; on failure one line naming the binding cause
-            (:mod:`~assembler_pin.messages`).
+            (:mod:`~assembler_pin.common.messages`).
         goal: the EE goal (world pose).
         state: the valid state, or the home state (checked against the goal) on failure.
         leg_lengths: (n, 6) leg lengths of ``state`` [m].
@@ -165,7 +165,7 @@ def why_not(scan: Scan, repairs: list[Candidate], opts: HelperArmOptions) -> str
 
 
 def short_why(scan: Scan, repaired: bool) -> str:
-    """The one-line cause of a failed scan (:mod:`~assembler_pin.messages`); ``repaired``:
+    """The one-line cause of a failed scan (:mod:`~assembler_pin.common.messages`); ``repaired``:
     a repair of the stack was tried too."""
     tried = f"after {scan.attempts} attempt(s){', repair failed' if repaired else ''}"
     head = "no valid initial condition: "

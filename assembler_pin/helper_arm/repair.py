@@ -13,9 +13,9 @@ import pinocchio as pin
 
 from ..constraints import leg_limit_margins
 from ..exceptions import PoseError
-from ..gradients import leg_derivatives
 from ..kinematics import PlateArrays, leg_state
-from ..model import AssemblerModel
+from ..model.assembler import AssemblerModel
+from ..statics.derivatives import leg_derivatives
 
 __all__ = ["perturbed_plates", "repair_stack"]
 
@@ -33,7 +33,7 @@ def _leg_hinge(am: AssemblerModel, pa: PlateArrays, margin: float) -> np.ndarray
 def _hinge_jacobian(am: AssemblerModel, pa: PlateArrays, x: np.ndarray, margin: float) -> np.ndarray:
     """Analytic Jacobian of :func:`_leg_hinge` w.r.t. the local twists ``x`` of plates
     1..n-1 (plate k = ``start_k·exp6(x_k)``): the world-twist derivatives of
-    :func:`~assembler_pin.gradients.leg_derivatives`, times ``Ad(T_k)·Jexp6(x_k)`` per plate
+    :func:`~assembler_pin.statics.derivatives.leg_derivatives`, times ``Ad(T_k)·Jexp6(x_k)`` per plate
     (a local change δ of x_k moves plate k by the world twist ``Ad(T_k)·Jexp6(x_k)·δ``).
     Rows past their bound have the bound's derivative, the others zero."""
     n = am.n

@@ -5,10 +5,10 @@ from __future__ import annotations
 import math
 import xml.etree.ElementTree as ET
 
-from ..config import AssemblerConfig
+from ..common.naming import names
+from ..config.schema import AssemblerConfig
 from ..exceptions import OptionsError
-from ..naming import names
-from ..urdf import xml_number
+from ..model.urdf import xml_number
 from .limits import cluster_limits
 
 __all__ = ["HELPER_ARM_URDF_FILENAME", "helper_arm_urdf"]

@@ -12,9 +12,9 @@ from collections.abc import Sequence
 import numpy as np
 import pinocchio as pin
 
+from ..common.validation import as_float_array
 from ..exceptions import PoseError
-from ..model import AssemblerModel
-from ..validation import as_float_array
+from ..model.assembler import AssemblerModel
 from .legs import leg_vectors
 from .poses import QUATERNION_NORM_TOL, PlateArrays, plate_arrays
 
@@ -141,7 +141,7 @@ def rotations_to_quaternions(R: np.ndarray) -> np.ndarray:
 
 def platform_configurations(am: AssemblerModel, pa: PlateArrays, vec: np.ndarray, lengths: np.ndarray) -> np.ndarray:
     """(n, nq) the configuration of each platform's own model
-    (:class:`~assembler_pin.platform_model.PlatformModel`), its plate frames turned by
+    (:class:`~assembler_pin.model.platform.PlatformModel`), its plate frames turned by
     ``Rz(60°·j)``: root free-flyer = plate j, the legs' (ux, uy, length), top free-flyer =
     plate j+1 relative to plate j after the joint's home placement."""
     pm = am.platform_models[0]

@@ -7,8 +7,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..linalg import cross
-from ..model import AssemblerModel
+from ..common.linalg import cross
+from ..model.assembler import AssemblerModel
 from .poses import PlateArrays, plate_arrays
 
 __all__ = ["PlateDeviation", "plate_deviation"]

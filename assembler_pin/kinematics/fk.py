@@ -13,11 +13,11 @@ import numpy as np
 import numpy.typing as npt
 import pinocchio as pin
 
-from ..bounds import check_bound
+from ..common.validation import as_float_array
+from ..config.bounds import check_bound
 from ..exceptions import ConvergenceError, PoseError
-from ..geometry import LEGS_PER_PLATFORM
-from ..model import AssemblerModel
-from ..validation import as_float_array
+from ..model.assembler import AssemblerModel
+from ..model.geometry import LEGS_PER_PLATFORM
 from .poses import PlateArrays, plate_arrays, to_se3
 
 __all__ = ["FKResult", "StackFKResult", "sp_forward_kinematics", "stack_forward_kinematics"]

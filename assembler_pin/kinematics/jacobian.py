@@ -10,7 +10,7 @@ from collections.abc import Sequence
 import numpy as np
 import pinocchio as pin
 
-from ..model import AssemblerModel
+from ..model.assembler import AssemblerModel
 from .legs import relative_leg_directions
 from .poses import PlateArrays, plate_arrays
 

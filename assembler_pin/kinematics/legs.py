@@ -15,8 +15,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..exceptions import PoseError
-from ..geometry import LegGeometry
-from ..model import AssemblerModel
+from ..model.assembler import AssemblerModel
+from ..model.geometry import LegGeometry
 from .poses import PlateArrays, plate_arrays
 
 __all__ = [

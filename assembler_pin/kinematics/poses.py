@@ -15,9 +15,9 @@ import numpy as np
 import numpy.typing as npt
 import pinocchio as pin
 
+from ..common.validation import as_float_array
 from ..exceptions import PoseError
-from ..model import AssemblerModel
-from ..validation import as_float_array
+from ..model.assembler import AssemblerModel
 
 __all__ = [
     "MAX_ROTATION_VECTOR",

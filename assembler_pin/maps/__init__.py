@@ -10,8 +10,8 @@ batches on Dask (a local cluster by default, or an existing one) and written to 
 * :mod:`.pictures` — heatmap slices and the Meshcat point cloud.
 """
 
-from ..exceptions import MapError
+from ..exceptions import GridError, MapError
 from .engine import MapRun, read_map, run_map
-from .grid import Cell, Grid, GridError, parse_grid, parse_orientations
+from .grid import Cell, Grid, parse_grid, parse_orientations
 
 __all__ = ["Cell", "Grid", "GridError", "MapError", "MapRun", "parse_grid", "parse_orientations", "read_map", "run_map"]

@@ -16,16 +16,16 @@ from typing import TypedDict
 
 import numpy as np
 
-from ..capacity import PayloadModels, payload_capacity
-from ..config import AssemblerConfig, config_from_dict
+from ..common.labels import leg_label
+from ..compliance.ee_stiffness import stiffness
+from ..config.schema import AssemblerConfig, config_from_dict
 from ..constraints import leg_limit_margins
-from ..ee_stiffness import stiffness
 from ..exceptions import AssemblerError
 from ..helper_arm import HelperArmOptions
-from ..labels import leg_label
-from ..model import AssemblerModel
+from ..model.assembler import AssemblerModel
 from ..optimize import OptimizeOptions
-from ..solver import solve
+from ..solver.capacity import PayloadModels, payload_capacity
+from ..solver.pipeline import solve
 from ..state import StackState
 from .grid import Cell
 
@@ -68,21 +68,21 @@ COLUMNS = (
 )
 """The columns of a map file, in order. Positions [m], rotation vector [rad], forces [N];
 ``sag_m``: the EE's sag [m] at the optimized pose (``|sag translation|`` of
-:func:`~assembler_pin.ee_stiffness.stiffness`, legs of ``leg.stiffness``), and
+:func:`~assembler_pin.compliance.ee_stiffness.stiffness`, legs of ``leg.stiffness``), and
 ``weakest_stiffness_n_per_m`` its smallest principal stiffness under a pure force [N/m] (both
 NaN where no pose was optimized or the stiffness is not defined);
 ``key``: what the row was computed from (:func:`cell_key`)."""
 
 
 class _CapacitySettings(TypedDict):
-    """Arguments of :func:`~assembler_pin.capacity.payload_capacity`: ``rtol`` and ``max_iterations``."""
+    """Arguments of :func:`~assembler_pin.solver.capacity.payload_capacity`: ``rtol`` and ``max_iterations``."""
 
     rtol: float
     max_iterations: int
 
 
 CAPACITY_OPTIONS: _CapacitySettings = {"rtol": 1e-3, "max_iterations": 12}
-"""The payload-capacity search settings of every cell (:func:`~assembler_pin.capacity.payload_capacity`)."""
+"""The payload-capacity search settings of every cell (:func:`~assembler_pin.solver.capacity.payload_capacity`)."""
 
 _MODELS: dict[str, PayloadModels] = {}
 

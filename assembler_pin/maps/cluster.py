@@ -104,7 +104,7 @@ def client_for(scheduler: str | None, workers: int):
 def _one_blas_thread(client, cluster, where: str):
     """``client`` once every worker (and every worker that joins later) runs with one BLAS
     thread; a :class:`MapError` when the plugin cannot be registered."""
-    from .workers import PLUGIN_NAME, OneBlasThread
+    from .workers import PLUGIN_NAME, OneBlasThread  # delays distributed
 
     try:
         client.register_plugin(OneBlasThread(), name=PLUGIN_NAME)
@@ -144,7 +144,7 @@ def _local(workers: int, local_cluster, client):
     profiler: :data:`LOCAL_WORKER_CONFIG`) and its client."""
     import dask
 
-    from .workers import ONE_THREAD_ENV
+    from .workers import ONE_THREAD_ENV  # delays distributed
 
     cluster = None
     try:

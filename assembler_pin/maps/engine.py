@@ -27,14 +27,14 @@ from collections.abc import Iterator, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
-from ..bounds import check_bound
-from ..config import AssemblerConfig
+from ..common.progress import ProgressCallback
+from ..config.bounds import check_bound
+from ..config.schema import AssemblerConfig
 from ..exceptions import AssemblerError, MapError
-from ..progress import ProgressCallback
 from .cells import COLUMNS, cell_key, compute_batch, config_hash, config_key, solver_hash
 from .cluster import check_scheduler, client_for, stop
 from .grid import Cell, Grid
-from .store import check_manifest, manifest_for, need_pyarrow, read_parts, remove_stale_temporaries, write_part
+from .store import check_manifest, manifest_for, need_pyarrow, read_parts, remove_stale_temporaries, schema, write_part
 
 __all__ = ["MapRun", "done_cells", "read_map", "run_map"]
 
@@ -85,8 +85,6 @@ def read_map(out: str | Path):
     path = _out_dir(out, create=False)
     parts = read_parts(path) if path.is_dir() else []
     if not parts:
-        from .store import schema
-
         return schema().empty_table()
     table = pa.concat_tables([t for _, t in parts])
     return table.sort_by([("config", "ascending"), ("cell", "ascending")])

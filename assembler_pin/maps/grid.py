@@ -6,7 +6,7 @@ are rotation vectors ``RX RY RZ`` [deg], separated by ``;`` (default: level, ``0
 
 The readers are strict: numbers are plain ASCII decimals (``0.25``, ``-1e-3``; no ``nan``,
 ``inf``, ``1_000`` or non-ASCII digits), a COUNT is a plain integer, every item is given once
-and no item is empty. Counts are checked against :data:`~assembler_pin.bounds.BOUNDS`
+and no item is empty. Counts are checked against :data:`~assembler_pin.config.bounds.BOUNDS`
 (``map.axis_count``, ``map.orientations``, ``map.cells``) from the SPEC's numbers, before
 any axis array is built.
 """
@@ -22,10 +22,10 @@ from dataclasses import dataclass
 import numpy as np
 import pinocchio as pin
 
-from ..bounds import BOUNDS, check_bound
+from ..config.bounds import BOUNDS, check_bound
 from ..exceptions import GridError
 
-__all__ = ["Cell", "Grid", "GridError", "parse_grid", "parse_orientations"]
+__all__ = ["Cell", "Grid", "parse_grid", "parse_orientations"]
 
 _AXES = ("x", "y", "z")
 MAX_CELLS = int(BOUNDS["map.cells"].high)

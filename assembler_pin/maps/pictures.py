@@ -7,9 +7,8 @@ from matplotlib import colormaps
 from matplotlib.colors import ListedColormap
 from matplotlib.figure import Figure
 
-from ..exceptions import AssemblerError
-from ..model import AssemblerModel
-from ..palette import (
+from ..common.files import write_atomic
+from ..common.palette import (
     CAPACITY_CMAP,
     FORCE_MAGNITUDE_CMAP,
     OUTSIDE_GRID,
@@ -27,7 +26,9 @@ from ..palette import (
     UNREACHABLE_MARK,
     hex_color,
 )
-from ..plots import draw_state
+from ..exceptions import AssemblerError
+from ..model.assembler import AssemblerModel
+from ..plots.figures import draw_state
 from ..state import evaluate_state
 
 __all__ = [
@@ -74,7 +75,7 @@ def map_slice(table, config: str | None = None, orientation: int = 0) -> tuple[s
 
 def map_heatmaps(table, am: AssemblerModel, config: str | None = None, orientation: int = 0, title: str = "") -> Figure:
     """Reachability, optimized max|F| [N] and payload capacity [kg] over a 2-D map slice,
-    the stack's home pose drawn in each panel for scale. Colours are :mod:`~assembler_pin.palette`'s:
+    the stack's home pose drawn in each panel for scale. Colours are :mod:`~assembler_pin.common.palette`'s:
     a cell with no valid state is dark grey with an ``x`` in every panel, and where no cell
     was computed is white, hatched; the capacity scale is that of the HTML point cloud
     (:func:`capacity_range`), and the legend sits below the panels, hiding nothing."""
@@ -191,8 +192,8 @@ def point_size(points: np.ndarray) -> float:
 
 def show_map_points(viewer, table, size: float | None = None, config: str | None = None) -> tuple[float, float]:
     """Draw a map's cells as a point cloud in a :class:`~assembler_pin.viz.StackViewer`,
-    colored by payload capacity on :data:`~assembler_pin.palette.CAPACITY_CMAP` (dark = low,
-    yellow = high, the PNG's scale); unreached cells :data:`~assembler_pin.palette.UNREACHABLE`.
+    colored by payload capacity on :data:`~assembler_pin.common.palette.CAPACITY_CMAP` (dark = low,
+    yellow = high, the PNG's scale); unreached cells :data:`~assembler_pin.common.palette.UNREACHABLE`.
 
     Args:
         size: point size [m] (default :func:`point_size` of the grid).
@@ -235,8 +236,6 @@ def capacity_bar_html(lo: float, hi: float) -> str:
 def write_map_page(viewer, table, path, config: str | None = None) -> tuple[float, float]:
     """The map's standalone page: the cells over the stack, a title, and the capacity colour
     bar (:func:`capacity_bar_html`), written atomically to ``path``. Returns the scale [kg]."""
-    from ..files import write_atomic
-
     lo, hi = show_map_points(viewer, table, config=config)
     viewer.set_title(f"Capability map: payload capacity {lo:.2f} (dark) – {hi:.2f} kg (yellow); grey: not reachable")
     html = viewer.static_html().replace("</body>", capacity_bar_html(lo, hi) + "\n</body>", 1)

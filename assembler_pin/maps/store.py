@@ -3,7 +3,7 @@
 A map directory holds one map: ``map.json`` (the manifest: the grid's, every configuration's
 and the solver settings' hashes) and one ``part-*.parquet`` file per finished batch, each row
 carrying the ``key`` of what it was computed from (:func:`~.cells.cell_key`). Every file is
-written atomically (:func:`~assembler_pin.files.atomic_path`): a part is whole or absent.
+written atomically (:func:`~assembler_pin.common.files.atomic_path`): a part is whole or absent.
 A directory that holds another map, a part that cannot be read, has another schema, repeats
 a cell or holds a row computed from anything else is refused with one line
 (:class:`~assembler_pin.exceptions.MapError`); its rows are never mixed into an answer.
@@ -16,8 +16,8 @@ import hashlib
 import json
 from pathlib import Path
 
+from ..common.files import atomic_path, write_atomic
 from ..exceptions import AssemblerError, MapError
-from ..files import atomic_path, write_atomic
 from .cells import COLUMNS
 from .grid import Grid
 

@@ -2,7 +2,7 @@
 
 A map's numbers must not depend on the machine that computes them: a threaded BLAS sums in
 another order, and the optimizer can turn that into another local optimum
-(:mod:`~assembler_pin.threads`). :func:`~assembler_pin.maps.cluster.client_for` therefore
+(:mod:`~assembler_pin.common.threads`). :func:`~assembler_pin.maps.cluster.client_for` therefore
 registers :class:`OneBlasThread` on every cluster a map runs on (a local one or a remote
 scheduler, workers that join later included), and starts local workers with
 :data:`ONE_THREAD_ENV` so that a library loaded after the plugin's setup starts with one
@@ -15,7 +15,7 @@ from typing import Any
 
 from distributed import WorkerPlugin
 
-from ..threads import single_blas_thread
+from ..common.threads import single_blas_thread
 
 __all__ = ["ONE_THREAD_ENV", "PLUGIN_NAME", "OneBlasThread"]
 

@@ -8,7 +8,9 @@
 * :mod:`.rows` — every row of a trajectory held to the model (stack FK of its lengths).
 """
 
-from .paths import PATH_KINDS, EEPath, PathError, interpolate_pose, read_waypoints
+from ..config.choices import PATH_KINDS
+from ..exceptions import PathError
+from .paths import EEPath, interpolate_pose, read_waypoints
 from .planner import PlanOptions, PlanResult, plan_path
 
 __all__ = [

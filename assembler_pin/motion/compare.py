@@ -26,12 +26,14 @@ import numpy.typing as npt
 
 from ..helper_arm import initial_condition
 from ..kinematics import stack_forward_kinematics
-from ..model import AssemblerModel
+from ..model.assembler import AssemblerModel
 from ..state import evaluate_state
 from .guess import on_se3
 from .paths import EEPath
 from .planner import PlanOptions, PlanResult
-from .timing import MotionResult, Trajectory, plan_trajectory, time_parametrize
+from .result import MotionResult
+from .timing import plan_trajectory, time_parametrize
+from .trajfile import Trajectory
 
 __all__ = ["METHODS", "MotionComparison", "PlanFigures", "compare_motion"]
 

@@ -14,7 +14,7 @@ import numpy as np
 
 from ..kinematics import PlateArrays, nearest_rotations
 
-__all__ = ["nearest_rotations", "on_se3"]
+__all__ = ["on_se3"]
 
 
 def on_se3(plates: PlateArrays) -> PlateArrays:

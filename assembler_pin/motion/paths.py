@@ -25,13 +25,13 @@ from pathlib import Path
 import numpy as np
 import pinocchio as pin
 
-from ..bounds import BOUNDS, check_bound
-from ..choices import PATH_KINDS
+from ..common.files import read_text_bounded, strict_json
+from ..config.bounds import BOUNDS, check_bound
+from ..config.choices import PATH_KINDS
 from ..exceptions import AssemblerError, PathError
-from ..files import read_text_bounded
 from ..kinematics import taa_to_se3, to_se3
 
-__all__ = ["PATH_KINDS", "EEPath", "PathError", "interpolate_pose", "read_waypoints"]
+__all__ = ["EEPath", "interpolate_pose", "read_waypoints"]
 
 
 def interpolate_pose(a: pin.SE3, b: pin.SE3, t: float, kind: str = "screw") -> pin.SE3:
@@ -141,8 +141,6 @@ def _numbers(row: object, width: int) -> bool:
 
 def _json_waypoints(text: str) -> tuple[list, tuple[float, ...] | None, bool]:
     """(rows, times or None, degrees) of a JSON waypoint file."""
-    from .trajfile import strict_json
-
     doc = strict_json(text, PathError)
     if not isinstance(doc, dict) or "waypoints" not in doc:
         raise PathError('expected a JSON object {"waypoints": [[x, y, z, rx, ry, rz], ...]}')

@@ -25,16 +25,16 @@ from dataclasses import dataclass, field
 import numpy as np
 import pinocchio as pin
 
-from ..constraints import GoalTolerance, leg_limit_margins
+from ..common.messages import binding, describe, one_line
+from ..common.progress import ProgressCallback
+from ..config.options import GEOMETRIC_MARGIN, SMOOTH_METHODS, GoalTolerance, checked_options, is_number
+from ..constraints import leg_limit_margins
 from ..exceptions import OptionsError
 from ..kinematics import PlateArrays, plate_arrays, stack_forward_kinematics
-from ..messages import binding, describe, one_line
-from ..model import AssemblerModel
+from ..model.assembler import AssemblerModel
 from ..optimize import MotionTerm, OptimizeOptions, OptimizeResult, optimize_internal_poses
-from ..options import GEOMETRIC_MARGIN, SMOOTH_METHODS, checked_options
-from ..progress import ProgressCallback
+from ..solver.pipeline import solve
 from ..state import StackState, evaluate_state
-from ..validation import is_number
 from .guess import on_se3
 from .paths import EEPath
 
@@ -230,8 +230,6 @@ def _start_state(
     """The valid state the plan starts from, or (None, why not)."""
     first = path.at(0.0)
     if start is None:
-        from ..solver import solve
-
         solved = solve(am, first, options=opts.optimize)
         if not solved.success:
             return None, one_line(f"{solved.message}, at the path's start")
@@ -257,7 +255,7 @@ def plan_path(
         path: the EE path (:class:`~assembler_pin.motion.paths.EEPath`).
         start: the stack's state at the path's start (e.g. its current pose, or
             ``am.home`` for a motion from the home pose). Default: the force-optimized
-            solution of the path's first pose (:func:`~assembler_pin.solver.solve`).
+            solution of the path's first pose (:func:`~assembler_pin.solver.pipeline.solve`).
         options: see :class:`PlanOptions`.
         progress: called as ``(permille of the path done, 1000, note)`` after each sample.
     """

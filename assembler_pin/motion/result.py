@@ -9,7 +9,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..model import AssemblerModel
+from ..model.assembler import AssemblerModel
 from .planner import PlanResult
 from .trajfile import Trajectory
 

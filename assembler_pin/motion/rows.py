@@ -17,11 +17,13 @@ from __future__ import annotations
 import numpy as np
 import pinocchio as pin
 
-from ..constraints import GoalTolerance, leg_limit_margins
+from ..common.progress import ProgressCallback
+from ..config.options import GoalTolerance
+from ..constraints import leg_limit_margins
+from ..dynamics import inverse_dynamics_from_lengths
 from ..exceptions import TrajectoryError
 from ..kinematics import PlateArrays, se3_to_taa, stack_forward_kinematics, taa_to_se3
-from ..model import AssemblerModel
-from ..progress import ProgressCallback
+from ..model.assembler import AssemblerModel
 from ..state import StackState, evaluate_state
 from .guess import on_se3
 from .trajfile import MARGIN_KINDS, Trajectory
@@ -51,8 +53,6 @@ def evaluate_rows(
         rates, accels: (T, n, 6) the legs' length rates [m/s] and accelerations [m/s²] of the
             time law at each row (default: at rest, the dynamic forces are the statics).
     """
-    from ..dynamics import inverse_dynamics_from_lengths
-
     tol: GoalTolerance = plan.path_tolerance
     T = len(times)
     ee, force, feasible = np.full((T, 6), np.nan), np.full(T, np.nan), np.zeros(T, dtype=bool)

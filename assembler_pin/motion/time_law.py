@@ -30,9 +30,10 @@ from typing import Any, Protocol
 
 import numpy as np
 
+from ..config.bounds import BOUNDS
 from ..exceptions import TrajectoryError
 
-__all__ = ["TIME_LAWS", "QuinticLaw", "Schedule", "TimeLaw", "TimingProblem", "time_law"]
+__all__ = ["TIME_LAWS", "QuinticLaw", "Schedule", "TimeLaw", "TimingProblem"]
 
 logger = logging.getLogger(__name__)
 
@@ -113,8 +114,6 @@ def _quintic(tau: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
 
 def _row_counts(durations: list[float], rate: float) -> list[int]:
     """Output intervals of each piece, after checking the duration and row bounds."""
-    from ..bounds import BOUNDS
-
     total = sum(durations)
     limit = BOUNDS["plan.duration"].high
     if not total <= limit:
@@ -181,14 +180,3 @@ class QuinticLaw:
         sdd[0][0] = 0.0
         cat = np.concatenate
         return Schedule(self.name, cat(times), cat(s), cat(sd), cat(sdd), time.perf_counter() - t0)
-
-
-def time_law(name: str) -> TimeLaw:
-    """The law called ``name`` (:data:`TIME_LAWS`)."""
-    if name == "quintic":
-        return QuinticLaw()
-    if name == "optimal":
-        from .toppra_law import OptimalLaw as Optimal
-
-        return Optimal()
-    raise TrajectoryError(f"time law must be one of {', '.join(TIME_LAWS)} (or auto), got {name!r}")

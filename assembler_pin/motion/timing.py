@@ -27,30 +27,28 @@ import time
 
 import numpy as np
 
-from ..bounds import check_bound
+from ..common.messages import one_line
+from ..common.progress import ProgressCallback
+from ..common.threads import one_blas_thread
+from ..config.bounds import check_bound
+from ..config.options import checked_options
+from ..dynamics import path_force_coefficients
 from ..exceptions import PathError, TrajectoryError
-from ..messages import one_line
-from ..model import AssemblerModel
-from ..options import checked_options
-from ..progress import ProgressCallback
-from ..threads import one_blas_thread
+from ..model.assembler import AssemblerModel
 from .paths import EEPath
-from .planner import PlanOptions, PlanResult
+from .planner import PlanOptions, PlanResult, plan_path
 from .result import MotionResult, first_bad_row, plan_prefix, rows_prefix, verify_trajectory
-from .rows import check_trajectory, trajectory_states
-from .time_law import TIME_LAWS, TimingProblem, time_law
+from .rows import evaluate_rows, trajectory_states
+from .time_law import TIME_LAWS, QuinticLaw, TimeLaw, TimingProblem
+from .toppra_law import OptimalLaw
 from .trajfile import Trajectory, read_trajectory
 
 __all__ = [
-    "MotionResult",
-    "Trajectory",
-    "TrajectoryError",
-    "check_trajectory",
     "plan_trajectory",
     "read_trajectory",
+    "time_law",
     "time_parametrize",
     "trajectory_states",
-    "verify_trajectory",
 ]
 
 
@@ -83,8 +81,6 @@ def _force_terms(am: AssemblerModel, plan: PlanResult, spline):
     """``forces(grid)`` of :class:`~.time_law.TimingProblem`: the coefficients ``a, b, c`` of
     every leg's force at the planned samples (their poses known), linear in between; at a
     sample the two one-sided ``L''`` of the PCHIP give two rows of ``b`` (a and c repeated)."""
-    from ..dynamics import path_force_coefficients
-
     m = len(plan.states)
     knots = np.arange(m, dtype=float)
     d1 = spline(knots, 1)
@@ -173,8 +169,6 @@ def _timed(
 ) -> tuple[Trajectory, np.ndarray]:
     """:func:`time_parametrize`, and the path sample index ``s`` of each row."""
     from scipy.interpolate import PchipInterpolator
-
-    from .rows import evaluate_rows
 
     leg = am.config.leg
     v_max = leg.max_speed if max_speed is None else max_speed
@@ -273,8 +267,6 @@ def plan_trajectory(
     Raises:
         TrajectoryError: ``rate`` out of its bounds (checked before planning).
     """
-    from .planner import plan_path
-
     t0 = time.perf_counter()
     opts = _checked_plan_inputs(path, options, rate, refinements, time_law)
     for attempt in range(refinements + 1):
@@ -385,3 +377,12 @@ def _answer(
     if final is not None:
         final.meta.update(complete=success, reason=reason)
     return MotionResult(success, reason, plan, final, problems, time.perf_counter() - t0)
+
+
+def time_law(name: str) -> TimeLaw:
+    """The law called ``name`` (:data:`TIME_LAWS`)."""
+    if name == "quintic":
+        return QuinticLaw()
+    if name == "optimal":
+        return OptimalLaw()
+    raise TrajectoryError(f"time law must be one of {', '.join(TIME_LAWS)} (or auto), got {name!r}")

@@ -21,7 +21,7 @@ the motion's part) and ``feasible`` (1). Version 3 added ``time_law``, the ``F_*
 ``margin_force_dynamic``; older files are refused with a request to plan again.
 
 :func:`read_trajectory` checks the format (types, names, counts, checksum, finite numbers,
-times increasing from 0); :func:`~assembler_pin.motion.timing.check_trajectory` then holds
+times increasing from 0); :func:`~assembler_pin.motion.rows.check_trajectory` then holds
 every row to the model (stroke, speeds, and the EE against stack FK of its lengths).
 """
 
@@ -37,10 +37,12 @@ from pathlib import Path
 
 import numpy as np
 
-from ..bounds import check_bound
+from ..common.files import read_text_bounded, strict_json, write_atomic
+from ..common.naming import names
+from ..config.bounds import check_bound
+from ..config.choices import PATH_KINDS
 from ..exceptions import AssemblerError, TrajectoryError
-from ..files import read_text_bounded, write_atomic
-from ..naming import names
+from ..kinematics import checked_rotations
 
 __all__ = [
     "FORMAT",
@@ -49,7 +51,6 @@ __all__ = [
     "VERSION",
     "Trajectory",
     "read_trajectory",
-    "strict_json",
     "trajectory_columns",
 ]
 
@@ -208,7 +209,7 @@ def rows_digest(rows: np.ndarray) -> str:
 def read_trajectory(path: str | os.PathLike[str]) -> Trajectory:
     """A trajectory file written by :meth:`Trajectory.write` (CSV or JSON by suffix), checked
     as a format: names, types, row count, checksum, finite values, times increasing from 0,
-    every row valid. Hold it to a model with :func:`~assembler_pin.motion.timing.check_trajectory`.
+    every row valid. Hold it to a model with :func:`~assembler_pin.motion.rows.check_trajectory`.
 
     Raises:
         TrajectoryError: one line naming the file and what is wrong with it.
@@ -222,28 +223,6 @@ def read_trajectory(path: str | os.PathLike[str]) -> Trajectory:
         return _trajectory(meta, columns, rows)
     except AssemblerError as exc:
         raise TrajectoryError(f"trajectory '{path}': {exc}") from None
-
-
-def strict_json(text: str, error: type[AssemblerError] = TrajectoryError) -> object:
-    """JSON without NaN/Infinity constants or duplicate keys; ``error`` (one line) when not."""
-
-    def pairs(items: list[tuple[str, object]]) -> dict:
-        keys = [k for k, _ in items]
-        if len(set(keys)) != len(keys):
-            raise error(f"duplicate key {next(k for k in keys if keys.count(k) > 1)!r}"[:120])
-        return dict(items)
-
-    def constant(name: str) -> object:
-        raise error(f"{name} is not a number a file may hold")
-
-    try:
-        return json.loads(text, object_pairs_hook=pairs, parse_constant=constant)
-    except AssemblerError:
-        raise
-    except json.JSONDecodeError as exc:
-        raise error(f"not valid JSON ({exc.msg} at line {exc.lineno} column {exc.colno}): truncated?") from None
-    except (RecursionError, ValueError) as exc:  # deep nesting, an integer of thousands of digits
-        raise error(f"not a valid file ({type(exc).__name__}: nested too deeply or a number too long)") from None
 
 
 def _parse_json(text: str) -> tuple[dict, list, list]:
@@ -302,9 +281,6 @@ def _is_num(x: object) -> bool:
 
 def _check_meta(meta: object) -> dict:
     """The file's meta with every key of the right type and range, or a TrajectoryError."""
-    from ..kinematics import checked_rotations
-    from .paths import PATH_KINDS
-
     if not isinstance(meta, dict):
         raise TrajectoryError("meta must be a JSON object")
     if set(meta) != _META_KEYS:

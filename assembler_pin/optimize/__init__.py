@@ -9,10 +9,10 @@ variable too, ``T_n = T_goal · exp6(x_n)``, with ``|x_n[3:]| <= rotation tolera
 
 Objective (paper eq. 10): ``Ω = w1·max|F| + w2·sqrt(Σ λ_k²)``, with λ_k the angle between
 ``p_k - p_{k-1}`` and the rest direction of plate k on plate k-1 (eq. 9); written once, in
-:mod:`assembler_pin.objective`.
+:mod:`assembler_pin.optimize.objective`.
 
 Other objectives (``OptimizeOptions.objective``, slsqp only): ``"sag"`` minimizes the EE's
-sag under its own load (legs stretched by F/k, :func:`~assembler_pin.compliance.sag_and_gradient`)
+sag under its own load (legs stretched by F/k, :func:`~assembler_pin.compliance.loaded.sag_and_gradient`)
 over the home pose's sag, every constraint kept (the force limits then are not capped by the
 start's max|F|); ``"weighted"`` minimizes ``Ω + w·sag/sag_home``. ``max_sag`` adds the row
 ``sag <= max_sag`` (:class:`.rows.SagRows`). The sag's gradient is the exact adjoint one.
@@ -21,12 +21,12 @@ Methods:
 
 * ``"slsqp"`` (default, :mod:`.smooth`): max|F| through an epigraph variable ``s``
   (``-s <= F_i <= s``), so the problem is smooth, and analytic gradients of every force,
-  length, deflection and angle (:mod:`assembler_pin.gradients`) — scipy's SLSQP.
+  length, deflection and angle (:mod:`assembler_pin.statics.derivatives`) — scipy's SLSQP.
 * ``"ipopt"`` (:mod:`.ipopt`, the ``nlp`` extra): the same epigraph problem, rows and
   analytic derivatives, solved by IPOPT (through CasADi) on the constraint Jacobian's
   structural sparsity (platform j's legs move with plates j and j+1, its forces with plates
   j..n); every point IPOPT evaluates is tracked, so the best feasible one is never lost.
-* ``"auto"``: IPOPT from :data:`~assembler_pin.options.AUTO_IPOPT_PLATFORMS` platforms up
+* ``"auto"``: IPOPT from :data:`~assembler_pin.config.options.AUTO_IPOPT_PLATFORMS` platforms up
   when CasADi is installed, SLSQP otherwise (the result's ``method`` names the one that ran).
 * ``"paper"`` (:mod:`.paper`): the paper's literal formulation — the non-smooth ``max`` in
   the objective, the poses as TAA vectors in the world frame, gradients by scipy's finite
@@ -52,9 +52,10 @@ nothing better was found, with the reason (:mod:`.result`).
 
 from __future__ import annotations
 
-from ..objective import objective_value
+from ..config.options import METHODS, OptimizeOptions
 from .internal_poses import optimize_internal_poses
-from .options import METHODS, MotionTerm, OptimizeOptions
+from .objective import objective_value
+from .options import MotionTerm
 from .point import SINGULAR_FORCE
 from .result import OptimizeResult
 

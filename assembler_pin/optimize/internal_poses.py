@@ -15,15 +15,16 @@ from dataclasses import dataclass
 import numpy as np
 import pinocchio as pin
 
+from ..common.messages import one_line
+from ..common.threads import one_blas_thread
+from ..config.options import SMOOTH_METHODS, GoalTolerance, OptimizeOptions, checked_options, resolved_method
 from ..exceptions import OptionsError, _SingularIterateError
 from ..kinematics import PlateArrays, checked_goal, plate_arrays
-from ..messages import one_line
-from ..model import AssemblerModel, checked_model
-from ..objective import SagObjective, state_sag, state_score
-from ..options import SMOOTH_METHODS, GoalTolerance, OptimizeOptions, checked_options, resolved_method
+from ..model.assembler import AssemblerModel, checked_model
 from ..state import StackState, evaluate_state
-from ..threads import one_blas_thread
 from .certificate import Optimality, optimality
+from .ipopt import run_ipopt
+from .objective import SagObjective, state_sag, state_score
 from .options import MotionTerm
 from .paper import PaperForm
 from .problem import Problem
@@ -329,7 +330,7 @@ class _Check:
         return self.opts.max_sag is None or state_sag(self.am, state) <= self.opts.max_sag
 
     def score(self, state: StackState) -> float:
-        """The objective of the state (:func:`~assembler_pin.objective.state_score`)."""
+        """The objective of the state (:func:`~assembler_pin.optimize.objective.state_score`)."""
         return state_score(self.am, state, self.objective, self.opts.w1, self.opts.w2, self.motion)
 
 
@@ -340,8 +341,6 @@ def _run_solver(problem: Problem, initial_state: StackState) -> tuple[SolverResu
 
     opts = problem.opts
     if opts.method == "ipopt":
-        from .ipopt import run_ipopt
-
         ipopt_result, singular = run_ipopt(problem, SmoothForm(problem).x0(initial_state))
         return ipopt_result, ipopt_result.x[:-1], singular
     form = SmoothForm(problem) if opts.method == "slsqp" else PaperForm(problem)

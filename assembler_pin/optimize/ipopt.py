@@ -19,13 +19,13 @@ from typing import Any
 
 import numpy as np
 
+from ..common.threads import forget_loaded_libraries, single_blas_thread
+from ..config.options import IPOPT_INSTALL_HINT, casadi_missing
 from ..exceptions import OptionsError
-from ..options import IPOPT_INSTALL_HINT, casadi_missing
-from ..threads import forget_loaded_libraries, single_blas_thread
 from .problem import Problem
 from .wrench import WrenchForm
 
-__all__ = ["casadi_missing", "ipopt_options", "run_ipopt", "values_callback"]
+__all__ = ["ipopt_options", "run_ipopt", "values_callback"]
 
 logger = logging.getLogger(__name__)
 
@@ -176,7 +176,7 @@ SCALAR2_PLATFORMS = 16
 
 
 def ipopt_options(problem: Problem) -> dict:
-    """IPOPT's settings from :class:`~assembler_pin.options.OptimizeOptions`.
+    """IPOPT's settings from :class:`~assembler_pin.config.options.OptimizeOptions`.
 
     The iteration limit; ``tol = ftol``; and SLSQP's kind of stop on the objective: the
     "acceptable" level after 3 iterations whose objective changes by less than ``10·ftol``

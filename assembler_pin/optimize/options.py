@@ -1,5 +1,5 @@
-"""The optimizer's settings: :class:`~assembler_pin.options.OptimizeOptions` and the
-continuity term of a motion (:class:`MotionTerm`)."""
+"""The continuity term of a motion (:class:`MotionTerm`); the optimizer's options are
+:class:`~assembler_pin.config.options.OptimizeOptions`."""
 
 from __future__ import annotations
 
@@ -8,18 +8,17 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..config.options import is_number
 from ..exceptions import OptionsError
-from ..options import METHODS, OptimizeOptions
-from ..validation import is_number
 
-__all__ = ["METHODS", "MotionTerm", "OptimizeOptions"]
+__all__ = ["MotionTerm"]
 
 
 @dataclass(frozen=True)
 class MotionTerm:
     """Continuity with the previous sample of a motion.
 
-    Its cost ``w3·Σ (L_i - L_i^prev)²`` is :func:`assembler_pin.objective.motion_cost`.
+    Its cost ``w3·Σ (L_i - L_i^prev)²`` is :func:`assembler_pin.optimize.objective.motion_cost`.
 
     Attributes:
         previous_lengths: (n, 6) leg lengths of the previous sample [m].

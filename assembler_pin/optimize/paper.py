@@ -9,8 +9,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..objective import omega
 from ..state import StackState
+from .objective import omega
 from .problem import Problem, finite_rows
 
 __all__ = ["PaperForm"]

@@ -8,9 +8,9 @@ from functools import cached_property
 
 import numpy as np
 
-from ..gradients import PoseDerivatives, PoseValues
 from ..kinematics import PlateArrays
-from ..pose_kernel import PoseMeasures
+from ..statics.derivatives import PoseDerivatives, PoseValues
+from ..statics.pose_kernel import PoseMeasures
 
 __all__ = ["SINGULAR_FORCE", "ChartDerivatives", "Point", "block_chart"]
 
@@ -25,8 +25,8 @@ class Point:
 
     Attributes:
         x: the chart coordinates of the movable plates.
-        values: the closed-form pass (:func:`~assembler_pin.gradients.pose_values`, or its
-            compiled twin :meth:`~assembler_pin.pose_kernel.CompiledPass.values`).
+        values: the closed-form pass (:func:`~assembler_pin.statics.derivatives.pose_values`, or its
+            compiled twin :meth:`~assembler_pin.statics.pose_kernel.CompiledPass.values`).
         forces: (n, 6) actuator forces [N, tension positive], :data:`SINGULAR_FORCE` where
             the statics are not defined.
     """
@@ -77,7 +77,7 @@ class ChartDerivatives:
 
     Attributes:
         pose: the derivatives w.r.t. the world twists of plates 1..n
-            (:func:`~assembler_pin.gradients.pose_derivatives`, last axis 6n).
+            (:func:`~assembler_pin.statics.derivatives.pose_derivatives`, last axis 6n).
         B: (6n, m) the world twists of plates 1..n per chart coordinate.
         blocks: where ``B`` is block diagonal (the local chart), the index (0 for plate 1)
             of each movable plate: then :meth:`chart` multiplies the 6×6 blocks alone

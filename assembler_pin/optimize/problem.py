@@ -4,12 +4,12 @@ and the evaluation of a chart point.
 Every iterate is evaluated by ONE closed-form pass: forces, lengths, deflection cosines, rise
 and plate angles. Where the solver asks for derivatives at that point, a second pass gives
 them. By default the passes are the numpy reference
-(:func:`~assembler_pin.gradients.pose_values`, whose pass
-:func:`~assembler_pin.gradients.pose_derivatives` extends); with ``ASSEMBLER_PIN_STATICS=numba``
-they run compiled (:class:`~assembler_pin.pose_kernel.CompiledPass`, values and derivatives in
+(:func:`~assembler_pin.statics.derivatives.pose_values`, whose pass
+:func:`~assembler_pin.statics.derivatives.pose_derivatives` extends); with ``ASSEMBLER_PIN_STATICS=numba``
+they run compiled (:class:`~assembler_pin.statics.pose_kernel.CompiledPass`, values and derivatives in
 one call each), except in a problem that reads the sag or runs IPOPT. The sag objectives and the sag limit
 read the EE's linear sag of that pass (:func:`.sag.linear_sag`) and, with the
-derivatives, its adjoint gradient (:func:`~assembler_pin.compliance.sag_and_gradient`).
+derivatives, its adjoint gradient (:func:`~assembler_pin.compliance.loaded.sag_and_gradient`).
 The Pinocchio statics are not used here: they re-check the returned state
 (:func:`~assembler_pin.state.evaluate_state` in :mod:`.internal_poses`), an independent path.
 """
@@ -21,14 +21,14 @@ from typing import cast
 import numpy as np
 import pinocchio as pin
 
+from ..config.options import GEOMETRIC_MARGIN, SMOOTH_METHODS, OptimizeOptions
 from ..exceptions import SingularConfigurationError, _SingularIterateError
-from ..gradients import PoseDerivatives, PoseValues, pose_derivatives, pose_values
 from ..kinematics import PlateArrays
-from ..model import AssemblerModel
-from ..objective import SagObjective, motion_cost, omega, sag_reference
-from ..options import GEOMETRIC_MARGIN, SMOOTH_METHODS, OptimizeOptions
-from ..pose_kernel import CompiledPass, use_pose_kernel
+from ..model.assembler import AssemblerModel
+from ..statics.derivatives import PoseDerivatives, PoseValues, pose_derivatives, pose_values
+from ..statics.pose_kernel import CompiledPass, use_pose_kernel
 from .charts import LocalChart, TaaChart
+from .objective import SagObjective, motion_cost, omega, sag_reference
 from .options import MotionTerm
 from .point import ChartDerivatives, Point
 from .rows import EETolerance, ForceLimitRows, LegLimitRows, MotionRows, SagRows
@@ -161,7 +161,7 @@ class Problem:
         return pose_derivatives(self.am, p.plates, _numpy_values(p))
 
     def score(self, p: Point) -> float:
-        """The objective at the point (Ω, the sag or both, :mod:`assembler_pin.objective`),
+        """The objective at the point (Ω, the sag or both, :mod:`assembler_pin.optimize.objective`),
         with the motion term."""
         omega_value = omega(p.max_abs_force, p.plate_angles, self.opts.w1, self.opts.w2)
         sag = self.sag(p) if self.objective.needs_sag else 0.0
@@ -182,7 +182,7 @@ class Problem:
         Raises:
             _SingularIterateError: the pose is singular there.
         """
-        from ..compliance import sag_and_gradient
+        from ..compliance.loaded import sag_and_gradient  # delays scipy
 
         p, d = self.point(x_pose), self.derivatives(x_pose)
         if self._sag_grad is None or self._sag_grad[0] is not d:

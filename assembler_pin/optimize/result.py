@@ -8,7 +8,7 @@ from typing import TYPE_CHECKING, Protocol
 
 import numpy as np
 
-from ..messages import binding, describe, one_line
+from ..common.messages import binding, describe, one_line
 from ..state import StackState
 
 if TYPE_CHECKING:
@@ -34,12 +34,12 @@ class OptimizeResult:
         initial, optimized: the starting state and the best feasible state found (the
             initial one when nothing better was found).
         objective_initial, objective_optimized: the objective of both states (Ω for the
-            force objective, :mod:`assembler_pin.objective`).
+            force objective, :mod:`assembler_pin.optimize.objective`).
         method: the method used (``slsqp``, ``paper``, ``ipopt``, or ``ipopt+slsqp`` for
             ``auto``'s IPOPT run finished by SLSQP); objective: the objective minimized
             (``OptimizeOptions.objective``).
         sag_initial, sag_optimized: the EE's linear sag of both states [m]
-            (:func:`~assembler_pin.compliance.sag_and_gradient`; inf where a platform is singular).
+            (:func:`~assembler_pin.compliance.loaded.sag_and_gradient`; inf where a platform is singular).
     """
 
     success: bool

@@ -18,9 +18,9 @@ from __future__ import annotations
 import numpy as np
 import pinocchio as pin
 
-from ..config import LegConfig
+from ..config.options import GoalTolerance
+from ..config.schema import LegConfig
 from ..constraints import leg_limit_margins
-from ..options import GoalTolerance
 from .charts import LocalChart, TaaChart
 from .options import MotionTerm
 from .point import ChartDerivatives, Point
@@ -120,7 +120,7 @@ class EETolerance:
 
 class MotionRows:
     """``max_step - margin ∓ (L_i - L_i^prev) >= 0`` for every leg [m]: ``margin``
-    (:data:`~assembler_pin.options.GEOMETRIC_MARGIN`) inside the step the final check applies,
+    (:data:`~assembler_pin.config.options.GEOMETRIC_MARGIN`) inside the step the final check applies,
     as the leg limits are: SLSQP honours its rows to ~1e-8, and an optimum on the step would
     otherwise be returned just outside it."""
 
@@ -138,7 +138,7 @@ class MotionRows:
 
 class SagRows:
     """``(0.999999·max_sag - sag) / max_sag >= 0``: the EE's linear sag
-    (:func:`~assembler_pin.compliance.sag_and_gradient`) within ``max_sag`` [m], one
+    (:func:`~assembler_pin.compliance.loaded.sag_and_gradient`) within ``max_sag`` [m], one
     dimensionless row (slightly inside the limit the final check applies)."""
 
     SHRINK = 1.0 - 1e-6

@@ -1,18 +1,18 @@
 """The smooth method (``"slsqp"``): max|F| through an epigraph variable ``s``.
 
 x = [poses in the local chart, s]; minimize ``w1·s + w2·sqrt(Σ λ_k²) (+ w3·Σ ΔL²)`` (the
-force objective; the sag objectives replace or extend it, :class:`~assembler_pin.objective.SagObjective`)
+force objective; the sag objectives replace or extend it, :class:`~assembler_pin.optimize.objective.SagObjective`)
 subject to ``-s <= F_i <= s``, the force limits (on ``s`` alone when they are equal), every
 leg limit, the EE tolerance, the motion step and the sag limit. Smooth, so SLSQP gets exact gradients
-(:mod:`assembler_pin.gradients`), all from the closed-form pass of each point.
+(:mod:`assembler_pin.statics.derivatives`), all from the closed-form pass of each point.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-from ..objective import deviation_term_gradient, motion_cost, motion_cost_gradient, omega
 from ..state import StackState
+from .objective import deviation_term_gradient, motion_cost, motion_cost_gradient, omega
 from .problem import Problem, finite_rows
 from .rows import EpigraphRows
 

@@ -6,7 +6,7 @@ triangle: at n = 64, 87 % of its 173,000 non-zeros, and a dense block in IPOPT's
 Here the moments are variables, ``x = [poses in the local chart, m_0..m_{n-1}, s]`` with
 ``m_j`` [N·m] (held in x in units of :data:`MOMENT_SCALE`) standing for ``M_up,j`` (about
 the world origin), tied to the poses by the
-equality rows of the level above (:func:`assembler_pin.closed_form.equilibrium`'s
+equality rows of the level above (:func:`assembler_pin.statics.closed_form.equilibrium`'s
 ``level_moment``):
 
     ``m_j - m_{j+1} - level_{j+1}(plates j+1, j+2) = 0``   (``m_n = 0``)
@@ -22,7 +22,7 @@ Pinocchio statics in :mod:`.internal_poses`).
 Every point evaluated goes through :meth:`~.problem.Problem.point` (the true forces of
 the poses), which keeps the best feasible point met.
 
-The derivatives are the closed form's (:mod:`assembler_pin.gradients`) restricted to each
+The derivatives are the closed form's (:mod:`assembler_pin.statics.derivatives`) restricted to each
 platform's two plates (:func:`banded_derivatives`, world twists ``[η_j, η_{j+1}]``), then
 taken to the chart by the 6×6 blocks of the local chart.
 """
@@ -34,18 +34,18 @@ from typing import cast
 
 import numpy as np
 
+from ..common.linalg import inverse_or_nan, skew
 from ..exceptions import _SingularIterateError
-from ..gradients import (
+from ..model.assembler import AssemblerModel
+from ..statics.derivatives import (
     PoseValues,
     _axial_force_derivatives,
     _plate_angle_sq_derivatives,
     _rest_directions,
     _transverse_force_derivatives,
 )
-from ..linalg import inverse_or_nan, skew
-from ..model import AssemblerModel
-from ..objective import deviation_term_gradient, motion_cost_gradient
 from .charts import LocalChart
+from .objective import deviation_term_gradient, motion_cost_gradient
 from .point import Point, block_chart
 from .problem import Problem, finite_rows
 from .smooth import SmoothForm
@@ -102,7 +102,7 @@ def banded_derivatives(am: AssemblerModel, v: PoseValues, m: np.ndarray) -> Band
     """Every derivative of the moment-variable form at the moment variables ``m`` (n, 3)
     [N·m], per platform (:class:`BandedDerivatives`).
 
-    The same equilibrium as :func:`~assembler_pin.gradients.pose_derivatives` with
+    The same equilibrium as :func:`~assembler_pin.statics.derivatives.pose_derivatives` with
     ``M_up,j`` replaced by ``m_j``: ``K da = d(rhs) - dK a`` on the platform's own plates.
     """
     cfg, n = am.config, am.n

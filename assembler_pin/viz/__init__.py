@@ -5,7 +5,7 @@ loaded pose and the EE's compliance ellipsoid.
 and a visual geometry model parsed from the generated URDF (primitive shapes only). One
 concern per module:
 
-* :mod:`.colors` — the package's colour language (:mod:`~assembler_pin.palette`) as arrays,
+* :mod:`.colors` — the package's colour language (:mod:`~assembler_pin.common.palette`) as arrays,
   the leg force scale (:func:`force_color`: blue compression ↔ gray zero ↔ red tension);
 * :mod:`.camera` — :func:`camera_for_points`, the one frame-along-an-axis helper;
 * :mod:`.placements` — where each visual goes (Pinocchio's kinematics or the closed form);
@@ -24,7 +24,7 @@ Everything is in the world frame O (z up) and SI units.
 
 from __future__ import annotations
 
-from ..signals import StopRequested, interrupt_on_signals
+from ..common.signals import StopRequested, interrupt_on_signals
 from .animation import FORCE_BAND_LENGTH, FORCE_BAND_LEVELS, interpolate_states
 from .camera import CAMERA_FOV_DEG, Camera, camera_for_points, frame_along_axis
 from .colors import (

@@ -17,11 +17,11 @@ import meshcat.geometry as mg
 import numpy as np
 import pinocchio as pin
 
+from ..common.naming import names
 from ..exceptions import AssemblerError, ConvergenceError
-from ..geometry import DIMENSIONS
 from ..kinematics import PlateArrays, leg_state, leg_vectors, stack_forward_kinematics
-from ..model import AssemblerModel
-from ..naming import names
+from ..model.assembler import AssemblerModel
+from ..model.geometry import DIMENSIONS
 from ..state import StackState, evaluate_state
 from .camera import cylinder_between
 from .colors import force_color, material

@@ -1,7 +1,7 @@
-"""The viewer's colours: the package's one colour language (:mod:`~assembler_pin.palette`)
+"""The viewer's colours: the package's one colour language (:mod:`~assembler_pin.common.palette`)
 as numpy arrays, the leg force scale and meshcat materials.
 
-Every value here is taken from :mod:`~assembler_pin.palette`; none is written twice.
+Every value here is taken from :mod:`~assembler_pin.common.palette`; none is written twice.
 """
 
 from __future__ import annotations
@@ -10,8 +10,8 @@ import meshcat.geometry as mg
 import numpy as np
 import numpy.typing as npt
 
-from .. import palette
-from ..choices import FORCE_SCALES
+from ..common import palette
+from ..config.choices import FORCE_SCALES
 from ..exceptions import AssemblerError, ViewerError
 
 __all__ = [
@@ -117,5 +117,5 @@ def material(rgba: npt.ArrayLike) -> mg.MeshPhongMaterial:
 
 
 def css(rgb: npt.ArrayLike) -> str:
-    """CSS color of an RGB(A) triple in [0, 1] (:func:`~assembler_pin.palette.hex_color`)."""
+    """CSS color of an RGB(A) triple in [0, 1] (:func:`~assembler_pin.common.palette.hex_color`)."""
     return palette.hex_color(tuple(np.asarray(rgb, dtype=float)[:3]))

@@ -1,11 +1,11 @@
 """The compliant truss in the viewer: the loaded pose, exaggerated, and the EE's compliance ellipsoid.
 
 * :func:`loaded_view` — the elastic equilibrium of the legs commanded to a pose's lengths
-  (:func:`~assembler_pin.compliance.loaded_pose`: gravity, payload, an optional EE wrench),
+  (:func:`~assembler_pin.compliance.loaded.loaded_pose`: gravity, payload, an optional EE wrench),
   drawn with every plate moved ``factor`` times its displacement from the rigid pose
   (:func:`exaggerated_plates`).
 * :func:`ellipsoid_view` — the translational block ``C_vv`` (3×3) [m/N] of the EE's compliance
-  at the EE plate's origin (:func:`~assembler_pin.ee_stiffness.stiffness`, world axes), drawn
+  at the EE plate's origin (:func:`~assembler_pin.compliance.ee_stiffness.stiffness`, world axes), drawn
   as the ellipsoid whose semi-axes lie along its principal directions with length
   ``force × c_i`` [m]: the EE's sag under ``force`` newtons along each principal direction.
 
@@ -22,12 +22,12 @@ import numpy as np
 import numpy.typing as npt
 import pinocchio as pin
 
-from ..bounds import check_bound
-from ..compliance import LoadedPose, loaded_pose
-from ..ee_stiffness import stiffness
+from ..compliance.ee_stiffness import stiffness
+from ..compliance.loaded import LoadedPose, loaded_pose
+from ..config.bounds import check_bound
 from ..exceptions import ConvergenceError, ViewerError
 from ..kinematics import PlateArrays, leg_state
-from ..model import AssemblerModel
+from ..model.assembler import AssemblerModel
 from .colors import material
 
 __all__ = [
@@ -67,7 +67,7 @@ def auto_exaggeration(displacement: float, target: float = AUTO_EXAGGERATION_TAR
 
 @dataclass(frozen=True)
 class LoadedView:
-    """A drawn loaded pose: ``loaded`` the equilibrium (:class:`~assembler_pin.compliance.LoadedPose`),
+    """A drawn loaded pose: ``loaded`` the equilibrium (:class:`~assembler_pin.compliance.loaded.LoadedPose`),
     ``factor`` the exaggeration, ``plates`` the plates as drawn, ``largest`` the largest plate
     displacement before exaggeration [m]."""
 

@@ -11,10 +11,10 @@ import numpy.typing as npt
 import pinocchio as pin
 from pinocchio.visualize import MeshcatVisualizer
 
+from ..common.naming import names
 from ..exceptions import AssemblerError
-from ..geometry import DIMENSIONS
-from ..model import AssemblerModel
-from ..naming import names
+from ..model.assembler import AssemblerModel
+from ..model.geometry import DIMENSIONS
 from ..state import StackState
 from .camera import cylinder_between, translation
 from .colors import ARM_CLUSTER_RGBA, ARM_LINK_RGBA, PAYLOAD_RGBA, PAYLOAD_ROD_RGBA, VIOLATION_RGBA, material

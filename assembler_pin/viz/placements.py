@@ -15,10 +15,10 @@ import numpy.typing as npt
 import pinocchio as pin
 from pinocchio.visualize import MeshcatVisualizer
 
-from ..geometry import DIMENSIONS
+from ..common.naming import names, parse_name
 from ..kinematics import PlateArrays, leg_state, plate_arrays, q_from_plates
-from ..model import AssemblerModel
-from ..naming import names, parse_name
+from ..model.assembler import AssemblerModel
+from ..model.geometry import DIMENSIONS
 from ..state import StackState
 from .camera import frame_along_axis
 
@@ -37,7 +37,7 @@ __all__ = [
 
 GeometryFrame = tuple[str, tuple[int, ...], np.ndarray]
 """A visual's body kind (``plate``, ``motor``, ``shaft``, ``payload``), its indices (as
-:func:`~assembler_pin.naming.parse_name`) and its 4×4 placement in its joint's frame."""
+:func:`~assembler_pin.common.naming.parse_name`) and its 4×4 placement in its joint's frame."""
 
 Pose = StackState | PlateArrays | Sequence | np.ndarray
 

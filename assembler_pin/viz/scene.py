@@ -24,10 +24,11 @@ import numpy.typing as npt
 import pinocchio as pin
 from pinocchio.visualize import MeshcatVisualizer
 
-from ..choices import FORCE_SCALES
+from ..common.files import write_atomic
+from ..config.choices import FORCE_SCALES
 from ..exceptions import AssemblerError, ViewerError
 from ..kinematics import PlateArrays, q_from_plates
-from ..model import WHOLE_DATA_MAX_PLATFORMS, AssemblerModel
+from ..model.assembler import WHOLE_DATA_MAX_PLATFORMS, AssemblerModel
 from ..state import StackState, evaluate_state
 from . import animation as anim_mod
 from . import drawing, overlay
@@ -170,7 +171,7 @@ class StackScene:
             pose: a :class:`StackState`, or world plate poses (their state is computed).
             color_forces: color motor and shaft by the actuator force (else URDF colors).
             mark_violations: a yellow ball at the middle of every leg that violates a limit,
-                at ``{prefix}_violations/<leg name>`` (:func:`~assembler_pin.naming.names`).
+                at ``{prefix}_violations/<leg name>`` (:func:`~assembler_pin.common.naming.names`).
             force_scale: where the colors saturate (:data:`FORCE_SCALES`; default the
                 viewer's); the numbers are in :attr:`force_range` and on the color bar.
         """
@@ -289,8 +290,6 @@ class StackScene:
             self.frame()
         html = self.meshcat.static_html().replace("</body>", self.overlay_html() + "\n</body>", 1)
         if path is not None:
-            from ..files import write_atomic
-
             write_atomic(path, html)
             logger.info("wrote %s (%d bytes)", path, len(html))
         return html

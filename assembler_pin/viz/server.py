@@ -171,7 +171,7 @@ def start_server(host: str = DEFAULT_HOST, port: int | None = None, timeout: flo
         server.stop()
         raise
     if "zmq_url" not in urls or "web_url" not in urls:
-        from ..exceptions import ViewerError
+        from ..exceptions import ViewerError  # script: run without its package (runpy), see main()
 
         server._stderr = None  # read it once the server has ended, then close it here
         server.stop()
@@ -187,7 +187,7 @@ def start_server(host: str = DEFAULT_HOST, port: int | None = None, timeout: flo
 
 def _check_host_and_port(host: str, port: int | None) -> None:
     """Refuse a host this machine cannot listen on, or a port out of range (ViewerError)."""
-    from ..exceptions import ViewerError
+    from ..exceptions import ViewerError  # script: run without its package (runpy), see main()
 
     allowed = "e.g. 127.0.0.1 (this machine only) or 0.0.0.0 (every interface)"
     if port is not None:

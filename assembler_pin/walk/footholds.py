@@ -15,6 +15,7 @@ refused in one line (:class:`~assembler_pin.exceptions.WalkError`).
 from __future__ import annotations
 
 import json
+import math
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -23,13 +24,21 @@ from typing import cast
 import numpy as np
 import pinocchio as pin
 
-from ..bounds import check_bound
+from ..common.files import read_text_bounded, strict_json
+from ..config.bounds import check_bound
 from ..exceptions import AssemblerError, WalkError
-from ..files import read_text_bounded
 from ..kinematics import taa_to_se3, to_se3
-from ..model import AssemblerModel
+from ..model.assembler import AssemblerModel
 
-__all__ = ["FootholdFile", "checked_footholds", "floor_footholds", "parse_footholds", "read_footholds"]
+__all__ = [
+    "TURN_OVER",
+    "FootholdFile",
+    "checked_footholds",
+    "floor_footholds",
+    "parse_footholds",
+    "plate_target",
+    "read_footholds",
+]
 
 
 @dataclass(frozen=True)
@@ -113,8 +122,6 @@ def parse_footholds(text: str) -> FootholdFile:
     Raises:
         WalkError: anything but the format, in one line.
     """
-    from ..motion.trajfile import strict_json
-
     doc = strict_json(text, WalkError)
     if not isinstance(doc, dict) or "footholds" not in doc:
         raise WalkError('expected a JSON object {"footholds": [[x, y, z, rx, ry, rz], ...]}')
@@ -140,3 +147,14 @@ def read_footholds(path: str | Path) -> FootholdFile:
         WalkError: unreadable, empty, too large, not UTF-8, or not the format (one line).
     """
     return parse_footholds(read_text_bounded(Path(path), "walk.file_bytes", "footholds file", WalkError))
+
+
+#: Turns a foothold frame into the pose of the EE plate standing on it (its +z into the
+#: surface): a half turn about the foothold's y, the stack arriving along its x.
+TURN_OVER = pin.SE3(pin.exp3(np.array([0.0, math.pi, 0.0])), np.zeros(3))
+
+
+def plate_target(foothold: pin.SE3, foot: str) -> pin.SE3:
+    """The world pose of a foot's plate standing on ``foothold``: the base plate is the
+    foothold frame, the EE plate the frame turned over about its y (``foothold · Ry(π)``)."""
+    return foothold if foot == "base" else foothold * TURN_OVER

@@ -4,7 +4,7 @@ joined to one rigid body (six Assemblers as the legs of a hexapod).
 With ``k`` stacks the body's six equations meet ``6k`` unknown wrenches (what the body applies
 to each stack's EE plate): ``6(k − 1)`` are redundant, like the two-point support's six. Each
 stack's leg forces are affine in the wrench ``u`` on its EE plate (world axes, moment about
-that plate's origin): ``F = P + N u`` (:func:`~assembler_pin.support_choice.held_equilibrium`
+that plate's origin): ``F = P + N u`` (:func:`~assembler_pin.supports.choice.held_equilibrium`
 of the stack held at both ends: ``P`` the base-held forces, ``N`` the internal force patterns).
 The body in equilibrium under its weight needs ``Σ_i u_i = G`` (moments about one point), ``G``
 the body's weight wrench ``[0, 0, −m g]`` at its centre of mass.
@@ -31,8 +31,8 @@ from scipy.optimize import linprog
 
 from ..exceptions import WalkError
 from ..kinematics import PlateArrays, leg_vectors, plate_arrays
-from ..model import AssemblerModel
-from ..support_choice import force_bounds, held_equilibrium
+from ..model.assembler import AssemblerModel
+from ..supports.choice import force_bounds, held_equilibrium
 
 __all__ = ["MacroStatics", "macro_capacity", "macro_statics"]
 

@@ -8,7 +8,7 @@ where the base stands at the start; the feet then land in turn, the EE on ``foot
 the base on ``footholds[2]``, the EE on ``footholds[3]`` ... Each step is two phases:
 
 * **reach** (support ``base``: plate 0 held) or **swing** (support ``ee``: plate n held, the
-  stack planned on the turned model, :mod:`assembler_pin.walk.turned`): the free foot lifts
+  stack planned on the turned model, :mod:`assembler_pin.supports.turned`): the free foot lifts
   ``clearance`` off its foothold along the surface normal (not at the first step, which starts
   from the home pose), moves to ``clearance`` above the next foothold (the pre-contact pose)
   and lands, every sample a force-optimal valid pose of
@@ -17,9 +17,9 @@ the base on ``footholds[2]``, the EE on ``footholds[3]`` ... Each step is two ph
 * **transfer** (support ``both``): both feet held at the landed pose, the load moves from the
   old foot to the new: the EE support's wrench ``w`` goes from zero (the base carries all) to
   the whole weight (the EE carries all), or back, in ``transfer_samples`` steps, the forces
-  ``F(w)`` set by length offsets ``−F / k`` (:mod:`assembler_pin.support_choice`); each sample
+  ``F(w)`` set by length offsets ``−F / k`` (:mod:`assembler_pin.supports.choice`); each sample
   within the force limits and the stroke, and the commanded lengths applied through the
-  elastic solve (:func:`~assembler_pin.supports.two_point_statics`) give its forces back. The
+  elastic solve (:func:`~assembler_pin.supports.two_point.two_point_statics`) give its forces back. The
   chosen distribution (min max|F|) of the pose is reported with the phase.
 
 Reach and swing samples are rigid poses (commanded = pin-to-pin lengths), like the package's
@@ -37,27 +37,23 @@ from dataclasses import dataclass, field
 import numpy as np
 import pinocchio as pin
 
-from ..bounds import check_bound
+from ..common.progress import ProgressCallback
+from ..config.bounds import check_bound
+from ..config.options import checked_options
 from ..exceptions import WalkError
 from ..kinematics import PlateArrays, leg_vectors, plate_arrays
-from ..model import AssemblerModel
+from ..model.assembler import AssemblerModel
 from ..motion.paths import EEPath
 from ..motion.planner import PlanOptions, plan_path
-from ..options import checked_options
-from ..progress import ProgressCallback
-from ..support_choice import CHECK_TOLERANCE, ChosenDistribution, chosen_distribution, force_bounds, held_equilibrium
-from ..supports import two_point_statics
-from .footholds import checked_footholds
-from .turned import turned_model
+from ..supports.choice import CHECK_TOLERANCE, ChosenDistribution, chosen_distribution, force_bounds, held_equilibrium
+from ..supports.turned import turned_model
+from ..supports.two_point import two_point_statics
+from .footholds import checked_footholds, plate_target
 from .verify import verify_walk
 
-__all__ = ["WalkOptions", "WalkPhase", "WalkResult", "checked_footholds", "plan_walk", "plate_target"]
+__all__ = ["WalkOptions", "WalkPhase", "WalkResult", "plan_walk"]
 
 logger = logging.getLogger(__name__)
-
-#: Turns a foothold frame into the pose of the EE plate standing on it (its +z into the
-#: surface): a half turn about the foothold's y, the stack arriving along its x.
-TURN_OVER = pin.SE3(pin.exp3(np.array([0.0, math.pi, 0.0])), np.zeros(3))
 
 
 def _walk_plan_options() -> PlanOptions:
@@ -171,12 +167,6 @@ class WalkResult:
             "phases": [p.to_dict() for p in self.phases],
             "units": "N (tension positive), m; plates world frame",
         }
-
-
-def plate_target(foothold: pin.SE3, foot: str) -> pin.SE3:
-    """The world pose of a foot's plate standing on ``foothold``: the base plate is the
-    foothold frame, the EE plate the frame turned over about its y (``foothold · Ry(π)``)."""
-    return foothold if foot == "base" else foothold * TURN_OVER
 
 
 def _other(foot: str) -> str:
@@ -346,7 +336,7 @@ def plan_walk(
 
     Args:
         footholds: world frames (pin.SE3 or 4×4) [m]: ``footholds[0]`` the base's at the start,
-            then the EE's, the base's ... (see :func:`plate_target`).
+            then the EE's, the base's ... (see :func:`~assembler_pin.walk.footholds.plate_target`).
         start: the physical plates at the start (plate 0 on ``footholds[0]``); default the home
             pose standing on it.
         options: :class:`WalkOptions`.

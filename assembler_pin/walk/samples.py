@@ -8,9 +8,9 @@ One header line, then one row per sample of every phase in order::
 share it, and it grows by one from phase to phase); ``kind`` is ``reach``, ``transfer`` or
 ``swing`` in the walk's order (reach, transfer, swing, transfer, reach ...); ``support`` the
 plates held in that kind (``base``, ``both``, ``ee``: names of
-:data:`~assembler_pin.supports.SUPPORTS`); ``foothold`` the foothold the phase goes to
+:data:`~assembler_pin.supports.two_point.SUPPORTS`); ``foothold`` the foothold the phase goes to
 (phase p: p // 2 + 1); ``max_abs_force`` the sample's max|F| [N] with that support; then the
-commanded lengths [m] of the legs (columns of :meth:`~assembler_pin.naming.names.length_column`).
+commanded lengths [m] of the legs (columns of :meth:`~assembler_pin.common.naming.names.length_column`).
 The file ends with a newline. The reader refuses anything else in one line
 (:class:`~assembler_pin.exceptions.WalkError`): a truncated file, an unknown phase kind, a
 support not in ``SUPPORTS`` or not the one of its kind, a NaN or non-positive length, ...
@@ -25,11 +25,11 @@ from pathlib import Path
 
 import numpy as np
 
-from ..bounds import check_bound
+from ..common.files import read_text_bounded
+from ..common.naming import names
+from ..config.bounds import check_bound
 from ..exceptions import WalkError
-from ..files import read_text_bounded
-from ..naming import names
-from ..supports import SUPPORTS
+from ..supports.two_point import SUPPORTS
 
 __all__ = ["PHASE_SUPPORT", "SAMPLE_COLUMNS", "WalkSamples", "parse_walk_csv", "read_walk_csv", "walk_csv", "walk_rows"]
 

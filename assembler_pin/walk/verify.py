@@ -14,12 +14,13 @@ import numpy as np
 import pinocchio as pin
 
 from ..kinematics import PlateArrays, stack_forward_kinematics
-from ..model import AssemblerModel
+from ..model.assembler import AssemblerModel
 from ..motion.guess import on_se3
 from ..state import evaluate_state
-from ..support_choice import CHECK_TOLERANCE, force_bounds
-from ..supports import two_point_statics
-from .turned import turned_model
+from ..supports.choice import CHECK_TOLERANCE, force_bounds
+from ..supports.turned import turned_model
+from ..supports.two_point import two_point_statics
+from .footholds import plate_target
 
 __all__ = ["SAMPLE_TOLERANCE", "verify_walk"]
 
@@ -80,8 +81,6 @@ def _transfer_sample(am: AssemblerModel, phase, i: int) -> str:
 def verify_walk(am: AssemblerModel, walk) -> list[str]:
     """Every problem found in a :class:`~assembler_pin.walk.plan.WalkResult` (module doc),
     each naming its phase and sample; empty when every sample checks."""
-    from .plan import plate_target
-
     out: list[str] = []
     previous = None
     for k, phase in enumerate(walk.phases):

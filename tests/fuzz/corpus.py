@@ -1188,7 +1188,7 @@ def _api_cases() -> list[ApiCase]:
         ApiCase(
             "api.solve.name_is_callable",
             lambda c: (
-                importlib.import_module("assembler_pin.solver"),
+                importlib.import_module("assembler_pin.solver.pipeline"),
                 ap.solve(c.am, _se3(p=(10.0, 0, 0.9)), optimize=False),
             )[1],
             "any",

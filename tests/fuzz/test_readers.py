@@ -2,7 +2,7 @@
 with an ``AssemblerError`` subclass, or read into exactly what it says — never a silently
 different value, never another exception.
 
-Complements ``tests/test_fuzz.py`` (configs as YAML mappings, plate files, goals, solver
+Complements ``tests/contract/test_fuzz.py`` (configs as YAML mappings, plate files, goals, solver
 options): here trajectory files, waypoint files, grid and orientation SPECs, YAML number
 spellings and forward-kinematics inputs.
 """

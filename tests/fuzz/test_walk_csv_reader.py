@@ -9,7 +9,7 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 import assembler_pin as ap
-from assembler_pin.supports import SUPPORTS
+from assembler_pin.supports.two_point import SUPPORTS
 from assembler_pin.walk import WalkPhase, WalkResult
 from assembler_pin.walk.samples import parse_walk_csv, read_walk_csv, walk_csv
 

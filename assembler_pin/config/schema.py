@@ -1,0 +1,367 @@
+"""Configuration of an Assembler: geometry, masses, limits and payload.
+
+The YAML format (every key optional; a missing key takes the default shown)::
+
+    platforms: 4            # number of stacked Stewart platforms, integer >= 1
+    gravity: 9.81           # [m/s^2], along -z of the world frame, >= 0
+    plate:
+      node_radius: 0.15     # [m] radius of the circle carrying the joint nodes, > 0
+      node_spacing_deg: 8.0 # [deg] angle between the two leg ends of a node, in [0, 60)
+      mass: 0.2             # [kg] plate mass, at the plate centre, >= 0
+    leg:
+      min_length: 0.20      # [m] shortest pin-to-pin length, > 0
+      max_length: 0.35      # [m] longest pin-to-pin length, > min_length
+      motor_mass: 0.10      # [kg] >= 0
+      shaft_mass: 0.04      # [kg] >= 0
+      motor_com: 0.06       # [m] motor centre of mass from the bottom joint, on the leg axis
+      shaft_com: 0.06       # [m] shaft centre of mass from the top joint, on the leg axis
+      max_deflection_deg: 45  # [deg] largest joint deflection from the home direction, (0, 90)
+      max_tension: 200      # [N] > 0
+      max_compression: 200  # [N] > 0
+      max_speed: 0.05       # [m/s] > 0, largest leg-length rate along a planned motion
+      max_acceleration: 0.2 # [m/s^2] > 0, largest leg-length acceleration along a motion
+      stiffness: 1.0e6      # [N/m] axial stiffness of a leg, in [1e3, 1e10]: a ball-screw linear
+                            # actuator is 1e6-1e7 N/m (screw, nut, bearings, housing in series);
+                            # 1e6, the soft end, suits the small 200 N actuators of the prototype.
+                            # It is the MJCF servos' gain too.
+    payload:
+      mass: 5.0             # [kg] >= 0
+      offset: 0.2           # [m] along the end-effector plate's local +z
+
+Internally everything is SI and radians; only keys ending in ``_deg`` are in degrees.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import re
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, ClassVar
+
+import yaml
+
+from ..exceptions import ConfigError, short_repr
+from .checks import MAX_MESSAGE, check, shorten, validate
+from .options import is_number
+
+__all__ = [
+    "AssemblerConfig",
+    "LegConfig",
+    "PayloadConfig",
+    "PlateConfig",
+    "load_config",
+]
+
+
+@dataclass(frozen=True)
+class PlateConfig:
+    """Plate geometry and mass.
+
+    Attributes:
+        node_radius: radius of the node circle [m].
+        node_spacing_deg: angle between the two leg ends of one node [deg].
+        mass: plate mass, concentrated at the plate centre [kg].
+    """
+
+    node_radius: float = 0.15
+    node_spacing_deg: float = 8.0
+    mass: float = 0.2
+
+
+@dataclass(frozen=True)
+class LegConfig:
+    """Linear actuator (leg) stroke, masses and limits.
+
+    Attributes:
+        min_length, max_length: pin-to-pin length range [m].
+        motor_mass, shaft_mass: [kg].
+        motor_com: motor centre of mass from the bottom joint centre, on the leg axis [m].
+        shaft_com: shaft centre of mass from the top joint centre, on the leg axis [m].
+        max_deflection_deg: largest deflection of the leg from its home direction at
+            either joint, measured in the frame of the plate the joint sits on [deg].
+        max_tension, max_compression: force limits, both positive magnitudes [N].
+        max_speed, max_acceleration: limits of a leg's length rate [m/s] and its
+            acceleration [m/s²] along a planned motion (:mod:`assembler_pin.motion`).
+        stiffness: axial stiffness of the leg [N/m] (:mod:`assembler_pin.compliance.ee_stiffness`).
+    """
+
+    min_length: float = 0.20
+    max_length: float = 0.35
+    motor_mass: float = 0.10
+    shaft_mass: float = 0.04
+    motor_com: float = 0.06
+    shaft_com: float = 0.06
+    max_deflection_deg: float = 45.0
+    max_tension: float = 200.0
+    max_compression: float = 200.0
+    max_speed: float = 0.05
+    max_acceleration: float = 0.2
+    stiffness: float = 1.0e6
+
+    @property
+    def mid_length(self) -> float:
+        """Mid-stroke (home) length [m]."""
+        return 0.5 * (self.min_length + self.max_length)
+
+    @property
+    def max_deflection(self) -> float:
+        """Largest joint deflection [rad]."""
+        return math.radians(self.max_deflection_deg)
+
+
+@dataclass(frozen=True)
+class PayloadConfig:
+    """A point mass held rigidly by the end-effector plate.
+
+    Attributes:
+        mass: [kg].
+        offset: distance along the end-effector plate's local +z [m].
+    """
+
+    mass: float = 5.0
+    offset: float = 0.2
+
+
+@dataclass(frozen=True)
+class AssemblerConfig:
+    """Everything that defines an Assembler. Build with :func:`load_config` or directly.
+
+    Attributes:
+        platforms: number of Stewart platforms in series (plates 0..platforms).
+        gravity: magnitude of gravity along the world's -z [m/s^2].
+        plate, leg, payload: see :class:`PlateConfig`, :class:`LegConfig`,
+            :class:`PayloadConfig`.
+    """
+
+    platforms: int = 4
+    gravity: float = 9.81
+    plate: PlateConfig = field(default_factory=PlateConfig)
+    leg: LegConfig = field(default_factory=LegConfig)
+    payload: PayloadConfig = field(default_factory=PayloadConfig)
+
+    def __post_init__(self) -> None:
+        validate(self)
+
+    # ------------------------------------------------------------------ derived
+    @property
+    def node_spacing(self) -> float:
+        """Angle between the two leg ends of one node [rad]."""
+        return math.radians(self.plate.node_spacing_deg)
+
+    @property
+    def leg_chord(self) -> float:
+        """Horizontal distance between the two ends of a leg in the home pose [m]."""
+        return 2.0 * self.plate.node_radius * math.sin(0.5 * (math.pi / 3.0 - self.node_spacing))
+
+    @property
+    def home_height(self) -> float:
+        """Distance between consecutive plates in the home pose [m] (every leg mid-stroke)."""
+        return math.sqrt(self.leg.mid_length**2 - self.leg_chord**2)
+
+    def to_dict(self) -> dict[str, Any]:
+        """The configuration as a plain dict, in the YAML file's layout."""
+        return dataclasses.asdict(self)
+
+    def replace(self, **changes: Any) -> AssemblerConfig:
+        """A copy with top-level fields or whole sections replaced (validated again)."""
+        return dataclasses.replace(self, **changes)
+
+
+_SECTIONS: dict[str, type] = {"plate": PlateConfig, "leg": LegConfig, "payload": PayloadConfig}
+_TOP_SCALARS = ("platforms", "gravity")
+
+
+def _section_from_mapping(name: str, cls: type, data: Any) -> Any:
+    if not isinstance(data, Mapping):
+        raise ConfigError(f"config key '{name}' must be a mapping of keys to values, got {short_repr(data)}")
+    allowed = [f.name for f in dataclasses.fields(cls)]
+    for key in data:
+        if key not in allowed:
+            raise ConfigError(f"unknown config key '{name}.{shorten(str(key), 12)}'; allowed: {','.join(allowed)}")
+    for key, value in data.items():
+        if not is_number(value):
+            raise ConfigError(f"config key '{name}.{key}' = {short_repr(value)} is invalid: must be a number")
+    return cls(**{k: float(v) for k, v in data.items()})
+
+
+#: Longest configuration file read [bytes] (a real one is under 2 kB).
+MAX_CONFIG_BYTES = 1 << 20
+
+_YAML12_INT = re.compile(r"^(?:[-+]?[0-9]+|0o[0-7]+|0x[0-9a-fA-F]+)$")
+_YAML12_FLOAT = re.compile(
+    r"^(?:[-+]?(?:\.[0-9]+|[0-9]+(?:\.[0-9]*)?)(?:[eE][-+]?[0-9]+)?|[-+]?\.(?:inf|Inf|INF)|\.(?:nan|NaN|NAN))$"
+)
+
+
+class StrictLoader(yaml.SafeLoader):
+    """YAML for the package's own files, read by the YAML 1.2 core schema.
+
+    * Numbers are YAML 1.2's: ``9_81``, ``1:30``, ``0b1`` or ``017``-as-octal are not numbers
+      (YAML 1.1 reads ``9_81`` as 981 and ``1:30`` as 90) but strings, refused where a number
+      belongs; ``2e-1`` and ``1e5`` are numbers. ``true``/``false`` are the only booleans
+      (``yes``, ``on`` are strings), ``null``/``~`` the only nulls; no merge keys (``<<``).
+    * Aliases and anchors (``*name``, ``&name``) are refused: a configuration never needs
+      them, and nested aliases expand exponentially (an "alias bomb").
+    * A key given twice is an error (not the last one silently winning).
+
+    Every error is a :class:`~assembler_pin.exceptions.ConfigError` or a ``yaml.YAMLError``.
+    """
+
+    yaml_implicit_resolvers: ClassVar[dict] = {}
+
+    def compose_node(self, parent: yaml.Node | None, index: object) -> yaml.Node:
+        event = self.peek_event()
+        if isinstance(event, yaml.AliasEvent) or getattr(event, "anchor", None) is not None:
+            raise ConfigError(
+                f"line {event.start_mark.line + 1}: YAML anchors and aliases (&name, *name) are not accepted"
+            )
+        return super().compose_node(parent, index)
+
+    def construct_mapping(self, node: yaml.MappingNode, deep: bool = False) -> dict:
+        seen = set()
+        for key_node, _ in node.value:
+            key = self.construct_object(key_node, deep=deep)
+            if key in seen:
+                raise ConfigError(f"key {short_repr(key)} is given twice (line {key_node.start_mark.line + 1})")
+            seen.add(key)
+        return super().construct_mapping(node, deep=deep)
+
+    def construct_yaml12_int(self, node: yaml.ScalarNode) -> int:
+        text = self.construct_scalar(node)
+        if not _YAML12_INT.match(text):  # an explicit !!int tag on text that is no YAML 1.2 integer
+            raise ConfigError(f"line {node.start_mark.line + 1}: {short_repr(text, 30)} is not an integer")
+        base = {"0o": 8, "0x": 16}.get(text[:2], 10)
+        return int(text[2:] if base != 10 else text, base)
+
+    def construct_yaml12_float(self, node: yaml.ScalarNode) -> float:
+        text = self.construct_scalar(node)
+        if not (_YAML12_FLOAT.match(text) or _YAML12_INT.match(text)):
+            raise ConfigError(f"line {node.start_mark.line + 1}: {short_repr(text, 30)} is not a number")
+        if _YAML12_INT.match(text) and text[:2] in ("0o", "0x"):
+            return float(self.construct_yaml12_int(node))
+        text = text.lower()
+        return float(text.replace(".inf", "inf").replace(".nan", "nan"))
+
+
+for _tag, _regex, _first in (
+    ("bool", re.compile(r"^(?:true|True|TRUE|false|False|FALSE)$"), list("tTfF")),
+    ("null", re.compile(r"^(?:~|null|Null|NULL|)$"), ["~", "n", "N", ""]),
+    ("int", _YAML12_INT, list("-+0123456789")),
+    ("float", _YAML12_FLOAT, list("-+.0123456789")),
+):
+    StrictLoader.add_implicit_resolver(f"tag:yaml.org,2002:{_tag}", _regex, _first)
+StrictLoader.add_constructor("tag:yaml.org,2002:int", StrictLoader.construct_yaml12_int)
+StrictLoader.add_constructor("tag:yaml.org,2002:float", StrictLoader.construct_yaml12_float)
+
+
+def load_yaml(text: str, what: str) -> Any:
+    """Parse YAML text with :class:`StrictLoader`.
+
+    Args:
+        what: the source, for the message (e.g. "config file 'c.yaml'").
+
+    Raises:
+        ConfigError: one line of at most :data:`MAX_MESSAGE` characters naming ``what``.
+    """
+    try:
+        return yaml.load(text, Loader=StrictLoader)
+    except ConfigError as exc:
+        raise ConfigError(shorten(f"{what}: {exc}")) from None
+    except yaml.YAMLError as exc:
+        first = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
+        mark = getattr(exc, "problem_mark", None)
+        where = f" (line {mark.line + 1})" if mark is not None else ""
+        raise ConfigError(shorten(f"{what} is not valid YAML{where}: {first}")) from None
+    except (RecursionError, ValueError, OverflowError):
+        raise ConfigError(f"{what} is not a readable configuration (nested too deeply or a malformed number)") from None
+
+
+def config_from_dict(data: Mapping[str, Any] | None) -> AssemblerConfig:
+    """Build a validated configuration from a (possibly partial) mapping.
+
+    Raises:
+        ConfigError: unknown keys, wrong types or out-of-range values.
+    """
+    if data is None:
+        data = {}
+    if not isinstance(data, Mapping):
+        raise ConfigError(f"a configuration must be a mapping of keys to values, got {short_repr(data)}")
+    allowed = list(_TOP_SCALARS) + list(_SECTIONS)
+    for key in data:
+        if key not in allowed:
+            raise ConfigError(f"unknown config key '{shorten(str(key), 30)}'; allowed keys: {', '.join(allowed)}")
+    kwargs: dict[str, Any] = {}
+    if "platforms" in data:
+        value = data["platforms"]
+        if is_number(value) and float(value).is_integer() and abs(value) < 2**31:
+            value = int(value)  # 3.0 and numpy integers are the integer 3
+        check(
+            isinstance(value, int) and not isinstance(value, bool),
+            "platforms",
+            value,
+            "must be an integer from 1 to 64",
+        )
+        kwargs["platforms"] = value
+    if "gravity" in data:
+        check(is_number(data["gravity"]), "gravity", data["gravity"], "must be a number")
+        kwargs["gravity"] = float(data["gravity"])
+    for name, cls in _SECTIONS.items():
+        if name in data:
+            kwargs[name] = _section_from_mapping(name, cls, data[name])
+    return AssemblerConfig(**kwargs)
+
+
+def read_text_file(path: Path, shown: str, what: str, max_bytes: int, error: type[Exception]) -> str:
+    """The UTF-8 text of the file at ``path``, at most ``max_bytes`` bytes (a configuration or a
+    model file).
+
+    Raises:
+        error: one line naming ``what`` and ``shown`` (the path as the user gave it): the file
+            cannot be read, is larger than ``max_bytes`` or is not UTF-8 text.
+    """
+    try:
+        with path.open("rb") as f:
+            raw = f.read(max_bytes + 1)
+    except (OSError, ValueError) as exc:  # ValueError: a NUL in the path
+        why = getattr(exc, "strerror", None) or exc
+        raise error(shorten(f"cannot read {what} '{shown}': {why}")) from None
+    if len(raw) > max_bytes:
+        raise error(f"{what} '{shown}' is larger than {max_bytes} bytes")
+    try:
+        return raw.decode("utf-8")
+    except UnicodeDecodeError:
+        raise error(f"{what} '{shown}' is not UTF-8 text") from None
+
+
+def load_config(source: str | Path | Mapping[str, Any] | AssemblerConfig | None = None) -> AssemblerConfig:
+    """Load a configuration from a YAML file path, a mapping, or return the default.
+
+    Args:
+        source: path of a YAML file, a mapping in the YAML layout, an existing
+            :class:`AssemblerConfig` (returned as is), or ``None`` for the defaults.
+
+    Raises:
+        ConfigError: unreadable file, invalid YAML, unknown keys, wrong types or values.
+    """
+    if source is None:
+        return AssemblerConfig()
+    if isinstance(source, AssemblerConfig):
+        return source
+    if isinstance(source, Mapping):
+        return config_from_dict(source)
+    if not isinstance(source, (str, Path)):
+        raise ConfigError(
+            f"a configuration must be a YAML path, a mapping, an AssemblerConfig or None, got {short_repr(source)}"
+        )
+    path = Path(source)
+    short_path = shorten(path.name, 40)
+    text = read_text_file(path, short_path, "config file", MAX_CONFIG_BYTES, ConfigError)
+    data = load_yaml(text, f"config file '{short_path}'")
+    try:
+        return config_from_dict(data)
+    except ConfigError as exc:
+        message = f"{short_path}: {exc}"  # the file's name when the line has room for it
+        raise ConfigError(message if len(message) <= MAX_MESSAGE else shorten(str(exc))) from None

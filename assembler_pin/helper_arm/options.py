@@ -1,8 +1,0 @@
-"""Options of the helper arm's initial condition: :class:`HelperArmOptions` lives in
-:mod:`assembler_pin.options` (light, the one source of its defaults); re-exported here."""
-
-from __future__ import annotations
-
-from ..options import HelperArmOptions
-
-__all__ = ["HelperArmOptions"]

@@ -1,0 +1,70 @@
+"""The statics: one equilibrium of a pose, and the backends that compute it.
+
+- :mod:`.pinocchio_statics`: the reference, from Pinocchio (:func:`solve_statics`, per platform
+  or whole-stack) and the batched closed form (:func:`solve_statics_batch`).
+- :mod:`.result`: :class:`StaticsResult`.
+- :mod:`.closed_form`: the equilibrium in closed form and the one condition number
+  (:data:`CONDITION_LIMIT`).
+- :mod:`.derivatives`: values and derivatives of the force objective with numpy (the
+  optimizer's reference).
+- :mod:`.kernel`, :mod:`.loops`: the compiled batch statics (numba, opt-in); :mod:`.pose_kernel`,
+  :mod:`.pose_loops`: compiled values and derivatives.
+- :mod:`.home`: the home pose on plain floats, for ``assembler-pin statics --home``.
+
+The names below are imported on first use, so that ``statics --home`` (which imports
+:mod:`.home`) loads no numpy.
+"""
+
+from __future__ import annotations
+
+import importlib
+from typing import TYPE_CHECKING, Any
+
+#: public name -> the module of this package that defines it.
+_LAZY: dict[str, str] = {
+    "CONDITION_LIMIT": ".closed_form",
+    "StaticsResult": ".result",
+    "WHOLE_STACK_STATICS_MAX_PLATFORMS": ".pinocchio_statics",
+    "checked_data": ".pinocchio_statics",
+    "closure_jacobian_blocks": ".pinocchio_statics",
+    "gravity_terms": ".pinocchio_statics",
+    "solve_statics": ".pinocchio_statics",
+    "solve_statics_batch": ".pinocchio_statics",
+}
+
+__all__ = [
+    "CONDITION_LIMIT",
+    "WHOLE_STACK_STATICS_MAX_PLATFORMS",
+    "StaticsResult",
+    "checked_data",
+    "closure_jacobian_blocks",
+    "gravity_terms",
+    "solve_statics",
+    "solve_statics_batch",
+]
+
+
+def __getattr__(name: str) -> Any:
+    module = _LAZY.get(name)
+    if module is None:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    value = getattr(importlib.import_module(module, __name__), name)
+    globals()[name] = value
+    return value
+
+
+def __dir__() -> list[str]:
+    return sorted(set(globals()) | set(_LAZY))
+
+
+if TYPE_CHECKING:  # for type checkers and IDEs: the same names, imported eagerly
+    from .closed_form import CONDITION_LIMIT
+    from .pinocchio_statics import (
+        WHOLE_STACK_STATICS_MAX_PLATFORMS,
+        checked_data,
+        closure_jacobian_blocks,
+        gravity_terms,
+        solve_statics,
+        solve_statics_batch,
+    )
+    from .result import StaticsResult
