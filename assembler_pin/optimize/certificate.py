@@ -26,11 +26,12 @@ from dataclasses import dataclass
 import numpy as np
 import pinocchio as pin
 
+from ..config.options import OptimizeOptions
 from ..exceptions import _SingularIterateError
-from ..model import AssemblerModel
-from ..objective import deviation_term, deviation_term_gradient
+from ..model.assembler import AssemblerModel
 from ..state import StackState
-from .options import MotionTerm, OptimizeOptions
+from .objective import deviation_term, deviation_term_gradient
+from .options import MotionTerm
 from .problem import Problem
 from .smooth import SmoothForm
 
