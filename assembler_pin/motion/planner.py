@@ -198,7 +198,7 @@ def _step(
         second = optimize_internal_poses(am, _spread(prev.plates, goal), goal, opts.optimize, motion=motion)
         solve_s += second.time_s
         if not _kept(am, second, opts):
-            return None, result.message, solve_s, (0.0, 0.0)
+            return None, _not_kept_reason(am, result, opts), solve_s, (0.0, 0.0)
         result = second
     state = result.optimized
     jump = float(np.abs(state.leg_lengths - prev.leg_lengths).max())
@@ -211,6 +211,23 @@ def _step(
     return state, "", solve_s, (dev_p, dev_r)
 
 
+def _not_kept_reason(am: AssemblerModel, result: OptimizeResult, opts: PlanOptions) -> str:
+    """Why a sample's run gave no sample: its own message, or for a valid state that came
+    within the plan's margin of a limit, which leg and which limit."""
+    if not result.success:
+        return result.message
+    rows = _margin_rows(am, result, opts)
+    kind, j, i = np.unravel_index(int(np.argmin(rows)), rows.shape)
+    cause = ("leg stroke", "leg stroke", "joint deflection", "joint deflection", "leg stroke")[kind]
+    return f"{cause}: SP{j} leg {i} would come within the plan's margin of its limit ({opts.limit_margin:g})"
+
+
+def _margin_rows(am: AssemblerModel, result: OptimizeResult, opts: PlanOptions) -> np.ndarray:
+    """(5, n, 6) margins of the returned state's legs to their limits less the plan's margin."""
+    legs = result.optimized.legs
+    return leg_limit_margins(am.config.leg, legs.lengths, np.cos(legs.deflection), legs.rise, opts.limit_margin)
+
+
 def _kept(am: AssemblerModel, result: OptimizeResult, opts: PlanOptions) -> bool:
     """Whether a sample's run gives a sample: an optimum, or a valid state whose legs keep the
     plan's ``limit_margin`` inside their limits (a valid state nearer a limit, such as a
@@ -219,9 +236,7 @@ def _kept(am: AssemblerModel, result: OptimizeResult, opts: PlanOptions) -> bool
         return False
     if result.optimal:
         return True
-    legs = result.optimized.legs
-    rows = leg_limit_margins(am.config.leg, legs.lengths, np.cos(legs.deflection), legs.rise, opts.limit_margin)
-    return bool(np.all(rows >= -GEOMETRIC_MARGIN))
+    return bool(np.all(_margin_rows(am, result, opts) >= -GEOMETRIC_MARGIN))
 
 
 def _start_state(

@@ -63,8 +63,9 @@ def optimize_internal_poses(
     result = _optimized(am, start, goal, opts, motion)
     if _asked_for_auto(options) and result.method == "ipopt" and not result.optimal:
         result = _polished(am, result, goal, opts, motion)
-    # the restarts are SLSQP runs, for SLSQP's stalls (IPOPT's run is finished by _polished)
-    if result.optimal or not result.success or opts.method != "slsqp":
+    # the restarts are SLSQP runs, for SLSQP's stalls (IPOPT's run is finished by _polished);
+    # a motion's sample has the planner's own fallbacks (another start, a shorter step)
+    if result.optimal or not result.success or opts.method != "slsqp" or motion is not None:
         return result
     return _restarted(am, result, goal, opts, motion)
 

@@ -550,7 +550,7 @@ def test_ctrl_c_stops_the_local_dask_cluster_at_once(tmp_path):
         if not (tmp_path / "m" / "map.json").exists():
             return False
         start = seen.setdefault("manifest", time.monotonic())
-        workers = [c for c in seen["children"] if "spawn_main" in " ".join(c.cmdline())]
+        workers = [c for c in seen["children"] if "spawn_main" in _cmdline(c)]
         return bool(workers) and time.monotonic() - start > 1 and not _ignores_sigint(proc.pid)
 
     done, took = _interrupt(tmp_path, script, ready, limit=120)
@@ -635,3 +635,13 @@ def test_png_of_a_map_without_two_axes_is_refused_before_computing(tmp_path, cap
         == 2
     )
     assert "--png" in capsys.readouterr().err and not (tmp_path / "m").exists()
+
+
+def _cmdline(process) -> str:
+    """A process's command line, "" once it has exited (a zombie or gone: no line to read)."""
+    import psutil
+
+    try:
+        return " ".join(process.cmdline())
+    except psutil.Error:
+        return ""
