@@ -111,18 +111,19 @@ def _interrupt(argv: list[str], cwd: Path, after: float) -> tuple[int | None, st
 
 @pytest.mark.slow
 @pytest.mark.parametrize(
-    "argv, output",
+    "argv, output, after",
     [
-        # 200 output samples a second: still running at 8 s (the default rate ends near 8 s here)
-        (["plan", "--to", *README_GOAL.split(), "--rate", "200", "--out", "t.csv"], "t.csv"),
-        (["reproduce", "--out", "rep"], "rep/report.md"),
+        # the signal at 2 s: planning (the whole command takes 3.5 s on a quiet machine, more
+        # at 200 output samples a second)
+        (["plan", "--to", *README_GOAL.split(), "--rate", "200", "--out", "t.csv"], "t.csv", 2.0),
+        (["reproduce", "--out", "rep"], "rep/report.md", 8.0),
         # 900 cells: still running when the signal comes (3 cells were done within the 8 s)
-        (["map", "--workers", "0", "--grid", "x=-0.1:0.1:30,y=-0.1:0.1:30,z=0.85", "--out", "m"], None),
+        (["map", "--workers", "0", "--grid", "x=-0.1:0.1:30,y=-0.1:0.1:30,z=0.85", "--out", "m"], None, 8.0),
     ],
     ids=["ctrl_c.plan", "ctrl_c.reproduce", "ctrl_c.map"],
 )
-def test_ctrl_c_ends_with_one_line_and_no_partial_file(tmp_path, argv, output):
-    code, err = _interrupt(argv, tmp_path, after=8.0)
+def test_ctrl_c_ends_with_one_line_and_no_partial_file(tmp_path, argv, output, after):
+    code, err = _interrupt(argv, tmp_path, after=after)
     what = f"Ctrl-C in assembler-pin {argv[0]}"
     if code is None:
         fail("hang", f"{what}: still running 30 s after SIGINT")
