@@ -144,9 +144,13 @@ def optimize_options(args: argparse.Namespace):
 
     ee = None
     if args.ee_tolerance is not None:
+        from ..config.bounds import check_bound
+
         pos, rot = args.ee_tolerance
-        if not (0 < pos < math.inf and 0 < rot < math.inf):
+        if not (pos > 0 and rot > 0):
             raise CLIError("--ee-tolerance POSITION ROTATION (ee_tolerance) must be finite numbers > 0 (m, rad)")
+        check_bound("goal_tolerance.position", pos, "--ee-tolerance POSITION (ee_tolerance)", CLIError)
+        check_bound("goal_tolerance.rotation", rot, "--ee-tolerance ROTATION (ee_tolerance)", CLIError)
         ee = GoalTolerance(position=pos, rotation=rot)
     try:
         return OptimizeOptions(

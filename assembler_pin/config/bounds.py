@@ -94,6 +94,11 @@ BOUNDS: dict[str, Bound] = {
     "walk.fps": Bound(0.1, 1000.0, "1/s", False, "walk --fps: samples of the walk's page shown per second"),
     "walk.clearance": Bound(0.0, 0.5, "m", False, "WalkOptions.clearance: lift and pre-contact height"),
     "walk.transfer_samples": Bound(2, 1000, "", True, "WalkOptions.transfer_samples: samples of a load transfer"),
+    "pose.translation": Bound(
+        0.0, 1e4, "m", False, "largest coordinate of a goal, waypoint, plate pose, foothold or carrier mount"
+    ),
+    "goal_tolerance.position": Bound(0.0, 100.0, "m", False, "--ee-tolerance / GoalTolerance.position"),
+    "goal_tolerance.rotation": Bound(0.0, 3.15, "rad", False, "--ee-tolerance / GoalTolerance.rotation (π and less)"),
 }
 
 

@@ -132,6 +132,7 @@ PLATE_REFUSE = [
     "plates_object.json",
     "plates_many.json",
     "plates_quaternion_zero.json",
+    "plates_moved_1e15.json",
 ]
 
 
@@ -176,6 +177,11 @@ def _solve_cases() -> list[CliCase]:
         _case("solve.ee_tolerance_inf", s + " --ee-tolerance inf inf"),
         _case("solve.ee_tolerance_zero", s + " --ee-tolerance 0 0"),
         _case("solve.ee_tolerance_negative", s + " --ee-tolerance -1 1"),
+        _case("solve.ee_tolerance_overflow", s + " --ee-tolerance 1e300 1e300"),
+        _case("solve.ee_tolerance_rotation_huge", s + " --ee-tolerance 0.01 1e308"),
+        _case("solve.goal_far", "solve --json --goal 1e308 0 0.9 0 0 0"),
+        _case("solve.goal_far_below", "solve --json --goal 0 0 -1e15 0 0 0"),
+        _case("solve.carrier_mount_far", s + " --carrier ur5 --mount 1e308 0 0 0 0 0"),
         _case("solve.d_step_zero", s + " --d-step 0"),
         _case("solve.d_step_negative", s + " --d-step -1"),
         _case("solve.d_step_nan", s + " --d-step nan"),
@@ -220,6 +226,7 @@ def _reproduce_cases() -> list[CliCase]:
         _case("reproduce.out_under_file", "reproduce --scenario translation --out " + UNDER_FILE),
         _case("reproduce.out_is_file", "reproduce --scenario translation --out {d}/afile"),
         _case("reproduce.w1_nan", "reproduce --scenario translation --w1 nan"),
+        _case("reproduce.ee_tolerance_overflow", "reproduce --scenario translation --ee-tolerance 1e308 1e308"),
         _case("reproduce.max_iterations_negative", "reproduce --scenario translation --max-iterations -5"),
         _case("reproduce.method_bogus", "reproduce --method bogus"),
         _case("reproduce.config_bad", "reproduce --scenario translation --config {d}/cfg_9_81.yaml"),
@@ -261,6 +268,8 @@ def _plan_cases() -> list[CliCase]:
         _case("plan.to_nan", "plan --json --to nan 0 0.9 0 0 0"),
         _case("plan.to_overflow", "plan --json --to 0 0 1e400 0 0 0"),
         _case("plan.from_nan", p + " --from 0 0 nan 0 0 0"),
+        _case("plan.to_far", "plan --json --to 1e308 0 0.9 0 0 0"),
+        _case("plan.from_far", "plan --json --from 0 0 1e308 0 0 0 --to 0 0 0.9 0 0 0"),
         _case("plan.nothing", "plan --json"),
         _case("plan.out_under_file", p + " --out " + UNDER_FILE + ".csv"),
         _case("plan.out_is_dir", p + " --out {d}/adir"),
@@ -321,6 +330,7 @@ def _plan_cases() -> list[CliCase]:
 
 
 WAYPOINT_REFUSE = [
+    "wp_far.json",
     "missing.json",
     "adir",
     "wp_empty.json",
@@ -740,6 +750,8 @@ def plate_files(home: np.ndarray) -> dict[str, bytes]:
     far[2:, 2, 3] += 1.0
     huge = home.copy()
     huge[3:, 0, 3] = 1e300
+    moved = home.copy()
+    moved[:, 0, 3] += 1e15  # the whole stack moved: beyond the pose.translation limit
     one_string = [m for m in h]
     one_string[1] = [[str(v) if (i, j) == (0, 0) else v for j, v in enumerate(row)] for i, row in enumerate(h[1])]
     return {
@@ -771,6 +783,7 @@ def plate_files(home: np.ndarray) -> dict[str, bytes]:
         "plates_quaternion_zero.json": _dumps({"plates": [[0, 0, 0, 0, 0, 0, 0]] * len(h)}),
         "plates_far.json": _dumps({"plates": far.tolist()}),
         "plates_huge_translation.json": _dumps({"plates": huge.tolist()}),
+        "plates_moved_1e15.json": _dumps({"plates": moved.tolist()}),
         "plates_extra.json": _dumps({"plates": h, "units": "m"}),
     }
 
@@ -848,6 +861,7 @@ def waypoint_files(start: list[float], goal: list[float]) -> dict[str, bytes]:
         "wp_strings.json": _dumps({"waypoints": [[str(v) for v in p] for p in wp]}),
         "wp_bools.json": _dumps({"waypoints": [[True] * 6, [False] * 6]}),
         "wp_nan.json": b'{"waypoints": [[NaN, 0, 0.9, 0, 0, 0], [0, 0, 0.9, 0, 0, 0]]}',
+        "wp_far.json": b'{"waypoints": [[1e308, 0, 0.9, 0, 0, 0], [0, 0, 0.9, 0, 0, 0]]}',
         "wp_unknown_key.json": _dumps({"waypoints": wp, "speed": 0.01}),
         "wp_many.json": _dumps({"waypoints": [start, goal] * 10_001}),
         "wp_header_only.csv": b"x,y,z,rx,ry,rz\n",
