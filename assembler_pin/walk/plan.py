@@ -44,7 +44,7 @@ from ..exceptions import WalkError
 from ..kinematics import PlateArrays, leg_vectors, plate_arrays
 from ..model.assembler import AssemblerModel
 from ..motion.paths import EEPath
-from ..motion.planner import PlanOptions, plan_path
+from ..motion.planner import PlanOptions, check_plan_work, plan_path
 from ..supports.choice import CHECK_TOLERANCE, ChosenDistribution, chosen_distribution, force_bounds, held_equilibrium
 from ..supports.turned import turned_model
 from ..supports.two_point import two_point_statics
@@ -325,6 +325,23 @@ def _transfer_phase(am: AssemblerModel, pose: PlateArrays, stance: str, step: in
     )
 
 
+def _check_walk_work(am: AssemblerModel, start: PlateArrays, feet: list[pin.SE3], opts: WalkOptions) -> None:
+    """Refuse, before planning, a walk one of whose reach or swing phases needs more planned
+    samples than ``plan.work`` allows: each moving foot goes at least the straight distance
+    from where it stands to its next foothold, at ``opts.plan.position_step`` per sample.
+
+    Raises:
+        PathError: naming the phase's samples and the limit.
+    """
+    step = opts.plan.position_step
+    where = [start.se3(0).translation, start.se3(am.n).translation]  # base, EE
+    for k in range(1, len(feet)):
+        foot = k % 2  # the EE lands on odd footholds, the base on even ones
+        distance = float(np.linalg.norm(feet[k].translation - where[foot]))
+        check_plan_work(1 + math.ceil(distance / step), am.n)
+        where[foot] = feet[k].translation
+
+
 def plan_walk(
     am: AssemblerModel,
     footholds: object,
@@ -353,6 +370,7 @@ def plan_walk(
     opts = checked_options(options, WalkOptions, "options")
     feet = checked_footholds(am, footholds, opts.floor_z)
     cur = _start_plates(am, feet[0], start)
+    _check_walk_work(am, cur, feet, opts)
     stance, phases, total = "base", [], 2 * (len(feet) - 1)
     for step in range(1, len(feet)):
         moving = _other(stance)

@@ -298,6 +298,13 @@ def _plan_cases() -> list[CliCase]:
             slow=True,
         ),
         _case("plan.near_home", p + " --out {d}/plan_near.csv", "answer", slow=True, check="plan"),
+        # the slowest allowed legs at 1000 Hz: over plan.row_checks, answered not possible at once
+        _case(
+            "plan.slowest_legs_rate_1000",
+            p + " --rate 1000 --config {d}/cfg_slowest_legs.yaml --out {d}/plan_slowest.csv",
+            "any",
+            check="plan",
+        ),
         _case(
             "plan.waypoints_valid",
             "plan --json --waypoints {d}/wp_valid.json --out {d}/plan_wp.csv",
@@ -384,6 +391,15 @@ ORIENTATION_REFUSE = {
     "text": "a b c",
     "too_many": "0 0 0;" * 20000,
 }
+
+
+def _walk_cases() -> list[CliCase]:
+    """Walks whose work is over the plan.work bound are refused before planning."""
+    return [
+        _case("walk.floor_64_platforms", "walk --json --floor 0.5 2 --config {d}/cfg_platforms_64.yaml"),
+        _case("walk.floor_count_huge", "walk --json --floor 0.5 1000000"),
+        _case("walk.floor_step_nan", "walk --json --floor nan 2"),
+    ]
 
 
 def _map_cases() -> list[CliCase]:
@@ -835,6 +851,8 @@ CONFIG_FILES: dict[str, bytes] = {
     "cfg_timestamp.yaml": b"gravity: 2001-12-14\n",
     "cfg_tiny_speed.yaml": b"leg:\n  max_speed: 1.0e-12\n",
     "cfg_tiny_accel.yaml": b"leg:\n  max_acceleration: 1.0e-12\n",
+    "cfg_slowest_legs.yaml": b"leg:\n  max_speed: 1.0e-4\n  max_acceleration: 1.0e-4\n",
+    "cfg_platforms_64.yaml": b"platforms: 64\n",
 }
 
 
@@ -936,6 +954,7 @@ CLI_CASES: list[CliCase] = [
     *_reproduce_cases(),
     *_bench_cases(),
     *_plan_cases(),
+    *_walk_cases(),
     *_map_cases(),
     *_simulate_cases(),
     *_view_cases(),
