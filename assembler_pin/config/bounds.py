@@ -84,6 +84,7 @@ BOUNDS: dict[str, Bound] = {
     "map.batch_size": Bound(1, 10_000, "", True, "map --batch-size: cells per task"),
     "map.axis_count": Bound(1, 10_000, "", True, "points along one axis of a map grid"),
     "map.cells": Bound(1, 10_000_000, "", True, "cells of one map (grid points x orientations x configs)"),
+    "map.manifest_bytes": Bound(1, 1 << 20, "bytes", True, "size of a map directory's map.json read"),
     "map.orientations": Bound(1, 10_000, "", True, "orientations of one map"),
     "simulate.seconds": Bound(1e-3, 600.0, "s", False, "simulate --seconds: simulated time of a held pose"),
     "simulate.samples": Bound(2, 100_000, "", True, "simulate --samples: stored samples"),
