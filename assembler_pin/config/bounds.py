@@ -109,6 +109,9 @@ BOUNDS: dict[str, Bound] = {
     "walk.fps": Bound(0.1, 1000.0, "1/s", False, "walk --fps: samples of the walk's page shown per second"),
     "walk.clearance": Bound(0.0, 0.5, "m", False, "WalkOptions.clearance: lift and pre-contact height"),
     "walk.transfer_samples": Bound(2, 1000, "", True, "WalkOptions.transfer_samples: samples of a load transfer"),
+    "dynamics.motion": Bound(
+        0.0, 1e4, "m/s, rad/s, m/s², rad/s²", False, "inverse_dynamics: largest component of a twist or acceleration"
+    ),
     "pose.translation": Bound(
         0.0, 1e4, "m", False, "largest coordinate of a goal, waypoint, plate pose, foothold or carrier mount"
     ),

@@ -1510,8 +1510,47 @@ def _api_cases() -> list[ApiCase]:
             "api.solve_on_carrier.q0_wrong_count",
             lambda c: solve_on_carrier(c.am, c.carrier, _se3(p=(0.3, 0.2, 1.4)), q0=np.zeros(2)),
         ),
+        # bounds before arithmetic: motions, tolerances, positions
+        *[
+            ApiCase(
+                f"api.inverse_dynamics.{name}",
+                lambda c, v=v: ap.inverse_dynamics(c.am, c.am.home, np.full((c.am.n + 1, 6), v), np.zeros((c.am.n, 6))),
+            )
+            for name, v in (("twists_1e308", 1e308), ("twists_1e200", 1e200), ("twists_1e5", 1e5))
+        ],
+        ApiCase(
+            "api.inverse_dynamics.accelerations_huge",
+            lambda c: ap.inverse_dynamics(c.am, c.am.home, np.zeros((c.am.n, 6)), np.full((c.am.n, 6), 1e300)),
+        ),
+        ApiCase("api.goal_tolerance.position_huge", lambda c: GT(1e300, 1e-3)),
+        ApiCase("api.goal_tolerance.rotation_huge", lambda c: GT(1e-3, 1e308)),
+        ApiCase("api.goal_tolerance.bool", lambda c: GT(True, 1e-3)),
+        ApiCase(
+            "api.evaluate_state.moved_1e15",
+            lambda c: ap.evaluate_state(c.am, [m.homogeneous + _shift(1e15) for m in c.am.home]),
+        ),
+        # payload_capacity: a start that is not a valid pose at the goal, wrong types
+        ApiCase(
+            "api.payload_capacity.start_off_goal",
+            lambda c: ap.payload_capacity(c.am, _se3(p=REACH_P), start=c.am.home),
+        ),
+        ApiCase(
+            "api.payload_capacity.start_off_unreachable_goal",
+            lambda c: ap.payload_capacity(c.am, _se3(p=(10.0, 0.0, 0.9)), start=c.am.home),
+        ),
+        ApiCase("api.payload_capacity.rtol_string", lambda c: ap.payload_capacity(c.am, _se3(p=REACH_P), rtol="0.1")),
+        ApiCase("api.payload_capacity.rtol_nan", lambda c: ap.payload_capacity(c.am, _se3(p=REACH_P), rtol=np.nan)),
+        ApiCase("api.payload_capacity.models_wrong", lambda c: ap.payload_capacity(c.am, _se3(p=REACH_P), models="x")),
+        ApiCase("api.payload_capacity.model_string", lambda c: ap.payload_capacity("am", _se3(p=REACH_P))),
     ]
     return cases
+
+
+def _shift(d: float) -> np.ndarray:
+    """A 4x4 matrix adding ``d`` [m] to a pose's x."""
+    out = np.zeros((4, 4))
+    out[0, 3] = d
+    return out
 
 
 API_CASES: list[ApiCase] = _api_cases()
