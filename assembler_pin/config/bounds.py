@@ -101,7 +101,9 @@ BOUNDS: dict[str, Bound] = {
     "batch.stacks": Bound(1, 10_000_000, "", True, "stacks in one batched statics call"),
     "elastic.wrench": Bound(0.0, 1e6, "N, N m", False, "loaded_pose(wrench=...): largest EE force or moment"),
     "elastic.tol": Bound(1e-15, 1e-3, "m", False, "stiffness / loaded_pose(tol=...): Newton step accepted"),
-    "elastic.max_iterations": Bound(1, 1000, "", True, "loaded_pose(max_iterations=...): Newton steps"),
+    "elastic.max_iterations": Bound(
+        1, 1000, "", True, "loaded_pose / two_point_statics(max_iterations=...): Newton steps"
+    ),
     "compensated.tolerance": Bound(1e-12, 1e-3, "m", False, "compensated_lengths(tolerance=...): pose error"),
     "walk.footholds": Bound(2, 100, "", True, "walk --footholds / --floor COUNT: footholds of one walk"),
     "walk.file_bytes": Bound(1, 1 << 20, "bytes", True, "size of a footholds file read"),

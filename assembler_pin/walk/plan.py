@@ -80,7 +80,11 @@ class WalkOptions:
     def __post_init__(self) -> None:
         check_bound("walk.clearance", self.clearance, "clearance", error=WalkError)
         check_bound("walk.transfer_samples", self.transfer_samples, "transfer_samples", error=WalkError)
-        if self.floor_z is not None and not (isinstance(self.floor_z, (int, float)) and math.isfinite(self.floor_z)):
+        if self.floor_z is not None and not (
+            isinstance(self.floor_z, (int, float))
+            and not isinstance(self.floor_z, bool)
+            and math.isfinite(self.floor_z)
+        ):
             raise WalkError(f"floor_z must be a finite number [m] or None, got {self.floor_z!r}")
         if not isinstance(self.plan, PlanOptions):
             raise WalkError(f"plan must be a PlanOptions, got {type(self.plan).__name__}")

@@ -182,6 +182,25 @@ def _solve_cases() -> list[CliCase]:
         _case("solve.goal_far", "solve --json --goal 1e308 0 0.9 0 0 0"),
         _case("solve.goal_far_below", "solve --json --goal 0 0 -1e15 0 0 0"),
         _case("solve.carrier_mount_far", s + " --carrier ur5 --mount 1e308 0 0 0 0 0"),
+        _case("solve.carrier_empty", ["solve", "--json", "--goal", *REACHABLE.split(), "--carrier", ""]),
+        # an option with no effect in the combination given is refused, never ignored
+        *[
+            _case(f"solve.no_optimize_with_{flag[2:].replace('-', '_')}", f"{s} --no-optimize {flag} {value}")
+            for flag, value in (
+                ("--method", "slsqp"),
+                ("--starts", "all"),
+                ("--w1", "1"),
+                ("--w2", "1"),
+                ("--max-iterations", "50"),
+                ("--ftol", "1e-6"),
+                ("--ee-tolerance", "0.01 0.01"),
+                ("--objective", "sag"),
+                ("--max-sag", "0.01"),
+            )
+        ],
+        _case("stiffness.max_platforms_without_scaling", "stiffness --json --home --max-platforms 4"),
+        _case("stiffness.compensated_with_scaling", "stiffness --json --scaling --compensated"),
+        _case("stiffness.scaling_small", "stiffness --json --scaling --max-platforms 2", "answer", check="finite"),
         _case("solve.d_step_zero", s + " --d-step 0"),
         _case("solve.d_step_negative", s + " --d-step -1"),
         _case("solve.d_step_nan", s + " --d-step nan"),
@@ -1542,6 +1561,16 @@ def _api_cases() -> list[ApiCase]:
         ApiCase("api.payload_capacity.rtol_nan", lambda c: ap.payload_capacity(c.am, _se3(p=REACH_P), rtol=np.nan)),
         ApiCase("api.payload_capacity.models_wrong", lambda c: ap.payload_capacity(c.am, _se3(p=REACH_P), models="x")),
         ApiCase("api.payload_capacity.model_string", lambda c: ap.payload_capacity("am", _se3(p=REACH_P))),
+        *[
+            ApiCase(
+                f"api.two_point_statics.max_iterations_{name}",
+                lambda c, v=v: ap.two_point_statics(c.am, c.am.home, max_iterations=v),
+            )
+            for name, v in (("zero", 0), ("huge", 10**9), ("bool", True), ("float", 5.0), ("string", "5"))
+        ],
+        ApiCase("api.two_point_statics.model_string", lambda c: ap.two_point_statics("am", c.am.home)),
+        ApiCase("api.walk_options.floor_nan", lambda c: ap.walk.WalkOptions(floor_z=float("nan"))),
+        ApiCase("api.walk_options.floor_bool", lambda c: ap.walk.WalkOptions(floor_z=True)),
     ]
     return cases
 
