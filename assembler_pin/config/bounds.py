@@ -114,6 +114,7 @@ BOUNDS: dict[str, Bound] = {
     "dynamics.motion": Bound(
         0.0, 1e4, "m/s, rad/s, m/s², rad/s²", False, "inverse_dynamics: largest component of a twist or acceleration"
     ),
+    "macro.body_mass": Bound(0.0, 1e5, "kg", False, "macro_statics(body_mass=...): the body the stacks carry"),
     "pose.translation": Bound(
         0.0, 1e4, "m", False, "largest coordinate of a goal, waypoint, plate pose, foothold or carrier mount"
     ),

@@ -128,6 +128,20 @@ def nearest_rotations(R: np.ndarray) -> np.ndarray:
     return np.matmul(u, vt)
 
 
+def checked_platform_index(am: AssemblerModel, j: object) -> int:
+    """``j`` when it is an integer platform index 0..n-1 (not a boolean or a float).
+
+    Raises:
+        PoseError: naming the index given and the allowed range.
+    """
+    import numbers
+
+    if isinstance(j, bool) or not isinstance(j, numbers.Integral) or not 0 <= int(j) < am.n:
+        shown = repr(j) if len(repr(j)) <= 30 else repr(j)[:27] + "..."
+        raise PoseError(f"platform index must be an integer in 0..{am.n - 1}, got {shown}")
+    return int(j)
+
+
 def check_translations(p: np.ndarray, what: str) -> None:
     """Refuse positions farther than the ``pose.translation`` bound from the origin (every
     coordinate; the statics lose their digits far away, and path lengths overflow).

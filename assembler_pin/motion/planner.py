@@ -26,7 +26,7 @@ import numpy as np
 import pinocchio as pin
 
 from ..common.messages import binding, describe, one_line
-from ..common.progress import ProgressCallback
+from ..common.progress import ProgressCallback, checked_progress
 from ..config.bounds import BOUNDS
 from ..config.options import GEOMETRIC_MARGIN, SMOOTH_METHODS, GoalTolerance, checked_options, is_number
 from ..constraints import leg_limit_margins
@@ -277,6 +277,7 @@ def plan_path(
         progress: called as ``(permille of the path done, 1000, note)`` after each sample.
     """
     opts = checked_options(options, PlanOptions, "options")
+    progress = checked_progress(progress)
     t_start = time.perf_counter()
     targets = list(path.parameters(opts.position_step, opts.rotation_step)[1:])  # bounded before planning
     check_plan_work(len(targets) + 1, am.n)

@@ -28,7 +28,7 @@ import time
 import numpy as np
 
 from ..common.messages import one_line
-from ..common.progress import ProgressCallback
+from ..common.progress import ProgressCallback, checked_progress
 from ..common.threads import one_blas_thread
 from ..config.bounds import BOUNDS, check_bound
 from ..config.options import checked_options
@@ -152,6 +152,7 @@ def time_parametrize(
             times too short for the limits, limits that allow no motion (optimal law), or
             (strict) a failed FK.
     """
+    progress = checked_progress(progress)
     return _timed(am, plan, rate, max_speed, max_acceleration, safety, grid_per_sample, strict, progress, time_law)[0]
 
 
@@ -287,6 +288,7 @@ def plan_trajectory(
     """
     t0 = time.perf_counter()
     opts = _checked_plan_inputs(path, options, rate, refinements, time_law)
+    progress = checked_progress(progress)
     for attempt in range(refinements + 1):
         plan = plan_path(am, path, start, opts, progress=progress)
         if len(plan.states) < 2:

@@ -37,12 +37,12 @@ from dataclasses import dataclass, field
 import numpy as np
 import pinocchio as pin
 
-from ..common.progress import ProgressCallback
+from ..common.progress import ProgressCallback, checked_progress
 from ..config.bounds import check_bound
 from ..config.options import checked_options
 from ..exceptions import WalkError
 from ..kinematics import PlateArrays, leg_vectors, plate_arrays
-from ..model.assembler import AssemblerModel
+from ..model.assembler import AssemblerModel, checked_model
 from ..motion.paths import EEPath
 from ..motion.planner import PlanOptions, check_plan_work, plan_path
 from ..supports.choice import CHECK_TOLERANCE, ChosenDistribution, chosen_distribution, force_bounds, held_equilibrium
@@ -371,6 +371,8 @@ def plan_walk(
     Raises:
         WalkError: malformed or overlapping footholds, off the floor, a start off footholds[0].
     """
+    am = checked_model(am)
+    progress = checked_progress(progress)
     opts = checked_options(options, WalkOptions, "options")
     feet = checked_footholds(am, footholds, opts.floor_z)
     cur = _start_plates(am, feet[0], start)

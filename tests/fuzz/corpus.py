@@ -1571,6 +1571,61 @@ def _api_cases() -> list[ApiCase]:
         ApiCase("api.two_point_statics.model_string", lambda c: ap.two_point_statics("am", c.am.home)),
         ApiCase("api.walk_options.floor_nan", lambda c: ap.walk.WalkOptions(floor_z=float("nan"))),
         ApiCase("api.walk_options.floor_bool", lambda c: ap.walk.WalkOptions(floor_z=True)),
+        # one argument check at every public entry: a specific AssemblerError, never a bare one
+        *[
+            ApiCase(
+                f"api.macro_statics.{name}",
+                lambda c, m=m, com=com: ap.walk.macro_statics(c.am, [c.am.home, c.am.home], m, com),
+            )
+            for name, m, com in (
+                ("mass_string", "5", [0, 0, 1]),
+                ("mass_none", None, [0, 0, 1]),
+                ("mass_complex", 1 + 2j, [0, 0, 1]),
+                ("mass_huge", 1e308, [0, 0, 1]),
+                ("mass_bool", True, [0, 0, 1]),
+                ("com_string", 5.0, "abc"),
+                ("com_none", 5.0, None),
+                ("com_complex", 5.0, [1j, 0, 1]),
+                ("com_huge", 5.0, [1e308, 0, 0]),
+            )
+        ],
+        ApiCase("api.macro_capacity.com_none", lambda c: ap.walk.macro_capacity(c.am, [c.am.home], None)),
+        ApiCase("api.macro_statics.model_string", lambda c: ap.walk.macro_statics("am", [c.am.home], 1.0, [0, 0, 1])),
+        ApiCase(
+            "api.loaded_pose.max_iterations_negative", lambda c: ap.loaded_pose(c.am, c.am.home, max_iterations=-1)
+        ),
+        ApiCase("api.loaded_pose.max_iterations_string", lambda c: ap.loaded_pose(c.am, c.am.home, max_iterations="5")),
+        ApiCase("api.stiffness.model_string", lambda c: ap.stiffness("am", c.am.home)),
+        ApiCase("api.plan_walk.model_string", lambda c: ap.plan_walk("am", [])),
+        ApiCase("api.turned_model.model_string", lambda c: ap.walk.turned_model("am")),
+        ApiCase(
+            "api.plan_walk.progress_int",
+            lambda c: ap.plan_walk(c.am, ap.walk.footholds.floor_footholds(0.3, 2), progress=5),
+        ),
+        ApiCase(
+            "api.plan_trajectory.progress_int",
+            lambda c: ap.plan_trajectory(c.am, ap.EEPath.between(c.am.home[-1], c.am.home[-1]), progress=5),
+        ),
+        ApiCase("api.stiffness_scaling.progress_int", lambda c: importlib.import_module("assembler_pin.compliance.scaling").stiffness_scaling(progress=5)),
+        ApiCase("api.read_walk_csv.none", lambda c: ap.walk.read_walk_csv(None)),
+        ApiCase("api.read_walk_csv.bytes", lambda c: ap.walk.read_walk_csv(b"walk.csv")),
+        ApiCase("api.parse_walk_csv.none", lambda c: ap.walk.parse_walk_csv(None)),
+        ApiCase("api.parse_walk_csv.bytes", lambda c: ap.walk.parse_walk_csv(b"sample\n")),
+        ApiCase("api.read_footholds.none", lambda c: ap.walk.footholds.read_footholds(None)),
+        ApiCase("api.read_trajectory.dev_zero", lambda c: ap.read_trajectory("/dev/zero")),
+        ApiCase("api.export_model_files.none", lambda c: ap.export.export_model_files(None, c.ws.root / "exp_none")),
+        ApiCase("api.export_model_files.out_none", lambda c: ap.export.export_model_files(c.am.config, None)),
+        *[
+            ApiCase(
+                f"api.sp_forward_kinematics.index_{name}",
+                lambda c, j=j: sp_forward_kinematics(c.am, j, np.full(6, 0.27)),
+            )
+            for name, j in (("float", 1.0), ("bool", True), ("half", 1.5), ("string", "1"), ("negative", -1))
+        ],
+        ApiCase(
+            "api.ee_jacobian.coinciding_joints",
+            lambda c: ap.kinematics.jacobian.ee_jacobian_wrt_lengths(c.am, [_se3(p=(0, 0, 0))] * (c.am.n + 1)),
+        ),
     ]
     return cases
 
