@@ -196,8 +196,13 @@ def _refuse_optimizer_options_without_optimizing(args: argparse.Namespace) -> No
     score the carrier's placements."""
     if not args.no_optimize or args.carrier is not None:
         return
-    flags = (*OPTIMIZE_FLAGS, ("starts", "--starts"), ("objective", "--objective"))
-    flags += (("sag_weight", "--sag-weight"), ("max_sag", "--max-sag"))
+    flags = (
+        *OPTIMIZE_FLAGS,
+        ("starts", "--starts"),
+        ("objective", "--objective"),
+        ("sag_weight", "--sag-weight"),
+        ("max_sag", "--max-sag"),
+    )
     given = given_flags(args, flags)
     if given:
         raise CLIError(

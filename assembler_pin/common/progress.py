@@ -22,12 +22,12 @@ __all__ = ["ProgressCallback", "TerminalProgress", "checked_progress"]
 ProgressCallback = Callable[[int, int, str], None]
 
 
-def checked_progress(progress: object) -> ProgressCallback | None:
+def checked_progress(progress: ProgressCallback | None) -> ProgressCallback | None:
     """``progress`` when it is None or callable, else :class:`ArgumentError` (a public
     function checks it before any work, not at its first call deep inside)."""
     if progress is not None and not callable(progress):
         raise ArgumentError(f"progress must be a callable (done, total, note) or None, got {type(progress).__name__}")
-    return progress  # type: ignore[return-value]
+    return progress
 
 
 class TerminalProgress:

@@ -282,7 +282,9 @@ def payload_capacity(
 _FORCE_KINDS = frozenset({"tension", "compression", "non_finite_force"})
 
 
-def _checked_start(am: AssemblerModel, goal: pin.SE3, start: object, what: str, forces: bool) -> PlateArrays | None:
+def _checked_start(
+    am: AssemblerModel, goal: pin.SE3, start: PlateArrays | None, what: str, forces: bool
+) -> PlateArrays | None:
     """``start`` as plates when it is a valid pose at ``goal`` (every limit, or every limit but
     the forces when not ``forces``); None stays None.
 

@@ -32,6 +32,7 @@ from __future__ import annotations
 import dataclasses
 import logging
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -329,7 +330,7 @@ def _transfer_phase(am: AssemblerModel, pose: PlateArrays, stance: str, step: in
     )
 
 
-def _check_walk_work(am: AssemblerModel, start: PlateArrays, feet: list[pin.SE3], opts: WalkOptions) -> None:
+def _check_walk_work(am: AssemblerModel, start: PlateArrays, feet: Sequence[pin.SE3], opts: WalkOptions) -> None:
     """Refuse, before planning, a walk one of whose reach or swing phases needs more planned
     samples than ``plan.work`` allows: each moving foot goes at least the straight distance
     from where it stands to its next foothold, at ``opts.plan.position_step`` per sample.

@@ -629,6 +629,7 @@ TRAJECTORY_MUTATIONS: dict[str, tuple[str, tuple[str, ...]]] = {
     "time_law_unknown": ("refuse", ("json",)),
     "time_law_missing": ("refuse", ("json",)),
     "older_version": ("refuse", ("csv", "json")),
+    "version_float": ("refuse", ("json",)),
     "feasible_flag_cleared": ("any", ("csv",)),
     "extra_column": ("any", ("csv",)),
 }
@@ -753,6 +754,8 @@ def _mutate_json(name: str, original: str) -> bytes:
         del doc["meta"]["time_law"]
     elif name == "older_version":
         doc["version"] = 2
+    elif name == "version_float":
+        doc["version"] = float(doc["version"])  # 3.0: not what the writer writes
     elif name == "header_only":
         doc["rows"] = []
     else:
@@ -1606,7 +1609,10 @@ def _api_cases() -> list[ApiCase]:
             "api.plan_trajectory.progress_int",
             lambda c: ap.plan_trajectory(c.am, ap.EEPath.between(c.am.home[-1], c.am.home[-1]), progress=5),
         ),
-        ApiCase("api.stiffness_scaling.progress_int", lambda c: importlib.import_module("assembler_pin.compliance.scaling").stiffness_scaling(progress=5)),
+        ApiCase(
+            "api.stiffness_scaling.progress_int",
+            lambda c: importlib.import_module("assembler_pin.compliance.scaling").stiffness_scaling(progress=5),
+        ),
         ApiCase("api.read_walk_csv.none", lambda c: ap.walk.read_walk_csv(None)),
         ApiCase("api.read_walk_csv.bytes", lambda c: ap.walk.read_walk_csv(b"walk.csv")),
         ApiCase("api.parse_walk_csv.none", lambda c: ap.walk.parse_walk_csv(None)),
