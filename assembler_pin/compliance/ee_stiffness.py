@@ -244,7 +244,8 @@ def stiffness(
     Raises:
         PoseError: malformed plates or lengths. LoadError: ``tol`` out of bounds (``elastic.tol``).
     """
-    am = checked_model(am)
+    if not all(hasattr(am, a) for a in ("config", "n", "geometry", "home")):  # the truss of scaling passes
+        checked_model(am)
     check_bound("elastic.tol", tol, "tol", LoadError)
     pa = plate_arrays(am, plates)
     k = float(am.config.leg.stiffness)
