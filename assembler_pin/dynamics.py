@@ -40,6 +40,7 @@ import pinocchio as pin
 
 from .common.linalg import cross, inverse_or_nan
 from .common.validation import as_float_array
+from .config.bounds import BOUNDS
 from .exceptions import ArgumentError, SingularConfigurationError
 from .kinematics import PlateArrays, leg_vectors, plate_arrays, q_from_arrays
 from .model.assembler import WHOLE_DATA_MAX_PLATFORMS, AssemblerModel, checked_model
@@ -214,12 +215,24 @@ def _block_solve(am: AssemblerModel, pose: _Pose, tau: np.ndarray) -> tuple[np.n
     return -act, ball, base
 
 
+def _check_magnitude(arr: np.ndarray, what: str) -> None:
+    """Refuse a motion component beyond the ``dynamics.motion`` bound (its square would
+    overflow the inverse dynamics into NaN forces)."""
+    high = BOUNDS["dynamics.motion"].high
+    if arr.size and not np.abs(arr).max() <= high:
+        raise ArgumentError(
+            f"{what}: a component of {float(np.abs(arr).max()):.3g} is out of range (every component within "
+            f"±{high:g} m/s, rad/s, m/s² or rad/s², the dynamics.motion limit)"
+        )
+
+
 def _checked_motion(am: AssemblerModel, value: npt.ArrayLike, what: str) -> np.ndarray:
-    arr = as_float_array(value, what)
+    arr = as_float_array(value, what, error=ArgumentError)
     if arr.shape == (am.n, 6):  # the moving plates only: the base at rest
         arr = np.vstack([np.zeros(6), arr])
     if arr.shape != (am.n + 1, 6) or not np.isfinite(arr).all():
         raise ArgumentError(f"{what} must be finite, shape ({am.n + 1}, 6) (plates 0..n) or ({am.n}, 6)")
+    _check_magnitude(arr, what)
     return arr
 
 
@@ -288,9 +301,10 @@ def _spatial_from_lengths(pose: _Pose, rates: np.ndarray, accels: np.ndarray) ->
 
 
 def _checked_rates(am: AssemblerModel, value: npt.ArrayLike, what: str) -> np.ndarray:
-    arr = as_float_array(value, what)
+    arr = as_float_array(value, what, error=ArgumentError)
     if arr.size != 6 * am.n or not np.isfinite(arr).all():
         raise ArgumentError(f"{what} must be {6 * am.n} finite numbers (n x 6 legs)")
+    _check_magnitude(arr, what)
     return arr.reshape(am.n, 6)
 
 

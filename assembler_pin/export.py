@@ -3,10 +3,12 @@ helper arm's URDF and, on request, the MuJoCo MJCF (``assembler-pin export``).""
 
 from __future__ import annotations
 
+import os
 from pathlib import Path
 
 from .common.files import write_atomic
 from .config.schema import AssemblerConfig
+from .exceptions import ArgumentError
 from .helper_arm import HELPER_ARM_URDF_FILENAME, helper_arm_urdf
 from .model.mjcf import MJCF_FILENAME, assembler_mjcf
 from .model.urdf import SIDECAR_FILENAME, URDF_FILENAME, assembler_urdf, closure_sidecar
@@ -25,6 +27,10 @@ def export_model_files(cfg: AssemblerConfig, out_dir: str | Path, mjcf: bool = F
         A mapping from file role (``urdf``, ``sidecar``, ``helper_arm``, ``mjcf``) to the
         written path.
     """
+    if not isinstance(cfg, AssemblerConfig):
+        raise ArgumentError(f"cfg must be an AssemblerConfig (load_config(...)), got {type(cfg).__name__}")
+    if isinstance(out_dir, bytes) or not isinstance(out_dir, (str, os.PathLike)) or not str(out_dir):
+        raise ArgumentError(f"out_dir must be a non-empty str or path, got {type(out_dir).__name__}")
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     paths = {

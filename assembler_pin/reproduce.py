@@ -25,7 +25,7 @@ import pinocchio as pin
 
 from .common.files import atomic_path
 from .common.labels import leg_label, platform_label
-from .common.progress import ProgressCallback
+from .common.progress import ProgressCallback, checked_progress
 from .helper_arm import perturbed_plates, repair_stack
 from .model.assembler import AssemblerModel
 from .optimize import OptimizeOptions, optimize_internal_poses
@@ -119,6 +119,7 @@ def run_scenarios(
     """Solve the named scenarios (default: all, in the paper's order) with the force
     objective and, with ``sag``, with the sag objective too (the same options otherwise);
     ``progress`` is called ``(done, total, scenario name)`` after each."""
+    progress = checked_progress(progress)
     chosen = list(SCENARIOS) if names is None else list(names)
     base = options if options is not None else OptimizeOptions()
     force_options = dataclasses.replace(base, objective="force")

@@ -12,7 +12,7 @@ import numpy.typing as npt
 import pinocchio as pin
 
 from ..common.messages import binding, describe
-from ..common.progress import ProgressCallback
+from ..common.progress import ProgressCallback, checked_progress
 from ..common.threads import one_blas_thread
 from ..config.bounds import check_bound
 from ..config.options import DEFAULT_GOAL_TOLERANCE, GoalTolerance, HelperArmOptions, OptimizeOptions
@@ -212,6 +212,7 @@ def solve_on_carrier(
         progress: called ``(done, total, note)`` after each placement and the joint optimization.
     """
     t0 = time.perf_counter()
+    progress = checked_progress(progress)
     goal = to_se3(goal, "goal")
     opts, limit = _checked_settings(options, helper_options, blends, max_iterations, w_carrier)
     q0 = carrier.upright_q if q0 is None else carrier.check_q(q0, "q0")

@@ -6,9 +6,11 @@ Nothing heavy is imported at module level: ``assembler-pin --help`` starts at on
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import json
 import math
 import os
+from collections.abc import Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -138,25 +140,40 @@ def goal_from_args(args: argparse.Namespace):
     raise CLIError("give the EE goal: --goal X Y Z RX RY RZ (m, rad) or --goal-deg X Y Z RX RY RZ (m, deg)")
 
 
+#: The optimizer's options as ``(attribute, option)``: None in the parsed arguments unless given.
+OPTIMIZE_FLAGS = (
+    ("method", "--method"),
+    ("w1", "--w1"),
+    ("w2", "--w2"),
+    ("ee_tolerance", "--ee-tolerance"),
+    ("max_iterations", "--max-iterations"),
+    ("ftol", "--ftol"),
+)
+
+
+def given_flags(args: argparse.Namespace, flags: Sequence[tuple[str, str]]) -> list[str]:
+    """The options of ``flags`` that were given (not None, not false) in ``args``."""
+    return [flag for name, flag in flags if getattr(args, name, None) not in (None, False)]
+
+
 def optimize_options(args: argparse.Namespace):
     from ..config.options import GoalTolerance
     from ..optimize import OptimizeOptions
 
     ee = None
     if args.ee_tolerance is not None:
+        from ..config.bounds import check_bound
+
         pos, rot = args.ee_tolerance
-        if not (0 < pos < math.inf and 0 < rot < math.inf):
+        if not (pos > 0 and rot > 0):
             raise CLIError("--ee-tolerance POSITION ROTATION (ee_tolerance) must be finite numbers > 0 (m, rad)")
+        check_bound("goal_tolerance.position", pos, "--ee-tolerance POSITION (ee_tolerance)", CLIError)
+        check_bound("goal_tolerance.rotation", rot, "--ee-tolerance ROTATION (ee_tolerance)", CLIError)
         ee = GoalTolerance(position=pos, rotation=rot)
     try:
-        return OptimizeOptions(
-            method=args.method,
-            w1=args.w1,
-            w2=args.w2,
-            ee_tolerance=ee,
-            max_iterations=args.max_iterations,
-            ftol=args.ftol,
-        )
+        d = OptimizeOptions()
+        given = {name: getattr(args, name) for name in ("method", "w1", "w2", "max_iterations", "ftol")}
+        return dataclasses.replace(d, ee_tolerance=ee, **{k: v for k, v in given.items() if v is not None})
     except ValueError as exc:
         raise CLIError(str(exc)) from None
 
@@ -188,7 +205,7 @@ def add_carrier_arguments(p: argparse.ArgumentParser, note: str = "") -> None:
 
 def carrier_from_args(args: argparse.Namespace):
     """(carrier, q) of ``--carrier``, or (None, None) without one."""
-    if not getattr(args, "carrier", None):
+    if getattr(args, "carrier", None) is None:  # '' is a name given, and refused as a name
         if getattr(args, "carrier_q", None) or getattr(args, "mount", None):
             raise CLIError("--carrier-q and --mount need --carrier NAME")
         return None, None
@@ -233,23 +250,22 @@ def add_goal_arguments(group: argparse._MutuallyExclusiveGroup, note: str = "") 
 
 
 def add_optimize_arguments(p: argparse.ArgumentParser) -> None:
-    """The optimizer's options; defaults and choices come from :class:`OptimizeOptions`."""
+    """The optimizer's options; defaults and choices come from :class:`OptimizeOptions`. Each
+    is None unless given (:data:`OPTIMIZE_FLAGS`), so that a command can refuse one that would
+    have no effect; :func:`optimize_options` fills in the defaults."""
     from ..config.options import METHODS, OptimizeOptions
 
     d = OptimizeOptions()
     p.add_argument(
         "--method",
         choices=METHODS,
-        default=d.method,
         help=f"slsqp: smooth epigraph form, SciPy SLSQP; ipopt: the same form by IPOPT on the sparse "
         f"Jacobian (pip install assembler_pin[nlp]); auto: ipopt from 12 platforms (finished by slsqp when it "
         f"stops unconverged), else slsqp; paper: the "
         f"paper's non-smooth objective with finite differences (default {d.method})",
     )
-    p.add_argument("--w1", type=float, default=d.w1, help=f"weight of max|F| [1/N] (default {d.w1:g})")
-    p.add_argument(
-        "--w2", type=float, default=d.w2, help=f"weight of the plate deviation term [1/rad] (default {d.w2:g})"
-    )
+    p.add_argument("--w1", type=float, help=f"weight of max|F| [1/N] (default {d.w1:g})")
+    p.add_argument("--w2", type=float, help=f"weight of the plate deviation term [1/rad] (default {d.w2:g})")
     p.add_argument(
         "--ee-tolerance",
         type=float,
@@ -260,10 +276,9 @@ def add_optimize_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument(
         "--max-iterations",
         type=int,
-        default=d.max_iterations,
         help=f"solver iteration limit (default {d.max_iterations})",
     )
-    p.add_argument("--ftol", type=float, default=d.ftol, help=f"solver tolerance on the objective (default {d.ftol:g})")
+    p.add_argument("--ftol", type=float, help=f"solver tolerance on the objective (default {d.ftol:g})")
 
 
 def add_helper_arm_arguments(p: argparse.ArgumentParser) -> None:

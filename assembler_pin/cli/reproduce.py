@@ -56,7 +56,8 @@ def run(args: argparse.Namespace) -> int:
     unknown = [n for n in names if n not in SCENARIOS]
     if unknown:
         raise CLIError(f"unknown scenario {', '.join(unknown)}; valid: {', '.join(SCENARIOS)}")
-    check_bound("optimize.max_iterations", args.max_iterations, "--max-iterations", CLIError)
+    if args.max_iterations is not None:
+        check_bound("optimize.max_iterations", args.max_iterations, "--max-iterations", CLIError)
     if args.markdown and args.out:
         raise CLIError("--markdown prints the docs' tables, --out writes the report: use one of them")
     if args.out:

@@ -10,6 +10,7 @@ from ..exceptions import CLIError
 if TYPE_CHECKING:
     from ..model.assembler import AssemblerModel
 from .common import (
+    OPTIMIZE_FLAGS,
     add_carrier_arguments,
     add_goal_arguments,
     add_helper_arm_arguments,
@@ -19,6 +20,7 @@ from .common import (
     dumps,
     format_carrier,
     format_state_table,
+    given_flags,
     goal_from_args,
     optimize_options,
     progress_for,
@@ -151,9 +153,11 @@ def run(args: argparse.Namespace) -> int:
 
     goal = goal_from_args(args)
     _refuse_carrier_options(args)
+    _refuse_optimizer_options_without_optimizing(args)
     if args.out:
         writable_parent(args.out, "--out file")
-    check_bound("optimize.max_iterations", args.max_iterations, "--max-iterations", CLIError)
+    if args.max_iterations is not None:
+        check_bound("optimize.max_iterations", args.max_iterations, "--max-iterations", CLIError)
     helper = helper_options(args)
     options = None if args.no_optimize else sag_options(args, optimize_options(args))
     am = AssemblerModel.from_config(config_from_args(args))
@@ -184,6 +188,26 @@ def run(args: argparse.Namespace) -> int:
         if args.out:
             print(f"wrote {written}" if written else f"no pose to write to {args.out}: the goal was not solved")
     return 0 if result.success and (capacity is None or capacity.success) else 1
+
+
+def _refuse_optimizer_options_without_optimizing(args: argparse.Namespace) -> None:
+    """``--no-optimize`` skips the optimizer: an option that only sets it is refused (it would
+    be silently ignored), naming the first one given. With ``--carrier`` the options still
+    score the carrier's placements."""
+    if not args.no_optimize or args.carrier is not None:
+        return
+    flags = (
+        *OPTIMIZE_FLAGS,
+        ("starts", "--starts"),
+        ("objective", "--objective"),
+        ("sag_weight", "--sag-weight"),
+        ("max_sag", "--max-sag"),
+    )
+    given = given_flags(args, flags)
+    if given:
+        raise CLIError(
+            f"{given[0]} sets the optimizer, which --no-optimize skips (only the helper arm's pose): drop one of them"
+        )
 
 
 def _write_plates(path: str, result) -> str | None:

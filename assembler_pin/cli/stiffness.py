@@ -22,7 +22,7 @@ def add_parser(add) -> None:
         action="store_true",
         help="stiffness and sag of the home pose against the number of platforms, n = 1..--max-platforms",
     )
-    p.add_argument("--max-platforms", type=int, default=64, metavar="N", help="with --scaling: the largest n (64)")
+    p.add_argument("--max-platforms", type=int, metavar="N", help="with --scaling: the largest n (64)")
     p.add_argument("--out", metavar="FILE.png", help="with --scaling: write the log-log figure there")
     p.add_argument(
         "--compensated",
@@ -36,14 +36,17 @@ def add_parser(add) -> None:
 def run(args: argparse.Namespace) -> int:
     """Exit 0 with the stiffness; 1 when there is none (singular, unstable, no pose for the goal)."""
     from ..compliance.ee_stiffness import stiffness
+    from ..exceptions import CLIError
     from ..model.assembler import AssemblerModel
 
     if args.scaling:
+        if args.compensated:
+            raise CLIError("--compensated has no effect with --scaling (the home poses are rigid): drop one of them")
         return _run_scaling(args)
     if args.out is not None:
-        from ..exceptions import CLIError
-
         raise CLIError("--out writes the figure of --scaling: give --scaling too")
+    if args.max_platforms is not None:
+        raise CLIError("--max-platforms sets the largest n of --scaling: give --scaling too, or drop it")
     am = AssemblerModel.from_config(config_from_args(args))
     plates: PlateArrays | list
     if args.goal is not None or args.goal_deg is not None:
@@ -80,7 +83,8 @@ def _run_scaling(args: argparse.Namespace) -> int:
     from ..exceptions import CLIError
     from .common import progress_for
 
-    top = int(check_bound("config.platforms", args.max_platforms, "--max-platforms", CLIError))
+    top = 64 if args.max_platforms is None else args.max_platforms
+    top = int(check_bound("config.platforms", top, "--max-platforms", CLIError))
     if args.out is not None and not str(args.out).lower().endswith(".png"):
         raise CLIError(f"--out must name a .png file, got {args.out!r}")
     cfg = config_from_args(args)

@@ -10,6 +10,7 @@ from __future__ import annotations
 import contextlib
 import json
 import os
+import stat
 import tempfile
 from collections.abc import Iterator
 from pathlib import Path
@@ -54,16 +55,25 @@ def write_atomic(path: str | os.PathLike[str], data: str | bytes, encoding: str 
     return target
 
 
-def read_text_bounded(path: Path, bound_key: str, what: str, error: type[Exception]) -> str:
-    """The UTF-8 text of the input file ``path``, refused in one line (``error``) when it is
-    missing or unreadable, empty, larger than its row ``bound_key`` of the limits table, or not
+def read_text_bounded(path: object, bound_key: str, what: str, error: type[Exception]) -> str:
+    """The UTF-8 text of the input file ``path``, refused in one line (``error``) when ``path``
+    is not a str or path, the file is missing or unreadable, not a regular file (a pipe or a
+    device is never read), empty, larger than its row ``bound_key`` of the limits table, or not
     UTF-8. ``what`` names the file in the message (``"trajectory"``, ``"waypoint file"``)."""
+    if isinstance(path, bytes) or not isinstance(path, (str, os.PathLike)) or not str(path):
+        raise error(f"a {what} path must be a non-empty str or path, got {type(path).__name__}")
+    path = Path(path)
     try:
-        size = path.stat().st_size
-        if size == 0:
+        info = path.stat()
+        if not stat.S_ISREG(info.st_mode):
+            raise error(f"{what} '{path}' is not a regular file")
+        if info.st_size == 0:
             raise error(f"{what} '{path}' is empty")
-        check_bound(bound_key, size, f"the size of '{path}'", error)
-        return path.read_bytes().decode("utf-8")
+        check_bound(bound_key, info.st_size, f"the size of '{path}'", error)
+        with open(path, "rb") as fh:
+            data = fh.read(info.st_size + 1)
+        check_bound(bound_key, len(data), f"the size of '{path}'", error)
+        return data.decode("utf-8")
     except OSError as exc:
         raise error(f"cannot read {what} '{path}': {exc.strerror or exc}") from None
     except UnicodeDecodeError:

@@ -84,8 +84,8 @@ class ParsedName:
     indices: tuple[int, ...] = ()
 
 
-_PLATE = re.compile(r"plate_(\d+)")
-_LEG = re.compile(r"sp(\d+)_leg(\d+)(?:_([a-z]+))?")
+_PLATE = re.compile(r"plate_(\d+)", re.ASCII)
+_LEG = re.compile(r"sp(\d+)_leg(\d+)(?:_([a-z]+))?", re.ASCII)
 
 
 def parse_name(name: str) -> ParsedName:

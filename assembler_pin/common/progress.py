@@ -14,10 +14,20 @@ import time
 from collections.abc import Callable
 from typing import TextIO
 
-__all__ = ["ProgressCallback", "TerminalProgress"]
+from ..exceptions import ArgumentError
+
+__all__ = ["ProgressCallback", "TerminalProgress", "checked_progress"]
 
 #: ``(done, total, note)``: ``done`` of ``total`` units finished (``total`` 0 when unknown).
 ProgressCallback = Callable[[int, int, str], None]
+
+
+def checked_progress(progress: ProgressCallback | None) -> ProgressCallback | None:
+    """``progress`` when it is None or callable, else :class:`ArgumentError` (a public
+    function checks it before any work, not at its first call deep inside)."""
+    if progress is not None and not callable(progress):
+        raise ArgumentError(f"progress must be a callable (done, total, note) or None, got {type(progress).__name__}")
+    return progress
 
 
 class TerminalProgress:

@@ -32,7 +32,7 @@ from ..common.validation import as_float_array
 from ..config.bounds import check_bound
 from ..exceptions import LoadError, PoseError
 from ..kinematics import PlateArrays, plate_arrays
-from ..model.assembler import AssemblerModel
+from ..model.assembler import AssemblerModel, checked_model
 from ..statics.closed_form import CONDITION_LIMIT
 from .elastic import Equilibrium, elastic_terms, line_conditions, solve_equilibrium
 
@@ -244,6 +244,8 @@ def stiffness(
     Raises:
         PoseError: malformed plates or lengths. LoadError: ``tol`` out of bounds (``elastic.tol``).
     """
+    if not all(hasattr(am, a) for a in ("config", "n", "geometry", "home")):  # the truss of scaling passes
+        checked_model(am)
     check_bound("elastic.tol", tol, "tol", LoadError)
     pa = plate_arrays(am, plates)
     k = float(am.config.leg.stiffness)

@@ -340,7 +340,9 @@ def solve_equilibrium(
     with ``hold_ee`` the EE plate n stays too and plates 1..n-1 move: both ends held).
 
     Converged when the Newton step is at most ``tol`` [m] (rotations scaled by the node
-    radius); steps longer than :data:`MAX_STEP` are shortened. Whether the answer is stable is
+    radius); that last step is taken and the terms (forces, gradient) are those of the pose it
+    lands on, never of the start, whatever ``tol``; steps longer than :data:`MAX_STEP` are
+    shortened. Whether the answer is stable is
     reported (``stable``), not required. With ``condition_limit``, a start whose leg lines are
     worse conditioned (:func:`line_conditions`) is refused before any step (a singular pose).
     ``rest`` None commands the lengths of the start.
@@ -373,9 +375,10 @@ def solve_equilibrium(
                     f"the elastic equilibrium did not converge in {max_iterations} Newton steps "
                     f"(last step {size:.3g} m > {tol:.1g} m)"
                 )
-            else:
+            else:  # the last step taken, and the forces, energy and gradient of where it lands
                 p[1:] += x[:, :3]
                 R[1:] = np.matmul(exp3_batch(x[:, 3:]), R[1:])
+                terms = elastic_terms(am, R, p, rest, stiffness, wrench)
             return Equilibrium(R, p, terms, C, stable, it, size, message)
         if size > MAX_STEP:
             x = x * (MAX_STEP / size)

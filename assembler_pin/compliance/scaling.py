@@ -21,7 +21,7 @@ import numpy as np
 import pinocchio as pin
 
 from ..common.palette import LEG_CYCLE, LIMIT, OPTIMIZED
-from ..common.progress import ProgressCallback
+from ..common.progress import ProgressCallback, checked_progress
 from ..config.bounds import check_bound
 from ..config.schema import AssemblerConfig, load_config
 from ..exceptions import OptionsError
@@ -106,6 +106,9 @@ def stiffness_scaling(
         OptionsError: ``max_platforms`` out of its bounds.
     """
     top = int(check_bound("config.platforms", max_platforms, "max_platforms", OptionsError))
+    progress = checked_progress(progress)
+    if config is not None and not isinstance(config, AssemblerConfig):
+        raise OptionsError(f"config must be an AssemblerConfig or None, got {type(config).__name__}")
     base = config if config is not None else load_config()
     ns = np.arange(1, top + 1)
     rows, elastic, stable, message = [], [], [], []

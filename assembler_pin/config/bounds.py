@@ -47,6 +47,20 @@ BOUNDS: dict[str, Bound] = {
     "waypoints.count": Bound(2, 10_000, "", True, "waypoints of one path file"),
     "waypoints.bytes": Bound(1, 100_000_000, "bytes", True, "size of a waypoint file read"),
     "plan.path_samples": Bound(2, 100_000, "", True, "planned samples along one path (its length / the step)"),
+    "plan.work": Bound(
+        1,
+        200_000,
+        "",
+        True,
+        "planned samples x platforms² of one plan or walk phase (~0.1 s per sample at 4 platforms)",
+    ),
+    "plan.row_checks": Bound(
+        1,
+        100_000,
+        "",
+        True,
+        "trajectory rows x platforms checked by FK, statics and dynamics (~1 ms each)",
+    ),
     "view.animate": Bound(0, 1000, "", True, "view --animate: leg-length steps from initial to optimized"),
     "view.frames": Bound(2, 2000, "", True, "view --frames: frames of a trajectory animation"),
     "view.exaggerate": Bound(1e-3, 1e4, "", False, "view --exaggerate: factor on the loaded pose's displacements"),
@@ -70,6 +84,7 @@ BOUNDS: dict[str, Bound] = {
     "map.batch_size": Bound(1, 10_000, "", True, "map --batch-size: cells per task"),
     "map.axis_count": Bound(1, 10_000, "", True, "points along one axis of a map grid"),
     "map.cells": Bound(1, 10_000_000, "", True, "cells of one map (grid points x orientations x configs)"),
+    "map.manifest_bytes": Bound(1, 1 << 20, "bytes", True, "size of a map directory's map.json read"),
     "map.orientations": Bound(1, 10_000, "", True, "orientations of one map"),
     "simulate.seconds": Bound(1e-3, 600.0, "s", False, "simulate --seconds: simulated time of a held pose"),
     "simulate.samples": Bound(2, 100_000, "", True, "simulate --samples: stored samples"),
@@ -86,7 +101,9 @@ BOUNDS: dict[str, Bound] = {
     "batch.stacks": Bound(1, 10_000_000, "", True, "stacks in one batched statics call"),
     "elastic.wrench": Bound(0.0, 1e6, "N, N m", False, "loaded_pose(wrench=...): largest EE force or moment"),
     "elastic.tol": Bound(1e-15, 1e-3, "m", False, "stiffness / loaded_pose(tol=...): Newton step accepted"),
-    "elastic.max_iterations": Bound(1, 1000, "", True, "loaded_pose(max_iterations=...): Newton steps"),
+    "elastic.max_iterations": Bound(
+        1, 1000, "", True, "loaded_pose / two_point_statics(max_iterations=...): Newton steps"
+    ),
     "compensated.tolerance": Bound(1e-12, 1e-3, "m", False, "compensated_lengths(tolerance=...): pose error"),
     "walk.footholds": Bound(2, 100, "", True, "walk --footholds / --floor COUNT: footholds of one walk"),
     "walk.file_bytes": Bound(1, 1 << 20, "bytes", True, "size of a footholds file read"),
@@ -94,6 +111,15 @@ BOUNDS: dict[str, Bound] = {
     "walk.fps": Bound(0.1, 1000.0, "1/s", False, "walk --fps: samples of the walk's page shown per second"),
     "walk.clearance": Bound(0.0, 0.5, "m", False, "WalkOptions.clearance: lift and pre-contact height"),
     "walk.transfer_samples": Bound(2, 1000, "", True, "WalkOptions.transfer_samples: samples of a load transfer"),
+    "dynamics.motion": Bound(
+        0.0, 1e4, "m/s, rad/s, m/s², rad/s²", False, "inverse_dynamics: largest component of a twist or acceleration"
+    ),
+    "macro.body_mass": Bound(0.0, 1e5, "kg", False, "macro_statics(body_mass=...): the body the stacks carry"),
+    "pose.translation": Bound(
+        0.0, 1e4, "m", False, "largest coordinate of a goal, waypoint, plate pose, foothold or carrier mount"
+    ),
+    "goal_tolerance.position": Bound(0.0, 100.0, "m", False, "--ee-tolerance / GoalTolerance.position"),
+    "goal_tolerance.rotation": Bound(0.0, 3.15, "rad", False, "--ee-tolerance / GoalTolerance.rotation (π and less)"),
 }
 
 

@@ -54,11 +54,7 @@ class GoalTolerance:
 
     def __post_init__(self) -> None:
         for name in ("position", "rotation"):
-            value = getattr(self, name)
-            if not (is_number(value) and 0 <= value < math.inf):
-                unit = "m" if name == "position" else "rad"
-                shown = short_repr(value)
-                raise OptionsError(f"GoalTolerance.{name} must be a finite number >= 0 [{unit}], got {shown}")
+            check_bound(f"goal_tolerance.{name}", getattr(self, name), f"GoalTolerance.{name}")
 
 
 _OptionsT = TypeVar("_OptionsT")

@@ -18,7 +18,7 @@ from ..config.bounds import check_bound
 from ..exceptions import ConvergenceError, PoseError
 from ..model.assembler import AssemblerModel
 from ..model.geometry import LEGS_PER_PLATFORM
-from .poses import PlateArrays, plate_arrays, to_se3
+from .poses import PlateArrays, checked_platform_index, plate_arrays, to_se3
 
 __all__ = ["FKResult", "StackFKResult", "sp_forward_kinematics", "stack_forward_kinematics"]
 
@@ -105,8 +105,7 @@ def sp_forward_kinematics(
         max_iterations: Newton iterations before giving up.
     """
     target = _check_lengths(lengths, (LEGS_PER_PLATFORM,))
-    if not 0 <= j < am.n:
-        raise PoseError(f"platform index must be in 0..{am.n - 1}, got {j}")
+    j = checked_platform_index(am, j)
     return _platform_fk(am, j, target, guess, tol, max_iterations)
 
 

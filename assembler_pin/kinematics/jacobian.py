@@ -10,9 +10,13 @@ from collections.abc import Sequence
 import numpy as np
 import pinocchio as pin
 
+from ..exceptions import SingularConfigurationError
 from ..model.assembler import AssemblerModel
 from .legs import relative_leg_directions
-from .poses import PlateArrays, plate_arrays
+from .poses import PlateArrays, checked_platform_index, plate_arrays
+
+#: Largest condition number of a platform's inverse Jacobian that is inverted (beyond it: no inverse).
+CONDITION_LIMIT = 1e12
 
 __all__ = ["ee_jacobian_wrt_lengths", "sp_inverse_jacobian"]
 
@@ -20,6 +24,7 @@ __all__ = ["ee_jacobian_wrt_lengths", "sp_inverse_jacobian"]
 def sp_inverse_jacobian(am: AssemblerModel, j: int, top_in_bottom: pin.SE3) -> np.ndarray:
     """dL/dξ of platform j (6×6): leg-length rates for a local twist ξ = [v, ω] of the top
     plate (pose perturbed as ``top_in_bottom * exp6(ξ)``), bottom plate fixed [m/m, m/rad]."""
+    j = checked_platform_index(am, j)
     geo = am.geometry
     R, p = top_in_bottom.rotation, top_in_bottom.translation
     _, _, _, u_top = relative_leg_directions(geo.bottom_in_plate[j], geo.top_in_plate[j], R, p)
@@ -42,7 +47,16 @@ def ee_jacobian_wrt_lengths(am: AssemblerModel, plates: PlateArrays | Sequence |
     rot6[:3, :3] = rot6[3:, 3:] = ee.rotation
     for j in range(n):
         rel = pa.se3(j).actInv(pa.se3(j + 1))
-        local_twist_per_length = np.linalg.inv(sp_inverse_jacobian(am, j, rel))
+        inverse = sp_inverse_jacobian(am, j, rel)
+        condition = np.linalg.cond(inverse) if np.isfinite(inverse).all() else np.inf
+        if not condition <= CONDITION_LIMIT:
+            raise SingularConfigurationError(
+                f"platform {j} is singular (coinciding joints or parallel leg lines, condition number "
+                f"{condition:.3g}): the EE Jacobian w.r.t. the leg lengths does not exist there",
+                float(condition),
+                j,
+            )
+        local_twist_per_length = np.linalg.inv(inverse)
         plate_to_ee = pa.se3(j + 1).actInv(ee)
         jac[:, 6 * j : 6 * j + 6] = rot6 @ plate_to_ee.inverse().action @ local_twist_per_length
     return jac

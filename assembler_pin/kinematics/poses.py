@@ -16,6 +16,7 @@ import numpy.typing as npt
 import pinocchio as pin
 
 from ..common.validation import as_float_array
+from ..config.bounds import BOUNDS
 from ..exceptions import PoseError
 from ..model.assembler import AssemblerModel
 
@@ -103,6 +104,7 @@ def to_se3(pose: pin.SE3 | npt.ArrayLike, what: str = "pose") -> pin.SE3:
     matrix = pose.homogeneous if isinstance(pose, pin.SE3) else as_float_array(pose, f"{what} (a 4x4 matrix)", (4, 4))
     if not np.all(np.isfinite(matrix)):
         raise PoseError(f"{what} contains NaN or infinite values")
+    check_translations(matrix[:3, 3], what)
     if not np.abs(matrix[3] - [0.0, 0.0, 0.0, 1.0]).max() <= 1e-12:
         raise PoseError(f"{what}: the bottom row must be [0, 0, 0, 1], got {matrix[3].tolist()}")
     rot = matrix[:3, :3]
@@ -126,6 +128,42 @@ def nearest_rotations(R: np.ndarray) -> np.ndarray:
     return np.matmul(u, vt)
 
 
+def checked_platform_index(am: AssemblerModel, j: object) -> int:
+    """``j`` when it is an integer platform index 0..n-1 (not a boolean or a float).
+
+    Raises:
+        PoseError: naming the index given and the allowed range.
+    """
+    import numbers
+
+    if isinstance(j, bool) or not isinstance(j, numbers.Integral) or not 0 <= int(j) < am.n:
+        shown = repr(j) if len(repr(j)) <= 30 else repr(j)[:27] + "..."
+        raise PoseError(f"platform index must be an integer in 0..{am.n - 1}, got {shown}")
+    return int(j)
+
+
+def check_translations(p: np.ndarray, what: str) -> None:
+    """Refuse positions farther than the ``pose.translation`` bound from the origin (every
+    coordinate; the statics lose their digits far away, and path lengths overflow).
+
+    Args:
+        p: positions (..., 3) [m], already finite.
+
+    Raises:
+        PoseError: naming the first one out of range and the bound.
+    """
+    high = BOUNDS["pose.translation"].high
+    far = np.abs(p).reshape(-1, 3).max(axis=1) > high if p.size else np.zeros(0, bool)
+    if far.any():
+        k = int(np.argmax(far))
+        coord = float(np.abs(p.reshape(-1, 3)[k]).max())
+        where = f" {k}" if p.ndim > 1 else ""
+        raise PoseError(
+            f"{what}{where}: a coordinate of {coord:.3g} m is out of range "
+            f"(every coordinate within ±{high:g} m, the pose.translation limit)"
+        )
+
+
 def taa_to_se3(taa: npt.ArrayLike, degrees: bool = False, what: str = "goal") -> pin.SE3:
     """A pose from the paper's translation-axis-angle vector ``(x, y, z, rx, ry, rz)``.
 
@@ -139,6 +177,7 @@ def taa_to_se3(taa: npt.ArrayLike, degrees: bool = False, what: str = "goal") ->
     arr = as_float_array(taa, f"{what} (six numbers X Y Z RX RY RZ)", (6,))
     if not np.all(np.isfinite(arr)):
         raise PoseError(f"{what} contains NaN or infinite values: {arr.tolist()}")
+    check_translations(arr[:3], what)
     rotvec = np.deg2rad(arr[3:]) if degrees else arr[3:]
     angle = float(np.abs(rotvec).max())
     if angle > MAX_ROTATION_VECTOR:
@@ -227,6 +266,7 @@ def checked_rotations(matrices: np.ndarray, what: str = "plate") -> tuple[np.nda
     bad = ~np.isfinite(matrices).all(axis=(1, 2))
     if bad.any():
         raise PoseError(f"{what} {int(np.argmax(bad))} contains NaN or infinite values")
+    check_translations(matrices[:, :3, 3], what)
     last = np.abs(matrices[:, 3] - np.array([0.0, 0.0, 0.0, 1.0])).max(axis=1) > 1e-12
     if last.any():
         k = int(np.argmax(last))

@@ -34,7 +34,17 @@ from ..exceptions import AssemblerError, MapError
 from .cells import COLUMNS, cell_key, compute_batch, config_hash, config_key, solver_hash
 from .cluster import check_scheduler, client_for, stop
 from .grid import Cell, Grid
-from .store import check_manifest, manifest_for, need_pyarrow, read_parts, remove_stale_temporaries, schema, write_part
+from .store import (
+    MANIFEST,
+    check_manifest,
+    manifest_for,
+    need_pyarrow,
+    read_manifest,
+    read_parts,
+    remove_stale_temporaries,
+    schema,
+    write_part,
+)
 
 __all__ = ["MapRun", "done_cells", "read_map", "run_map"]
 
@@ -77,16 +87,32 @@ def read_map(out: str | Path):
     """Every row written in a map directory, as a ``pyarrow.Table`` sorted by config and cell
     (an empty table when nothing was written).
 
+    Refuses what ``map`` refuses on a rerun: parts without a manifest, a manifest of another
+    version or that is not a regular file, a part that is truncated, of another schema, edited
+    after it was written (its checksum), repeats a cell, or holds a configuration or a cell
+    the manifest does not have.
+
     Raises:
-        MapError: ``out`` is not a directory, or a part is unreadable, of another schema or
-            repeats a cell (named in one line).
+        MapError: ``out`` is not a directory, or one of the above (named in one line).
     """
     pa, _ = need_pyarrow()
     path = _out_dir(out, create=False)
     parts = read_parts(path) if path.is_dir() else []
     if not parts:
         return schema().empty_table()
-    table = pa.concat_tables([t for _, t in parts])
+    manifest = read_manifest(path)
+    cells = math.prod(manifest["shape"])
+    for part, table in parts:
+        names = set(table.column("config").to_pylist()) - set(manifest["configs"])
+        if names:
+            raise MapError(f"map part {part} holds configuration {sorted(names)[0]!r:.60}, not in {MANIFEST}")
+        ids = table.column("cell").to_pylist()
+        if min(ids) < 0 or max(ids) >= cells:
+            raise MapError(
+                f"map part {part} holds cell {max(ids) if max(ids) >= cells else min(ids)}, "
+                f"outside the map's {cells} cells"
+            )
+    table = pa.concat_tables([t.replace_schema_metadata(None) for _, t in parts])
     return table.sort_by([("config", "ascending"), ("cell", "ascending")])
 
 

@@ -7,6 +7,11 @@ written atomically (:func:`~assembler_pin.common.files.atomic_path`): a part is 
 A directory that holds another map, a part that cannot be read, has another schema, repeats
 a cell or holds a row computed from anything else is refused with one line
 (:class:`~assembler_pin.exceptions.MapError`); its rows are never mixed into an answer.
+
+Each part carries the SHA-256 of its rows in its Parquet metadata (:data:`CHECKSUM_KEY`),
+verified whenever it is read: a part edited after it was written is refused. The manifest is
+read only when it is a regular file of at most ``map.manifest_bytes`` (never a pipe or a
+device read whole).
 """
 
 from __future__ import annotations
@@ -14,19 +19,33 @@ from __future__ import annotations
 import contextlib
 import hashlib
 import json
+import os
+import stat
 from pathlib import Path
 
 from ..common.files import atomic_path, write_atomic
+from ..config.bounds import BOUNDS
 from ..exceptions import AssemblerError, MapError
 from .cells import COLUMNS
 from .grid import Grid
 
-__all__ = ["MANIFEST", "check_manifest", "grid_hash", "manifest_for", "read_parts", "write_part"]
+__all__ = [
+    "MANIFEST",
+    "check_manifest",
+    "grid_hash",
+    "manifest_for",
+    "read_manifest",
+    "read_parts",
+    "rows_checksum",
+    "write_part",
+]
 
 MANIFEST = "map.json"
 """The manifest's file name in a map directory."""
 FORMAT = "assembler_pin map"
-VERSION = 3  # 3: the sag and weakest-stiffness columns
+VERSION = 4  # 3: the sag and weakest-stiffness columns; 4: parts carry a checksum
+CHECKSUM_KEY = b"assembler_pin.sha256"
+"""The key of a part's checksum in its Parquet schema metadata."""
 _HOW = "use another --out directory, or delete this one to start afresh"
 
 
@@ -69,8 +88,28 @@ def manifest_for(grid: Grid, configs: dict[str, str], solver: str) -> dict:
 
 
 def _read_manifest(path: Path) -> dict:
+    """The manifest at ``path``, read only when it is a regular file of bounded size.
+
+    Raises:
+        MapError: not a regular file, too large, not JSON, or not a map manifest.
+    """
+    limit = int(BOUNDS["map.manifest_bytes"].high)
     try:
-        doc = json.loads(path.read_text(encoding="utf-8"))
+        info = os.stat(path)
+    except OSError as exc:
+        raise MapError(f"the map manifest {path} cannot be read: {exc.strerror or exc}: {_HOW}") from None
+    if not stat.S_ISREG(info.st_mode):
+        raise MapError(f"the map manifest {path} is not a regular file: {_HOW}")
+    if info.st_size > limit:
+        raise MapError(
+            f"the map manifest {path} holds {info.st_size:,} bytes, over {limit:,} (map.manifest_bytes): {_HOW}"
+        )
+    try:
+        with open(path, "rb") as fh:
+            data = fh.read(limit + 1)
+        if len(data) > limit:
+            raise ValueError("grew while read")
+        doc = json.loads(data.decode("utf-8"))
     except (OSError, UnicodeDecodeError, ValueError, RecursionError):
         raise MapError(f"the map manifest {path} cannot be read as JSON: {_HOW}") from None
     keys = {"format", "version", "shape", "grid", "configs", "solver"}
@@ -79,11 +118,34 @@ def _read_manifest(path: Path) -> dict:
     return doc
 
 
+def read_manifest(out: Path) -> dict:
+    """The manifest of the map directory ``out``, checked as a reader sees it: present,
+    of this :data:`VERSION`, its configuration names texts.
+
+    Raises:
+        MapError: naming what is wrong.
+    """
+    path = out / MANIFEST
+    if not os.path.lexists(path):
+        raise MapError(f"the map directory {out} holds parts without a manifest ({MANIFEST}): {_HOW}")
+    doc = _read_manifest(path)
+    if doc["version"] != VERSION:
+        raise MapError(
+            f"{path} is a map of version {doc['version']!r:.20}, this package reads version {VERSION}: {_HOW}"
+        )
+    configs, shape = doc["configs"], doc["shape"]
+    if not (isinstance(configs, dict) and configs and all(isinstance(v, str) for v in configs.values())):
+        raise MapError(f"{path} is not an assembler_pin map manifest (configs): {_HOW}")
+    if not (isinstance(shape, list) and shape and all(type(v) is int and v > 0 for v in shape)):
+        raise MapError(f"{path} is not an assembler_pin map manifest (shape): {_HOW}")
+    return doc
+
+
 def check_manifest(out: Path, wanted: dict) -> None:
     """Write ``wanted`` as the manifest of a new map directory, or check that ``out`` holds this
     same map; a directory holding another map, or parts without a manifest, is refused."""
     path = out / MANIFEST
-    if not path.exists():
+    if not os.path.lexists(path):
         if any(out.glob("part-*.parquet")):
             raise MapError(f"the map directory {out} holds parts without a manifest ({MANIFEST}): {_HOW}")
         write_atomic(path, json.dumps(wanted, indent=1) + "\n")
@@ -99,6 +161,16 @@ def check_manifest(out: Path, wanted: dict) -> None:
     else:
         differs += [f"configuration {name!r} content" for name in new if old[name] != new[name]]
     raise MapError(f"the map directory {out} holds another map (its {', '.join(differs) or 'manifest'} differ): {_HOW}")
+
+
+def rows_checksum(table) -> str:
+    """The SHA-256 of a part's rows: every column's values in order, floats exactly (their
+    ``repr``), whatever the Parquet encoding."""
+    h = hashlib.sha256()
+    for name in table.schema.names:
+        h.update(name.encode())
+        h.update(json.dumps(table.column(name).to_pylist(), allow_nan=True).encode())
+    return h.hexdigest()
 
 
 def _bad_part(path: Path, why: str) -> MapError:
@@ -123,6 +195,11 @@ def _read_part(path: Path, pa, pq):
             raise _bad_part(path, f"has column {field.name!r} of type {got}, not {field.type}")
     if table.num_rows == 0:
         raise _bad_part(path, "holds no rows")
+    stored = (table.schema.metadata or {}).get(CHECKSUM_KEY)
+    if stored is None:
+        raise _bad_part(path, "carries no checksum of its rows")
+    if stored.decode("ascii", "replace") != rows_checksum(table):
+        raise _bad_part(path, "does not match its checksum (its rows were changed after it was written)")
     if table.column("config").null_count or table.column("cell").null_count or table.column("key").null_count:
         raise _bad_part(path, "holds rows without config, cell or key")
     return table
@@ -152,6 +229,7 @@ def write_part(out: Path, rows: list[dict], tag: str) -> Path:
     """Write a batch's rows as one part, atomically (a part is whole or absent)."""
     pa, pq = need_pyarrow()
     table = pa.Table.from_pylist(rows, schema=schema())
+    table = table.replace_schema_metadata({CHECKSUM_KEY: rows_checksum(table).encode("ascii")})
     path = out / f"part-{tag}-{rows[0]['cell']:09d}.parquet"
     with atomic_path(path) as tmp:
         pq.write_table(table, tmp)

@@ -122,8 +122,8 @@ def read_waypoints(path: str | Path, kind: str = "screw") -> EEPath:
     Raises:
         PathError: one line naming the file and what is wrong.
     """
-    path = Path(path)
     text = read_text_bounded(path, "waypoints.bytes", "waypoint file", PathError)
+    path = Path(path)
     try:
         rows, times, degrees = _json_waypoints(text) if path.suffix.lower() == ".json" else _csv_waypoints(text)
         check_bound("waypoints.count", len(rows), "the number of waypoints", PathError)

@@ -26,10 +26,11 @@ import numpy as np
 import pinocchio as pin
 
 from ..common.messages import binding, describe, one_line
-from ..common.progress import ProgressCallback
+from ..common.progress import ProgressCallback, checked_progress
+from ..config.bounds import BOUNDS
 from ..config.options import GEOMETRIC_MARGIN, SMOOTH_METHODS, GoalTolerance, checked_options, is_number
 from ..constraints import leg_limit_margins
-from ..exceptions import OptionsError
+from ..exceptions import OptionsError, PathError
 from ..kinematics import PlateArrays, plate_arrays, stack_forward_kinematics
 from ..model.assembler import AssemblerModel
 from ..optimize import MotionTerm, OptimizeOptions, OptimizeResult, optimize_internal_poses
@@ -257,6 +258,22 @@ def _start_state(
     return state, ""
 
 
+def check_plan_work(samples: int, platforms: int) -> None:
+    """Refuse a plan whose samples would take too long to optimize (``plan.work``: samples x
+    platforms², each sample an optimization whose cost grows with the platform count).
+
+    Raises:
+        PathError: naming the samples, the platforms and the limit.
+    """
+    limit = BOUNDS["plan.work"].high
+    work = samples * platforms**2
+    if work > limit:
+        raise PathError(
+            f"the path needs {samples:,} planned samples on {platforms} platforms ({work:,} samples x platforms²), "
+            f"over the {limit:,.0f} of one plan (plan.work): shorten the path or use fewer platforms"
+        )
+
+
 def plan_path(
     am: AssemblerModel,
     path: EEPath,
@@ -275,8 +292,10 @@ def plan_path(
         progress: called as ``(permille of the path done, 1000, note)`` after each sample.
     """
     opts = checked_options(options, PlanOptions, "options")
+    progress = checked_progress(progress)
     t_start = time.perf_counter()
     targets = list(path.parameters(opts.position_step, opts.rotation_step)[1:])  # bounded before planning
+    check_plan_work(len(targets) + 1, am.n)
     start_state, why = _start_state(am, path, start, opts)
     if start_state is None:
         march = _March(False, why, [], [], [], 0, (0.0, 0.0))

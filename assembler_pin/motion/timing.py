@@ -28,9 +28,9 @@ import time
 import numpy as np
 
 from ..common.messages import one_line
-from ..common.progress import ProgressCallback
+from ..common.progress import ProgressCallback, checked_progress
 from ..common.threads import one_blas_thread
-from ..config.bounds import check_bound
+from ..config.bounds import BOUNDS, check_bound
 from ..config.options import checked_options
 from ..dynamics import path_force_coefficients
 from ..exceptions import PathError, TrajectoryError
@@ -152,7 +152,25 @@ def time_parametrize(
             times too short for the limits, limits that allow no motion (optimal law), or
             (strict) a failed FK.
     """
+    progress = checked_progress(progress)
     return _timed(am, plan, rate, max_speed, max_acceleration, safety, grid_per_sample, strict, progress, time_law)[0]
+
+
+def check_row_work(rows: int, platforms: int, rate: float, duration: float) -> None:
+    """Refuse a trajectory whose rows would take too long to check (``plan.row_checks``):
+    every row is checked by stack FK, statics and the inverse dynamics, about 1 ms per
+    platform, before the answer is given.
+
+    Raises:
+        TrajectoryError: naming the rows, the rate, the duration and the limit.
+    """
+    limit = BOUNDS["plan.row_checks"].high
+    if rows * platforms > limit:
+        raise TrajectoryError(
+            f"the trajectory would hold {rows:,} rows ({rate:g} Hz x {duration:.4g} s) of {platforms} platforms, "
+            f"{rows * platforms:,} row checks, over the {limit:,.0f} of one plan (plan.row_checks): "
+            "lower the rate or raise leg.max_speed / leg.max_acceleration"
+        )
 
 
 def _timed(
@@ -184,6 +202,7 @@ def _timed(
     spline = PchipInterpolator(np.arange(len(L), dtype=float), L, axis=0)
     problem = _problem(am, plan, spline, safety * v_max, safety * a_max, grid_per_sample, law)
     schedule = time_law(law).schedule(problem, rate)
+    check_row_work(len(schedule.times), am.n, rate, schedule.duration)
     times, s, sd, sdd = schedule.times, schedule.s, schedule.s_dot[:, None], schedule.s_ddot[:, None]
     lengths = spline(s).reshape(len(times), am.n, 6)
     d1 = spline(s, 1)
@@ -269,6 +288,7 @@ def plan_trajectory(
     """
     t0 = time.perf_counter()
     opts = _checked_plan_inputs(path, options, rate, refinements, time_law)
+    progress = checked_progress(progress)
     for attempt in range(refinements + 1):
         plan = plan_path(am, path, start, opts, progress=progress)
         if len(plan.states) < 2:

@@ -233,7 +233,7 @@ def _parse_json(text: str) -> tuple[dict, list, list]:
         raise TrajectoryError(f'not a trajectory file (expected a JSON object with "format": "{FORMAT}")')
     if set(doc) != {"format", "version", "meta", "columns", "rows"}:
         raise TrajectoryError("expected exactly the keys format, version, meta, columns, rows")
-    if doc["version"] != VERSION or isinstance(doc["version"], bool):
+    if type(doc["version"]) is not int or doc["version"] != VERSION:  # 3.0 is not the integer 3
         raise TrajectoryError(f"format version {doc['version']!r} is not {VERSION}: {_REPLAN}")
     meta = _check_meta(doc["meta"])
     rows = doc["rows"]

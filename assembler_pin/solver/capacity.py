@@ -30,16 +30,18 @@ import numpy as np
 import pinocchio as pin
 
 from ..common.labels import leg_label
-from ..common.messages import one_line
+from ..common.messages import binding, describe, one_line
 from ..common.threads import one_blas_thread
 from ..config.bounds import check_bound
-from ..exceptions import OptionsError
+from ..config.options import is_number
+from ..exceptions import ArgumentError, OptionsError, PoseError, short_repr
 from ..helper_arm import initial_condition
-from ..kinematics import PlateArrays, to_se3
-from ..model.assembler import AssemblerModel
+from ..kinematics import PlateArrays, plate_arrays, to_se3
+from ..model.assembler import AssemblerModel, checked_model
 from ..model.geometry import DIMENSIONS
 from ..model.platform import PlatformModel, StackPlan
 from ..optimize import optimize_internal_poses
+from ..state import evaluate_state
 from ..statics.pinocchio_statics import solve_statics
 from .pipeline import optimizer_starts, solve
 
@@ -244,11 +246,16 @@ def payload_capacity(
             the solve without payload).
         arm_start: the helper arm's valid pose for the goal, if the caller has it.
     """
-    if not (0 < rtol < 0.5 and isinstance(max_iterations, int) and max_iterations >= 1):
-        raise OptionsError("rtol must be in (0, 0.5) and max_iterations an integer >= 1")
+    am = checked_model(am)
+    if not (is_number(rtol) and 0 < rtol < 0.5):
+        raise OptionsError(f"rtol must be a number in (0, 0.5), got {short_repr(rtol)}")
     check_bound("capacity.max_iterations", max_iterations, "max_iterations", OptionsError)
+    if models is not None and not isinstance(models, PayloadModels):
+        raise ArgumentError(f"models must be PayloadModels(am) (or None), got {type(models).__name__}")
     t0 = time.perf_counter()
     goal = to_se3(goal, "goal")
+    start = _checked_start(am, goal, start, "start", forces=not configured_failed)
+    arm_start = _checked_start(am, goal, arm_start, "arm_start", forces=False)
     models = models or PayloadModels(am)
     plates, why = _valid_start(am, goal, models, start, configured_failed)
     if plates is None:
@@ -269,6 +276,29 @@ def payload_capacity(
     )
     logger.info("capacity: %s", answer)
     return answer
+
+
+#: The kinds of violation a kinematically valid pose may have (its forces at a payload).
+_FORCE_KINDS = frozenset({"tension", "compression", "non_finite_force"})
+
+
+def _checked_start(
+    am: AssemblerModel, goal: pin.SE3, start: PlateArrays | None, what: str, forces: bool
+) -> PlateArrays | None:
+    """``start`` as plates when it is a valid pose at ``goal`` (every limit, or every limit but
+    the forces when not ``forces``); None stays None.
+
+    Raises:
+        PoseError: malformed plates, or a pose off the goal or beyond a limit (naming the first).
+    """
+    if start is None:
+        return None
+    pa = plate_arrays(am, start)
+    state = evaluate_state(am, pa, goal=goal)
+    bad = [v for v in state.violations if forces or v.kind not in _FORCE_KINDS]
+    if bad:
+        raise PoseError(one_line(f"{what} is not a valid pose at the goal: {describe(binding(bad))}"))
+    return pa
 
 
 def _valid_start(

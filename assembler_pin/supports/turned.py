@@ -36,7 +36,7 @@ import pinocchio as pin
 from ..config.schema import AssemblerConfig, LegConfig, PayloadConfig
 from ..constraints import Violation
 from ..kinematics import PlateArrays, leg_vectors, plate_arrays
-from ..model.assembler import AssemblerModel
+from ..model.assembler import AssemblerModel, checked_model
 
 __all__ = ["TurnedModel", "turned_config", "turned_model"]
 
@@ -163,6 +163,7 @@ def turned_model(am: AssemblerModel) -> TurnedModel:
     The turn ψ about z is the multiple of 60° that maps every joint centre of the turned
     model, at the original's home pose, onto the original's own to :data:`MATCH_TOLERANCE`.
     """
+    am = checked_model(am)
     key = id(am)
     held = _BUILT.get(key)
     if held is None or held.original is not am:

@@ -33,9 +33,10 @@ import pinocchio as pin
 from ..common.validation import as_float_array
 from ..compliance.elastic import elastic_terms, line_conditions, solve_equilibrium
 from ..compliance.loaded import LoadedPose, loaded_pose
+from ..config.bounds import check_bound
 from ..exceptions import PoseError, SupportError
 from ..kinematics import PlateArrays, leg_vectors, plate_arrays, to_se3
-from ..model.assembler import AssemblerModel
+from ..model.assembler import AssemblerModel, checked_model
 from ..state import StackState, evaluate_state
 from ..statics.closed_form import CONDITION_LIMIT
 from .turned import turned_model
@@ -257,8 +258,11 @@ def two_point_statics(
         an unstable equilibrium or a residual above :func:`residual_tolerance`.
 
     Raises:
-        PoseError: malformed plates or lengths.
+        PoseError: malformed plates or lengths. SupportError: ``max_iterations`` not an
+            integer within ``elastic.max_iterations``. ArgumentError: ``am`` not a model.
     """
+    am = checked_model(am)
+    check_bound("elastic.max_iterations", max_iterations, "max_iterations", SupportError)
     pa = plate_arrays(am, plates)
     rest = leg_vectors(am, pa)[3] if lengths is None else checked_lengths(am, lengths)
     tolerance = residual_tolerance(am, pa)

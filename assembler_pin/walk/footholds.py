@@ -146,7 +146,7 @@ def read_footholds(path: str | Path) -> FootholdFile:
     Raises:
         WalkError: unreadable, empty, too large, not UTF-8, or not the format (one line).
     """
-    return parse_footholds(read_text_bounded(Path(path), "walk.file_bytes", "footholds file", WalkError))
+    return parse_footholds(read_text_bounded(path, "walk.file_bytes", "footholds file", WalkError))
 
 
 #: Turns a foothold frame into the pose of the EE plate standing on it (its +z into the

@@ -15,13 +15,18 @@ the body's weight wrench ``[0, 0, −m g]`` at its centre of mass.
 * :func:`macro_capacity` — the largest body mass any distribution carries within the limits
   (a linear program in the mass and the wrenches).
 
+**The tool payload.** Each stack is modelled by ``am``, payload included: every stack carries
+its configured tool payload (``payload.mass`` at ``payload.com`` on its EE plate: 5 kg at
+0.2 m with the default configuration) besides its share of the body, so a 0 kg body gives
+each stack its loaded ``statics --home`` forces. For the body alone, model the stacks
+without a payload: ``AssemblerModel.from_config(cfg.replace(payload=PayloadConfig(mass=0.0)))``.
+
 Not here (left for later): the elastic distribution of the macro-configuration (the stacks'
 compliance sharing the body's load for given commanded lengths).
 """
 
 from __future__ import annotations
 
-import math
 from collections.abc import Sequence
 from dataclasses import dataclass
 
@@ -29,9 +34,11 @@ import numpy as np
 import numpy.typing as npt
 from scipy.optimize import linprog
 
+from ..common.validation import as_float_array
+from ..config.bounds import BOUNDS, check_bound
 from ..exceptions import WalkError
 from ..kinematics import PlateArrays, leg_vectors, plate_arrays
-from ..model.assembler import AssemblerModel
+from ..model.assembler import AssemblerModel, checked_model
 from ..supports.choice import force_bounds, held_equilibrium
 
 __all__ = ["MacroStatics", "macro_capacity", "macro_statics"]
@@ -62,9 +69,21 @@ class MacroStatics:
 
 
 def _stacks(am: AssemblerModel, stacks: Sequence) -> list[PlateArrays]:
+    checked_model(am)
     if isinstance(stacks, (str, bytes)) or not hasattr(stacks, "__len__") or not 1 <= len(stacks) <= 16:
         raise WalkError("stacks must be a list of 1..16 plate poses (each n+1 world poses)")
     return [plate_arrays(am, s) for s in stacks]
+
+
+def _body_com(body_com: object) -> np.ndarray:
+    """``body_com`` as three finite numbers [m] within the ``pose.translation`` bound."""
+    com = as_float_array(body_com, "body_com (three numbers x, y, z [m])", (3,), error=WalkError)
+    if not np.all(np.isfinite(com)):
+        raise WalkError(f"body_com must be three finite numbers [m], got {com.tolist()}")
+    high = BOUNDS["pose.translation"].high
+    if not np.abs(com).max() <= high:
+        raise WalkError(f"body_com: every coordinate within ±{high:g} m (pose.translation), got {com.tolist()}")
+    return com
 
 
 def _moved_to(point: np.ndarray, origin: np.ndarray) -> np.ndarray:
@@ -101,15 +120,17 @@ def _weight_wrench(mass: float, com: np.ndarray, gravity: float) -> np.ndarray:
 def macro_statics(am: AssemblerModel, stacks: Sequence, body_mass: float, body_com: npt.ArrayLike) -> MacroStatics:
     """The chosen distribution (module doc) of the stacks ``stacks`` (each its n+1 world plate
     poses, its plate 0 held) carrying a body of ``body_mass`` [kg] centred at ``body_com`` (world,
-    [m]) on their EE plates.
+    [m]) on their EE plates. Each stack also carries its configured tool payload (module doc):
+    with ``body_mass`` 0 the forces are those of the stacks under their own payloads.
 
     Raises:
-        WalkError: malformed stacks, mass or centre of mass.
+        WalkError: malformed stacks, a mass outside ``macro.body_mass`` or a centre of mass
+            that is not three finite numbers within ``pose.translation``.
+        ArgumentError: ``am`` is not a model.
     """
     pas = _stacks(am, stacks)
-    com = np.asarray(body_com, dtype=float)
-    if com.shape != (3,) or not np.all(np.isfinite(com)) or not (math.isfinite(body_mass) and body_mass >= 0):
-        raise WalkError("body_mass must be a finite mass >= 0 [kg] and body_com three finite numbers [m]")
+    check_bound("macro.body_mass", body_mass, "body_mass", WalkError)
+    com = _body_com(body_com)
     k, n6 = len(pas), 6 * am.n
     nan = np.full((k, am.n, 6), np.nan)
     prog = _program(am, pas)
@@ -137,15 +158,14 @@ def macro_statics(am: AssemblerModel, stacks: Sequence, body_mass: float, body_c
 def macro_capacity(am: AssemblerModel, stacks: Sequence, body_com: npt.ArrayLike) -> tuple[float, str]:
     """The largest body mass [kg] (centred at ``body_com``, world [m]) that some distribution
     carries within every leg's force limits and stroke, and a note; 0 with the reason when the
-    stacks cannot even carry themselves.
+    stacks cannot even carry themselves. The stacks' configured tool payloads are carried too
+    (module doc): the body's mass is on top of them.
 
     Raises:
         WalkError: malformed stacks or centre of mass.
     """
     pas = _stacks(am, stacks)
-    com = np.asarray(body_com, dtype=float)
-    if com.shape != (3,) or not np.all(np.isfinite(com)):
-        raise WalkError("body_com must be three finite numbers [m]")
+    com = _body_com(body_com)
     prog = _program(am, pas)
     if isinstance(prog, str):
         return 0.0, prog

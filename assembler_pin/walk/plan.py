@@ -32,19 +32,20 @@ from __future__ import annotations
 import dataclasses
 import logging
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
 import pinocchio as pin
 
-from ..common.progress import ProgressCallback
+from ..common.progress import ProgressCallback, checked_progress
 from ..config.bounds import check_bound
 from ..config.options import checked_options
 from ..exceptions import WalkError
 from ..kinematics import PlateArrays, leg_vectors, plate_arrays
-from ..model.assembler import AssemblerModel
+from ..model.assembler import AssemblerModel, checked_model
 from ..motion.paths import EEPath
-from ..motion.planner import PlanOptions, plan_path
+from ..motion.planner import PlanOptions, check_plan_work, plan_path
 from ..supports.choice import CHECK_TOLERANCE, ChosenDistribution, chosen_distribution, force_bounds, held_equilibrium
 from ..supports.turned import turned_model
 from ..supports.two_point import two_point_statics
@@ -80,7 +81,11 @@ class WalkOptions:
     def __post_init__(self) -> None:
         check_bound("walk.clearance", self.clearance, "clearance", error=WalkError)
         check_bound("walk.transfer_samples", self.transfer_samples, "transfer_samples", error=WalkError)
-        if self.floor_z is not None and not (isinstance(self.floor_z, (int, float)) and math.isfinite(self.floor_z)):
+        if self.floor_z is not None and not (
+            isinstance(self.floor_z, (int, float))
+            and not isinstance(self.floor_z, bool)
+            and math.isfinite(self.floor_z)
+        ):
             raise WalkError(f"floor_z must be a finite number [m] or None, got {self.floor_z!r}")
         if not isinstance(self.plan, PlanOptions):
             raise WalkError(f"plan must be a PlanOptions, got {type(self.plan).__name__}")
@@ -325,6 +330,23 @@ def _transfer_phase(am: AssemblerModel, pose: PlateArrays, stance: str, step: in
     )
 
 
+def _check_walk_work(am: AssemblerModel, start: PlateArrays, feet: Sequence[pin.SE3], opts: WalkOptions) -> None:
+    """Refuse, before planning, a walk one of whose reach or swing phases needs more planned
+    samples than ``plan.work`` allows: each moving foot goes at least the straight distance
+    from where it stands to its next foothold, at ``opts.plan.position_step`` per sample.
+
+    Raises:
+        PathError: naming the phase's samples and the limit.
+    """
+    step = opts.plan.position_step
+    where = [start.se3(0).translation, start.se3(am.n).translation]  # base, EE
+    for k in range(1, len(feet)):
+        foot = k % 2  # the EE lands on odd footholds, the base on even ones
+        distance = float(np.linalg.norm(feet[k].translation - where[foot]))
+        check_plan_work(1 + math.ceil(distance / step), am.n)
+        where[foot] = feet[k].translation
+
+
 def plan_walk(
     am: AssemblerModel,
     footholds: object,
@@ -350,9 +372,12 @@ def plan_walk(
     Raises:
         WalkError: malformed or overlapping footholds, off the floor, a start off footholds[0].
     """
+    am = checked_model(am)
+    progress = checked_progress(progress)
     opts = checked_options(options, WalkOptions, "options")
     feet = checked_footholds(am, footholds, opts.floor_z)
     cur = _start_plates(am, feet[0], start)
+    _check_walk_work(am, cur, feet, opts)
     stance, phases, total = "base", [], 2 * (len(feet) - 1)
     for step in range(1, len(feet)):
         moving = _other(stance)

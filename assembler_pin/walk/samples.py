@@ -40,8 +40,8 @@ SAMPLE_COLUMNS = ("sample", "phase", "kind", "support", "foothold", "max_abs_for
 #: Longest commanded length accepted [m] (the stroke of any real leg is far below it).
 MAX_LENGTH = 100.0
 
-_INT = re.compile(r"\d{1,9}")
-_REAL = re.compile(r"[-+]?(?:\d+(?:\.\d*)?|\.\d+)(?:[eE][-+]?\d{1,3})?")
+_INT = re.compile(r"\d{1,9}", re.ASCII)  # ASCII digits only: float() reads '١٢' as 12
+_REAL = re.compile(r"[-+]?(?:\d+(?:\.\d*)?|\.\d+)(?:[eE][-+]?\d{1,3})?", re.ASCII)
 
 
 @dataclass(frozen=True)
@@ -143,6 +143,8 @@ def parse_walk_csv(text: str, n: int | None = None) -> WalkSamples:
     Raises:
         WalkError: anything but the format, in one line naming the row and the column.
     """
+    if not isinstance(text, str):
+        raise WalkError(f"the samples file's text must be a str, got {type(text).__name__}")
     if not text.endswith("\n"):
         raise WalkError("the samples file is truncated: its last line has no end")
     lines = text[:-1].split("\n")
@@ -185,4 +187,4 @@ def read_walk_csv(path: str | Path, n: int | None = None) -> WalkSamples:
     Raises:
         WalkError: unreadable, empty, too large, not UTF-8, or not the format (one line).
     """
-    return parse_walk_csv(read_text_bounded(Path(path), "trajectory.bytes", "walk samples file", WalkError), n)
+    return parse_walk_csv(read_text_bounded(path, "trajectory.bytes", "walk samples file", WalkError), n)

@@ -129,16 +129,13 @@ def test_bench_json_keys():
 def test_cli_defaults_come_from_the_options_dataclasses():
     from assembler_pin import HelperArmOptions, OptimizeOptions
     from assembler_pin.cli import build_parser
+    from assembler_pin.cli.common import optimize_options
 
     args = build_parser().parse_args(["solve", "--goal", "0", "0", "0.9", "0", "0", "0"])
     d, h = OptimizeOptions(), HelperArmOptions()
-    assert (args.method, args.w1, args.w2, args.max_iterations, args.ftol) == (
-        d.method,
-        d.w1,
-        d.w2,
-        d.max_iterations,
-        d.ftol,
-    )
+    # not given: None in the arguments (so that an option with no effect can be refused)
+    assert (args.method, args.w1, args.w2, args.max_iterations, args.ftol) == (None,) * 5
+    assert optimize_options(args) == d
     assert (args.d_step, args.max_attempts) == (h.d_step, h.max_attempts)
 
 

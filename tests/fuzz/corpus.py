@@ -132,6 +132,7 @@ PLATE_REFUSE = [
     "plates_object.json",
     "plates_many.json",
     "plates_quaternion_zero.json",
+    "plates_moved_1e15.json",
 ]
 
 
@@ -176,6 +177,30 @@ def _solve_cases() -> list[CliCase]:
         _case("solve.ee_tolerance_inf", s + " --ee-tolerance inf inf"),
         _case("solve.ee_tolerance_zero", s + " --ee-tolerance 0 0"),
         _case("solve.ee_tolerance_negative", s + " --ee-tolerance -1 1"),
+        _case("solve.ee_tolerance_overflow", s + " --ee-tolerance 1e300 1e300"),
+        _case("solve.ee_tolerance_rotation_huge", s + " --ee-tolerance 0.01 1e308"),
+        _case("solve.goal_far", "solve --json --goal 1e308 0 0.9 0 0 0"),
+        _case("solve.goal_far_below", "solve --json --goal 0 0 -1e15 0 0 0"),
+        _case("solve.carrier_mount_far", s + " --carrier ur5 --mount 1e308 0 0 0 0 0"),
+        _case("solve.carrier_empty", ["solve", "--json", "--goal", *REACHABLE.split(), "--carrier", ""]),
+        # an option with no effect in the combination given is refused, never ignored
+        *[
+            _case(f"solve.no_optimize_with_{flag[2:].replace('-', '_')}", f"{s} --no-optimize {flag} {value}")
+            for flag, value in (
+                ("--method", "slsqp"),
+                ("--starts", "all"),
+                ("--w1", "1"),
+                ("--w2", "1"),
+                ("--max-iterations", "50"),
+                ("--ftol", "1e-6"),
+                ("--ee-tolerance", "0.01 0.01"),
+                ("--objective", "sag"),
+                ("--max-sag", "0.01"),
+            )
+        ],
+        _case("stiffness.max_platforms_without_scaling", "stiffness --json --home --max-platforms 4"),
+        _case("stiffness.compensated_with_scaling", "stiffness --json --scaling --compensated"),
+        _case("stiffness.scaling_small", "stiffness --json --scaling --max-platforms 2", "answer", check="finite"),
         _case("solve.d_step_zero", s + " --d-step 0"),
         _case("solve.d_step_negative", s + " --d-step -1"),
         _case("solve.d_step_nan", s + " --d-step nan"),
@@ -220,6 +245,7 @@ def _reproduce_cases() -> list[CliCase]:
         _case("reproduce.out_under_file", "reproduce --scenario translation --out " + UNDER_FILE),
         _case("reproduce.out_is_file", "reproduce --scenario translation --out {d}/afile"),
         _case("reproduce.w1_nan", "reproduce --scenario translation --w1 nan"),
+        _case("reproduce.ee_tolerance_overflow", "reproduce --scenario translation --ee-tolerance 1e308 1e308"),
         _case("reproduce.max_iterations_negative", "reproduce --scenario translation --max-iterations -5"),
         _case("reproduce.method_bogus", "reproduce --method bogus"),
         _case("reproduce.config_bad", "reproduce --scenario translation --config {d}/cfg_9_81.yaml"),
@@ -261,6 +287,8 @@ def _plan_cases() -> list[CliCase]:
         _case("plan.to_nan", "plan --json --to nan 0 0.9 0 0 0"),
         _case("plan.to_overflow", "plan --json --to 0 0 1e400 0 0 0"),
         _case("plan.from_nan", p + " --from 0 0 nan 0 0 0"),
+        _case("plan.to_far", "plan --json --to 1e308 0 0.9 0 0 0"),
+        _case("plan.from_far", "plan --json --from 0 0 1e308 0 0 0 --to 0 0 0.9 0 0 0"),
         _case("plan.nothing", "plan --json"),
         _case("plan.out_under_file", p + " --out " + UNDER_FILE + ".csv"),
         _case("plan.out_is_dir", p + " --out {d}/adir"),
@@ -289,6 +317,13 @@ def _plan_cases() -> list[CliCase]:
             slow=True,
         ),
         _case("plan.near_home", p + " --out {d}/plan_near.csv", "answer", slow=True, check="plan"),
+        # the slowest allowed legs at 1000 Hz: over plan.row_checks, answered not possible at once
+        _case(
+            "plan.slowest_legs_rate_1000",
+            p + " --rate 1000 --config {d}/cfg_slowest_legs.yaml --out {d}/plan_slowest.csv",
+            "any",
+            check="plan",
+        ),
         _case(
             "plan.waypoints_valid",
             "plan --json --waypoints {d}/wp_valid.json --out {d}/plan_wp.csv",
@@ -321,6 +356,7 @@ def _plan_cases() -> list[CliCase]:
 
 
 WAYPOINT_REFUSE = [
+    "wp_far.json",
     "missing.json",
     "adir",
     "wp_empty.json",
@@ -374,6 +410,15 @@ ORIENTATION_REFUSE = {
     "text": "a b c",
     "too_many": "0 0 0;" * 20000,
 }
+
+
+def _walk_cases() -> list[CliCase]:
+    """Walks whose work is over the plan.work bound are refused before planning."""
+    return [
+        _case("walk.floor_64_platforms", "walk --json --floor 0.5 2 --config {d}/cfg_platforms_64.yaml"),
+        _case("walk.floor_count_huge", "walk --json --floor 0.5 1000000"),
+        _case("walk.floor_step_nan", "walk --json --floor nan 2"),
+    ]
 
 
 def _map_cases() -> list[CliCase]:
@@ -584,6 +629,7 @@ TRAJECTORY_MUTATIONS: dict[str, tuple[str, tuple[str, ...]]] = {
     "time_law_unknown": ("refuse", ("json",)),
     "time_law_missing": ("refuse", ("json",)),
     "older_version": ("refuse", ("csv", "json")),
+    "version_float": ("refuse", ("json",)),
     "feasible_flag_cleared": ("any", ("csv",)),
     "extra_column": ("any", ("csv",)),
 }
@@ -708,6 +754,8 @@ def _mutate_json(name: str, original: str) -> bytes:
         del doc["meta"]["time_law"]
     elif name == "older_version":
         doc["version"] = 2
+    elif name == "version_float":
+        doc["version"] = float(doc["version"])  # 3.0: not what the writer writes
     elif name == "header_only":
         doc["rows"] = []
     else:
@@ -740,6 +788,8 @@ def plate_files(home: np.ndarray) -> dict[str, bytes]:
     far[2:, 2, 3] += 1.0
     huge = home.copy()
     huge[3:, 0, 3] = 1e300
+    moved = home.copy()
+    moved[:, 0, 3] += 1e15  # the whole stack moved: beyond the pose.translation limit
     one_string = [m for m in h]
     one_string[1] = [[str(v) if (i, j) == (0, 0) else v for j, v in enumerate(row)] for i, row in enumerate(h[1])]
     return {
@@ -771,6 +821,7 @@ def plate_files(home: np.ndarray) -> dict[str, bytes]:
         "plates_quaternion_zero.json": _dumps({"plates": [[0, 0, 0, 0, 0, 0, 0]] * len(h)}),
         "plates_far.json": _dumps({"plates": far.tolist()}),
         "plates_huge_translation.json": _dumps({"plates": huge.tolist()}),
+        "plates_moved_1e15.json": _dumps({"plates": moved.tolist()}),
         "plates_extra.json": _dumps({"plates": h, "units": "m"}),
     }
 
@@ -822,6 +873,8 @@ CONFIG_FILES: dict[str, bytes] = {
     "cfg_timestamp.yaml": b"gravity: 2001-12-14\n",
     "cfg_tiny_speed.yaml": b"leg:\n  max_speed: 1.0e-12\n",
     "cfg_tiny_accel.yaml": b"leg:\n  max_acceleration: 1.0e-12\n",
+    "cfg_slowest_legs.yaml": b"leg:\n  max_speed: 1.0e-4\n  max_acceleration: 1.0e-4\n",
+    "cfg_platforms_64.yaml": b"platforms: 64\n",
 }
 
 
@@ -848,6 +901,7 @@ def waypoint_files(start: list[float], goal: list[float]) -> dict[str, bytes]:
         "wp_strings.json": _dumps({"waypoints": [[str(v) for v in p] for p in wp]}),
         "wp_bools.json": _dumps({"waypoints": [[True] * 6, [False] * 6]}),
         "wp_nan.json": b'{"waypoints": [[NaN, 0, 0.9, 0, 0, 0], [0, 0, 0.9, 0, 0, 0]]}',
+        "wp_far.json": b'{"waypoints": [[1e308, 0, 0.9, 0, 0, 0], [0, 0, 0.9, 0, 0, 0]]}',
         "wp_unknown_key.json": _dumps({"waypoints": wp, "speed": 0.01}),
         "wp_many.json": _dumps({"waypoints": [start, goal] * 10_001}),
         "wp_header_only.csv": b"x,y,z,rx,ry,rz\n",
@@ -922,6 +976,7 @@ CLI_CASES: list[CliCase] = [
     *_reproduce_cases(),
     *_bench_cases(),
     *_plan_cases(),
+    *_walk_cases(),
     *_map_cases(),
     *_simulate_cases(),
     *_view_cases(),
@@ -1477,8 +1532,115 @@ def _api_cases() -> list[ApiCase]:
             "api.solve_on_carrier.q0_wrong_count",
             lambda c: solve_on_carrier(c.am, c.carrier, _se3(p=(0.3, 0.2, 1.4)), q0=np.zeros(2)),
         ),
+        # bounds before arithmetic: motions, tolerances, positions
+        *[
+            ApiCase(
+                f"api.inverse_dynamics.{name}",
+                lambda c, v=v: ap.inverse_dynamics(c.am, c.am.home, np.full((c.am.n + 1, 6), v), np.zeros((c.am.n, 6))),
+            )
+            for name, v in (("twists_1e308", 1e308), ("twists_1e200", 1e200), ("twists_1e5", 1e5))
+        ],
+        ApiCase(
+            "api.inverse_dynamics.accelerations_huge",
+            lambda c: ap.inverse_dynamics(c.am, c.am.home, np.zeros((c.am.n, 6)), np.full((c.am.n, 6), 1e300)),
+        ),
+        ApiCase("api.goal_tolerance.position_huge", lambda c: GT(1e300, 1e-3)),
+        ApiCase("api.goal_tolerance.rotation_huge", lambda c: GT(1e-3, 1e308)),
+        ApiCase("api.goal_tolerance.bool", lambda c: GT(True, 1e-3)),
+        ApiCase(
+            "api.evaluate_state.moved_1e15",
+            lambda c: ap.evaluate_state(c.am, [m.homogeneous + _shift(1e15) for m in c.am.home]),
+        ),
+        # payload_capacity: a start that is not a valid pose at the goal, wrong types
+        ApiCase(
+            "api.payload_capacity.start_off_goal",
+            lambda c: ap.payload_capacity(c.am, _se3(p=REACH_P), start=c.am.home),
+        ),
+        ApiCase(
+            "api.payload_capacity.start_off_unreachable_goal",
+            lambda c: ap.payload_capacity(c.am, _se3(p=(10.0, 0.0, 0.9)), start=c.am.home),
+        ),
+        ApiCase("api.payload_capacity.rtol_string", lambda c: ap.payload_capacity(c.am, _se3(p=REACH_P), rtol="0.1")),
+        ApiCase("api.payload_capacity.rtol_nan", lambda c: ap.payload_capacity(c.am, _se3(p=REACH_P), rtol=np.nan)),
+        ApiCase("api.payload_capacity.models_wrong", lambda c: ap.payload_capacity(c.am, _se3(p=REACH_P), models="x")),
+        ApiCase("api.payload_capacity.model_string", lambda c: ap.payload_capacity("am", _se3(p=REACH_P))),
+        *[
+            ApiCase(
+                f"api.two_point_statics.max_iterations_{name}",
+                lambda c, v=v: ap.two_point_statics(c.am, c.am.home, max_iterations=v),
+            )
+            for name, v in (("zero", 0), ("huge", 10**9), ("bool", True), ("float", 5.0), ("string", "5"))
+        ],
+        ApiCase("api.two_point_statics.model_string", lambda c: ap.two_point_statics("am", c.am.home)),
+        ApiCase("api.walk_options.floor_nan", lambda c: ap.walk.WalkOptions(floor_z=float("nan"))),
+        ApiCase("api.walk_options.floor_bool", lambda c: ap.walk.WalkOptions(floor_z=True)),
+        # one argument check at every public entry: a specific AssemblerError, never a bare one
+        *[
+            ApiCase(
+                f"api.macro_statics.{name}",
+                lambda c, m=m, com=com: ap.walk.macro_statics(c.am, [c.am.home, c.am.home], m, com),
+            )
+            for name, m, com in (
+                ("mass_string", "5", [0, 0, 1]),
+                ("mass_none", None, [0, 0, 1]),
+                ("mass_complex", 1 + 2j, [0, 0, 1]),
+                ("mass_huge", 1e308, [0, 0, 1]),
+                ("mass_bool", True, [0, 0, 1]),
+                ("com_string", 5.0, "abc"),
+                ("com_none", 5.0, None),
+                ("com_complex", 5.0, [1j, 0, 1]),
+                ("com_huge", 5.0, [1e308, 0, 0]),
+            )
+        ],
+        ApiCase("api.macro_capacity.com_none", lambda c: ap.walk.macro_capacity(c.am, [c.am.home], None)),
+        ApiCase("api.macro_statics.model_string", lambda c: ap.walk.macro_statics("am", [c.am.home], 1.0, [0, 0, 1])),
+        ApiCase(
+            "api.loaded_pose.max_iterations_negative", lambda c: ap.loaded_pose(c.am, c.am.home, max_iterations=-1)
+        ),
+        ApiCase("api.loaded_pose.max_iterations_string", lambda c: ap.loaded_pose(c.am, c.am.home, max_iterations="5")),
+        ApiCase("api.stiffness.model_string", lambda c: ap.stiffness("am", c.am.home)),
+        ApiCase("api.plan_walk.model_string", lambda c: ap.plan_walk("am", [])),
+        ApiCase("api.turned_model.model_string", lambda c: ap.walk.turned_model("am")),
+        ApiCase(
+            "api.plan_walk.progress_int",
+            lambda c: ap.plan_walk(c.am, ap.walk.footholds.floor_footholds(0.3, 2), progress=5),
+        ),
+        ApiCase(
+            "api.plan_trajectory.progress_int",
+            lambda c: ap.plan_trajectory(c.am, ap.EEPath.between(c.am.home[-1], c.am.home[-1]), progress=5),
+        ),
+        ApiCase(
+            "api.stiffness_scaling.progress_int",
+            lambda c: importlib.import_module("assembler_pin.compliance.scaling").stiffness_scaling(progress=5),
+        ),
+        ApiCase("api.read_walk_csv.none", lambda c: ap.walk.read_walk_csv(None)),
+        ApiCase("api.read_walk_csv.bytes", lambda c: ap.walk.read_walk_csv(b"walk.csv")),
+        ApiCase("api.parse_walk_csv.none", lambda c: ap.walk.parse_walk_csv(None)),
+        ApiCase("api.parse_walk_csv.bytes", lambda c: ap.walk.parse_walk_csv(b"sample\n")),
+        ApiCase("api.read_footholds.none", lambda c: ap.walk.footholds.read_footholds(None)),
+        ApiCase("api.read_trajectory.dev_zero", lambda c: ap.read_trajectory("/dev/zero")),
+        ApiCase("api.export_model_files.none", lambda c: ap.export.export_model_files(None, c.ws.root / "exp_none")),
+        ApiCase("api.export_model_files.out_none", lambda c: ap.export.export_model_files(c.am.config, None)),
+        *[
+            ApiCase(
+                f"api.sp_forward_kinematics.index_{name}",
+                lambda c, j=j: sp_forward_kinematics(c.am, j, np.full(6, 0.27)),
+            )
+            for name, j in (("float", 1.0), ("bool", True), ("half", 1.5), ("string", "1"), ("negative", -1))
+        ],
+        ApiCase(
+            "api.ee_jacobian.coinciding_joints",
+            lambda c: ap.kinematics.jacobian.ee_jacobian_wrt_lengths(c.am, [_se3(p=(0, 0, 0))] * (c.am.n + 1)),
+        ),
     ]
     return cases
+
+
+def _shift(d: float) -> np.ndarray:
+    """A 4x4 matrix adding ``d`` [m] to a pose's x."""
+    out = np.zeros((4, 4))
+    out[0, 3] = d
+    return out
 
 
 API_CASES: list[ApiCase] = _api_cases()

@@ -86,6 +86,9 @@ HOSTILE = {
     "header-renamed": lambda t: t.replace("L_sp0_leg3", "L_sp0_leg9", 1),
     "header-short": lambda t: t.replace(",L_sp3_leg5", "", 1),
     "not-csv": lambda t: '{"footholds": []}\n',
+    "arabic-indic-length": lambda t: _edit(t, 2, 7, "\u0660.\u0662\u0665"),
+    "arabic-indic-sample": lambda t: _edit(t, 1, 0, "\u0661"),
+    "fullwidth-force": lambda t: _edit(t, 0, 5, "\uff11\uff10"),
 }
 
 
@@ -96,6 +99,32 @@ def test_hostile_walk_samples_are_refused_in_one_line(good, tmp_path, case):
     with pytest.raises(ap.exceptions.WalkError) as err:
         read_walk_csv(path)
     assert "\n" not in str(err.value) and len(str(err.value)) < 300
+
+
+@pytest.mark.parametrize("path", [None, b"walk.csv", 5, "", ["walk.csv"]])
+def test_walk_file_readers_refuse_what_is_not_a_path(path):
+    """The readers' argument: a str or path, else one WalkError (never a TypeError)."""
+    for read in (read_walk_csv, ap.walk.footholds.read_footholds):
+        with pytest.raises(ap.exceptions.WalkError, match="path"):
+            read(path)
+
+
+@pytest.mark.parametrize("text", [None, b"sample\n", 5])
+def test_parse_walk_csv_refuses_what_is_not_text(text):
+    with pytest.raises(ap.exceptions.WalkError, match="str"):
+        parse_walk_csv(text)
+
+
+def test_walk_file_readers_refuse_pipes_and_devices(tmp_path):
+    """Only regular files are read: a named pipe would block, /dev/zero never ends."""
+    import os
+
+    fifo = tmp_path / "walk.csv"
+    os.mkfifo(fifo)
+    for path in (fifo, "/dev/zero"):
+        for read in (read_walk_csv, ap.walk.footholds.read_footholds, ap.read_trajectory):
+            with pytest.raises(ap.AssemblerError, match="not a regular file"):
+                read(path)
 
 
 TOKENS = st.one_of(

@@ -358,10 +358,12 @@ def test_goals_beyond_any_span_are_answered_before_the_arm(am):
     # one platform spans at most |b| + max_length + |t| (both anchors on the node circle)
     cfg = am.config
     span = cfg.platforms * (2 * cfg.plate.node_radius + cfg.leg.max_length)
-    for x in (1.01 * span, 1e200):
+    for x in (1.01 * span, 5e3):
         result = initial_condition(am, pin.SE3(np.eye(3), np.array([x, 0.0, 0.0])))
         assert not result.success and result.attempts == 0
         assert "out of reach" in result.message and "farther than the stack can span" in result.message
+    with pytest.raises(PoseError, match=r"pose\.translation"):  # beyond any pose: refused, not answered
+        initial_condition(am, pin.SE3(np.eye(3), np.array([1e200, 0.0, 0.0])))
 
 
 @pytest.mark.parametrize(

@@ -21,7 +21,7 @@ from hypothesis import strategies as st
 
 from assembler_pin import AssemblerModel, solve_statics, stack_forward_kinematics
 from assembler_pin.cli import main
-from assembler_pin.exceptions import PathError, SimulationError, TrajectoryError
+from assembler_pin.exceptions import PathError, PoseError, SimulationError, TrajectoryError
 from assembler_pin.motion import EEPath, PlanOptions, plan_path, read_waypoints
 from assembler_pin.motion.result import verify_trajectory
 from assembler_pin.motion.rows import check_trajectory
@@ -299,7 +299,9 @@ def test_durations_and_row_counts_out_of_bounds_are_refused_before_allocating(am
     assert time.perf_counter() - t0 < 30  # refused from the laws' durations, no row evaluated
     assert motion.to_dict()["complete"] is False
     with pytest.raises(PathError, match=r"plan.path_samples"):
-        EEPath.between(am.home[-1], pin.SE3(np.eye(3), np.array([1e9, 0, 0]))).parameters(0.01, 0.03)
+        EEPath.between(am.home[-1], pin.SE3(np.eye(3), np.array([5e3, 0, 0]))).parameters(0.01, 0.03)
+    with pytest.raises(PoseError, match=r"pose.translation"):  # farther than any pose may be
+        EEPath.between(am.home[-1], pin.SE3(np.eye(3), np.array([1e9, 0, 0])))
 
 
 def _doc(traj, **changes):

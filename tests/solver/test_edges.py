@@ -160,8 +160,14 @@ def test_exactly_singular_plates_are_flagged_not_raised(am):
     assert statics.singular
 
 
-@pytest.mark.parametrize("goal", [[1e200, 0, 0.9, 0, 0, 0], [3.0, 0, 0.5, 0, 0, 0]])
+@pytest.mark.parametrize("goal", [[5e3, 0, 0.9, 0, 0, 0], [3.0, 0, 0.5, 0, 0, 0]])
 def test_goals_out_of_reach_are_answers(goal, capsys):
     assert main(["solve", "--goal", *map(str, goal), "--json"]) == 1  # answered: not possible
     doc = json.loads(capsys.readouterr().out, parse_constant=lambda c: pytest.fail(f"non-strict JSON {c}"))
     assert doc["success"] is False and "out of reach" in doc["message"]
+
+
+def test_goals_beyond_the_translation_limit_are_refused(capsys):
+    assert main(["solve", "--goal", "1e200", "0", "0.9", "0", "0", "0", "--json"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "pose.translation" in err[0]
