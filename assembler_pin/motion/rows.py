@@ -121,6 +121,23 @@ def _base(am: AssemblerModel, traj: Trajectory) -> pin.SE3:
     return pin.SE3(np.asarray(traj.meta["base"], dtype=float)) if "base" in traj.meta else am.home[0]
 
 
+def _check_forces(am: AssemblerModel, traj: Trajectory) -> None:
+    """Every row's leg forces (with the motion's part, where the file has them) within the
+    model's tension and compression limits, and its max|F| column no larger than the
+    largest of them allows (the columns are not taken on trust)."""
+    if traj.dynamic_forces is None:
+        return
+    leg = am.config.leg
+    F = traj.dynamic_forces
+    over = (F > leg.max_tension * (1 + 1e-9)) | (F < -leg.max_compression * (1 + 1e-9))
+    if over.any():
+        k = int(np.argmax(over.any(axis=(1, 2))))
+        raise TrajectoryError(
+            f"at t = {traj.times[k]:.3f} s a leg force is outside the limits "
+            f"[-{leg.max_compression:g}, {leg.max_tension:g}] N"
+        )
+
+
 def check_trajectory(
     am: AssemblerModel,
     traj: Trajectory,
@@ -153,6 +170,7 @@ def check_trajectory(
             f"[{leg.min_length:g}, {leg.max_length:g}] m"
         )
     _check_rates(am, traj)
+    _check_forces(am, traj)
     wanted = set() if keep is None else {int(k) for k in keep}
     base = _base(am, traj)
     start = _start_guess(am, base)

@@ -347,9 +347,10 @@ def _trajectory(meta: dict, columns: object, rows: list) -> Trajectory:
         raise TrajectoryError("leg lengths must be > 0 and max_abs_force >= 0")
     dynamic = arr[:, 8 + 6 * n : 8 + 12 * n]
     margins = {k: arr[:, 8 + 12 * n + i] for i, k in enumerate(MARGIN_KINDS)}
-    if not (margins["force_dynamic"] >= 0).all() or not (margins["force"] >= 0).all():
-        k = int(np.argmax((margins["force_dynamic"] < 0) | (margins["force"] < 0)))
-        raise TrajectoryError(f"row {k} has a negative force margin yet is marked feasible")
+    negative = np.stack([margins[kind] < 0 for kind in MARGIN_KINDS], axis=1)
+    if negative.any():  # a file holds valid rows only: every margin of every row is >= 0
+        k, kind = (int(i) for i in np.argwhere(negative)[0])
+        raise TrajectoryError(f"row {k} has a negative {MARGIN_KINDS[kind]} margin yet is marked feasible")
     return Trajectory(
         times=t.copy(),
         lengths=legs.reshape(-1, n, 6).copy(),

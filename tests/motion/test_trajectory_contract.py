@@ -433,6 +433,20 @@ def _mutations(traj):
     yield "columns", doc
 
 
+@pytest.mark.parametrize("kind", ["stroke", "deflection", "rise", "force", "force_dynamic", "path_position"])
+def test_a_negative_margin_column_is_refused_whatever_its_kind(traj, tmp_path, kind):
+    """A file holds valid rows only: a margin column saying a row breaks a limit is refused by
+    the reader (the checksum recomputed, so the columns themselves are what is read)."""
+    from assembler_pin.motion.trajfile import MARGIN_KINDS
+
+    r = traj.rows()
+    r[len(r) // 2, 8 + 12 * traj.platforms + MARGIN_KINDS.index(kind)] = -1e-3
+    path = tmp_path / "m.json"
+    path.write_text(json.dumps(_doc(traj, rows=r)))
+    with pytest.raises(TrajectoryError, match=f"negative {kind} margin"):
+        read_trajectory(path)
+
+
 def test_every_format_defect_is_named(traj, tmp_path):
     for k, (what, doc) in enumerate(_mutations(traj)):
         path = tmp_path / f"m{k}.json"
@@ -455,6 +469,9 @@ def test_every_row_is_held_to_the_model_not_only_the_ends(am, traj, tmp_path):
     r = traj.rows()
     r[mid, 1] += 0.5 * (leg.max_length - r[mid, 1])  # a jump: speed over the limit
     cases.append(("leg.max_speed", r))
+    r = traj.rows()
+    r[mid, 8 + 6 * traj.platforms] = 1e6  # a dynamic-force column of 1e6 N (checksum recomputed)
+    cases.append(("leg force is outside the limits", r))
     for what, rows in cases:
         path = tmp_path / "m.json"
         path.write_text(json.dumps(_doc(traj, rows=rows)))
