@@ -1,0 +1,638 @@
+"""The clearance of a pose: the smallest distance between two bodies that must not touch.
+
+:func:`clearance` measures every pair of :mod:`~assembler_pin.collision.pairs` (the stack's
+own bodies) and, with a :class:`~assembler_pin.collision.scene.Scene`, every body against
+every obstacle and the floor. It returns a :class:`Clearance`: the smallest distance, the
+two bodies, every pair's distance, and :meth:`Clearance.gradient`, the derivatives of the
+pair distances with respect to the plate poses.
+
+**Which engine.** Capsule–capsule (every leg pair, ~1100 capsule pairs for four platforms),
+capsule–sphere, capsule–floor, plate–floor and plate–sphere distances are closed forms
+(:mod:`~assembler_pin.collision.distance`), vectorized in numpy. Plates against legs, plates
+and boxes or cylinders, and legs against boxes or cylinders have no closed form here: a cheap
+lower bound (bounding spheres, and for a plate the slab of its two faces) screens every such
+pair, and only those within :data:`NEAR` of the clearance go to coal's GJK
+(``coal.distance``, ~0.6 µs per pair with shapes made once, plus ~3 µs of Python around each
+call). Pinocchio's ``GeometryModel`` + ``computeDistances`` would run all ~1200 pairs of a
+four-platform stack in C++ at ~0.6 µs each, and updating the 48 capsules' placements and
+lengths from Python costs more again: the vectorized closed form is the faster of the two.
+
+**Distances** are between surfaces [m], negative when two bodies overlap (for capsules, the
+distance of the axes minus the radii; for coal pairs, coal's signed distance). Pairs the
+screen leaves out keep their lower bound (``exact`` False); the smallest distance is always
+exact: screened pairs whose bound is below it are measured until none is.
+
+**Derivatives** are taken with respect to a world twist ``η_k = (v, ω)`` of each plate
+``k = 0..n`` (``T_k ← exp6(η_k) T_k``), the convention of :mod:`assembler_pin.gradients`:
+by the envelope theorem ``∂d = n · (δx_a − δx_b)`` with ``x_a, x_b`` the closest points
+moving with their bodies and ``n`` the unit normal from b to a. A leg's point at ``σ`` from
+its bottom joint moves with both of its plates and with the leg's length when it lies on a
+segment end that follows the top joint.
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ..geometry import LEGS_PER_PLATFORM
+from ..kinematics import PlateArrays
+from ..model import AssemblerModel
+from .bodies import MOTOR, SHAFT, StackBodies, leg_segments, stack_bodies, stack_body_names
+from .distance import cylinder_lowest_point, point_in_cylinder_distance, segment_point, segment_segment
+from .pairs import pair_table
+from .scene import Obstacle, Scene, read_scene
+
+__all__ = ["NEAR", "Clearance", "clearance"]
+
+logger = logging.getLogger(__name__)
+
+#: Pairs whose screening bound is within this of the clearance are measured exactly [m].
+NEAR = 0.05
+
+# carrier kinds of a closest point: on a leg (moves with its two plates and its length),
+# on a plate (rigid with it), fixed (an obstacle, the floor)
+_LEG, _PLATE, _FIXED = 0, 1, 2
+
+
+@dataclass
+class _Rows:
+    """Pair rows of one kind: distances, the two bodies and their closest points' carriers."""
+
+    dist: np.ndarray
+    exact: np.ndarray
+    body: np.ndarray  # (m, 2) body ids
+    kind: np.ndarray  # (m, 2) carrier kinds
+    index: np.ndarray  # (m, 2) leg g or plate k
+    sigma: np.ndarray  # (m, 2) σ of a leg point [m]
+    hb: np.ndarray  # (m, 2) d σ / d L of a leg point
+    point: np.ndarray  # (m, 2, 3) closest points (a leg's on its axis), world [m]
+    normal: np.ndarray  # (m, 3) unit normal from body b to body a
+
+
+def _empty_rows() -> _Rows:
+    z = np.zeros
+    return _Rows(
+        z(0), z(0, bool), z((0, 2), int), z((0, 2), int), z((0, 2), int), z((0, 2)), z((0, 2)), z((0, 2, 3)), z((0, 3))
+    )
+
+
+def _concat(rows: list[_Rows]) -> _Rows:
+    rows = [r for r in rows if len(r.dist)] or [_empty_rows()]
+    return _Rows(*(np.concatenate([getattr(r, f) for r in rows]) for f in _Rows.__dataclass_fields__))
+
+
+def _unit(v: np.ndarray) -> np.ndarray:
+    norm = np.sqrt(np.einsum("...k,...k->...", v, v))
+    fallback = np.broadcast_to(np.array([0.0, 0.0, 1.0]), v.shape)
+    return np.where(norm[..., None] > 1e-15, v / np.maximum(norm, 1e-300)[..., None], fallback)
+
+
+@dataclass(frozen=True)
+class Clearance:
+    """The clearance of one pose.
+
+    Attributes:
+        min_distance: the smallest distance between two bodies that must not touch [m]
+            (``inf`` when no pair is checked).
+        between: the names of those two bodies (``"SP1 leg 3"``, ``"plate 2"``, an
+            obstacle's name, ``"floor"``).
+        limit: the smallest distance allowed (the configuration's ``clearance``) [m].
+        names: every body's name, indexed by ``pairs``.
+        pairs: (m, 2) the bodies of every checked pair (indices into ``names``).
+        distances: (m,) their distances [m] (lower bounds where ``exact`` is False).
+        exact: (m,) True where the distance was measured, not only bounded.
+    """
+
+    min_distance: float
+    between: tuple[str, str]
+    limit: float
+    names: list[str]
+    pairs: np.ndarray
+    distances: np.ndarray
+    exact: np.ndarray
+    _rows: _Rows = field(repr=False)
+    _bodies: StackBodies = field(repr=False)
+
+    @property
+    def clear(self) -> bool:
+        """True when the smallest distance is at least the allowed clearance."""
+        return bool(self.min_distance >= self.limit)
+
+    def to_dict(self) -> dict:
+        """``{"min_distance_m": d, "between": [a, b]}`` (``null`` distance when no pair is checked)."""
+        d = self.min_distance if math.isfinite(self.min_distance) else None
+        return {"min_distance_m": d, "between": list(self.between)}
+
+    def __repr__(self) -> str:
+        a, b = self.between
+        return f"Clearance({self.min_distance:.4g} m between {a} and {b}, limit {self.limit} m)"
+
+    def gradient(self, rows: np.ndarray | Sequence[int] | None = None) -> np.ndarray:
+        """Derivatives of the pair distances with respect to the plates' world twists.
+
+        Args:
+            rows: which pairs (indices into ``distances``; default all). Only exact rows have
+                a meaningful derivative.
+
+        Returns:
+            (m, n+1, 6): ``∂d / ∂(v_k, ω_k)`` for plates k = 0..n [m/m, m/rad].
+        """
+        r = self._rows
+        sel = np.arange(len(r.dist)) if rows is None else np.asarray(rows, dtype=int)
+        b = self._bodies
+        out = np.zeros((len(sel), len(b.p), 6))
+        n = r.normal[sel]
+        for side, sign in ((0, 1.0), (1, -1.0)):
+            kind, idx, x = r.kind[sel, side], r.index[sel, side], r.point[sel, side]
+            at = np.nonzero(kind == _PLATE)[0]
+            np.add.at(out, (at, idx[at]), sign * np.hstack([n[at], np.cross(x[at], n[at])]))
+            at = np.nonzero(kind == _LEG)[0]
+            if not len(at):
+                continue
+            g = idx[at]
+            u, L, nn = b.axis[g], b.length[g], n[at]
+            nu = np.einsum("ij,ij->i", nn, u)
+            c_top = (r.sigma[sel[at], side] / L)[:, None] * (nn - nu[:, None] * u) + (r.hb[sel[at], side] * nu)[
+                :, None
+            ] * u
+            c_bottom = nn - c_top
+            j = g // LEGS_PER_PLATFORM
+            for plate, c, anchor in ((j, c_bottom, b.bottom[g]), (j + 1, c_top, b.top[g])):
+                np.add.at(out, (at, plate), sign * np.hstack([c, np.cross(anchor, c)]))
+        return out
+
+
+# ---------------------------------------------------------------- closed forms
+def _capsule_rows(
+    bodies: StackBodies, legs: np.ndarray, part: np.ndarray, trim_bottom=False, trim_top=False
+) -> tuple[np.ndarray, ...]:
+    start, vec, lo, hi, hb, radius = leg_segments(bodies, legs, part, trim_bottom, trim_top)
+    return start, vec, lo, hi, hb, radius
+
+
+def _variant_index(t, G: int) -> tuple[np.ndarray, np.ndarray]:
+    """Rows of the leg–leg capsule pairs (4 per leg pair: motor/shaft × motor/shaft) as
+    indices into the 8 variants of each leg part (part × bottom trim × top trim)."""
+    parts_a = np.tile(np.array([MOTOR, MOTOR, SHAFT, SHAFT]), len(t.leg_a))
+    parts_b = np.tile(np.array([MOTOR, SHAFT, MOTOR, SHAFT]), len(t.leg_a))
+    tr = np.repeat(t.trim.astype(int), 4, axis=0)
+    va = np.repeat(t.leg_a, 4) * 8 + parts_a * 4 + tr[:, 0] * 2 + tr[:, 1]
+    vb = np.repeat(t.leg_b, 4) * 8 + parts_b * 4 + tr[:, 2] * 2 + tr[:, 3]
+    return va, vb
+
+
+_VARIANTS: dict = {}
+
+
+def _leg_leg(bodies: StackBodies) -> _Rows:
+    """Every leg pair: the smallest of its four capsule pairs (motor/shaft × motor/shaft)."""
+    t = pair_table(bodies.cfg)
+    G = len(bodies.length)
+    key = (bodies.cfg, G)
+    if key not in _VARIANTS:
+        _VARIANTS.clear()
+        code = np.arange(8 * G)
+        _VARIANTS[key] = (code // 8, (code // 4) % 2, (code // 2) % 2 == 1, code % 2 == 1, *_variant_index(t, G))
+    g, part, tb, tt, va, vb = _VARIANTS[key]
+    start, vec, lo, hi, hb, radius = leg_segments(bodies, g, part, tb, tt)
+    P = len(t.leg_a)
+    axis_d, s, u = segment_segment(start[va], vec[va], start[vb], vec[vb])
+    d = axis_d - radius[va] - radius[vb]
+    d[(hi[va] < lo[va]) | (hi[vb] < lo[vb])] = np.inf
+    best = np.argmin(d.reshape(P, 4), axis=1) + 4 * np.arange(P)
+    ia, ib, sb, ub = va[best], vb[best], s[best], u[best]
+    xa = start[ia] + sb[:, None] * vec[ia]
+    xb = start[ib] + ub[:, None] * vec[ib]
+    sig_a = lo[ia] + sb * np.maximum(hi[ia] - lo[ia], 0.0)
+    sig_b = lo[ib] + ub * np.maximum(hi[ib] - lo[ib], 0.0)
+    legs = np.stack([t.leg_a, t.leg_b], 1)
+    return _Rows(
+        d[best],
+        np.ones(P, bool),
+        legs,
+        np.zeros((P, 2), int),
+        legs,
+        np.stack([sig_a, sig_b], 1),
+        np.stack([sb * hb[ia], ub * hb[ib]], 1),
+        np.stack([xa, xb], 1),
+        _unit(xa - xb),
+    )
+
+
+def _legs_all_parts(bodies: StackBodies, trim_bottom=False) -> tuple[np.ndarray, ...]:
+    G = len(bodies.length)
+    g = np.repeat(np.arange(G), 2)
+    part = np.tile(np.array([MOTOR, SHAFT]), G)
+    tb = np.repeat(np.asarray(trim_bottom), 2) if np.ndim(trim_bottom) else trim_bottom
+    return (g, part, *_capsule_rows(bodies, g, part, tb, False))
+
+
+def _leg_rows_from_parts(g, d, s, start, vec, lo, hi, hb, other_body, other_kind, other_index, other_point, normal):
+    """Reduce per-capsule rows (2 per leg, motor then shaft) to one row per leg."""
+    m = len(d) // 2
+    best = np.argmin(d.reshape(m, 2), axis=1) + 2 * np.arange(m)
+    x = start[best] + s[best, None] * vec[best]
+    sig = lo[best] + s[best] * np.maximum(hi[best] - lo[best], 0.0)
+    z = np.zeros(m)
+    return _Rows(
+        d[best],
+        np.ones(m, bool),
+        np.stack([g[best], other_body[best]], 1),
+        np.stack([np.full(m, _LEG), other_kind[best]], 1),
+        np.stack([g[best], other_index[best]], 1),
+        np.stack([sig, z], 1),
+        np.stack([s[best] * hb[best], z], 1),
+        np.stack([x, other_point[best]], 1),
+        normal[best],
+    )
+
+
+def _floor(bodies: StackBodies, floor_z: float, floor_id: int) -> _Rows:
+    """Every leg (platform 0's beyond the node zone of its bottom joint) and plates 1..n
+    against the floor (a half-space below ``floor_z``): exact, signed."""
+    t = pair_table(bodies.cfg)
+    g, _, start, vec, lo, hi, hb, radius = _legs_all_parts(bodies, t.floor_trim)
+    z0, z1 = start[:, 2], start[:, 2] + vec[:, 2]
+    s = (z1 < z0).astype(float)
+    x = start + s[:, None] * vec
+    d = x[:, 2] - floor_z - radius
+    d[hi < lo] = np.inf
+    m = len(d)
+    on_floor = x.copy()
+    on_floor[:, 2] = floor_z
+    up = np.broadcast_to(np.array([0.0, 0.0, 1.0]), (m, 3))
+    rows = [
+        _leg_rows_from_parts(
+            g, d, s, start, vec, lo, hi, hb, np.full(m, floor_id), np.full(m, _FIXED), np.zeros(m, int), on_floor, up
+        )
+    ]
+    cfg = bodies.cfg
+    k = np.arange(1, len(bodies.p))
+    if len(k):
+        low, height = cylinder_lowest_point(bodies.p[k], bodies.R[k][:, :, 2], cfg.plate.radius, cfg.plate.thickness)
+        G = len(bodies.length)
+        below = low.copy()
+        below[:, 2] = floor_z
+        rows.append(
+            _Rows(
+                height - floor_z,
+                np.ones(len(k), bool),
+                np.stack([G + k, np.full(len(k), floor_id)], 1),
+                np.stack([np.full(len(k), _PLATE), np.full(len(k), _FIXED)], 1),
+                np.stack([k, np.zeros(len(k), int)], 1),
+                np.zeros((len(k), 2)),
+                np.zeros((len(k), 2)),
+                np.stack([low, below], 1),
+                np.broadcast_to(np.array([0.0, 0.0, 1.0]), (len(k), 3)).copy(),
+            )
+        )
+    return _concat(rows)
+
+
+def _sphere(bodies: StackBodies, obstacle: Obstacle, body_id: int) -> _Rows:
+    """Every leg and plate against a sphere: closed forms, exact."""
+    centre, r = obstacle.pose.translation, obstacle.size[0]
+    g, _, start, vec, lo, hi, hb, radius = _legs_all_parts(bodies)
+    d_axis, s = segment_point(start, vec, centre)
+    x = start + s[:, None] * vec
+    d = d_axis - radius - r
+    d[hi < lo] = np.inf
+    n = _unit(x - centre)
+    m = len(d)
+    rows = [
+        _leg_rows_from_parts(
+            g,
+            d,
+            s,
+            start,
+            vec,
+            lo,
+            hi,
+            hb,
+            np.full(m, body_id),
+            np.full(m, _FIXED),
+            np.zeros(m, int),
+            centre + r * n,
+            n,
+        )
+    ]
+    cfg = bodies.cfg
+    local = np.einsum("kji,kj->ki", bodies.R, centre - bodies.p)  # Rᵀ (c - p)
+    dc, closest = point_in_cylinder_distance(local, cfg.plate.radius, cfg.plate.thickness)
+    on_plate = bodies.p + np.einsum("kij,kj->ki", bodies.R, closest)
+    k = np.arange(len(bodies.p))
+    nk = _unit(on_plate - centre)
+    nk = np.where((dc < 0)[:, None], -nk, nk)
+    G = len(bodies.length)
+    rows.append(
+        _Rows(
+            dc - r,
+            np.ones(len(k), bool),
+            np.stack([G + k, np.full(len(k), body_id)], 1),
+            np.stack([np.full(len(k), _PLATE), np.full(len(k), _FIXED)], 1),
+            np.stack([k, np.zeros(len(k), int)], 1),
+            np.zeros((len(k), 2)),
+            np.zeros((len(k), 2)),
+            np.stack([on_plate, centre + r * nk], 1),
+            nk,
+        )
+    )
+    return _concat(rows)
+
+
+# ---------------------------------------------------------------- coal pairs
+def _coal():
+    import coal  # shipped with pin; imported on the first pair that needs it
+
+    return coal
+
+
+def _plate_shape(cfg):
+    return _coal().Cylinder(cfg.plate.radius, max(cfg.plate.thickness, 1e-9))
+
+
+def _obstacle_shape(o: Obstacle):
+    coal = _coal()
+    if o.kind == "box":
+        return coal.Box(*o.size)
+    return coal.Cylinder(o.size[0], o.size[1])
+
+
+def _z_to(u: np.ndarray) -> np.ndarray:
+    """A rotation whose z axis is the unit vector ``u``."""
+    a = np.array([1.0, 0.0, 0.0]) if abs(u[0]) < 0.9 else np.array([0.0, 1.0, 0.0])
+    x = np.cross(a, u)
+    x /= np.linalg.norm(x)
+    return np.column_stack([x, np.cross(u, x), u])
+
+
+def _coal_distance(shape_a, R_a, p_a, shape_b, R_b, p_b) -> tuple[float, np.ndarray, np.ndarray, np.ndarray]:
+    coal = _coal()
+    req, res = coal.DistanceRequest(), coal.DistanceResult()
+    d = coal.distance(shape_a, coal.Transform3s(R_a, p_a), shape_b, coal.Transform3s(R_b, p_b), req, res)
+    wa, wb = np.array(res.getNearestPoint1()), np.array(res.getNearestPoint2())
+    return float(d), wa, wb, -np.array(res.normal)
+
+
+def _capsule_coal(bodies, g, part, lo, hi, radius, start, vec):
+    """A leg part as a coal capsule and its frame (None when trimmed away)."""
+    if hi < lo:
+        return None
+    length = max(hi - lo, 1e-12)
+    u = bodies.axis[g]
+    return _coal().Capsule(radius, length), _z_to(u), start + 0.5 * vec
+
+
+@dataclass
+class _Screened:
+    """Pairs measured by coal on demand: their lower bounds and how to measure each."""
+
+    rows: _Rows
+    measure: Callable[[int], tuple | None]  # row → (d, x_a, x_b, n, sigma_a, hb_a) or None
+
+
+def _leg_screen(bodies: StackBodies, g: np.ndarray, centre: np.ndarray, bound: np.ndarray, slab=None) -> tuple:
+    """Lower bounds of leg capsules (both parts of each leg ``g``) against bodies inside
+    spheres ``(centre, bound)`` (and optionally the slab of a plate: (normal, half-thickness))."""
+    part = np.tile(np.array([MOTOR, SHAFT]), len(g))
+    gg = np.repeat(g, 2)
+    start, vec, lo, hi, hb, radius = leg_segments(bodies, gg, part)
+    cc = np.repeat(centre, 2, axis=0)
+    d_axis, _ = segment_point(start, vec, cc)
+    lb = d_axis - np.repeat(bound, 2) - radius
+    if slab is not None:
+        normal, half = np.repeat(slab[0], 2, axis=0), slab[1]
+        h0 = np.einsum("ij,ij->i", start - cc, normal)
+        h1 = h0 + np.einsum("ij,ij->i", vec, normal)
+        lb = np.maximum(lb, np.maximum(np.minimum(h0, h1), np.minimum(-h0, -h1)) - half - radius)
+    lb[hi < lo] = np.inf
+    return gg, part, start, vec, lo, hi, hb, radius, lb
+
+
+def _coal_leg_rows(bodies, gg, part, start, vec, lo, hi, hb, radius, lb, other_body, other_kind, other_index, other):
+    """Per-capsule rows against coal shapes; reduced to one row per leg."""
+    m = len(lb)
+    d = lb.copy()
+    z2 = np.zeros((m, 2))
+    rows = _Rows(
+        d,
+        np.zeros(m, bool),
+        np.stack([gg, other_body], 1),
+        np.stack([np.full(m, _LEG), other_kind], 1),
+        np.stack([gg, other_index], 1),
+        z2.copy(),
+        z2.copy(),
+        np.zeros((m, 2, 3)),
+        np.tile(np.array([0.0, 0.0, 1.0]), (m, 1)),
+    )
+
+    def measure(r: int):
+        return _measure_capsule(bodies, gg[r], part[r], start[r], vec[r], lo[r], hi[r], hb[r], radius[r], other(r))
+
+    return _Screened(rows, measure)
+
+
+def _measure_capsule(bodies, g, part, start, vec, lo, hi, hb, radius, other):
+    """coal's distance between one leg capsule and ``other = (shape, R, p)``."""
+    cap = _capsule_coal(bodies, g, part, lo, hi, radius, start, vec)
+    if cap is None:
+        return None
+    d, wa, wb, n = _coal_distance(cap[0], cap[1], cap[2], *other)
+    length = max(hi - lo, 1e-12)
+    s = float(np.clip(np.dot(wa - start, bodies.axis[g]) / length, 0.0, 1.0))
+    x = start + s * vec
+    return d, x, wb, n, lo + s * max(hi - lo, 0.0), s * hb
+
+
+def _screened_pairs(bodies: StackBodies, scene: Scene | None, ids: dict) -> list[_Screened]:
+    cfg = bodies.cfg
+    t = pair_table(cfg)
+    G = len(bodies.length)
+    plate = _plate_shape(cfg) if len(t.leg_plate) or len(t.plate_pairs) or scene else None
+    rho = math.hypot(cfg.plate.radius, 0.5 * cfg.plate.thickness)
+    half = 0.5 * cfg.plate.thickness
+    out: list[_Screened] = []
+    # legs against the plates they do not sit on
+    if len(t.leg_plate):
+        g, k = t.leg_plate[:, 0], t.leg_plate[:, 1]
+        gg, part, start, vec, lo, hi, hb, radius, lb = _leg_screen(
+            bodies, g, bodies.p[k], np.full(len(k), rho), (bodies.R[k][:, :, 2], half)
+        )
+        kk = np.repeat(k, 2)
+
+        def plate_of(r: int, kk=kk):
+            return plate, bodies.R[kk[r]], bodies.p[kk[r]]
+
+        out.append(
+            _coal_leg_rows(
+                bodies, gg, part, start, vec, lo, hi, hb, radius, lb, G + kk, np.full(len(kk), _PLATE), kk, plate_of
+            )
+        )
+    # plate against plate
+    if len(t.plate_pairs):
+        ka, kb = t.plate_pairs[:, 0], t.plate_pairs[:, 1]
+        dc = bodies.p[ka] - bodies.p[kb]
+        lb = np.sqrt(np.einsum("ij,ij->i", dc, dc)) - 2 * rho
+        for first, second, sign in ((ka, kb, 1.0), (kb, ka, -1.0)):
+            na, nb = bodies.R[first][:, :, 2], bodies.R[second][:, :, 2]
+            c = np.einsum("ij,ij->i", na, nb)
+            h = np.einsum("ij,ij->i", na, -sign * dc)
+            spread = cfg.plate.radius * np.sqrt(np.maximum(1 - c * c, 0.0)) + half * np.abs(c) + half
+            lb = np.maximum(lb, np.abs(h) - spread)
+        m = len(ka)
+        rows = _Rows(
+            lb,
+            np.zeros(m, bool),
+            np.stack([G + ka, G + kb], 1),
+            np.full((m, 2), _PLATE),
+            np.stack([ka, kb], 1),
+            np.zeros((m, 2)),
+            np.zeros((m, 2)),
+            np.zeros((m, 2, 3)),
+            np.tile(np.array([0.0, 0.0, 1.0]), (m, 1)),
+        )
+
+        def plate_pair(r: int, ka: np.ndarray = ka, kb: np.ndarray = kb) -> tuple:
+            a, b = int(ka[r]), int(kb[r])
+            d, wa, wb, n = _coal_distance(plate, bodies.R[a], bodies.p[a], plate, bodies.R[b], bodies.p[b])
+            return d, wa, wb, n, 0.0, 0.0
+
+        out.append(_Screened(rows, plate_pair))
+    if scene is None:
+        return out
+    for o in scene.obstacles:
+        if o.kind == "sphere":
+            continue
+        shape, oid = _obstacle_shape(o), ids[o.name]
+        R_o, p_o = o.pose.rotation, o.pose.translation
+        gall = np.arange(G)
+        gg, part, start, vec, lo, hi, hb, radius, lb = _leg_screen(
+            bodies, gall, np.tile(p_o, (G, 1)), np.full(G, o.bounding_radius)
+        )
+        m = len(gg)
+        fixed = (shape, R_o, p_o)
+        out.append(
+            _coal_leg_rows(
+                bodies,
+                gg,
+                part,
+                start,
+                vec,
+                lo,
+                hi,
+                hb,
+                radius,
+                lb,
+                np.full(m, oid),
+                np.full(m, _FIXED),
+                np.zeros(m, int),
+                lambda r, fixed=fixed: fixed,
+            )
+        )
+        k = np.arange(len(bodies.p))
+        dc = bodies.p - p_o
+        lbp = np.sqrt(np.einsum("ij,ij->i", dc, dc)) - rho - o.bounding_radius
+        mk = len(k)
+        rows = _Rows(
+            lbp,
+            np.zeros(mk, bool),
+            np.stack([G + k, np.full(mk, oid)], 1),
+            np.stack([np.full(mk, _PLATE), np.full(mk, _FIXED)], 1),
+            np.stack([k, np.zeros(mk, int)], 1),
+            np.zeros((mk, 2)),
+            np.zeros((mk, 2)),
+            np.zeros((mk, 2, 3)),
+            np.tile(np.array([0.0, 0.0, 1.0]), (mk, 1)),
+        )
+
+        def plate_obstacle(k: int, shape=shape, R_o=R_o, p_o=p_o):
+            d, wa, wb, n = _coal_distance(plate, bodies.R[k], bodies.p[k], shape, R_o, p_o)
+            return d, wa, wb, n, 0.0, 0.0
+
+        out.append(_Screened(rows, lambda r: plate_obstacle(int(r))))
+    return out
+
+
+def _reduce_legs(rows: _Rows) -> _Rows:
+    """Capsule rows (two per leg: motor, shaft) reduced to the smaller of each leg's two."""
+    m = len(rows.dist) // 2
+    best = np.argmin(rows.dist.reshape(m, 2), axis=1) + 2 * np.arange(m)
+    return _Rows(*(getattr(rows, f)[best] for f in _Rows.__dataclass_fields__))
+
+
+def _measure(screened: _Screened, r: int) -> None:
+    got = screened.measure(r)
+    rows = screened.rows
+    rows.exact[r] = True
+    if got is None:
+        rows.dist[r] = np.inf
+        return
+    d, xa, xb, n, sigma, hb = got
+    rows.dist[r], rows.point[r, 0], rows.point[r, 1], rows.normal[r] = d, xa, xb, n
+    rows.sigma[r, 0], rows.hb[r, 0] = sigma, hb
+
+
+def clearance(
+    am: AssemblerModel,
+    plates: PlateArrays | Sequence | np.ndarray,
+    scene: Scene | str | None = None,
+) -> Clearance:
+    """The clearance of a pose: every checked pair's distance, the smallest and its two bodies.
+
+    Args:
+        am: the model (sizes and the clearance allowed come from its configuration).
+        plates: world poses of plates 0..n, plate 0 first.
+        scene: obstacles and floor (a :class:`~assembler_pin.collision.scene.Scene`, a path
+            of a scene file, or None for the stack's own bodies only).
+
+    Returns:
+        a :class:`Clearance` (distances [m], world frame).
+    """
+    scene = read_scene(scene)
+    bodies = stack_bodies(am, plates)
+    cfg = bodies.cfg
+    names = list(stack_body_names(cfg.platforms))
+    ids: dict[str, int] = {}
+    if scene is not None:
+        for o in scene.obstacles:
+            ids[o.name] = len(names)
+            names.append(o.name)
+    exact = [_leg_leg(bodies)]
+    if scene is not None:
+        if scene.floor_z is not None:
+            names.append("floor")
+            exact.append(_floor(bodies, scene.floor_z, len(names) - 1))
+        for o in scene.obstacles:
+            if o.kind == "sphere":
+                exact.append(_sphere(bodies, o, ids[o.name]))
+    screened = _screened_pairs(bodies, scene, ids)
+    horizon = cfg.clearance + NEAR
+    for sc in screened:
+        for i in np.nonzero(sc.rows.dist < horizon)[0]:
+            _measure(sc, int(i))
+    best_exact = min((float(np.min(e.dist)) for e in exact if len(e.dist)), default=math.inf)
+    while True:  # the smallest distance exact: measure bounds below it until none is
+        best = min(
+            [best_exact] + [float(np.min(sc.rows.dist[sc.rows.exact])) for sc in screened if sc.rows.exact.any()]
+        )
+        pending = [(sc, int(i)) for sc in screened for i in np.nonzero(~sc.rows.exact & (sc.rows.dist < best))[0]]
+        if not pending:
+            break
+        for sc, row in pending:
+            _measure(sc, row)
+    parts = exact + [
+        _reduce_legs(sc.rows) if sc.rows.kind.size and sc.rows.kind[0, 0] == _LEG else sc.rows for sc in screened
+    ]
+    rows = _concat(parts)
+    if len(rows.dist):
+        dmin = float(np.min(rows.dist))
+        first = int(np.flatnonzero(rows.dist <= dmin + 1e-12)[0])
+        between = (names[rows.body[first, 0]], names[rows.body[first, 1]])
+    else:
+        dmin, between = math.inf, ("", "")
+    return Clearance(dmin, between, cfg.clearance, names, rows.body, rows.dist, rows.exact, rows, bodies)
