@@ -6,7 +6,7 @@ point) or a horizontal floor (the segment's lowest end). Every function takes ar
 leading shape ``(...)`` of world points [m] and returns the distances with the parameters of
 the closest points, so that a caller can rebuild the witness points and differentiate.
 
-These closed forms are exact and need no iteration; :mod:`~assembler_pin.collision.clearance`
+These closed forms are exact and need no iteration; :mod:`~assembler_pin.collision.check`
 uses them for every leg–leg pair (about 1100 capsule pairs for four platforms in one numpy
 pass, where one ``coal.distance`` call from Python alone costs ~4 µs), and coal only for the
 few near pairs whose shapes have no closed form here (a capsule or a plate against a box, a
