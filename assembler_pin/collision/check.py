@@ -365,10 +365,15 @@ def _obstacle_shape(o: Obstacle):
 
 def _z_to(u: np.ndarray) -> np.ndarray:
     """A rotation whose z axis is the unit vector ``u``."""
-    a = np.array([1.0, 0.0, 0.0]) if abs(u[0]) < 0.9 else np.array([0.0, 1.0, 0.0])
-    x = np.cross(a, u)
-    x /= np.linalg.norm(x)
-    return np.column_stack([x, np.cross(u, x), u])
+    ux, uy, uz = float(u[0]), float(u[1]), float(u[2])
+    if abs(ux) < 0.9:  # x = e_x × u, normalized
+        x = (0.0, -uz, uy)
+    else:  # x = e_y × u
+        x = (uz, 0.0, -ux)
+    norm = math.sqrt(x[0] * x[0] + x[1] * x[1] + x[2] * x[2])
+    x = (x[0] / norm, x[1] / norm, x[2] / norm)
+    y = (uy * x[2] - uz * x[1], uz * x[0] - ux * x[2], ux * x[1] - uy * x[0])
+    return np.array([[x[0], y[0], ux], [x[1], y[1], uy], [x[2], y[2], uz]])
 
 
 def _coal_distance(shape_a, R_a, p_a, shape_b, R_b, p_b) -> tuple[float, np.ndarray, np.ndarray, np.ndarray]:
@@ -396,22 +401,36 @@ class _Screened:
     measure: Callable[[int], tuple | None]  # row → (d, x_a, x_b, n, sigma_a, hb_a) or None
 
 
-def _leg_screen(bodies: StackBodies, g: np.ndarray, centre: np.ndarray, bound: np.ndarray, slab=None) -> tuple:
-    """Lower bounds of leg capsules (both parts of each leg ``g``) against bodies inside
-    spheres ``(centre, bound)`` (and optionally the slab of a plate: (normal, half-thickness))."""
+def _leg_screen(
+    bodies: StackBodies,
+    g: np.ndarray,
+    core: tuple[np.ndarray, np.ndarray, np.ndarray],
+    slab: tuple[np.ndarray, float] | None = None,
+) -> tuple:
+    """Lower bounds of leg capsules (both parts of each leg ``g``) against bodies held in
+    capsules ``core = (start, vector, radius)`` (one per leg, or one for all), and optionally
+    in the slab of a plate (``(normal, half-thickness)``, about the core's start)."""
     part = np.tile(np.array([MOTOR, SHAFT]), len(g))
     gg = np.repeat(g, 2)
     start, vec, lo, hi, hb, radius = leg_segments(bodies, gg, part)
-    cc = np.repeat(centre, 2, axis=0)
-    d_axis, _ = segment_point(start, vec, cc)
-    lb = d_axis - np.repeat(bound, 2) - radius
+    c0, c1, cr = _repeat_core(core, len(g))
+    d_axis, _, _ = segment_segment(start, vec, c0, c1)
+    lb = d_axis - cr - radius
     if slab is not None:
         normal, half = np.repeat(slab[0], 2, axis=0), slab[1]
-        h0 = np.einsum("ij,ij->i", start - cc, normal)
+        h0 = np.einsum("ij,ij->i", start - c0, normal)
         h1 = h0 + np.einsum("ij,ij->i", vec, normal)
         lb = np.maximum(lb, np.maximum(np.minimum(h0, h1), np.minimum(-h0, -h1)) - half - radius)
     lb[hi < lo] = np.inf
     return gg, part, start, vec, lo, hi, hb, radius, lb
+
+
+def _repeat_core(core: tuple, m: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    start, vec, radius = core
+    start = np.broadcast_to(start, (m, 3))
+    vec = np.broadcast_to(vec, (m, 3))
+    radius = np.broadcast_to(radius, (m,))
+    return np.repeat(start, 2, axis=0), np.repeat(vec, 2, axis=0), np.repeat(radius, 2)
 
 
 def _coal_leg_rows(bodies, gg, part, start, vec, lo, hi, hb, radius, lb, other_body, other_kind, other_index, other):
@@ -460,9 +479,8 @@ def _screened_pairs(bodies: StackBodies, scene: Scene | None, ids: dict) -> list
     # legs against the plates they do not sit on
     if len(t.leg_plate):
         g, k = t.leg_plate[:, 0], t.leg_plate[:, 1]
-        gg, part, start, vec, lo, hi, hb, radius, lb = _leg_screen(
-            bodies, g, bodies.p[k], np.full(len(k), rho), (bodies.R[k][:, :, 2], half)
-        )
+        core = (bodies.p[k], np.zeros((len(k), 3)), np.full(len(k), rho))
+        gg, part, start, vec, lo, hi, hb, radius, lb = _leg_screen(bodies, g, core, (bodies.R[k][:, :, 2], half))
         kk = np.repeat(k, 2)
 
         def plate_of(r: int, kk=kk):
@@ -510,9 +528,9 @@ def _screened_pairs(bodies: StackBodies, scene: Scene | None, ids: dict) -> list
             continue
         shape, oid = _obstacle_shape(o), ids[o.name]
         R_o, p_o = o.pose.rotation, o.pose.translation
-        gall = np.arange(G)
+        core_start, core_vec, core_r = o.bounding_capsule()
         gg, part, start, vec, lo, hi, hb, radius, lb = _leg_screen(
-            bodies, gall, np.tile(p_o, (G, 1)), np.full(G, o.bounding_radius)
+            bodies, np.arange(G), (core_start, core_vec, np.float64(core_r))
         )
         m = len(gg)
         fixed = (shape, R_o, p_o)
@@ -535,8 +553,10 @@ def _screened_pairs(bodies: StackBodies, scene: Scene | None, ids: dict) -> list
             )
         )
         k = np.arange(len(bodies.p))
-        dc = bodies.p - p_o
-        lbp = np.sqrt(np.einsum("ij,ij->i", dc, dc)) - rho - o.bounding_radius
+        lbp = segment_point(
+            np.broadcast_to(core_start, bodies.p.shape), np.broadcast_to(core_vec, bodies.p.shape), bodies.p
+        )[0]
+        lbp = lbp - rho - core_r
         mk = len(k)
         rows = _Rows(
             lbp,

@@ -64,14 +64,19 @@ class Obstacle:
     pose: pin.SE3
     size: tuple[float, ...]
 
-    @property
-    def bounding_radius(self) -> float:
-        """Radius of the smallest sphere about ``pose.translation`` holding it [m]."""
-        if self.kind == "box":
-            return 0.5 * math.sqrt(sum(s * s for s in self.size))
+    def bounding_capsule(self) -> tuple[np.ndarray, np.ndarray, float]:
+        """A capsule holding the obstacle: start (3,), start→end vector (3,) world [m] and
+        radius [m] (a box: along its longest edge, the half-diagonal of the other two)."""
+        R, p = self.pose.rotation, self.pose.translation
+        if self.kind == "sphere":
+            return p.copy(), np.zeros(3), self.size[0]
         if self.kind == "cylinder":
-            return math.hypot(self.size[0], 0.5 * self.size[1])
-        return self.size[0]
+            axis, half, radius = R[:, 2], 0.5 * self.size[1], self.size[0]
+        else:
+            i = int(np.argmax(self.size))
+            axis, half = R[:, i], 0.5 * self.size[i]
+            radius = 0.5 * math.hypot(*(s for k, s in enumerate(self.size) if k != i))
+        return p - half * axis, 2.0 * half * axis, radius
 
 
 @dataclass(frozen=True)
