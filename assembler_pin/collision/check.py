@@ -530,7 +530,7 @@ def _screened_pairs(bodies: StackBodies, scene: Scene | None, ids: dict) -> list
         R_o, p_o = o.pose.rotation, o.pose.translation
         core_start, core_vec, core_r = o.bounding_capsule()
         gg, part, start, vec, lo, hi, hb, radius, lb = _leg_screen(
-            bodies, np.arange(G), (core_start, core_vec, np.float64(core_r))
+            bodies, np.arange(G), (core_start, core_vec, np.array(core_r))
         )
         m = len(gg)
         fixed = (shape, R_o, p_o)
