@@ -47,12 +47,17 @@ from .distance import cylinder_lowest_point, point_in_cylinder_distance, segment
 from .pairs import pair_table
 from .scene import Obstacle, Scene, read_scene
 
-__all__ = ["NEAR", "Clearance", "clearance"]
+__all__ = ["GJK_TOLERANCE", "NEAR", "Clearance", "clearance"]
 
 logger = logging.getLogger(__name__)
 
 #: Pairs whose screening bound is within this of the clearance are measured exactly [m].
 NEAR = 0.05
+
+#: coal's GJK tolerance [m] (the default, 1e-6, leaves the distance noisy at that level: too
+#: coarse for derivatives held to central differences). The penetration depth of overlapping
+#: pairs comes from coal's EPA at its default tolerance: its derivative is good to ~1e-3.
+GJK_TOLERANCE = 1e-10
 
 # carrier kinds of a closest point: on a leg (moves with its two plates and its length),
 # on a plate (rigid with it), fixed (an obstacle, the floor)
@@ -379,6 +384,8 @@ def _z_to(u: np.ndarray) -> np.ndarray:
 def _coal_distance(shape_a, R_a, p_a, shape_b, R_b, p_b) -> tuple[float, np.ndarray, np.ndarray, np.ndarray]:
     coal = _coal()
     req, res = coal.DistanceRequest(), coal.DistanceResult()
+    req.gjk_tolerance = GJK_TOLERANCE
+    req.gjk_max_iterations = 1000
     d = coal.distance(shape_a, coal.Transform3s(R_a, p_a), shape_b, coal.Transform3s(R_b, p_b), req, res)
     wa, wb = np.array(res.getNearestPoint1()), np.array(res.getNearestPoint2())
     return float(d), wa, wb, -np.array(res.normal)

@@ -47,11 +47,10 @@ def segment_segment(
     c, f = _dot(d1, r), _dot(d2, r)
     den = a * e - b * b
     general = den > 1e-12 * a * e  # not parallel: the lines' closest points, clamped
-    s = np.where(general, (b * f - c * e) / np.where(general, den, 1.0), 0.0)
-    np.clip(s, 0.0, 1.0, out=s)
+    s = np.clip(np.where(general, (b * f - c * e) / np.where(general, den, 1.0), 0.0), 0.0, 1.0)
     t = (b * s + f) / np.maximum(e, _TINY)
     outside = (t < 0.0) | (t > 1.0)
-    np.clip(t, 0.0, 1.0, out=t)
+    t = np.clip(t, 0.0, 1.0)
     s = np.where(outside, np.clip((b * t - c) / np.maximum(a, _TINY), 0.0, 1.0), s)
     w = r + s[..., None] * d1 - t[..., None] * d2
     return np.sqrt(_dot(w, w)), s, t
