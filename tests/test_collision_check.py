@@ -8,6 +8,7 @@ import coal
 import numpy as np
 import pinocchio as pin
 import pytest
+from test_collision_distance import _brute_segments
 
 import assembler_pin as ap
 from assembler_pin.collision import Scene, clearance, read_scene, scene_from_dict
@@ -16,8 +17,6 @@ from assembler_pin.collision.pairs import pair_table
 from assembler_pin.messages import binding, describe
 from assembler_pin.scenarios import SCENARIOS
 from assembler_pin.state import evaluate_state
-
-from test_collision_distance import _brute_segments
 
 
 @pytest.fixture(scope="module")

@@ -39,15 +39,16 @@ def _brute_segments(p1, d1, p2, d2) -> float:
 def _segment_cases(count: int) -> list[tuple[np.ndarray, ...]]:
     cases = []
     for _ in range(count):
-        p1, d1, p2, d2 = RNG.normal(size=(4, 3)) * [0.3, 0.3, 0.3, 0.3][0]
+        p1, d1, p2, d2 = RNG.normal(size=(4, 3)) * 0.3
         cases.append((p1, d1, p2, d2))
     p = RNG.normal(size=3)
     d = RNG.normal(size=3)
+    up, side, both = np.array([0.0, 0.0, 0.1]), np.array([0.1, 0.0, 0.0]), np.array([0.1, 0.2, 0.0])
     cases += [
-        (p, d, p + [0.0, 0.0, 0.1], d),  # parallel, overlapping
-        (p, d, p + 2 * d + [0.0, 0.05, 0.0], d),  # parallel, apart along the axis
-        (p, np.zeros(3), p + [0.1, 0.0, 0.0], d),  # a point and a segment
-        (p, np.zeros(3), p + [0.1, 0.2, 0.0], np.zeros(3)),  # two points
+        (p, d, p + up, d),  # parallel, overlapping
+        (p, d, p + 2 * d + 0.5 * both - side, d),  # parallel, apart along the axis
+        (p, np.zeros(3), p + side, d),  # a point and a segment
+        (p, np.zeros(3), p + both, np.zeros(3)),  # two points
         (p, d, p + 0.5 * d, np.cross(d, [0.0, 0.0, 1.0])),  # crossing
     ]
     return cases
@@ -87,7 +88,7 @@ def test_segment_segment_against_coal_capsules():
 
 def test_segment_point_against_sampling():
     p, d, c = RNG.normal(size=(3, 100, 3))
-    dist, s = segment_point(p, d, c)
+    dist, _ = segment_point(p, d, c)
     grid = np.linspace(0.0, 1.0, 20001)
     for k in range(100):
         sampled = np.linalg.norm(p[k] + grid[:, None] * d[k] - c[k], axis=1).min()
