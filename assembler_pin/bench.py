@@ -15,6 +15,7 @@ from typing import Any
 import numpy as np
 
 from .bounds import check_bound
+from .collision.check import clearance
 from .kinematics import PlateArrays, q_from_plates, sp_forward_kinematics, stack_forward_kinematics
 from .model import AssemblerModel
 from .progress import ProgressCallback
@@ -74,7 +75,8 @@ def run_benchmarks(
     quick: bool = False,
     progress: ProgressCallback | None = None,
 ) -> dict[str, Any]:
-    """Median per-call times [µs] of statics, SP FK, stack FK and closed-form q, then the
+    """Median per-call times [µs] of statics, SP FK, stack FK, closed-form q and the
+    self-collision clearance (:func:`~assembler_pin.collision.check.clearance`), then the
     helper-arm initial condition (:func:`benchmark_initial_condition`: ``initial_scenarios_ms``,
     ``initial_random_ms`` [ms], ``initial_success_rate``), the CLI start-up in fresh processes
     beside its targets (``cli_help_s``, ``cli_statics_home_json_s``, ``bare_python_s`` [s],
@@ -100,6 +102,7 @@ def run_benchmarks(
         "sp_fk_us": lambda: median_time_us(lambda: sp_forward_kinematics(am, 0, pick()[0][0]), repeat),
         "stack_fk_us": lambda: median_time_us(lambda: stack_forward_kinematics(am, pick()[0]), repeat),
         "q_from_plates_us": lambda: median_time_us(lambda: q_from_plates(am, pick()[1]), repeat),
+        "clearance_us": lambda: median_time_us(lambda: clearance(am, pick()[1]), repeat),
         "statics_from_matrices_us": lambda: median_time_us(lambda: solve_statics(am, pick()[1].as_matrices()), repeat),
         "statics_batch_stacks_per_s": lambda: (
             len(batch) / (1e-6 * median_time_us(lambda: solve_statics_batch(am, batch), 5))

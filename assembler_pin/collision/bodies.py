@@ -13,6 +13,7 @@ motor or following the top joint), which is what the derivatives need.
 
 from __future__ import annotations
 
+import functools
 from collections.abc import Sequence
 from dataclasses import dataclass
 
@@ -97,6 +98,8 @@ def leg_segments(
     return start, vector, lo, hi, hb, radius
 
 
-def stack_body_names(n: int) -> list[str]:
+@functools.lru_cache(maxsize=8)
+def stack_body_names(n: int) -> tuple[str, ...]:
     """Names of the stack's bodies: legs ``SPj leg i`` (6n, in ``g`` order), then ``plate k``."""
-    return [leg_label(j, i) for j in range(n) for i in range(LEGS_PER_PLATFORM)] + [f"plate {k}" for k in range(n + 1)]
+    legs = [leg_label(j, i) for j in range(n) for i in range(LEGS_PER_PLATFORM)]
+    return tuple(legs + [f"plate {k}" for k in range(n + 1)])
