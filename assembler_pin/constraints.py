@@ -76,9 +76,10 @@ class Violation:
 
     def __str__(self) -> str:
         """``max_length at SP1 leg 2: 0.36 (limit 0.35)`` — 0-based, as :mod:`~assembler_pin.labels`."""
-        if self.between is not None:
-            where = f"{self.between[0]} and {self.between[1]}"
-        elif self.platform is None:
+        if self.between is not None:  # a collision: a distance [m] between two bodies
+            a, b = self.between
+            return f"{self.kind} between {a} and {b}: {self.value:.6g} m (limit {self.limit:.6g} m)"
+        if self.platform is None:
             where = "end effector"
         elif self.leg is None:
             where = platform_label(self.platform)
