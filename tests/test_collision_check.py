@@ -13,6 +13,7 @@ from test_collision_distance import _brute_segments
 import assembler_pin as ap
 from assembler_pin.collision import Scene, clearance, read_scene, scene_from_dict
 from assembler_pin.collision.bodies import MOTOR, SHAFT, leg_segments, stack_bodies
+from assembler_pin.collision.kernel import kernel_available
 from assembler_pin.collision.pairs import pair_table
 from assembler_pin.messages import binding, describe
 from assembler_pin.scenarios import SCENARIOS
@@ -224,3 +225,22 @@ def test_the_truss_bay_strut_crosses_the_translation_optimum(am, scenario_states
     state = evaluate_state(am, result.best.plates, scene=scene)
     assert not state.feasible
     assert state.clearance.between[1] == "lower strut" and state.clearance.min_distance < 0
+
+
+@pytest.mark.skipif(not kernel_available(), reason="numba is not installed")
+@pytest.mark.parametrize("scene", [None, "examples/truss_bay.yaml"])
+def test_the_compiled_kernel_equals_numpy(am, scene):
+    """The same pairs, bounds, distances, bodies and derivatives from both engines."""
+    for plates in (am.home, _perturbed(am, 0.05, 3), _twisted(am, 130.0), _perturbed(am, 0.1, 11)):
+        ref = clearance(am, plates, scene, engine="numpy")
+        got = clearance(am, plates, scene, engine="numba")
+        assert got.between == ref.between and got.min_distance == pytest.approx(ref.min_distance, abs=1e-12)
+        np.testing.assert_array_equal(got.pairs, ref.pairs)
+        np.testing.assert_array_equal(got.exact, ref.exact)
+        np.testing.assert_allclose(got.distances, ref.distances, rtol=0, atol=1e-12)
+        np.testing.assert_allclose(got.gradient(), ref.gradient(), rtol=0, atol=1e-10)
+
+
+def test_an_unknown_engine_is_refused(am):
+    with pytest.raises(ap.exceptions.OptionsError):
+        clearance(am, am.home, engine="gpu")

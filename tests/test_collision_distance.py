@@ -49,6 +49,8 @@ def _segment_cases(count: int) -> list[tuple[np.ndarray, ...]]:
         (p, d, p + 2 * d + 0.5 * both - side, d),  # parallel, apart along the axis
         (p, np.zeros(3), p + side, d),  # a point and a segment
         (p, np.zeros(3), p + both, np.zeros(3)),  # two points
+        (p, d, p + 0.3 * d + side, np.zeros(3)),  # a segment and a point
+        (p, d, p - up, 1e-9 * d),  # a segment and a nearly zero-length one
         (p, d, p + 0.5 * d, np.cross(d, [0.0, 0.0, 1.0])),  # crossing
     ]
     return cases

@@ -32,6 +32,7 @@ segment end that follows the top joint.
 
 from __future__ import annotations
 
+import functools
 import logging
 import math
 from collections.abc import Callable, Sequence
@@ -39,12 +40,14 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..geometry import LEGS_PER_PLATFORM
-from ..kinematics import PlateArrays
+from ..config import AssemblerConfig
+from ..geometry import LEGS_PER_PLATFORM, leg_geometry
+from ..kinematics import PlateArrays, plate_arrays
 from ..model import AssemblerModel
 from .bodies import MOTOR, SHAFT, StackBodies, leg_segments, stack_bodies, stack_body_names
 from .distance import cylinder_lowest_point, point_in_cylinder_distance, segment_point, segment_segment
-from .pairs import pair_table
+from .kernel import self_kernel
+from .pairs import pair_table, per_config
 from .scene import Obstacle, Scene, read_scene
 
 __all__ = ["GJK_TOLERANCE", "NEAR", "Clearance", "clearance"]
@@ -107,7 +110,7 @@ class Clearance:
         between: the names of those two bodies (``"SP1 leg 3"``, ``"plate 2"``, an
             obstacle's name, ``"floor"``).
         limit: the smallest distance allowed (the configuration's ``clearance``) [m].
-        names: every body's name, indexed by ``pairs``.
+        names: every body's name, indexed by ``pairs`` (shared: do not modify).
         pairs: (m, 2) the bodies of every checked pair (indices into ``names``).
         distances: (m,) their distances [m] (lower bounds where ``exact`` is False).
         exact: (m,) True where the distance was measured, not only bounded.
@@ -116,12 +119,17 @@ class Clearance:
     min_distance: float
     between: tuple[str, str]
     limit: float
-    names: list[str]
+    names: Sequence[str]
     pairs: np.ndarray
     distances: np.ndarray
     exact: np.ndarray
-    _rows: _Rows = field(repr=False)
+    _parts: list[_Rows] = field(repr=False)
     _bodies: StackBodies = field(repr=False)
+
+    @functools.cached_property
+    def _rows(self) -> _Rows:
+        """Every row's closest points and normal (built on first use: the derivatives)."""
+        return _concat(self._parts)
 
     @property
     def clear(self) -> bool:
@@ -357,10 +365,6 @@ def _coal():
     return coal
 
 
-def _plate_shape(cfg):
-    return _coal().Cylinder(cfg.plate.radius, max(cfg.plate.thickness, 1e-9))
-
-
 def _obstacle_shape(o: Obstacle):
     coal = _coal()
     if o.kind == "box":
@@ -391,15 +395,6 @@ def _coal_distance(shape_a, R_a, p_a, shape_b, R_b, p_b) -> tuple[float, np.ndar
     return float(d), wa, wb, -np.array(res.normal)
 
 
-def _capsule_coal(bodies, g, part, lo, hi, radius, start, vec):
-    """A leg part as a coal capsule and its frame (None when trimmed away)."""
-    if hi < lo:
-        return None
-    length = max(hi - lo, 1e-12)
-    u = bodies.axis[g]
-    return _coal().Capsule(radius, length), _z_to(u), start + 0.5 * vec
-
-
 @dataclass
 class _Screened:
     """Pairs measured by coal on demand: their lower bounds and how to measure each."""
@@ -413,13 +408,12 @@ def _leg_screen(
     g: np.ndarray,
     core: tuple[np.ndarray, np.ndarray, np.ndarray],
     slab: tuple[np.ndarray, float] | None = None,
-) -> tuple:
-    """Lower bounds of leg capsules (both parts of each leg ``g``) against bodies held in
-    capsules ``core = (start, vector, radius)`` (one per leg, or one for all), and optionally
+) -> np.ndarray:
+    """Lower bounds (m, 2) of the motor and the shaft of each leg ``g`` (m,) against bodies held
+    in capsules ``core = (start, vector, radius)`` (one per leg, or one for all), and optionally
     in the slab of a plate (``(normal, half-thickness)``, about the core's start)."""
     part = np.tile(np.array([MOTOR, SHAFT]), len(g))
-    gg = np.repeat(g, 2)
-    start, vec, lo, hi, hb, radius = leg_segments(bodies, gg, part)
+    start, vec, lo, hi, _, radius = leg_segments(bodies, np.repeat(g, 2), part)
     c0, c1, cr = _repeat_core(core, len(g))
     d_axis, _, _ = segment_segment(start, vec, c0, c1)
     lb = d_axis - cr - radius
@@ -429,7 +423,7 @@ def _leg_screen(
         h1 = h0 + np.einsum("ij,ij->i", vec, normal)
         lb = np.maximum(lb, np.maximum(np.minimum(h0, h1), np.minimum(-h0, -h1)) - half - radius)
     lb[hi < lo] = np.inf
-    return gg, part, start, vec, lo, hi, hb, radius, lb
+    return lb.reshape(-1, 2)
 
 
 def _repeat_core(core: tuple, m: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -440,156 +434,168 @@ def _repeat_core(core: tuple, m: int) -> tuple[np.ndarray, np.ndarray, np.ndarra
     return np.repeat(start, 2, axis=0), np.repeat(vec, 2, axis=0), np.repeat(radius, 2)
 
 
-def _coal_leg_rows(bodies, gg, part, start, vec, lo, hi, hb, radius, lb, other_body, other_kind, other_index, other):
-    """Per-capsule rows against coal shapes; reduced to one row per leg."""
+def _screened_rows(lb: np.ndarray, body: np.ndarray, kind: np.ndarray, index: np.ndarray) -> _Rows:
+    """Rows known by their lower bounds ``lb`` only (not measured yet)."""
     m = len(lb)
-    d = lb.copy()
-    z2 = np.zeros((m, 2))
-    rows = _Rows(
-        d,
+    return _Rows(
+        lb,
         np.zeros(m, bool),
-        np.stack([gg, other_body], 1),
-        np.stack([np.full(m, _LEG), other_kind], 1),
-        np.stack([gg, other_index], 1),
-        z2.copy(),
-        z2.copy(),
+        body,
+        kind,
+        index,
+        np.zeros((m, 2)),
+        np.zeros((m, 2)),
         np.zeros((m, 2, 3)),
-        np.tile(np.array([0.0, 0.0, 1.0]), (m, 1)),
+        _UP[:m].copy(),
     )
 
-    def measure(r: int):
-        return _measure_capsule(bodies, gg[r], part[r], start[r], vec[r], lo[r], hi[r], hb[r], radius[r], other(r))
 
-    return _Screened(rows, measure)
+_UP = np.tile(np.array([0.0, 0.0, 1.0]), (4096, 1))
 
 
-def _measure_capsule(bodies, g, part, start, vec, lo, hi, hb, radius, other):
+def _coal_leg_rows(
+    bodies: StackBodies,
+    g: np.ndarray,
+    lb: np.ndarray,
+    static: tuple[np.ndarray, np.ndarray, np.ndarray],
+    other: Callable[[int], tuple],
+) -> _Screened:
+    """One row per leg ``g`` against a body coal measures (``other(r)``: shape, R, p), known by
+    the smaller bound of its two parts ``lb`` (m, 2) until measured (both parts, the smaller)."""
+
+    def measure(r: int) -> tuple | None:
+        best = None
+        for part in (MOTOR, SHAFT):
+            if not np.isfinite(lb[r, part]):
+                continue
+            start, vec, lo, hi, hb, radius = (x[0] for x in leg_segments(bodies, g[r : r + 1], np.array([part])))
+            got = _measure_capsule(bodies, int(g[r]), start, vec, lo, hi, hb, radius, other(r))
+            if got is not None and (best is None or got[0] < best[0]):
+                best = got
+        return best
+
+    return _Screened(_screened_rows(lb.min(axis=1), *static), measure)
+
+
+def _measure_capsule(bodies, g, start, vec, lo, hi, hb, radius, other):
     """coal's distance between one leg capsule and ``other = (shape, R, p)``."""
-    cap = _capsule_coal(bodies, g, part, lo, hi, radius, start, vec)
-    if cap is None:
+    if hi < lo:
         return None
-    d, wa, wb, n = _coal_distance(cap[0], cap[1], cap[2], *other)
     length = max(hi - lo, 1e-12)
+    capsule = _coal().Capsule(radius, length)
+    d, wa, wb, n = _coal_distance(capsule, _z_to(bodies.axis[g]), start + 0.5 * vec, *other)
     s = float(np.clip(np.dot(wa - start, bodies.axis[g]) / length, 0.0, 1.0))
-    x = start + s * vec
-    return d, x, wb, n, lo + s * max(hi - lo, 0.0), s * hb
+    return d, start + s * vec, wb, n, lo + s * max(hi - lo, 0.0), s * hb
 
 
-def _screened_pairs(bodies: StackBodies, scene: Scene | None, ids: dict) -> list[_Screened]:
+@per_config
+def _static_rows(cfg: AssemblerConfig) -> tuple:
+    """The bodies, carrier kinds and indices of the leg–plate and plate–plate rows."""
+    t = pair_table(cfg)
+    G = LEGS_PER_PLATFORM * cfg.platforms
+    g, k = t.leg_plate[:, 0], t.leg_plate[:, 1]
+    legs_plates = (np.stack([g, G + k], 1), np.stack([np.full(len(g), _LEG), np.full(len(g), _PLATE)], 1), t.leg_plate)
+    ka, kb = t.plate_pairs[:, 0], t.plate_pairs[:, 1]
+    plates = (np.stack([G + ka, G + kb], 1), np.full((len(ka), 2), _PLATE), t.plate_pairs)
+    legs = np.stack([t.leg_a, t.leg_b], 1)
+    self_pairs = np.concatenate([legs, legs_plates[0], plates[0]])  # the rows of the stack alone
+    return legs_plates, plates, self_pairs
+
+
+class _PlateShape:
+    """The plates' coal cylinder, made on the first measurement that needs it."""
+
+    def __init__(self, cfg: AssemblerConfig) -> None:
+        self.cfg, self.shape = cfg, None
+
+    def __call__(self):
+        if self.shape is None:
+            self.shape = _coal().Cylinder(self.cfg.plate.radius, max(self.cfg.plate.thickness, 1e-9))
+        return self.shape
+
+
+def _screened_pairs(
+    bodies: StackBodies, scene: Scene | None, ids: dict, bounds: tuple[np.ndarray, np.ndarray] | None = None
+) -> list[_Screened]:
+    """The pairs coal measures, with their lower bounds (``bounds``: the kernel's leg–plate
+    (Q, 2) and plate–plate (S,) bounds, else computed here)."""
     cfg = bodies.cfg
     t = pair_table(cfg)
     G = len(bodies.length)
-    plate = _plate_shape(cfg) if len(t.leg_plate) or len(t.plate_pairs) or scene else None
+    plate = _PlateShape(cfg)
     rho = math.hypot(cfg.plate.radius, 0.5 * cfg.plate.thickness)
     half = 0.5 * cfg.plate.thickness
+    legs_plates, plates, _ = _static_rows(cfg)
     out: list[_Screened] = []
-    # legs against the plates they do not sit on
-    if len(t.leg_plate):
+    if len(t.leg_plate):  # legs against the plates they do not sit on
         g, k = t.leg_plate[:, 0], t.leg_plate[:, 1]
-        core = (bodies.p[k], np.zeros((len(k), 3)), np.full(len(k), rho))
-        gg, part, start, vec, lo, hi, hb, radius, lb = _leg_screen(bodies, g, core, (bodies.R[k][:, :, 2], half))
-        kk = np.repeat(k, 2)
+        if bounds is None:
+            core = (bodies.p[k], np.zeros((len(k), 3)), np.full(len(k), rho))
+            lb = _leg_screen(bodies, g, core, (bodies.R[k][:, :, 2], half))
+        else:
+            lb = bounds[0]
 
-        def plate_of(r: int, kk=kk):
-            return plate, bodies.R[kk[r]], bodies.p[kk[r]]
+        def plate_of(r: int) -> tuple:
+            return plate(), bodies.R[k[r]], bodies.p[k[r]]
 
-        out.append(
-            _coal_leg_rows(
-                bodies, gg, part, start, vec, lo, hi, hb, radius, lb, G + kk, np.full(len(kk), _PLATE), kk, plate_of
-            )
-        )
-    # plate against plate
-    if len(t.plate_pairs):
+        out.append(_coal_leg_rows(bodies, g, lb, legs_plates, plate_of))
+    if len(t.plate_pairs):  # plate against plate
         ka, kb = t.plate_pairs[:, 0], t.plate_pairs[:, 1]
-        dc = bodies.p[ka] - bodies.p[kb]
-        lb = np.sqrt(np.einsum("ij,ij->i", dc, dc)) - 2 * rho
-        for first, second, sign in ((ka, kb, 1.0), (kb, ka, -1.0)):
-            na, nb = bodies.R[first][:, :, 2], bodies.R[second][:, :, 2]
-            c = np.einsum("ij,ij->i", na, nb)
-            h = np.einsum("ij,ij->i", na, -sign * dc)
-            spread = cfg.plate.radius * np.sqrt(np.maximum(1 - c * c, 0.0)) + half * np.abs(c) + half
-            lb = np.maximum(lb, np.abs(h) - spread)
-        m = len(ka)
-        rows = _Rows(
-            lb,
-            np.zeros(m, bool),
-            np.stack([G + ka, G + kb], 1),
-            np.full((m, 2), _PLATE),
-            np.stack([ka, kb], 1),
-            np.zeros((m, 2)),
-            np.zeros((m, 2)),
-            np.zeros((m, 2, 3)),
-            np.tile(np.array([0.0, 0.0, 1.0]), (m, 1)),
-        )
+        if bounds is None:
+            dc = bodies.p[ka] - bodies.p[kb]
+            lbp = np.sqrt(np.einsum("ij,ij->i", dc, dc)) - 2 * rho
+            for first, second, sign in ((ka, kb, 1.0), (kb, ka, -1.0)):
+                na, nb = bodies.R[first][:, :, 2], bodies.R[second][:, :, 2]
+                c = np.einsum("ij,ij->i", na, nb)
+                h = np.einsum("ij,ij->i", na, -sign * dc)
+                spread = cfg.plate.radius * np.sqrt(np.maximum(1 - c * c, 0.0)) + half * np.abs(c) + half
+                lbp = np.maximum(lbp, np.abs(h) - spread)
+        else:
+            lbp = bounds[1]
 
-        def plate_pair(r: int, ka: np.ndarray = ka, kb: np.ndarray = kb) -> tuple:
+        def plate_pair(r: int) -> tuple:
             a, b = int(ka[r]), int(kb[r])
-            d, wa, wb, n = _coal_distance(plate, bodies.R[a], bodies.p[a], plate, bodies.R[b], bodies.p[b])
+            d, wa, wb, n = _coal_distance(plate(), bodies.R[a], bodies.p[a], plate(), bodies.R[b], bodies.p[b])
             return d, wa, wb, n, 0.0, 0.0
 
-        out.append(_Screened(rows, plate_pair))
+        out.append(_Screened(_screened_rows(lbp, *plates), plate_pair))
     if scene is None:
         return out
+    legs = np.arange(G)
     for o in scene.obstacles:
         if o.kind == "sphere":
             continue
         shape, oid = _obstacle_shape(o), ids[o.name]
-        R_o, p_o = o.pose.rotation, o.pose.translation
+        fixed = (shape, o.pose.rotation, o.pose.translation)
         core_start, core_vec, core_r = o.bounding_capsule()
-        gg, part, start, vec, lo, hi, hb, radius, lb = _leg_screen(
-            bodies, np.arange(G), (core_start, core_vec, np.array(core_r))
+        lb = _leg_screen(bodies, legs, (core_start, core_vec, np.array(core_r)))
+        legs_static = (
+            np.stack([legs, np.full(G, oid)], 1),
+            np.stack([np.full(G, _LEG), np.full(G, _FIXED)], 1),
+            np.stack([legs, np.zeros(G, int)], 1),
         )
-        m = len(gg)
-        fixed = (shape, R_o, p_o)
-        out.append(
-            _coal_leg_rows(
-                bodies,
-                gg,
-                part,
-                start,
-                vec,
-                lo,
-                hi,
-                hb,
-                radius,
-                lb,
-                np.full(m, oid),
-                np.full(m, _FIXED),
-                np.zeros(m, int),
-                lambda r, fixed=fixed: fixed,
-            )
-        )
+
+        def obstacle_of(r: int, fixed: tuple = fixed) -> tuple:
+            return fixed
+
+        out.append(_coal_leg_rows(bodies, legs, lb, legs_static, obstacle_of))
         k = np.arange(len(bodies.p))
-        lbp = segment_point(
+        lbk = segment_point(
             np.broadcast_to(core_start, bodies.p.shape), np.broadcast_to(core_vec, bodies.p.shape), bodies.p
         )[0]
-        lbp = lbp - rho - core_r
         mk = len(k)
-        rows = _Rows(
-            lbp,
-            np.zeros(mk, bool),
+        plates_static = (
             np.stack([G + k, np.full(mk, oid)], 1),
             np.stack([np.full(mk, _PLATE), np.full(mk, _FIXED)], 1),
             np.stack([k, np.zeros(mk, int)], 1),
-            np.zeros((mk, 2)),
-            np.zeros((mk, 2)),
-            np.zeros((mk, 2, 3)),
-            np.tile(np.array([0.0, 0.0, 1.0]), (mk, 1)),
         )
 
-        def plate_obstacle(k: int, shape=shape, R_o=R_o, p_o=p_o):
-            d, wa, wb, n = _coal_distance(plate, bodies.R[k], bodies.p[k], shape, R_o, p_o)
+        def plate_obstacle(r: int, fixed: tuple = fixed) -> tuple:
+            d, wa, wb, n = _coal_distance(plate(), bodies.R[r], bodies.p[r], *fixed)
             return d, wa, wb, n, 0.0, 0.0
 
-        out.append(_Screened(rows, lambda r: plate_obstacle(int(r))))
+        out.append(_Screened(_screened_rows(lbk - rho - core_r, *plates_static), plate_obstacle))
     return out
-
-
-def _reduce_legs(rows: _Rows) -> _Rows:
-    """Capsule rows (two per leg: motor, shaft) reduced to the smaller of each leg's two."""
-    m = len(rows.dist) // 2
-    best = np.argmin(rows.dist.reshape(m, 2), axis=1) + 2 * np.arange(m)
-    return _Rows(*(getattr(rows, f)[best] for f in _Rows.__dataclass_fields__))
 
 
 def _measure(screened: _Screened, r: int) -> None:
@@ -604,10 +610,50 @@ def _measure(screened: _Screened, r: int) -> None:
     rows.sigma[r, 0], rows.hb[r, 0] = sigma, hb
 
 
+_calls = 0  # clearances asked for in this process (the kernel is loaded when they are many)
+
+
+@per_config
+def _kernel_inputs(cfg: AssemblerConfig) -> tuple:
+    """The kernel's constant inputs for a configuration: anchors, variant pairs, pair lists, sizes."""
+    t = pair_table(cfg)
+    G = LEGS_PER_PLATFORM * cfg.platforms
+    va, vb = _variant_index(t, G)
+    sizes = np.array(
+        [
+            cfg.leg.motor_length,
+            cfg.leg.node_zone,
+            cfg.leg.motor_radius,
+            cfg.leg.shaft_radius,
+            cfg.plate.radius,
+            0.5 * cfg.plate.thickness,
+            math.hypot(cfg.plate.radius, 0.5 * cfg.plate.thickness),
+        ]
+    )
+    geometry = leg_geometry(cfg)
+    bottom = np.ascontiguousarray(geometry.bottom_in_plate.reshape(-1, 3))
+    top = np.ascontiguousarray(geometry.top_in_plate.reshape(-1, 3))
+    legs = np.stack([t.leg_a, t.leg_b], 1)
+    return bottom, top, va, vb, t.leg_plate, t.plate_pairs, sizes, legs, np.zeros((len(legs), 2), int)
+
+
+def _kernel_pass(am: AssemblerModel, pa: PlateArrays, kernel) -> tuple[StackBodies, _Rows, tuple]:
+    """Bodies, leg–leg rows and the coal pairs' bounds from the compiled kernel."""
+    bottom, top, va, vb, leg_plate, plate_pairs, sizes, legs, kinds = _kernel_inputs(am.config)
+    G, P = len(bottom), len(legs)
+    B, T, U, L = np.empty((G, 3)), np.empty((G, 3)), np.empty((G, 3)), np.empty(G)
+    d, x, sig, hb, nrm = np.empty(P), np.empty((P, 2, 3)), np.empty((P, 2)), np.empty((P, 2)), np.empty((P, 3))
+    lp, pp = np.empty((len(leg_plate), 2)), np.empty(len(plate_pairs))
+    kernel(pa.R, pa.p, bottom, top, va, vb, leg_plate, plate_pairs, sizes, B, T, U, L, d, x, sig, hb, nrm, lp, pp)
+    bodies = StackBodies(am.config, B, T, U, L, pa.R, pa.p)
+    return bodies, _Rows(d, np.ones(P, bool), legs, kinds, legs, sig, hb, x, nrm), (lp, pp)
+
+
 def clearance(
     am: AssemblerModel,
     plates: PlateArrays | Sequence | np.ndarray,
     scene: Scene | str | None = None,
+    engine: str = "auto",
 ) -> Clearance:
     """The clearance of a pose: every checked pair's distance, the smallest and its two bodies.
 
@@ -616,28 +662,35 @@ def clearance(
         plates: world poses of plates 0..n, plate 0 first.
         scene: obstacles and floor (a :class:`~assembler_pin.collision.scene.Scene`, a path
             of a scene file, or None for the stack's own bodies only).
+        engine: the stack's own pairs through the compiled kernel (``numba``), numpy
+            (``numpy``) or ``auto`` (:func:`~assembler_pin.collision.kernel.self_kernel`); the
+            answers agree to rounding.
 
     Returns:
         a :class:`Clearance` (distances [m], world frame).
     """
+    global _calls
+    _calls += 1
     scene = read_scene(scene)
-    bodies = stack_bodies(am, plates)
+    kernel = self_kernel(_calls, engine)
+    bounds = None
+    if kernel is None:
+        bodies = stack_bodies(am, plates)
+    else:
+        bodies, leg_rows, bounds = _kernel_pass(am, plate_arrays(am, plates), kernel)
     cfg = bodies.cfg
-    names = list(stack_body_names(cfg.platforms))
+    names: Sequence[str] = stack_body_names(cfg.platforms)
     ids: dict[str, int] = {}
+    exact = [_leg_leg(bodies) if kernel is None else leg_rows]
     if scene is not None:
-        for o in scene.obstacles:
-            ids[o.name] = len(names)
-            names.append(o.name)
-    exact = [_leg_leg(bodies)]
-    if scene is not None:
+        names = [*names, *(o.name for o in scene.obstacles)] + (["floor"] if scene.floor_z is not None else [])
+        ids = {o.name: len(stack_body_names(cfg.platforms)) + i for i, o in enumerate(scene.obstacles)}
         if scene.floor_z is not None:
-            names.append("floor")
             exact.append(_floor(bodies, scene.floor_z, len(names) - 1))
         for o in scene.obstacles:
             if o.kind == "sphere":
                 exact.append(_sphere(bodies, o, ids[o.name]))
-    screened = _screened_pairs(bodies, scene, ids)
+    screened = _screened_pairs(bodies, scene, ids, bounds)
     horizon = cfg.clearance + NEAR
     for sc in screened:
         for i in np.nonzero(sc.rows.dist < horizon)[0]:
@@ -652,14 +705,14 @@ def clearance(
             break
         for sc, row in pending:
             _measure(sc, row)
-    parts = exact + [
-        _reduce_legs(sc.rows) if sc.rows.kind.size and sc.rows.kind[0, 0] == _LEG else sc.rows for sc in screened
-    ]
-    rows = _concat(parts)
-    if len(rows.dist):
-        dmin = float(np.min(rows.dist))
-        first = int(np.flatnonzero(rows.dist <= dmin + 1e-12)[0])
-        between = (names[rows.body[first, 0]], names[rows.body[first, 1]])
+    parts = exact + [sc.rows for sc in screened]
+    dist = np.concatenate([r.dist for r in parts])
+    exact_rows = np.concatenate([r.exact for r in parts])
+    pairs = _static_rows(cfg)[2] if scene is None else np.concatenate([r.body for r in parts])
+    if len(dist):
+        dmin = float(np.min(dist))
+        first = int(np.flatnonzero(dist <= dmin + 1e-12)[0])
+        between = (names[pairs[first, 0]], names[pairs[first, 1]])
     else:
         dmin, between = math.inf, ("", "")
-    return Clearance(dmin, between, cfg.clearance, names, rows.body, rows.dist, rows.exact, rows, bodies)
+    return Clearance(dmin, between, cfg.clearance, names, pairs, dist, exact_rows, parts, bodies)

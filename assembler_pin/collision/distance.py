@@ -31,9 +31,9 @@ def segment_segment(
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Distance between the segments ``p1 + s d1`` and ``p2 + t d2``, ``s, t`` in [0, 1].
 
-    The closed form of the closest points of two segments (clamped line–line solution, then
-    each parameter re-clamped against the other's end), valid for parallel and zero-length
-    segments too.
+    The closed form of the closest points of two segments (the lines' closest points, ``s``
+    clamped, ``t`` the best for that ``s`` clamped, then ``s`` the best for that ``t``
+    clamped), valid for parallel and zero-length segments too.
 
     Args:
         p1, d1, p2, d2: (..., 3) start points and start→end vectors, one frame [m].
@@ -48,10 +48,8 @@ def segment_segment(
     den = a * e - b * b
     general = den > 1e-12 * a * e  # not parallel: the lines' closest points, clamped
     s = np.clip(np.where(general, (b * f - c * e) / np.where(general, den, 1.0), 0.0), 0.0, 1.0)
-    t = (b * s + f) / np.maximum(e, _TINY)
-    outside = (t < 0.0) | (t > 1.0)
-    t = np.clip(t, 0.0, 1.0)
-    s = np.where(outside, np.clip((b * t - c) / np.maximum(a, _TINY), 0.0, 1.0), s)
+    t = np.clip((b * s + f) / np.maximum(e, _TINY), 0.0, 1.0)
+    s = np.clip((b * t - c) / np.maximum(a, _TINY), 0.0, 1.0)  # s again for t (a point: e = 0)
     w = r + s[..., None] * d1 - t[..., None] * d2
     return np.sqrt(_dot(w, w)), s, t
 

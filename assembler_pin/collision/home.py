@@ -36,10 +36,8 @@ def segment_distance(p1: Vec, d1: Vec, p2: Vec, d2: Vec) -> float:
     den = a * e - b * b
     s = (b * f - c * e) / den if den > 1e-12 * a * e else 0.0
     s = min(max(s, 0.0), 1.0)
-    t = (b * s + f) / max(e, 1e-300)
-    if t < 0.0 or t > 1.0:
-        t = min(max(t, 0.0), 1.0)
-        s = min(max((b * t - c) / max(a, 1e-300), 0.0), 1.0)
+    t = min(max((b * s + f) / max(e, 1e-300), 0.0), 1.0)
+    s = min(max((b * t - c) / max(a, 1e-300), 0.0), 1.0)
     w = [r[k] + s * d1[k] - t * d2[k] for k in range(3)]
     return math.sqrt(sum(x * x for x in w))
 

@@ -22,14 +22,37 @@ The table depends on the configuration only and is built once per configuration.
 from __future__ import annotations
 
 import functools
+from collections.abc import Callable
 from dataclasses import dataclass
+from typing import TypeVar
 
 import numpy as np
 
 from ..config import AssemblerConfig
 from ..geometry import LEGS_PER_PLATFORM
 
-__all__ = ["PairTable", "leg_nodes", "pair_table"]
+__all__ = ["PairTable", "leg_nodes", "pair_table", "per_config"]
+
+_T = TypeVar("_T")
+
+
+def per_config(build: Callable[[AssemblerConfig], _T]) -> Callable[[AssemblerConfig], _T]:
+    """``build(cfg)`` cached per configuration object (by identity, the last 8): hashing a
+    nested frozen configuration costs microseconds on every call, a look-up by id does not."""
+    cache: dict[int, tuple[AssemblerConfig, _T]] = {}
+
+    @functools.wraps(build)
+    def cached(cfg: AssemblerConfig) -> _T:
+        hit = cache.get(id(cfg))
+        if hit is not None and hit[0] is cfg:
+            return hit[1]
+        value = build(cfg)
+        if len(cache) >= 8:
+            cache.pop(next(iter(cache)))
+        cache[id(cfg)] = (cfg, value)
+        return value
+
+    return cached
 
 
 def leg_nodes(n: int) -> tuple[np.ndarray, np.ndarray]:
@@ -62,7 +85,7 @@ class PairTable:
     floor_trim: np.ndarray
 
 
-@functools.lru_cache(maxsize=16)
+@per_config
 def pair_table(cfg: AssemblerConfig) -> PairTable:
     """The pairs of the rule above for the configuration ``cfg`` (cached)."""
     n = cfg.platforms
