@@ -117,6 +117,10 @@ def format_state_table(state: StackState, title: str = "") -> str:
     lines.append(
         f"base wrench [N, N·m]: f = ({w[0]:.3f}, {w[1]:.3f}, {w[2]:.3f}), m = ({w[3]:.3f}, {w[4]:.3f}, {w[5]:.3f})"
     )
+    near = getattr(state, "clearance", None)  # None: not measured
+    if near is not None and near.between[0]:
+        a, b = near.between
+        lines.append(f"clearance: {near.min_distance:.4f} m between {a} and {b} (at least {near.limit:g} m)")
     if state.feasible:
         lines.append("feasible: yes (every constraint holds)")
     else:

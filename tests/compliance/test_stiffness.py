@@ -493,7 +493,7 @@ def test_top_level_names_stay_the_functions_whatever_was_imported():
     code = (
         "import assembler_pin as ap, assembler_pin.compliance.loaded, assembler_pin.cli.stiffness; "
         "assert callable(ap.stiffness) and callable(ap.loaded_pose) and callable(ap.compensated_lengths); "
-        "assert ap.ee_stiffness.StiffnessResult.__name__ == 'StiffnessResult'"
+        "assert ap.compliance.ee_stiffness.StiffnessResult.__name__ == 'StiffnessResult'"
     )
     assert subprocess.run([sys.executable, "-c", code], capture_output=True).returncode == 0
 

@@ -99,7 +99,7 @@ def test_agreeing_model_files_give_the_sidecar_forces(files):
     payload's weight on the base equals total mass x g (independent sum of the masses)."""
     directory, _, sidecar = files
     side = sidecar.replace("mass: 5.0", "mass: 50.0")
-    _write(directory, ap.urdf.assembler_urdf(ap.load_config({"platforms": 2, "payload": {"mass": 50.0}})), side)
+    _write(directory, ap.model.urdf.assembler_urdf(ap.load_config({"platforms": 2, "payload": {"mass": 50.0}})), side)
     am = ap.AssemblerModel.from_files(directory)
     cfg = am.config
     expected_mass = 3 * cfg.plate.mass + 12 * (cfg.leg.motor_mass + cfg.leg.shaft_mass) + 50.0
@@ -411,7 +411,7 @@ def _config(tmp_path: Path, text: str) -> ap.AssemblerConfig:
         ("a: &g 9.81\ngravity: *g\n", "aliases"),
         ("base: &b {mass: 1}\npayload:\n  <<: *b\n", "aliases"),
         ("payload: {<<: {mass: 1}}\n", "unknown config key 'payload.<<'"),
-        ("colour: red\n", "allowed keys: platforms, gravity, plate, leg, payload"),
+        ("colour: red\n", "allowed keys: platforms, gravity, clearance, plate, leg, payload"),
         ("leg: {stroke: 1}\n", "allowed: min_length,max_length"),
         ("plate: [1, 2]\n", "mapping"),
     ],

@@ -93,6 +93,14 @@ def _statics_config_cases() -> list[CliCase]:
         "cfg_unknown.yaml",
         "cfg_complex.yaml",
         "cfg_timestamp.yaml",
+        "cfg_clearance_negative.yaml",
+        "cfg_clearance_huge.yaml",
+        "cfg_clearance_nan.yaml",
+        "cfg_shaft_wider.yaml",
+        "cfg_motor_longer.yaml",
+        "cfg_node_zone_long.yaml",
+        "cfg_plate_thick.yaml",
+        "cfg_plate_radius_zero.yaml",
     ]
     cases = [_case(f"config.{Path(n).stem}", ["statics", "--home", "--json", "--config", f"{{d}}/{n}"]) for n in refuse]
     cases += [
@@ -822,6 +830,14 @@ CONFIG_FILES: dict[str, bytes] = {
     "cfg_timestamp.yaml": b"gravity: 2001-12-14\n",
     "cfg_tiny_speed.yaml": b"leg:\n  max_speed: 1.0e-12\n",
     "cfg_tiny_accel.yaml": b"leg:\n  max_acceleration: 1.0e-12\n",
+    "cfg_clearance_negative.yaml": b"clearance: -0.001\n",
+    "cfg_clearance_huge.yaml": b"clearance: 1.0e30\n",
+    "cfg_clearance_nan.yaml": b"clearance: .nan\n",
+    "cfg_shaft_wider.yaml": b"leg:\n  motor_radius: 0.01\n  shaft_radius: 0.02\n",
+    "cfg_motor_longer.yaml": b"leg:\n  motor_length: 0.5\n",
+    "cfg_node_zone_long.yaml": b"leg:\n  node_zone: 0.15\n",
+    "cfg_plate_thick.yaml": b"plate:\n  radius: 0.1\n  thickness: 0.2\n",
+    "cfg_plate_radius_zero.yaml": b"plate:\n  radius: 0.0\n",
 }
 
 

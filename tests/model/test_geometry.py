@@ -13,7 +13,7 @@ from assembler_pin.model.geometry import reach_bound
 @pytest.mark.parametrize("config", [{}, {"platforms": 3, "plate": {"node_radius": 0.2, "node_spacing_deg": 12.0}}])
 def test_anchors_and_home_directions_follow_the_design(config):
     cfg = ap.load_config(config)
-    geo = ap.geometry.leg_geometry(cfg)
+    geo = ap.model.geometry.leg_geometry(cfg)
     for j in range(cfg.platforms):
         bottom, top = design_anchors(cfg, j)
         np.testing.assert_allclose(geo.bottom_in_plate[j], bottom, atol=1e-15)
@@ -26,7 +26,7 @@ def test_anchors_and_home_directions_follow_the_design(config):
 
 def test_home_pose_puts_every_leg_at_mid_stroke():
     cfg = ap.load_config()
-    plates = ap.geometry.home_plates(cfg)
+    plates = ap.model.geometry.home_plates(cfg)
     for j in range(cfg.platforms):
         bottom, top = design_anchors(cfg, j)
         b = bottom @ plates[j].rotation.T + plates[j].translation
