@@ -501,7 +501,7 @@ def _screened_pairs(
         g, k = t.leg_plate[:, 0], t.leg_plate[:, 1]
         lb = bounds[0]
 
-        def plate_of(r: int) -> tuple:
+        def plate_of(r: int, k: np.ndarray = k) -> tuple:  # k bound now: the loop below rebinds the name
             return plate(), bodies.R[k[r]], bodies.p[k[r]]
 
         out.append(_coal_leg_rows(bodies, g, lb, legs_plates, plate_of))

@@ -244,3 +244,16 @@ def test_the_compiled_kernel_equals_numpy(am, scene):
 def test_an_unknown_engine_is_refused(am):
     with pytest.raises(ap.exceptions.OptionsError):
         clearance(am, am.home, engine="gpu")
+
+
+def test_a_scene_leaves_the_stack_s_own_pairs_as_they_are(am):
+    """Every pair of the stack alone has the same distance with a scene around it (the
+    leg–plate pairs coal measures included, whatever obstacles are measured after them)."""
+    scene = scene_from_dict({"obstacles": [{"cylinder": {"radius": 0.01, "length": 0.5, "pose": [3, 0, 1, 0, 0, 0]}}]})
+    for seed in range(6):
+        plates = _perturbed(am, 0.25, seed)
+        alone, around = clearance(am, plates), clearance(am, plates, scene)
+        measured = {tuple(p): d for p, d, e in zip(around.pairs, around.distances, around.exact, strict=True) if e}
+        for pair, d, exact in zip(alone.pairs, alone.distances, alone.exact, strict=True):
+            if exact and tuple(pair) in measured:
+                assert measured[tuple(pair)] == pytest.approx(d, abs=1e-9), pair
