@@ -57,6 +57,24 @@ def config_from_args(args: argparse.Namespace) -> AssemblerConfig:
     return load_config(args.config) if args.config else load_config()
 
 
+def add_scene_argument(p: argparse.ArgumentParser, what: str) -> None:
+    """``--scene FILE``: obstacles and a floor (read by :func:`scene_from_args`)."""
+    p.add_argument(
+        "--scene",
+        metavar="FILE",
+        help=f"YAML scene of obstacles and a floor (docs/guides/collisions.md): {what}",
+    )
+
+
+def scene_from_args(args: argparse.Namespace):
+    """The :class:`~assembler_pin.collision.scene.Scene` of ``--scene``, or None."""
+    if not getattr(args, "scene", None):
+        return None
+    from ..collision.scene import read_scene
+
+    return read_scene(args.scene)
+
+
 def add_pose_source(
     p: argparse.ArgumentParser, home_help: str = "use the home pose", required: bool = False
 ) -> argparse._MutuallyExclusiveGroup:

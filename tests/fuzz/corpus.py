@@ -143,6 +143,53 @@ PLATE_REFUSE = [
 ]
 
 
+#: Scene files a command refuses in one line (:func:`assembler_pin.collision.read_scene`).
+SCENE_FILES: dict[str, bytes] = {
+    "scene_not_yaml.yaml": b"obstacles: [\n",
+    "scene_unknown_key.yaml": b"walls: []\n",
+    "scene_nan.yaml": b"obstacles:\n  - sphere: {radius: .nan, center: [0, 0, 1]}\n",
+    "scene_huge.yaml": b"obstacles:\n  - sphere: {radius: 1.0e300, center: [0, 0, 1]}\n",
+    "scene_two_kinds.yaml": (
+        b"obstacles:\n  - {sphere: {radius: 1, center: [0, 0, 1]}, box: {size: [1, 1, 1], pose: [0, 0, 0, 0, 0, 0]}}\n"
+    ),
+    "scene_negative_box.yaml": b"obstacles:\n  - box: {size: [-1, 1, 1], pose: [0, 0, 0, 0, 0, 0]}\n",
+    "scene_alias.yaml": b"a: &x {z: 0}\nfloor: *x\n",
+    "scene_too_many.yaml": b"obstacles:\n" + b"  - sphere: {radius: 0.01, center: [5, 5, 5]}\n" * 300,
+    "scene_duplicate_name.yaml": (
+        b"obstacles:\n  - {name: a, sphere: {radius: 0.1, center: [5, 0, 1]}}\n"
+        b"  - {name: a, sphere: {radius: 0.1, center: [6, 0, 1]}}\n"
+    ),
+    "scene_long_name.yaml": b"obstacles:\n  - {name: " + b"n" * 500 + b", sphere: {radius: 0.1, center: [5, 0, 1]}}\n",
+    "scene_list.yaml": b"- 1\n- 2\n",
+    "scene_ok.yaml": b"floor: {z: 0.0}\nobstacles:\n  - sphere: {radius: 0.05, center: [0.0, 0.0, 0.956]}\n",
+}
+
+
+def _scene_cases() -> list[CliCase]:
+    refuse = [n for n in SCENE_FILES if n != "scene_ok.yaml"]
+    cases = [
+        _case(f"scene.statics.{Path(n).stem}", ["statics", "--home", "--json", "--scene", f"{{d}}/{n}"]) for n in refuse
+    ]
+    cases += [
+        _case(f"scene.solve.{Path(n).stem}", [*f"solve --json --goal {REACHABLE}".split(), "--scene", f"{{d}}/{n}"])
+        for n in refuse[:3]
+    ]
+    cases += [
+        _case(f"scene.plan.{Path(n).stem}", [*f"plan --json --to {NEAR_HOME}".split(), "--scene", f"{{d}}/{n}"])
+        for n in refuse[:3]
+    ]
+    cases += [
+        _case("scene.missing", "statics --home --json --scene {d}/no_such_scene.yaml"),
+        _case("scene.directory", "statics --home --json --scene {d}"),
+        # a sphere around the home EE plate: an answer, infeasible with a collision
+        _case("scene.statics_collision", "statics --home --json --scene {d}/scene_ok.yaml", "answer", check="state"),
+        _case("scene.solve_collision", f"solve --json --goal {NEAR_HOME} --scene {{d}}/scene_ok.yaml", "any"),
+        _case("scene.with_carrier", "statics --home --carrier ur5 --scene {d}/scene_ok.yaml"),
+        _case("scene.plan_compare", f"plan --compare --to {NEAR_HOME} --scene {{d}}/scene_ok.yaml"),
+    ]
+    return cases
+
+
 def _statics_cases() -> list[CliCase]:
     cases = [_case(f"statics.{Path(n).stem}", ["statics", "--json", "--plates", f"{{d}}/{n}"]) for n in PLATE_REFUSE]
     cases += [
@@ -911,6 +958,7 @@ def build_workspace(root: Path, am, plan: Callable[[], tuple[str, str]]) -> Work
     files: dict[str, bytes] = {}
     files |= plate_files(home)
     files |= CONFIG_FILES
+    files |= SCENE_FILES
     files["sub/cfg_other.yaml"] = CONFIG_FILES["cfg_other.yaml"]
     start = ap.kinematics.se3_to_taa(am.home[-1]).tolist()
     goal = [float(v) for v in NEAR_HOME.split()]
@@ -934,6 +982,7 @@ CLI_CASES: list[CliCase] = [
     *_global_cases(),
     *_statics_config_cases(),
     *_statics_cases(),
+    *_scene_cases(),
     *_solve_cases(),
     *_reproduce_cases(),
     *_bench_cases(),
