@@ -42,13 +42,15 @@ class Violation:
     Attributes:
         kind: ``min_length``, ``max_length``, ``deflection_bottom``, ``deflection_top``,
             ``tension``, ``compression``, ``continuous_translation``, ``ee_position``,
-            ``ee_rotation``, ``singular`` or ``non_finite_force`` (a force that overflowed:
-            never feasible).
+            ``ee_rotation``, ``singular``, ``non_finite_force`` (a force that overflowed:
+            never feasible) or ``collision`` (two bodies closer than the clearance allowed).
         platform: platform index j (``None`` for end-effector constraints).
         leg: leg index i within the platform (``None`` when not about one leg).
         value: the offending value, in the constraint's unit ([m], [rad], [N], or the
             condition number for ``singular``).
         limit: the bound it crosses, same unit.
+        between: for ``collision``, the names of the two bodies (``value`` is their distance
+            [m], ``limit`` the clearance allowed [m]); None otherwise.
     """
 
     kind: str
@@ -56,6 +58,7 @@ class Violation:
     leg: int | None
     value: float
     limit: float
+    between: tuple[str, str] | None = None
 
     @property
     def amount(self) -> float:
@@ -63,10 +66,18 @@ class Violation:
         return abs(self.value - self.limit)
 
     def to_dict(self) -> dict:
-        return asdict(self)
+        doc = asdict(self)
+        if self.between is None:
+            del doc["between"]
+        else:
+            doc["between"] = list(self.between)
+        return doc
 
     def __str__(self) -> str:
         """``max_length at SP1 leg 2: 0.36 (limit 0.35)`` — 0-based, as :mod:`~assembler_pin.common.labels`."""
+        if self.between is not None:  # a collision: a distance [m] between two bodies
+            a, b = self.between
+            return f"{self.kind} between {a} and {b}: {self.value:.6g} m (limit {self.limit:.6g} m)"
         if self.platform is None:
             where = "end effector"
         elif self.leg is None:

@@ -112,6 +112,10 @@ class LoadError(AssemblerError, ValueError):
     """An external load (a wrench on the end effector) that is malformed, not finite or absurd."""
 
 
+class SceneError(AssemblerError, ValueError):
+    """A scene of obstacles (:func:`assembler_pin.collision.read_scene`) that is malformed or out of range."""
+
+
 class _SingularIterateError(AssemblerError, RuntimeError):
     """The optimizer's solver accepted an iterate whose statics (or their derivatives) are
     singular (raised and caught inside :mod:`assembler_pin.optimize`)."""

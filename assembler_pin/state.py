@@ -14,6 +14,8 @@ from dataclasses import dataclass, field
 import numpy as np
 import pinocchio as pin
 
+from .collision.check import Clearance, clearance
+from .collision.scene import Scene
 from .config.options import DEFAULT_GOAL_TOLERANCE, GoalTolerance
 from .constraints import Violation, evaluate_constraints
 from .exceptions import OptionsError
@@ -35,6 +37,8 @@ class StackState:
         statics: actuator forces [N, tension positive], ball forces, base wrench.
         violations: every violated constraint (empty when feasible).
         goal: the EE goal it was checked against, if any.
+        clearance: the smallest distance between two bodies that must not touch and which
+            two (:func:`~assembler_pin.collision.check.clearance`), None when not computed.
     """
 
     plates: PlateArrays
@@ -42,6 +46,7 @@ class StackState:
     statics: StaticsResult
     violations: list[Violation] = field(default_factory=list)
     goal: pin.SE3 | None = None
+    clearance: Clearance | None = None
 
     @property
     def feasible(self) -> bool:
@@ -79,8 +84,9 @@ class StackState:
     def to_dict(self) -> dict:
         """The JSON contract: plates, leg_lengths, forces, bottom_points, top_points,
         max_abs_force, mean_abs_force, feasible, violations — then extras: joint
-        deflections [deg], base wrench, condition numbers."""
-        return {
+        deflections [deg], base wrench, condition numbers, and ``clearance``
+        (``{"min_distance_m", "between"}``) when it was computed."""
+        doc = {
             "plates": self.plates.as_matrices().tolist(),
             "leg_lengths": self.legs.lengths.tolist(),
             "forces": self.statics.forces.tolist(),
@@ -94,6 +100,9 @@ class StackState:
             "base_wrench": self.statics.base_wrench.tolist(),
             "condition": self.statics.condition.tolist(),
         }
+        if self.clearance is not None:
+            doc["clearance"] = self.clearance.to_dict()
+        return doc
 
 
 def evaluate_state(
@@ -102,8 +111,12 @@ def evaluate_state(
     goal: pin.SE3 | None = None,
     tolerance: GoalTolerance = DEFAULT_GOAL_TOLERANCE,
     data: pin.Data | None = None,
+    scene: Scene | str | None = None,
 ) -> StackState:
-    """Leg state, statics and constraint check of the given plate poses.
+    """Leg state, statics, clearance and constraint check of the given plate poses.
+
+    A pose whose clearance (:func:`~assembler_pin.collision.check.clearance`) is below the
+    configuration's ``clearance`` gets a ``collision`` violation naming the two bodies.
 
     Args:
         plates: world poses of plates 0..n, plate 0 first.
@@ -111,6 +124,8 @@ def evaluate_state(
         tolerance: EE goal tolerance.
         data: a whole-stack Pinocchio ``Data`` the caller owns, for the statics
             (:func:`~assembler_pin.statics.pinocchio_statics.solve_statics`); default one model per platform.
+        scene: obstacles and floor (:class:`~assembler_pin.collision.scene.Scene` or a scene file),
+            None for the stack's own bodies only.
     """
     checked_model(am)
     if goal is not None:
@@ -121,4 +136,7 @@ def evaluate_state(
     legs = leg_state(am, pa)
     statics = solve_statics(am, pa, legs=legs, data=data)
     violations = evaluate_constraints(am.config, legs, statics, pa, goal, tolerance)
-    return StackState(pa, legs, statics, violations, goal)
+    near = clearance(am, pa, scene)
+    if not near.min_distance >= near.limit:  # NaN is a violation, never a pass
+        violations.append(Violation("collision", None, None, near.min_distance, near.limit, near.between))
+    return StackState(pa, legs, statics, violations, goal, near)

@@ -358,3 +358,22 @@ def check_result(am, result) -> None:
     assert kinematic_problems(am.config, result.state.plates, result.goal) == []
     kinds = {v.kind for v in result.state.violations}
     assert not kinds - {"tension", "compression"}
+
+
+def brute_segment_distance(p1, d1, p2, d2) -> float:
+    """Smallest distance of two segments: a bounded minimizer over (s, t) from a grid's best
+    point (the squared distance is convex in (s, t))."""
+    grid = np.linspace(0.0, 1.0, 41)
+    pts1 = p1 + grid[:, None] * d1
+    pts2 = p2 + grid[:, None] * d2
+    dist = np.linalg.norm(pts1[:, None, :] - pts2[None, :, :], axis=-1)
+    i, j = np.unravel_index(np.argmin(dist), dist.shape)
+
+    def f(x):
+        w = p1 + x[0] * d1 - p2 - x[1] * d2
+        return w @ w
+
+    res = minimize(
+        f, [grid[i], grid[j]], bounds=[(0, 1), (0, 1)], method="L-BFGS-B", options={"ftol": 1e-16, "gtol": 1e-14}
+    )
+    return float(np.sqrt(min(res.fun, dist[i, j] ** 2)))

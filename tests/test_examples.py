@@ -14,6 +14,7 @@ import yaml
 from assembler_pin import AssemblerModel, load_config
 from assembler_pin.cli import main
 from assembler_pin.cli.plate_file import plates_from_file
+from assembler_pin.collision import read_scene
 from assembler_pin.config import AssemblerConfig
 from assembler_pin.kinematics import plate_arrays, taa_to_se3
 from assembler_pin.motion.paths import read_waypoints
@@ -34,11 +35,12 @@ def test_every_example_is_documented_and_read():
     """Each file of examples/ is named in its README and parsed by the strict reader of its kind."""
     readme = (EXAMPLES / "README.md").read_text(encoding="utf-8")
     files = sorted(p.name for p in EXAMPLES.iterdir() if p.name != "README.md")
-    assert files == sorted([*CONFIGS, "poses.json", "waypoints.json", "waypoints.csv"])
+    assert files == sorted([*CONFIGS, "poses.json", "waypoints.json", "waypoints.csv", "truss_bay.yaml"])
     for name in files:
         assert f"`{name}`" in readme, name
     for name in CONFIGS:
         AssemblerModel.from_config(load_config(EXAMPLES / name))
+    assert len(read_scene(EXAMPLES / "truss_bay.yaml").obstacles) == 9
 
 
 def test_config_example_holds_every_key_at_its_default():

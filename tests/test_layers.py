@@ -22,6 +22,7 @@ LAYERS: tuple[tuple[str, ...], ...] = (
     ("common", "scenarios"),
     ("model",),
     ("kinematics",),
+    ("collision",),
     ("statics",),
     ("compliance", "constraints", "dynamics"),
     ("state",),

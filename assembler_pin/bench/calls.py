@@ -14,6 +14,7 @@ from typing import Any
 
 import numpy as np
 
+from ..collision.check import clearance
 from ..common.progress import ProgressCallback
 from ..config.bounds import check_bound
 from ..helper_arm import initial_condition
@@ -46,7 +47,9 @@ def run_benchmarks(
     quick: bool = False,
     progress: ProgressCallback | None = None,
 ) -> dict[str, Any]:
-    """Median per-call times [µs] of statics, SP FK, stack FK and closed-form q, then the
+    """Median per-call times [µs] of statics, SP FK, stack FK, closed-form q and the
+    self-collision clearance (:func:`~assembler_pin.collision.check.clearance`: the compiled
+    kernel when numba is installed, and numpy), then the
     helper-arm initial condition (:func:`benchmark_initial_condition`: ``initial_scenarios_ms``,
     ``initial_random_ms`` [ms], ``initial_success_rate``), the CLI start-up in fresh processes
     beside its targets (``cli_help_s``, ``cli_statics_home_json_s``, ``bare_python_s`` [s],
@@ -72,6 +75,8 @@ def run_benchmarks(
         "sp_fk_us": lambda: median_time_us(lambda: sp_forward_kinematics(am, 0, pick()[0][0]), repeat),
         "stack_fk_us": lambda: median_time_us(lambda: stack_forward_kinematics(am, pick()[0]), repeat),
         "q_from_plates_us": lambda: median_time_us(lambda: q_from_plates(am, pick()[1]), repeat),
+        "clearance_us": lambda: median_time_us(lambda: clearance(am, pick()[1], engine="numba"), repeat),
+        "clearance_numpy_us": lambda: median_time_us(lambda: clearance(am, pick()[1], engine="numpy"), repeat),
         "statics_from_matrices_us": lambda: median_time_us(lambda: solve_statics(am, pick()[1].as_matrices()), repeat),
         "statics_batch_stacks_per_s": lambda: (
             len(batch) / (1e-6 * median_time_us(lambda: solve_statics_batch(am, batch), 5))

@@ -59,6 +59,24 @@ def config_from_args(args: argparse.Namespace) -> AssemblerConfig:
     return load_config(args.config) if args.config else load_config()
 
 
+def add_scene_argument(p: argparse.ArgumentParser, what: str) -> None:
+    """``--scene FILE``: obstacles and a floor (read by :func:`scene_from_args`)."""
+    p.add_argument(
+        "--scene",
+        metavar="FILE",
+        help=f"YAML scene of obstacles and a floor (docs/guides/collisions.md): {what}",
+    )
+
+
+def scene_from_args(args: argparse.Namespace):
+    """The :class:`~assembler_pin.collision.scene.Scene` of ``--scene``, or None."""
+    if not getattr(args, "scene", None):
+        return None
+    from ..collision.scene import read_scene
+
+    return read_scene(args.scene)
+
+
 def add_pose_source(
     p: argparse.ArgumentParser, home_help: str = "use the home pose", required: bool = False
 ) -> argparse._MutuallyExclusiveGroup:
@@ -119,6 +137,10 @@ def format_state_table(state: StackState, title: str = "") -> str:
     lines.append(
         f"base wrench [N, N·m]: f = ({w[0]:.3f}, {w[1]:.3f}, {w[2]:.3f}), m = ({w[3]:.3f}, {w[4]:.3f}, {w[5]:.3f})"
     )
+    near = getattr(state, "clearance", None)  # None: not measured
+    if near is not None and near.between[0]:
+        a, b = near.between
+        lines.append(f"clearance: {near.min_distance:.4f} m between {a} and {b} (at least {near.limit:g} m)")
     if state.feasible:
         lines.append("feasible: yes (every constraint holds)")
     else:

@@ -10,9 +10,11 @@ from ..exceptions import CLIError
 if TYPE_CHECKING:
     from ..model.assembler import AssemblerModel
 from .common import (
+    add_scene_argument,
     config_from_args,
     dumps,
     progress_for,
+    scene_from_args,
     wrapped,
     writable_parent,
 )
@@ -66,6 +68,7 @@ def add_parser(add) -> None:
         help="compare with the helper arm per sample and linear leg lengths (default paths: home to "
         f"{', '.join(COMPARE_SCENARIOS)})",
     )
+    add_scene_argument(p, "every sample and the motion between samples keep their clearance (not with --compare)")
     p.add_argument("--json", action="store_true", help="print one JSON object")
     p.set_defaults(func=run)
 
@@ -133,13 +136,18 @@ def run(args: argparse.Namespace) -> int:
         options = PlanOptions(w3=args.w3)
     except ValueError as exc:
         raise CLIError(str(exc)) from None
+    if args.compare and args.scene:
+        raise CLIError("--compare plans without obstacles: give it without --scene")
     am = AssemblerModel.from_config(config_from_args(args))
     if args.compare:
         return _plan_compare(args, am, options)
+    scene = scene_from_args(args)
     path, start = _plan_path(args, am)
     prog = progress_for(args, "plan")
     try:
-        motion = plan_trajectory(am, path, start, options, rate=args.rate, progress=prog, time_law=args.time_law)
+        motion = plan_trajectory(
+            am, path, start, options, rate=args.rate, progress=prog, time_law=args.time_law, scene=scene
+        )
         doc = _write_outputs(args, am, motion, prog)
         doc["start"] = "home" if args.from_ is None else "from"  # where the path starts (as --to)
     finally:

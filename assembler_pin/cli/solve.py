@@ -15,6 +15,7 @@ from .common import (
     add_goal_arguments,
     add_helper_arm_arguments,
     add_optimize_arguments,
+    add_scene_argument,
     carrier_from_args,
     config_from_args,
     dumps,
@@ -24,6 +25,7 @@ from .common import (
     goal_from_args,
     optimize_options,
     progress_for,
+    scene_from_args,
     wrapped,
     writable_parent,
 )
@@ -50,6 +52,7 @@ def add_parser(add) -> None:
         metavar="FILE",
         help='write the pose found as a plate file {"plates": [...]} for statics, view, simulate, stiffness',
     )
+    add_scene_argument(p, "every optimizer run keeps its clearance from it (not with --carrier)")
     p.add_argument("--json", action="store_true", help="print one JSON object")
     p.set_defaults(func=run)
 
@@ -166,7 +169,15 @@ def run(args: argparse.Namespace) -> int:
     if carrier is not None:
         return _solve_on_carrier(args, am, carrier, q, goal, helper)
     starts = args.starts or SOLVE_STARTS[0]
-    result = solve(am, goal, optimize=not args.no_optimize, options=options, helper_options=helper, starts=starts)
+    result = solve(
+        am,
+        goal,
+        optimize=not args.no_optimize,
+        options=options,
+        helper_options=helper,
+        starts=starts,
+        scene=scene_from_args(args),
+    )
     capacity = None
     if args.capacity:
         from ..solver.capacity import payload_capacity
@@ -259,6 +270,8 @@ def _refuse_carrier_options(args: argparse.Namespace) -> None:
         raise CLIError(
             f"{flag} sets the fixed-base optimizer's objective and is not available with --carrier or --no-optimize"
         )
+    if args.carrier and args.scene:
+        raise CLIError("--scene is checked on a fixed base and is not available with --carrier")
     if args.carrier and args.out:
         raise CLIError("--out writes a fixed-base plate file and is not available with --carrier")
     if args.carrier and args.capacity:

@@ -8,12 +8,14 @@ from ..exceptions import CLIError
 from .common import (
     add_carrier_arguments,
     add_pose_source,
+    add_scene_argument,
     carrier_from_args,
     config_from_args,
     dumps,
     format_carrier,
     format_state_table,
     plates_from_args,
+    scene_from_args,
 )
 
 
@@ -33,6 +35,7 @@ def add_parser(add) -> None:
         default="base",
         help="the plates held: base (plate 0, default), ee (the EE plate alone), both (see 'support')",
     )
+    add_scene_argument(p, "the clearance is measured against it too")
     p.add_argument("--json", action="store_true", help="print one JSON object")
     p.set_defaults(func=run)
 
@@ -66,7 +69,10 @@ def run(args: argparse.Namespace) -> int:
 
     if args.support != "base" and args.carrier is not None:
         raise CLIError("--support ee or both holds the stack at its own plates: give it without --carrier")
+    if args.scene and (args.carrier is not None or args.support != "base"):
+        raise CLIError("--scene is checked on a fixed base: give it without --carrier or --support ee|both")
     am = AssemblerModel.from_config(config_from_args(args))
+    scene = scene_from_args(args)
     carrier, q = carrier_from_args(args)
     plates = plates_from_args(args, am, "give --plates FILE (or - for stdin) or --home")
     if (carrier is not None or args.support != "base") and args.stiffness:
@@ -87,7 +93,7 @@ def run(args: argparse.Namespace) -> int:
         print(format_state_table(statics.state, f"Statics of {am.n} platforms on {carrier.name} (world gravity)"))
         print(format_carrier(carrier, statics))
         return 0
-    state = evaluate_state(am, plates)
+    state = evaluate_state(am, plates, scene=scene)
     from .stiffness import stiffness_blocks
 
     blocks, stiff_ok, stiff_text = stiffness_blocks(am, plates) if args.stiffness else ({}, True, None)

@@ -22,6 +22,8 @@ sag limit           the end effector's sag under its own load beyond ``max_sag``
 did not converge    an iterative solve (forward kinematics, optimizer, equilibrium)
                     stopped before its tolerance
 assembly mode       forward kinematics converged to another solution of the lengths
+collision           two bodies (legs, plates, obstacles, the floor) closer than the
+                    clearance allowed, in metres
 ==================  ================================================================
 
 The words *valid* (every kinematic limit met), *feasible* (valid, and every force within
@@ -43,7 +45,8 @@ __all__ = ["CAUSES", "MAX_LENGTH", "Violating", "binding", "describe", "finite_t
 class Violating(Protocol):
     """What a message reads of a violated limit (:class:`assembler_pin.constraints.Violation`
     has it): its kind, where (platform and leg, ``None`` for the EE or the whole platform),
-    the offending value, the limit and how far past it, in the limit's SI unit."""
+    the offending value, the limit and how far past it, in the limit's SI unit, and for a
+    collision the two bodies (``between``)."""
 
     @property
     def kind(self) -> str: ...
@@ -57,6 +60,8 @@ class Violating(Protocol):
     def limit(self) -> float: ...
     @property
     def amount(self) -> float: ...
+    @property
+    def between(self) -> tuple[str, str] | None: ...
 
 
 _V = TypeVar("_V", bound=Violating)
@@ -77,6 +82,7 @@ CAUSES = (
     "sag limit",
     "did not converge",
     "assembly mode",
+    "collision",
 )
 
 #: Violation kind → (cause, what is measured, unit, scale from SI to the unit).
@@ -92,6 +98,7 @@ _KINDS = {
     "singular": ("singular", "condition number", "", 1.0),
     "ee_position": ("goal missed", "end effector", "mm", 1e3),
     "ee_rotation": ("goal missed", "end effector", "°", 180.0 / math.pi),
+    "collision": ("collision", "distance", "m", 1.0),
 }
 
 #: Order in which causes bind when a state breaks several limits (kinematic first).
@@ -119,6 +126,10 @@ def describe(v: Violating | None) -> str:
         where = platform_label(v.platform)
     else:
         where = leg_label(v.platform, v.leg)
+    if v.kind == "collision" and v.between is not None:
+        value, limit = number(v.value, "m"), number(v.limit, "m")
+        under = number(v.amount, "m", 3)
+        return f"{cause}: {v.between[0]} and {v.between[1]} {value} apart, clearance {limit} ({under} under)"
     if v.kind == "non_finite_force":
         return f"{cause}: {where} force not finite (the statics overflowed)"
     if v.kind in ("ee_position", "ee_rotation"):

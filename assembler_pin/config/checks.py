@@ -67,12 +67,13 @@ def validate(cfg: AssemblerConfig) -> None:
     _check_plate_and_payload(cfg)
     _check_leg(cfg)
     _check_home_pose(cfg)
+    _check_collision_sizes(cfg)
 
 
 def _check_magnitudes(cfg: AssemblerConfig) -> None:
     """Every number finite and, by its unit, within :data:`LIMITS` in magnitude."""
     p, leg, pl = cfg.plate, cfg.leg, cfg.payload
-    numbers = {"gravity": cfg.gravity}
+    numbers = {"gravity": cfg.gravity, "clearance": cfg.clearance}
     numbers |= {f"plate.{f.name}": getattr(p, f.name) for f in dataclasses.fields(p)}
     numbers |= {f"leg.{f.name}": getattr(leg, f.name) for f in dataclasses.fields(leg)}
     numbers |= {f"payload.{f.name}": getattr(pl, f.name) for f in dataclasses.fields(pl)}
@@ -128,3 +129,32 @@ def _check_home_pose(cfg: AssemblerConfig) -> None:
             f"the horizontal span between its nodes {chord:.4g} m "
             "(lengthen the legs or reduce plate.node_radius)"
         )
+
+
+def _check_collision_sizes(cfg: AssemblerConfig) -> None:
+    """The bodies' sizes of :mod:`assembler_pin.collision`: plate disc, leg capsules, clearance."""
+    p, leg = cfg.plate, cfg.leg
+    check(p.radius > 0, "plate.radius", p.radius, "must be > 0 [m]")
+    check(
+        0 <= p.thickness <= p.radius, "plate.thickness", p.thickness, f"must be in [0, plate.radius = {p.radius}] [m]"
+    )
+    check(leg.motor_radius > 0, "leg.motor_radius", leg.motor_radius, "must be > 0 [m]")
+    check(
+        0 < leg.shaft_radius <= leg.motor_radius,
+        "leg.shaft_radius",
+        leg.shaft_radius,
+        f"must be in (0, leg.motor_radius = {leg.motor_radius}] [m]",
+    )
+    check(
+        0 < leg.motor_length <= leg.min_length,
+        "leg.motor_length",
+        leg.motor_length,
+        f"must be in (0, leg.min_length = {leg.min_length}] [m]",
+    )
+    check(
+        0 <= leg.node_zone <= 0.5 * leg.min_length,
+        "leg.node_zone",
+        leg.node_zone,
+        f"must be in [0, leg.min_length / 2 = {0.5 * leg.min_length:g}] [m]",
+    )
+    check(0 <= cfg.clearance <= 1.0, "clearance", cfg.clearance, "must be in [0, 1] [m]")

@@ -8,6 +8,8 @@ The YAML format (every key optional; a missing key takes the default shown)::
       node_radius: 0.15     # [m] radius of the circle carrying the joint nodes, > 0
       node_spacing_deg: 8.0 # [deg] angle between the two leg ends of a node, in [0, 60)
       mass: 0.2             # [kg] plate mass, at the plate centre, >= 0
+      radius: 0.17          # [m] radius of the plate's disc (collisions), > 0
+      thickness: 0.01       # [m] thickness of the disc, centred on the joint plane, in [0, radius]
     leg:
       min_length: 0.20      # [m] shortest pin-to-pin length, > 0
       max_length: 0.35      # [m] longest pin-to-pin length, > min_length
@@ -24,6 +26,12 @@ The YAML format (every key optional; a missing key takes the default shown)::
                             # actuator is 1e6-1e7 N/m (screw, nut, bearings, housing in series);
                             # 1e6, the soft end, suits the small 200 N actuators of the prototype.
                             # It is the MJCF servos' gain too.
+      motor_radius: 0.016   # [m] radius of the motor's capsule (collisions), > 0
+      shaft_radius: 0.006   # [m] radius of the shaft's capsule, in (0, motor_radius]
+      motor_length: 0.12    # [m] the motor's capsule from the bottom joint along the leg, in (0, min_length]
+      node_zone: 0.05       # [m] length of a leg end, at a node it shares, not checked against
+                            # the node's other legs (nor, on the base plate, the floor), in [0, min_length / 2]
+    clearance: 0.005        # [m] smallest distance allowed between two bodies that must not touch, in [0, 1]
     payload:
       mass: 5.0             # [kg] >= 0
       offset: 0.2           # [m] along the end-effector plate's local +z
@@ -64,11 +72,15 @@ class PlateConfig:
         node_radius: radius of the node circle [m].
         node_spacing_deg: angle between the two leg ends of one node [deg].
         mass: plate mass, concentrated at the plate centre [kg].
+        radius, thickness: the plate as a flat cylinder about its frame's z axis, centred on
+            the plane of its joint centres (:mod:`assembler_pin.collision`) [m].
     """
 
     node_radius: float = 0.15
     node_spacing_deg: float = 8.0
     mass: float = 0.2
+    radius: float = 0.17
+    thickness: float = 0.01
 
 
 @dataclass(frozen=True)
@@ -86,6 +98,12 @@ class LegConfig:
         max_speed, max_acceleration: limits of a leg's length rate [m/s] and its
             acceleration [m/s²] along a planned motion (:mod:`assembler_pin.motion`).
         stiffness: axial stiffness of the leg [N/m] (:mod:`assembler_pin.compliance.ee_stiffness`).
+        motor_radius, shaft_radius: radii of the leg's two capsules [m]: the motor from the
+            bottom joint centre ``motor_length`` along the axis, the shaft from there to the
+            top joint centre (:mod:`assembler_pin.collision`).
+        motor_length: [m].
+        node_zone: length of a leg's end, at a node it shares with other legs, that is not
+            checked against them (nor, at the base plate, against the floor) [m].
     """
 
     min_length: float = 0.20
@@ -100,6 +118,10 @@ class LegConfig:
     max_speed: float = 0.05
     max_acceleration: float = 0.2
     stiffness: float = 1.0e6
+    motor_radius: float = 0.016
+    shaft_radius: float = 0.006
+    motor_length: float = 0.12
+    node_zone: float = 0.05
 
     @property
     def mid_length(self) -> float:
@@ -134,6 +156,8 @@ class AssemblerConfig:
         gravity: magnitude of gravity along the world's -z [m/s^2].
         plate, leg, payload: see :class:`PlateConfig`, :class:`LegConfig`,
             :class:`PayloadConfig`.
+        clearance: smallest distance allowed between two bodies that must not touch [m]
+            (:mod:`assembler_pin.collision`).
     """
 
     platforms: int = 4
@@ -141,6 +165,7 @@ class AssemblerConfig:
     plate: PlateConfig = field(default_factory=PlateConfig)
     leg: LegConfig = field(default_factory=LegConfig)
     payload: PayloadConfig = field(default_factory=PayloadConfig)
+    clearance: float = 0.005
 
     def __post_init__(self) -> None:
         validate(self)
@@ -171,7 +196,7 @@ class AssemblerConfig:
 
 
 _SECTIONS: dict[str, type] = {"plate": PlateConfig, "leg": LegConfig, "payload": PayloadConfig}
-_TOP_SCALARS = ("platforms", "gravity")
+_TOP_SCALARS = ("platforms", "gravity", "clearance")
 
 
 def _section_from_mapping(name: str, cls: type, data: Any) -> Any:
@@ -180,7 +205,9 @@ def _section_from_mapping(name: str, cls: type, data: Any) -> Any:
     allowed = [f.name for f in dataclasses.fields(cls)]
     for key in data:
         if key not in allowed:
-            raise ConfigError(f"unknown config key '{name}.{shorten(str(key), 12)}'; allowed: {','.join(allowed)}")
+            raise ConfigError(
+                shorten(f"unknown config key '{name}.{shorten(str(key), 12)}'; allowed: {','.join(allowed)}")
+            )
     for key, value in data.items():
         if not is_number(value):
             raise ConfigError(f"config key '{name}.{key}' = {short_repr(value)} is invalid: must be a number")
@@ -305,9 +332,10 @@ def config_from_dict(data: Mapping[str, Any] | None) -> AssemblerConfig:
             "must be an integer from 1 to 64",
         )
         kwargs["platforms"] = value
-    if "gravity" in data:
-        check(is_number(data["gravity"]), "gravity", data["gravity"], "must be a number")
-        kwargs["gravity"] = float(data["gravity"])
+    for key in ("gravity", "clearance"):
+        if key in data:
+            check(is_number(data[key]), key, data[key], "must be a number")
+            kwargs[key] = float(data[key])
     for name, cls in _SECTIONS.items():
         if name in data:
             kwargs[name] = _section_from_mapping(name, cls, data[name])

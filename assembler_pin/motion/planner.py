@@ -12,11 +12,19 @@ Between two samples the leg lengths are interpolated and the stack checked there
 ``path_tolerance`` of the path). A step that fails any of this is halved, up to
 ``max_refinements`` times; a sample that still cannot be made valid ends the plan with the
 reason and the valid prefix — never a gap.
+
+With a scene (``plan_path(..., scene=...)``) every sample keeps its clearance (the optimizer's
+clearance rows) and so does the motion between samples: between two checked poses the
+clearance stays at least ``(d_A + d_B) / 2 - δ`` (:func:`~assembler_pin.collision.sweep.swept_bound`,
+``δ`` the largest move of any body), and where that bound is below the clearance the interval
+is bisected (stack FK of the midpoint lengths) up to :data:`SWEEP_DEPTH` times; an interval
+still not proven clear is a ``collision`` between samples.
 """
 
 from __future__ import annotations
 
 import dataclasses
+import itertools
 import logging
 import math
 import time
@@ -25,6 +33,8 @@ from dataclasses import dataclass, field
 import numpy as np
 import pinocchio as pin
 
+from ..collision.scene import Scene, read_scene
+from ..collision.sweep import body_move, swept_bound
 from ..common.messages import binding, describe, one_line
 from ..common.progress import ProgressCallback, checked_progress
 from ..config.bounds import BOUNDS
@@ -156,13 +166,49 @@ def _spread(plates: PlateArrays, goal: pin.SE3) -> PlateArrays:
     return PlateArrays.from_se3(moved)
 
 
+#: How many times an interval between two checked poses is bisected to prove it clear.
+SWEEP_DEPTH = 4
+
+
+def _swept_problem(am: AssemblerModel, a: StackState, b: StackState, scene: Scene, depth: int = 0) -> str:
+    """ "" when the motion from ``a`` to ``b`` (linear leg lengths) keeps the clearance by
+    :func:`~assembler_pin.collision.sweep.swept_bound`, bisecting where it does not; else why."""
+    if a.clearance is None or b.clearance is None:
+        return ""
+    limit = a.clearance.limit
+    bound = swept_bound(a.clearance.min_distance, b.clearance.min_distance, body_move(am, a.plates, b.plates))
+    if bound >= limit:
+        return ""
+    if depth >= SWEEP_DEPTH:
+        return one_line(
+            f"collision: the clearance between samples is not proven: bound {bound:.4g} m, clearance {limit:g} m"
+        )
+    lengths = 0.5 * (a.leg_lengths + b.leg_lengths)
+    fk = stack_forward_kinematics(am, lengths, base=a.plates.se3(0), guess=on_se3(a.plates))
+    if not fk.success:
+        return f"{fk.message}, between samples"
+    mid = evaluate_state(am, fk.plates, scene=scene)
+    if mid.clearance is not None and not mid.clearance.clear:
+        return f"{describe(binding([v for v in mid.violations if v.kind == 'collision']))}, between samples"
+    return _swept_problem(am, a, mid, scene, depth + 1) or _swept_problem(am, mid, b, scene, depth + 1)
+
+
 def _between_problems(
-    am: AssemblerModel, path: EEPath, u0: float, u1: float, a: StackState, b: StackState, opts: PlanOptions
+    am: AssemblerModel,
+    path: EEPath,
+    u0: float,
+    u1: float,
+    a: StackState,
+    b: StackState,
+    opts: PlanOptions,
+    scene: Scene | None = None,
 ) -> tuple[str, float, float]:
     """Checks at the interpolated leg lengths strictly between two samples: the first
-    problem found ("" when none), and the largest EE deviation from the path [m], [rad]."""
+    problem found ("" when none), and the largest EE deviation from the path [m], [rad].
+    With a scene, the clearance is also bounded between the checked poses (:func:`_swept_problem`)."""
     dev_p = dev_r = 0.0
     guess = a.plates
+    checked = [a]
     for t in np.arange(1, opts.checks_between + 1) / (opts.checks_between + 1):
         lengths = (1 - t) * a.leg_lengths + t * b.leg_lengths
         fk = stack_forward_kinematics(am, lengths, base=a.plates.se3(0), guess=on_se3(guess))
@@ -170,17 +216,30 @@ def _between_problems(
             return f"{fk.message}, between samples", dev_p, dev_r
         guess = fk.plates
         target = path.at((1 - t) * u0 + t * u1)
-        state = evaluate_state(am, fk.plates, goal=target, tolerance=opts.path_tolerance)
+        state = evaluate_state(am, fk.plates, goal=target, tolerance=opts.path_tolerance, scene=scene)
+        checked.append(state)
         ee = fk.plates.se3(am.n)
         dev_p = max(dev_p, float(np.linalg.norm(ee.translation - target.translation)))
         dev_r = max(dev_r, float(np.linalg.norm(pin.log3(target.rotation.T @ ee.rotation))))
         if not state.feasible:
             return f"{describe(binding(state.violations))}, between samples", dev_p, dev_r
+    if scene is not None:
+        checked.append(b)
+        for first, second in itertools.pairwise(checked):
+            problem = _swept_problem(am, first, second, scene)
+            if problem:
+                return problem, dev_p, dev_r
     return "", dev_p, dev_r
 
 
 def _step(
-    am: AssemblerModel, path: EEPath, u0: float, u1: float, prev: StackState, opts: PlanOptions
+    am: AssemblerModel,
+    path: EEPath,
+    u0: float,
+    u1: float,
+    prev: StackState,
+    opts: PlanOptions,
+    scene: Scene | None = None,
 ) -> tuple[StackState | None, str, float, tuple[float, float]]:
     """One sample at ``u1`` from the valid sample ``prev`` at ``u0``: (state or None, why
     not, solve time [s], EE deviation between them).
@@ -193,10 +252,12 @@ def _step(
     full height, z = 1.29 m)."""
     goal = path.at(u1)
     motion = MotionTerm(prev.leg_lengths, opts.max_leg_step, opts.w3)
-    result = optimize_internal_poses(am, _with_ee(prev.plates, goal), goal, opts.optimize, motion=motion)
+    result = optimize_internal_poses(am, _with_ee(prev.plates, goal), goal, opts.optimize, motion=motion, scene=scene)
     solve_s = result.time_s
     if not _kept(am, result, opts):
-        second = optimize_internal_poses(am, _spread(prev.plates, goal), goal, opts.optimize, motion=motion)
+        second = optimize_internal_poses(
+            am, _spread(prev.plates, goal), goal, opts.optimize, motion=motion, scene=scene
+        )
         solve_s += second.time_s
         if not _kept(am, second, opts):
             return None, _not_kept_reason(am, result, opts), solve_s, (0.0, 0.0)
@@ -206,7 +267,7 @@ def _step(
     if jump > opts.max_leg_step * (1 + 1e-9):  # held by the optimizer; checked again here
         why = f"motion step: a leg would move {1e3 * jump:.2f} mm, at most {1e3 * opts.max_leg_step:.3g} mm"
         return None, why, solve_s, (0.0, 0.0)
-    problem, dev_p, dev_r = _between_problems(am, path, u0, u1, prev, state, opts)
+    problem, dev_p, dev_r = _between_problems(am, path, u0, u1, prev, state, opts, scene)
     if problem:
         return None, problem, solve_s, (dev_p, dev_r)
     return state, "", solve_s, (dev_p, dev_r)
@@ -241,17 +302,21 @@ def _kept(am: AssemblerModel, result: OptimizeResult, opts: PlanOptions) -> bool
 
 
 def _start_state(
-    am: AssemblerModel, path: EEPath, start: StackState | PlateArrays | list | None, opts: PlanOptions
+    am: AssemblerModel,
+    path: EEPath,
+    start: StackState | PlateArrays | list | None,
+    opts: PlanOptions,
+    scene: Scene | None = None,
 ) -> tuple[StackState | None, str]:
     """The valid state the plan starts from, or (None, why not)."""
     first = path.at(0.0)
     if start is None:
-        solved = solve(am, first, options=opts.optimize)
+        solved = solve(am, first, options=opts.optimize, scene=scene)
         if not solved.success:
             return None, one_line(f"{solved.message}, at the path's start")
         return solved.optimized, ""
     pa = start.plates if isinstance(start, StackState) else plate_arrays(am, start)
-    state = evaluate_state(am, pa, goal=first, tolerance=GoalTolerance(1e-6, 1e-6))
+    state = evaluate_state(am, pa, goal=first, tolerance=GoalTolerance(1e-6, 1e-6), scene=scene)
     if not state.feasible:
         why = describe(binding(state.violations))
         return None, one_line(f"the start state is not valid at the path's start: {why}")
@@ -280,6 +345,7 @@ def plan_path(
     start: StackState | PlateArrays | list | None = None,
     options: PlanOptions | None = None,
     progress: ProgressCallback | None = None,
+    scene: Scene | str | None = None,
 ) -> PlanResult:
     """Force-optimized internal poses along an EE path (see module docstring).
 
@@ -290,17 +356,20 @@ def plan_path(
             solution of the path's first pose (:func:`~assembler_pin.solver.pipeline.solve`).
         options: see :class:`PlanOptions`.
         progress: called as ``(permille of the path done, 1000, note)`` after each sample.
+        scene: obstacles and floor (:class:`~assembler_pin.collision.scene.Scene`, a scene
+            file or None): every sample and the motion between samples keep the clearance.
     """
     opts = checked_options(options, PlanOptions, "options")
     progress = checked_progress(progress)
+    scene = read_scene(scene)
     t_start = time.perf_counter()
     targets = list(path.parameters(opts.position_step, opts.rotation_step)[1:])  # bounded before planning
     check_plan_work(len(targets) + 1, am.n)
-    start_state, why = _start_state(am, path, start, opts)
+    start_state, why = _start_state(am, path, start, opts, scene)
     if start_state is None:
         march = _March(False, why, [], [], [], 0, (0.0, 0.0))
     else:
-        march = _march(am, path, targets, start_state, opts, progress)
+        march = _march(am, path, targets, start_state, opts, progress, scene)
     result = PlanResult(
         march.success,
         march.reason,
@@ -337,6 +406,7 @@ def _march(
     start_state: StackState,
     opts: PlanOptions,
     progress: ProgressCallback | None,
+    scene: Scene | None = None,
 ) -> _March:
     """Step from ``start_state`` through the path parameters ``targets``, halving a step
     that finds no valid sample up to ``opts.max_refinements`` times."""
@@ -345,7 +415,7 @@ def _march(
     smallest = base_step * path.segments / 2**opts.max_refinements + 1e-12
     while targets:
         u0, u1 = march.params[-1], targets[0]
-        state, why, dt, d = _step(am, path, u0, u1, march.states[-1], opts)
+        state, why, dt, d = _step(am, path, u0, u1, march.states[-1], opts, scene)
         if state is None:
             if (u1 - u0) <= smallest or opts.max_refinements == 0:
                 where = f"no valid sample after u = {u0:.4f} of {path.segments}"

@@ -27,6 +27,7 @@ import time
 
 import numpy as np
 
+from ..collision.scene import Scene
 from ..common.messages import one_line
 from ..common.progress import ProgressCallback, checked_progress
 from ..common.threads import one_blas_thread
@@ -260,6 +261,7 @@ def plan_trajectory(
     refinements: int = 2,
     progress: ProgressCallback | None = None,
     time_law: str = "auto",
+    scene: Scene | str | None = None,
 ) -> MotionResult:
     """Plan a path, time it, and check every output sample; when a check fails between the
     samples of a successful plan, plan again with steps half as long (up to ``refinements``
@@ -277,6 +279,10 @@ def plan_trajectory(
             shorter of the two whose every row holds (the optimal law tries
             :data:`OPTIMAL_SAFETIES` of the limits in turn; with waypoint times only the
             quintic law applies).
+        scene: obstacles and floor (a :class:`~assembler_pin.collision.scene.Scene`, a scene
+            file or None): the plan keeps the clearance at and between its samples
+            (:func:`~assembler_pin.motion.planner.plan_path`); the timed output rows follow
+            the plan's leg lengths between its samples.
 
     Returns:
         A :class:`MotionResult`. Its trajectory holds valid rows only: the whole path when
@@ -290,7 +296,7 @@ def plan_trajectory(
     opts = _checked_plan_inputs(path, options, rate, refinements, time_law)
     progress = checked_progress(progress)
     for attempt in range(refinements + 1):
-        plan = plan_path(am, path, start, opts, progress=progress)
+        plan = plan_path(am, path, start, opts, progress=progress, scene=scene)
         if len(plan.states) < 2:
             return MotionResult(False, plan.reason, plan, None, [plan.reason], time.perf_counter() - t0)
         try:

@@ -26,6 +26,7 @@ from dataclasses import dataclass
 import numpy as np
 import pinocchio as pin
 
+from ..collision.scene import Scene
 from ..config.options import OptimizeOptions
 from ..exceptions import _SingularIterateError
 from ..model.assembler import AssemblerModel
@@ -84,16 +85,18 @@ def optimality(
     goal: pin.SE3,
     options: OptimizeOptions,
     motion: MotionTerm | None = None,
+    scene: Scene | None = None,
 ) -> Optimality:
     """The KKT check of ``state`` for the problem of ``options`` (its objective, EE tolerance,
-    sag limit and motion term; the force limits of the legs, not a start's cap).
+    sag limit, motion term and, with a scene, clearance rows; the force limits of the legs,
+    not a start's cap).
 
     A state that does not meet every constraint is not checked (``optimal`` False)."""
     if not state.feasible:
         return Optimality(False, np.inf, 0, np.zeros(0), None, "the state does not meet every constraint")
     # the smooth form, whatever method ran
     opts = options if options.method == "slsqp" else dataclasses.replace(options, method="slsqp")
-    problem = Problem(am, state.plates, goal, opts, start_feasible=False, motion=motion)
+    problem = Problem(am, state.plates, goal, opts, start_feasible=False, motion=motion, scene=scene)
     if problem.nx_pose == 0:
         return Optimality(True, 0.0, 0, np.zeros(0), problem)
     form = SmoothForm(problem)

@@ -15,6 +15,7 @@ from dataclasses import dataclass
 import numpy as np
 import pinocchio as pin
 
+from ..collision.scene import Scene, read_scene
 from ..common.messages import one_line
 from ..common.threads import one_blas_thread
 from ..config.options import SMOOTH_METHODS, GoalTolerance, OptimizeOptions, checked_options, resolved_method
@@ -43,6 +44,7 @@ def optimize_internal_poses(
     goal: pin.SE3 | None = None,
     options: OptimizeOptions | None = None,
     motion: MotionTerm | None = None,
+    scene: Scene | str | None = None,
 ) -> OptimizeResult:
     """Minimize Ω over the intermediate plate poses, from a starting pose.
 
@@ -58,16 +60,27 @@ def optimize_internal_poses(
         options: see :class:`OptimizeOptions`.
         motion: continuity with a previous sample (:class:`MotionTerm`, slsqp only); the
             chosen state then also keeps every leg within ``max_step`` of it.
+        scene: obstacles and floor (:class:`~assembler_pin.collision.scene.Scene`, a scene
+            file or None): the clearance rows (:class:`~.rows.ClearanceRows`) keep every pair
+            of bodies :func:`~assembler_pin.collision.check.clearance` checks at least the
+            configuration's ``clearance`` apart, and the states are checked against the scene
+            (an empty ``Scene()`` holds the stack's own pairs alone). Without a scene the
+            optimizer has no clearance rows and a colliding result is reported, not avoided.
+            IPOPT's moment-variable form has no clearance rows: with a scene, ``ipopt`` (and
+            ``auto`` on long stacks) runs SLSQP.
     """
     opts, start, goal = _checked_inputs(am, initial, goal, options, motion)
-    result = _optimized(am, start, goal, opts, motion)
+    scene = read_scene(scene)
+    if scene is not None and opts.method == "ipopt":
+        opts = dataclasses.replace(opts, method="slsqp")
+    result = _optimized(am, start, goal, opts, motion, scene)
     if _asked_for_auto(options) and result.method == "ipopt" and not result.optimal:
         result = _polished(am, result, goal, opts, motion)
     # the restarts are SLSQP runs, for SLSQP's stalls (IPOPT's run is finished by _polished);
     # a motion's sample has the planner's own fallbacks (another start, a shorter step)
     if result.optimal or not result.success or opts.method != "slsqp" or motion is not None:
         return result
-    return _restarted(am, result, goal, opts, motion)
+    return _restarted(am, result, goal, opts, motion, scene)
 
 
 #: The extra margins [m, cos] of the restarts from a valid state that is not an optimum
@@ -77,7 +90,12 @@ RESTART_MARGINS = (1e-6, 1e-5)
 
 
 def _restarted(
-    am: AssemblerModel, result: OptimizeResult, goal: pin.SE3, opts: OptimizeOptions, motion: MotionTerm | None
+    am: AssemblerModel,
+    result: OptimizeResult,
+    goal: pin.SE3,
+    opts: OptimizeOptions,
+    motion: MotionTerm | None,
+    scene: Scene | None = None,
 ) -> OptimizeResult:
     """A run that returned a valid state which is not an optimum
     (:func:`~.certificate.optimality`), restarted from that state until one is.
@@ -90,9 +108,9 @@ def _restarted(
     the optimum. Each restart is kept only when it is valid and no worse."""
     slsqp = opts  # resolved: SLSQP ran
     for extra in RESTART_MARGINS:
-        inside = _optimized(am, result.optimized.plates, goal, replace_margin(slsqp, extra), motion)
+        inside = _optimized(am, result.optimized.plates, goal, replace_margin(slsqp, extra), motion, scene)
         start = inside.optimized if inside.success else result.optimized
-        again = _optimized(am, start.plates, goal, slsqp, motion)
+        again = _optimized(am, start.plates, goal, slsqp, motion, scene)
         if again.success and again.objective_optimized <= result.objective_optimized + 1e-9:
             result = _continued(result, again, inside)
         if result.optimal:
@@ -158,13 +176,18 @@ def _polished(
 
 
 def _optimized(
-    am: AssemblerModel, start: PlateArrays, goal: pin.SE3, opts: OptimizeOptions, motion: MotionTerm | None
+    am: AssemblerModel,
+    start: PlateArrays,
+    goal: pin.SE3,
+    opts: OptimizeOptions,
+    motion: MotionTerm | None,
+    scene: Scene | None = None,
 ) -> OptimizeResult:
     """One run of the method of ``opts`` (resolved, not ``auto``) from ``start``."""
     tolerance = opts.ee_tolerance or opts.goal_tolerance
-    initial_state = evaluate_state(am, start, goal=goal, tolerance=tolerance)
-    problem = Problem(am, start, goal, opts, initial_state.feasible, motion)
-    check = _Check(am, goal, tolerance, opts, motion, problem.objective)
+    initial_state = evaluate_state(am, start, goal=goal, tolerance=tolerance, scene=scene)
+    problem = Problem(am, start, goal, opts, initial_state.feasible, motion, scene)
+    check = _Check(am, goal, tolerance, opts, motion, problem.objective, scene)
     omega0 = check.score(initial_state)
     if problem.nx_pose == 0:
         return _sag_checked(check, nothing_to_optimize(initial_state, omega0, opts.method), initial_state)
@@ -172,7 +195,7 @@ def _optimized(
     res, x_final, singular = _run_solver(problem, initial_state)
     elapsed = time.perf_counter() - t0
     chosen, omega_chosen, success, message = _outcome(check, problem, res, x_final, singular, initial_state)
-    certificate = optimality(am, chosen, goal, opts, motion) if success else None
+    certificate = optimality(am, chosen, goal, opts, motion, scene) if success else None
     optimal = certificate is not None and certificate.optimal
     message = _optimality_message(success, optimal, message, certificate, f"{res.message} (status {res.status})")
     logger.info(
@@ -310,6 +333,7 @@ class _Check:
     opts: OptimizeOptions
     motion: MotionTerm | None
     objective: SagObjective
+    scene: Scene | None = None
 
     states: dict[bytes, StackState] = dataclasses.field(default_factory=dict)
     """The states re-checked so far, by chart point (the best point met is often the final one)."""
@@ -319,7 +343,9 @@ class _Check:
         key = np.asarray(x_pose, dtype=float).tobytes()
         if key not in self.states:
             plates = problem.chart.plates(x_pose)
-            self.states[key] = evaluate_state(self.am, plates, goal=self.goal, tolerance=self.tolerance)
+            self.states[key] = evaluate_state(
+                self.am, plates, goal=self.goal, tolerance=self.tolerance, scene=self.scene
+            )
         return self.states[key]
 
     def acceptable(self, state: StackState) -> bool:

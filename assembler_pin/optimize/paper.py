@@ -33,9 +33,9 @@ class PaperForm:
         return omega(p.max_abs_force, p.plate_angles, pr.opts.w1, pr.opts.w2)
 
     def cons(self, x: np.ndarray) -> np.ndarray:
-        """Rows >= 0: the force limits, the leg limits, the EE tolerance."""
+        """Rows >= 0: the force limits, the leg limits, the EE tolerance, the clearance."""
         pr = self.problem
         p = pr.point(x)
         rows = pr.rows(p)
-        ee = [rows["ee"]] if "ee" in rows else []
-        return finite_rows(np.concatenate([rows["force"], rows["leg"], *ee]))
+        extra = [rows[k] for k in ("ee", "clearance") if k in rows]
+        return finite_rows(np.concatenate([rows["force"], rows["leg"], *extra]))

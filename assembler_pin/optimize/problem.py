@@ -21,6 +21,7 @@ from typing import cast
 import numpy as np
 import pinocchio as pin
 
+from ..collision.scene import Scene
 from ..config.options import GEOMETRIC_MARGIN, SMOOTH_METHODS, OptimizeOptions
 from ..exceptions import SingularConfigurationError, _SingularIterateError
 from ..kinematics import PlateArrays
@@ -31,13 +32,17 @@ from .charts import LocalChart, TaaChart
 from .objective import SagObjective, motion_cost, omega, sag_reference
 from .options import MotionTerm
 from .point import ChartDerivatives, Point
-from .rows import EETolerance, ForceLimitRows, LegLimitRows, MotionRows, SagRows
+from .rows import ClearanceRows, EETolerance, ForceLimitRows, LegLimitRows, MotionRows, SagRows
 from .sag import linear_sag
 
 __all__ = ["Problem", "finite_rows"]
 
 #: What a non-finite constraint row (a degenerate trial point) is replaced by: infeasible.
 _NON_FINITE_ROW = -1e6
+
+#: How far inside the clearance [m] the clearance rows hold (beyond ``limit_margin``): SLSQP
+#: honours its rows to ~1e-8 and the returned state is re-checked against the clearance itself.
+CLEARANCE_MARGIN = 1e-6
 
 #: The sag [m] standing in where none is defined (a singular trial point): finite, far
 #: above any limit.
@@ -62,6 +67,8 @@ class Problem:
             the force objective, both force limits are capped by its max|F|: max|F| never
             increases).
         motion: continuity with a previous sample (smooth method only).
+        scene: obstacles and floor: with one (an empty scene too) the clearance rows
+            (:class:`~.rows.ClearanceRows`) keep every checked pair apart; None: no such rows.
     """
 
     def __init__(
@@ -72,8 +79,9 @@ class Problem:
         opts: OptimizeOptions,
         start_feasible: bool,
         motion: MotionTerm | None = None,
+        scene: Scene | None = None,
     ) -> None:
-        self.am, self.opts, self.goal, self.motion = am, opts, goal, motion
+        self.am, self.opts, self.goal, self.motion, self.scene = am, opts, goal, motion, scene
         self.n = n = am.n
         free_ee = opts.ee_tolerance is not None
         ref = [start.se3(k) for k in range(n)] + [goal]
@@ -98,6 +106,8 @@ class Problem:
         self.leg_limits = LegLimitRows(leg, opts.limit_margin, opts.rise_margin)
         self.ee = EETolerance(goal, opts.ee_tolerance, self.chart) if opts.ee_tolerance is not None else None
         self.motion_rows = MotionRows(motion, GEOMETRIC_MARGIN) if motion is not None else None
+        margin = max(opts.limit_margin, 0.0) + CLEARANCE_MARGIN
+        self.clearance_rows = ClearanceRows(am, scene, margin) if scene is not None else None
         self._sag: tuple[Point, float] | None = None
         self._sag_grad: tuple[ChartDerivatives, np.ndarray] | None = None
         self.best: tuple[float, np.ndarray] | None = None
@@ -195,7 +205,8 @@ class Problem:
 
     def rows(self, p: Point) -> dict[str, np.ndarray]:
         """The rows of every family at the point (>= 0 when it holds), computed once per
-        point: ``leg``, ``force`` and, where they apply, ``ee``, ``motion`` and ``sag``."""
+        point: ``leg``, ``force`` and, where they apply, ``ee``, ``motion``, ``sag`` and
+        ``clearance``."""
         if self._rows is not None and self._rows[0] is p:
             return self._rows[1]
         rows = {"leg": self.leg_limits.values(p), "force": self.force_limits.values(p.forces)}
@@ -205,13 +216,15 @@ class Problem:
             rows["motion"] = self.motion_rows.values(p)
         if self.sag_rows is not None:
             rows["sag"] = self.sag_rows.values(self.sag(p))
+        if self.clearance_rows is not None:
+            rows["clearance"] = self.clearance_rows.values(p)
         self._rows = (p, rows)
         return rows
 
     def optional_rows(self, p: Point) -> list[np.ndarray]:
-        """The EE-tolerance, motion and sag rows where they apply."""
+        """The EE-tolerance, motion, sag and clearance rows where they apply."""
         rows = self.rows(p)
-        return [rows[k] for k in ("ee", "motion", "sag") if k in rows]
+        return [rows[k] for k in ("ee", "motion", "sag", "clearance") if k in rows]
 
     def feasible(self, p: Point) -> bool:
         """Every row of the problem holds at the point."""

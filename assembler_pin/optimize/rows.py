@@ -10,7 +10,9 @@ derivatives in chart coordinates (``jacobian``), in the same order:
   ``s`` on max|F|);
 * :class:`EETolerance` — the EE within its position and rotation tolerance (squared norms);
 * :class:`MotionRows` — ``|L_i - L_i^prev| <= max_step`` along a motion;
-* :class:`SagRows` — the EE's linear sag within ``max_sag``.
+* :class:`SagRows` — the EE's linear sag within ``max_sag``;
+* :class:`ClearanceRows` — every checked pair of bodies (the stack's own, a scene's
+  obstacles and floor) at least ``clearance`` apart.
 """
 
 from __future__ import annotations
@@ -18,14 +20,25 @@ from __future__ import annotations
 import numpy as np
 import pinocchio as pin
 
+from ..collision.check import NEAR, Clearance, clearance
+from ..collision.scene import Scene
 from ..config.options import GoalTolerance
 from ..config.schema import LegConfig
 from ..constraints import leg_limit_margins
+from ..model.assembler import AssemblerModel
 from .charts import LocalChart, TaaChart
 from .options import MotionTerm
 from .point import ChartDerivatives, Point
 
-__all__ = ["EETolerance", "EpigraphRows", "ForceLimitRows", "LegLimitRows", "MotionRows", "SagRows"]
+__all__ = [
+    "ClearanceRows",
+    "EETolerance",
+    "EpigraphRows",
+    "ForceLimitRows",
+    "LegLimitRows",
+    "MotionRows",
+    "SagRows",
+]
 
 
 class LegLimitRows:
@@ -153,3 +166,48 @@ class SagRows:
     def jacobian(self, d_sag: np.ndarray) -> np.ndarray:
         """(1, m) from the sag's chart gradient (m,) [m per chart unit]."""
         return -d_sag[None, :] / self.max_sag
+
+
+class ClearanceRows:
+    """``min(d - clearance - margin, BAND) >= 0`` for every pair of bodies
+    :func:`~assembler_pin.collision.check.clearance` checks [m]: the stack's own pairs and,
+    with a scene, every body against every obstacle and the floor.
+
+    The count of rows is fixed (every pair, in the clearance's order), as SLSQP needs; a pair
+    farther than ``BAND`` beyond its bound is held at ``BAND`` with a zero gradient, so only the
+    pairs within the band move the solver, and pairs the clearance only bounds from below
+    (beyond ``NEAR``) are never read. Each row's gradient is
+    :meth:`~assembler_pin.collision.check.Clearance.gradient` (per world twist of the plates,
+    the envelope theorem) through the chart's twist Jacobian ``B``; the tests hold it to
+    central differences. A row is the smallest of a leg pair's capsule pairs: continuous, with
+    a kink where the closest pair switches, which SLSQP's line search tolerates.
+    """
+
+    #: Rows beyond this distance from their bound are held constant [m] (within ``NEAR``, so
+    #: every row in the band is an exact distance).
+    BAND = 0.5 * NEAR
+
+    def __init__(self, am: AssemblerModel, scene: Scene | None, margin: float) -> None:
+        self.am, self.scene, self.margin = am, scene, float(margin)
+        self._last: tuple[Point, Clearance] | None = None
+
+    def measure(self, p: Point) -> Clearance:
+        """The clearance at the point (computed once per point)."""
+        if self._last is None or self._last[0] is not p:
+            self._last = (p, clearance(self.am, p.plates, self.scene))
+        return self._last[1]
+
+    def values(self, p: Point) -> np.ndarray:
+        """(pairs,) [m]."""
+        c = self.measure(p)
+        return np.minimum(c.distances - (c.limit + self.margin), self.BAND)
+
+    def jacobian(self, p: Point, d: ChartDerivatives) -> np.ndarray:
+        """(pairs, m), in the order of :meth:`values`: zero outside the band."""
+        c = self.measure(p)
+        near = np.flatnonzero(c.distances - (c.limit + self.margin) < self.BAND)
+        out = np.zeros((len(c.distances), d.B.shape[1]))
+        if len(near):
+            world = c.gradient(near)[:, 1:, :].reshape(len(near), -1)  # plates 1..n (plate 0 is fixed)
+            out[near] = d.chart(world)
+        return out

@@ -3,7 +3,8 @@
 x = [poses in the local chart, s]; minimize ``w1·s + w2·sqrt(Σ λ_k²) (+ w3·Σ ΔL²)`` (the
 force objective; the sag objectives replace or extend it, :class:`~assembler_pin.optimize.objective.SagObjective`)
 subject to ``-s <= F_i <= s``, the force limits (on ``s`` alone when they are equal), every
-leg limit, the EE tolerance, the motion step and the sag limit. Smooth, so SLSQP gets exact gradients
+leg limit, the EE tolerance, the motion step, the sag limit and, with a scene, the clearance
+rows. Smooth, so SLSQP gets exact gradients
 (:mod:`assembler_pin.statics.derivatives`), all from the closed-form pass of each point.
 """
 
@@ -53,7 +54,8 @@ class SmoothForm:
         return grad
 
     def cons(self, x: np.ndarray) -> np.ndarray:
-        """Rows >= 0: ``s ∓ F``, the force limits, the leg limits, EE tolerance, motion step, sag."""
+        """Rows >= 0: ``s ∓ F``, the force limits, the leg limits, EE tolerance, motion step, sag,
+        clearance."""
         pr = self.problem
         p, s = pr.point(x[:-1]), x[-1]
         limits = pr.force_limits.epigraph_values(p.forces, s)
@@ -77,6 +79,8 @@ class SmoothForm:
             blocks.append((pr.motion_rows.jacobian(d), 0.0))
         if pr.sag_rows is not None:
             blocks.append((pr.sag_rows.jacobian(pr.sag_gradient(x[:-1])), 0.0))
+        if pr.clearance_rows is not None:
+            blocks.append((pr.clearance_rows.jacobian(p, d), 0.0))
         out = np.empty((sum(block.shape[0] for block, _ in blocks), x.size))
         row = 0
         for block, d_s in blocks:

@@ -18,6 +18,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 import pinocchio as pin
 
+from ..collision.scene import Scene, read_scene
 from ..common.messages import binding, describe, one_line
 from ..common.threads import one_blas_thread
 from ..config.options import checked_options
@@ -28,7 +29,7 @@ from ..helper_arm.initial import even_screw_pose, lean_poses
 from ..kinematics import PlateArrays, se3_to_taa, to_se3
 from ..model.assembler import AssemblerModel, checked_model
 from ..optimize import OptimizeOptions, OptimizeResult, optimize_internal_poses
-from ..state import StackState
+from ..state import StackState, evaluate_state
 
 if TYPE_CHECKING:
     from ..helper_arm import InitialConditionResult
@@ -176,6 +177,7 @@ def solve(
     options: OptimizeOptions | None = None,
     helper_options: HelperArmOptions | None = None,
     starts: str = "first",
+    scene: Scene | str | None = None,
 ) -> SolveResult:
     """Internal poses of the stack for an EE goal pose.
 
@@ -191,23 +193,34 @@ def solve(
         options: optimizer settings; helper_options: helper-arm settings.
         starts: ``"first"`` (default): the helper arm's start alone when its optimum is
             final by :func:`needs_other_starts`, else every start; ``"all"``: every start.
+        scene: obstacles and floor (:class:`~assembler_pin.collision.scene.Scene`, a scene
+            file or None): every run keeps every checked pair of bodies at least the
+            configuration's ``clearance`` apart (the optimizer's clearance rows), and a goal
+            no start reaches without a collision is answered ``success=False`` with the cause
+            ``collision``. The helper arm does not see the scene: its pose is only a start.
 
     Raises:
         PoseError: the goal is not a valid SE(3) pose.
         OptionsError: ``starts`` is not one of :data:`START_MODES`.
     """
     goal, options, helper_options = _checked_inputs(am, goal, optimize, options, helper_options, starts)
+    scene = read_scene(scene)
     t0 = time.perf_counter()
     init = initial_condition(am, goal, helper_options)
     timing = {"initial": time.perf_counter() - t0}
     helper = f"helper arm: {init.details or init.message}"
     if not optimize:
+        if scene is not None and init.success:  # the helper arm's pose, checked in the scene
+            state = evaluate_state(am, init.state.plates, goal=goal, tolerance=helper_options.tolerance, scene=scene)
+            if not state.feasible:
+                why = one_line(f"{describe(binding(state.violations))} (the helper arm's pose, in the scene)")
+                return SolveResult(goal, False, why, init, None, timing, details=helper)
         return SolveResult(goal, init.success, init.message, init, None, timing, details=helper)
     if init.attempts == 0 and not init.success:  # out of reach: nothing to start from
         timing["optimize"] = 0.0
         return SolveResult(goal, False, init.message, init, None, timing, details=helper)
     t1 = time.perf_counter()
-    runs = _run_starts(am, goal, init, options, starts)
+    runs = _run_starts(am, goal, init, options, starts, scene)
     timing["optimize"] = time.perf_counter() - t1
     return _answer(goal, init, runs, timing)
 
@@ -263,7 +276,12 @@ def _no_start_message(init: InitialConditionResult, runs: dict[str, OptimizeResu
 
 
 def _run_starts(
-    am: AssemblerModel, goal: pin.SE3, init: InitialConditionResult, opts: OptimizeOptions, starts: str
+    am: AssemblerModel,
+    goal: pin.SE3,
+    init: InitialConditionResult,
+    opts: OptimizeOptions,
+    starts: str,
+    scene: Scene | None = None,
 ) -> dict[str, OptimizeResult]:
     """The optimizer's runs, lazily with ``starts="first"``: the helper arm's start; when it
     succeeds, the screw start too only when :func:`needs_other_starts` says so; when it
@@ -275,15 +293,15 @@ def _run_starts(
     cheap = optimizer_starts(am, goal, None)
     order = list(cheap)
     if helper_plates is not None:
-        runs["helper_arm"] = optimize_internal_poses(am, helper_plates, goal, opts)
+        runs["helper_arm"] = optimize_internal_poses(am, helper_plates, goal, opts, scene=scene)
         if starts == "first" and runs["helper_arm"].optimal:
             order = ["screw"] if needs_other_starts(am, runs["helper_arm"], opts) else []
     for name in order:
-        runs[name] = optimize_internal_poses(am, cheap[name], goal, opts)
+        runs[name] = optimize_internal_poses(am, cheap[name], goal, opts, scene=scene)
     if not any(r.optimal for r in runs.values()):
         around = init.state.plates if init.success else cheap["screw"]
         for name, start in _fallback_starts(am, goal, around):
-            runs[name] = optimize_internal_poses(am, start, goal, opts)
+            runs[name] = optimize_internal_poses(am, start, goal, opts, scene=scene)
             if runs[name].optimal:
                 break
     # the lean starts: every one when the helper arm's optimum is compressed (it asked for the
@@ -293,7 +311,7 @@ def _run_starts(
     compressed = order == ["screw"] and "helper_arm" in runs
     if compressed or not any(r.optimized.feasible for r in runs.values()):
         for name, start in _lean_starts(am, goal):
-            runs[name] = optimize_internal_poses(am, start, goal, opts)
+            runs[name] = optimize_internal_poses(am, start, goal, opts, scene=scene)
             if not compressed and runs[name].optimized.feasible:
                 break
     return runs

@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import math
 
+from ..collision.home import home_clearance
 from ..config.schema import AssemblerConfig
 from .loops import Grid, closed_form_pure, constants
 
@@ -127,7 +128,8 @@ def home_state_document(cfg: AssemblerConfig) -> dict | None:
 
     Keys: plates (n+1 4×4), leg_lengths (n, 6) [m], forces (n, 6) [N], bottom_points,
     top_points (n, 6, 3) world [m], max_abs_force, mean_abs_force [N], feasible, violations
-    (empty), deflection_deg (n, 6, 2), base_wrench (6,) [N, N·m], condition (n,).
+    (empty), deflection_deg (n, 6, 2), base_wrench (6,) [N, N·m], condition (n,), clearance
+    (:func:`~assembler_pin.collision.home.home_clearance`).
     """
     n = cfg.platforms
     heights = [0.0]
@@ -136,6 +138,9 @@ def home_state_document(cfg: AssemblerConfig) -> dict | None:
     legs = _legs(cfg, heights)
     forces, condition, base = _statics(cfg, heights)
     if not _clearly_feasible(cfg, legs, forces, condition):
+        return None
+    near = home_clearance(cfg, *home_anchors(cfg))
+    if near is None or not near["min_distance_m"] > cfg.clearance * (1.0 + _MARGIN):
         return None
     plates = [[[1.0, 0.0, 0.0, 0.0], [0.0, 1.0, 0.0, 0.0], [0.0, 0.0, 1.0, z], [0.0, 0.0, 0.0, 1.0]] for z in heights]
     magnitudes = [abs(f) for row in forces for f in row]
@@ -152,4 +157,5 @@ def home_state_document(cfg: AssemblerConfig) -> dict | None:
         "deflection_deg": [[[math.degrees(a) for a in ends] for ends in row] for row in legs["deflection"]],
         "base_wrench": base,
         "condition": condition,
+        "clearance": near,
     }

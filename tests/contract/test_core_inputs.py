@@ -411,7 +411,7 @@ def _config(tmp_path: Path, text: str) -> ap.AssemblerConfig:
         ("a: &g 9.81\ngravity: *g\n", "aliases"),
         ("base: &b {mass: 1}\npayload:\n  <<: *b\n", "aliases"),
         ("payload: {<<: {mass: 1}}\n", "unknown config key 'payload.<<'"),
-        ("colour: red\n", "allowed keys: platforms, gravity, plate, leg, payload"),
+        ("colour: red\n", "allowed keys: platforms, gravity, clearance, plate, leg, payload"),
         ("leg: {stroke: 1}\n", "allowed: min_length,max_length"),
         ("plate: [1, 2]\n", "mapping"),
     ],

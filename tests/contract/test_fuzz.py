@@ -36,7 +36,7 @@ bad_scalars = st.one_of(
     st.dictionaries(st.text(max_size=3), st.integers(), max_size=2),
 )
 sections = {
-    "plate": ["node_radius", "node_spacing_deg", "mass"],
+    "plate": ["node_radius", "node_spacing_deg", "mass", "radius", "thickness"],
     "leg": [
         "min_length",
         "max_length",
@@ -47,6 +47,10 @@ sections = {
         "max_deflection_deg",
         "max_tension",
         "max_compression",
+        "motor_radius",
+        "shaft_radius",
+        "motor_length",
+        "node_zone",
     ],
     "payload": ["mass", "offset"],
 }
@@ -60,6 +64,8 @@ def configs(draw) -> dict:
         doc["platforms"] = draw(st.one_of(st.integers(1, 4), bad_scalars, st.integers(65, 10**6)))
     if draw(st.booleans()):
         doc["gravity"] = draw(st.one_of(st.floats(0, 20), bad_scalars))
+    if draw(st.booleans()):
+        doc["clearance"] = draw(st.one_of(st.floats(0, 0.05), bad_scalars, st.floats(1.0, 1e300)))
     for name, keys in sections.items():
         if draw(st.booleans()):
             doc[name] = draw(

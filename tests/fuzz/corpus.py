@@ -93,6 +93,14 @@ def _statics_config_cases() -> list[CliCase]:
         "cfg_unknown.yaml",
         "cfg_complex.yaml",
         "cfg_timestamp.yaml",
+        "cfg_clearance_negative.yaml",
+        "cfg_clearance_huge.yaml",
+        "cfg_clearance_nan.yaml",
+        "cfg_shaft_wider.yaml",
+        "cfg_motor_longer.yaml",
+        "cfg_node_zone_long.yaml",
+        "cfg_plate_thick.yaml",
+        "cfg_plate_radius_zero.yaml",
     ]
     cases = [_case(f"config.{Path(n).stem}", ["statics", "--home", "--json", "--config", f"{{d}}/{n}"]) for n in refuse]
     cases += [
@@ -134,6 +142,53 @@ PLATE_REFUSE = [
     "plates_quaternion_zero.json",
     "plates_moved_1e15.json",
 ]
+
+
+#: Scene files a command refuses in one line (:func:`assembler_pin.collision.read_scene`).
+SCENE_FILES: dict[str, bytes] = {
+    "scene_not_yaml.yaml": b"obstacles: [\n",
+    "scene_unknown_key.yaml": b"walls: []\n",
+    "scene_nan.yaml": b"obstacles:\n  - sphere: {radius: .nan, center: [0, 0, 1]}\n",
+    "scene_huge.yaml": b"obstacles:\n  - sphere: {radius: 1.0e300, center: [0, 0, 1]}\n",
+    "scene_two_kinds.yaml": (
+        b"obstacles:\n  - {sphere: {radius: 1, center: [0, 0, 1]}, box: {size: [1, 1, 1], pose: [0, 0, 0, 0, 0, 0]}}\n"
+    ),
+    "scene_negative_box.yaml": b"obstacles:\n  - box: {size: [-1, 1, 1], pose: [0, 0, 0, 0, 0, 0]}\n",
+    "scene_alias.yaml": b"a: &x {z: 0}\nfloor: *x\n",
+    "scene_too_many.yaml": b"obstacles:\n" + b"  - sphere: {radius: 0.01, center: [5, 5, 5]}\n" * 300,
+    "scene_duplicate_name.yaml": (
+        b"obstacles:\n  - {name: a, sphere: {radius: 0.1, center: [5, 0, 1]}}\n"
+        b"  - {name: a, sphere: {radius: 0.1, center: [6, 0, 1]}}\n"
+    ),
+    "scene_long_name.yaml": b"obstacles:\n  - {name: " + b"n" * 500 + b", sphere: {radius: 0.1, center: [5, 0, 1]}}\n",
+    "scene_list.yaml": b"- 1\n- 2\n",
+    "scene_ok.yaml": b"floor: {z: 0.0}\nobstacles:\n  - sphere: {radius: 0.05, center: [0.0, 0.0, 0.956]}\n",
+}
+
+
+def _scene_cases() -> list[CliCase]:
+    refuse = [n for n in SCENE_FILES if n != "scene_ok.yaml"]
+    cases = [
+        _case(f"scene.statics.{Path(n).stem}", ["statics", "--home", "--json", "--scene", f"{{d}}/{n}"]) for n in refuse
+    ]
+    cases += [
+        _case(f"scene.solve.{Path(n).stem}", [*f"solve --json --goal {REACHABLE}".split(), "--scene", f"{{d}}/{n}"])
+        for n in refuse[:3]
+    ]
+    cases += [
+        _case(f"scene.plan.{Path(n).stem}", [*f"plan --json --to {NEAR_HOME}".split(), "--scene", f"{{d}}/{n}"])
+        for n in refuse[:3]
+    ]
+    cases += [
+        _case("scene.missing", "statics --home --json --scene {d}/no_such_scene.yaml"),
+        _case("scene.directory", "statics --home --json --scene {d}"),
+        # a sphere around the home EE plate: an answer, infeasible with a collision
+        _case("scene.statics_collision", "statics --home --json --scene {d}/scene_ok.yaml", "answer", check="state"),
+        _case("scene.solve_collision", f"solve --json --goal {NEAR_HOME} --scene {{d}}/scene_ok.yaml", "any"),
+        _case("scene.with_carrier", "statics --home --carrier ur5 --scene {d}/scene_ok.yaml"),
+        _case("scene.plan_compare", f"plan --compare --to {NEAR_HOME} --scene {{d}}/scene_ok.yaml"),
+    ]
+    return cases
 
 
 def _statics_cases() -> list[CliCase]:
@@ -875,6 +930,14 @@ CONFIG_FILES: dict[str, bytes] = {
     "cfg_tiny_accel.yaml": b"leg:\n  max_acceleration: 1.0e-12\n",
     "cfg_slowest_legs.yaml": b"leg:\n  max_speed: 1.0e-4\n  max_acceleration: 1.0e-4\n",
     "cfg_platforms_64.yaml": b"platforms: 64\n",
+    "cfg_clearance_negative.yaml": b"clearance: -0.001\n",
+    "cfg_clearance_huge.yaml": b"clearance: 1.0e30\n",
+    "cfg_clearance_nan.yaml": b"clearance: .nan\n",
+    "cfg_shaft_wider.yaml": b"leg:\n  motor_radius: 0.01\n  shaft_radius: 0.02\n",
+    "cfg_motor_longer.yaml": b"leg:\n  motor_length: 0.5\n",
+    "cfg_node_zone_long.yaml": b"leg:\n  node_zone: 0.15\n",
+    "cfg_plate_thick.yaml": b"plate:\n  radius: 0.1\n  thickness: 0.2\n",
+    "cfg_plate_radius_zero.yaml": b"plate:\n  radius: 0.0\n",
 }
 
 
@@ -949,6 +1012,7 @@ def build_workspace(root: Path, am, plan: Callable[[], tuple[str, str]]) -> Work
     files: dict[str, bytes] = {}
     files |= plate_files(home)
     files |= CONFIG_FILES
+    files |= SCENE_FILES
     files["sub/cfg_other.yaml"] = CONFIG_FILES["cfg_other.yaml"]
     start = ap.kinematics.se3_to_taa(am.home[-1]).tolist()
     goal = [float(v) for v in NEAR_HOME.split()]
@@ -972,6 +1036,7 @@ CLI_CASES: list[CliCase] = [
     *_global_cases(),
     *_statics_config_cases(),
     *_statics_cases(),
+    *_scene_cases(),
     *_solve_cases(),
     *_reproduce_cases(),
     *_bench_cases(),

@@ -1,0 +1,43 @@
+"""Collisions: the sizes of the stack's bodies, scenes of obstacles, and the clearance of a pose.
+
+* :mod:`~assembler_pin.collision.bodies`: leg capsules and plate cylinders of a pose;
+* :mod:`~assembler_pin.collision.pairs`: which pairs are checked (the rule);
+* :mod:`~assembler_pin.collision.distance`: closed-form vectorized distances;
+* :mod:`~assembler_pin.collision.scene`: obstacles and the floor, read strictly from YAML;
+* :mod:`~assembler_pin.collision.check`: the clearance of a pose and its derivatives;
+* :mod:`~assembler_pin.collision.home`: the home pose's clearance on plain floats.
+
+Names are imported on first use, so that :mod:`~assembler_pin.collision.home` loads
+without numpy (the fast ``statics --home`` answer).
+"""
+
+from __future__ import annotations
+
+import importlib
+from typing import TYPE_CHECKING, Any
+
+_LAZY = {
+    "NEAR": ".check",
+    "Clearance": ".check",
+    "clearance": ".check",
+    "Obstacle": ".scene",
+    "Scene": ".scene",
+    "read_scene": ".scene",
+    "scene_from_dict": ".scene",
+}
+
+__all__ = ["NEAR", "Clearance", "Obstacle", "Scene", "clearance", "read_scene", "scene_from_dict"]
+
+
+def __getattr__(name: str) -> Any:
+    module = _LAZY.get(name)
+    if module is None:
+        raise AttributeError(f"module 'assembler_pin.collision' has no attribute {name!r}")
+    value = getattr(importlib.import_module(module, __name__), name)
+    globals()[name] = value
+    return value
+
+
+if TYPE_CHECKING:
+    from .check import NEAR, Clearance, clearance
+    from .scene import Obstacle, Scene, read_scene, scene_from_dict

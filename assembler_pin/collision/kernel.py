@@ -1,0 +1,234 @@
+"""A compiled loop of the stack's own pairs: the leg–leg closed form and the screens.
+
+:func:`_self_py` is the self-collision pass of :mod:`~assembler_pin.collision.check` written
+as plain loops over legs and pairs: the joint centres of every leg from the plate poses, the
+smallest of the four capsule pairs (motor/shaft × motor/shaft, trimmed by the pair rule) of
+every leg pair with its closest points, and the lower bounds of the leg–plate and plate–plate
+pairs that coal measures when near. numba compiles it (``cache=True``) the first time
+:func:`self_kernel` is asked for it; the numpy path of :mod:`~assembler_pin.collision.check`
+stays the reference, and the tests hold the two to 1e-12 m.
+
+numba is optional (the ``fast`` extra). ``cache=True`` compiles the kernel once per install
+and Python version (a few seconds, the first time only); after that, importing numba and
+loading the cached kernel still take about 1.3 s in each new process, which would make a
+single ``statics`` or ``solve`` call slower, not faster (the numpy pass costs ~0.6 ms, the
+kernel ~0.08 ms: the load pays for itself after ~2500 clearances). So
+:func:`~assembler_pin.collision.check.clearance` loads the kernel only in a process that has
+asked for :data:`HOT_CALLS` clearances (a map, a long walk, ``bench``), or when
+``ASSEMBLER_PIN_COLLISION`` is ``numba``; ``numpy`` keeps the numpy path. A ``plan`` or a
+``solve`` stays on numpy.
+
+Frames: world, z up; lengths [m].
+"""
+
+from __future__ import annotations
+
+import importlib.util
+import math
+import os
+from typing import Any
+
+import numpy as np
+
+from ..exceptions import OptionsError, short_repr
+
+__all__ = ["ENGINES", "ENV_VAR", "HOT_CALLS", "SIZE_NAMES", "kernel_available", "self_kernel"]
+
+#: Environment variable choosing the self-collision engine: ``numba``, ``numpy`` or unset (auto).
+ENV_VAR = "ASSEMBLER_PIN_COLLISION"
+
+#: In ``auto``, the kernel is loaded at this many clearance calls in one process.
+HOT_CALLS = 3000
+
+#: The entries of the kernel's ``sizes`` array.
+SIZE_NAMES = ("motor_length", "node_zone", "motor_radius", "shaft_radius", "plate_radius", "half_thickness", "rho")
+
+_kernel: Any = None  # the compiled function (None: not yet; False: unavailable)
+
+
+def _variant_py(code, L, sizes):  # pragma: no cover - compiled
+    """(leg, lo, hi, hb, radius) of a leg-part variant ``code = 8 g + 4 part + 2 trim_bottom +
+    trim_top`` (:func:`~assembler_pin.collision.bodies.leg_segments`)."""
+    g = code // 8
+    part = (code // 4) % 2
+    tb = (code // 2) % 2
+    tt = code % 2
+    motor_length, zone = sizes[0], sizes[1]
+    lo = motor_length if part == 1 else 0.0
+    if tb == 1 and zone > lo:
+        lo = zone
+    hi = L[g] if part == 1 else motor_length
+    hb = 1.0 if part == 1 else 0.0
+    if tt == 1 and L[g] - zone < hi:
+        hi = L[g] - zone
+        hb = 1.0
+    radius = sizes[3] if part == 1 else sizes[2]
+    return g, lo, hi, hb, radius
+
+
+def _segseg_py(start, vec, i, j):  # pragma: no cover - compiled
+    """(distance, s, t) of the segments ``start[i] + s vec[i]`` and ``start[j] + t vec[j]``
+    (the closed form of :func:`~assembler_pin.collision.distance.segment_segment`)."""
+    r0, r1, r2 = start[i, 0] - start[j, 0], start[i, 1] - start[j, 1], start[i, 2] - start[j, 2]
+    a0, a1, a2 = vec[i, 0], vec[i, 1], vec[i, 2]
+    b0, b1, b2 = vec[j, 0], vec[j, 1], vec[j, 2]
+    a = a0 * a0 + a1 * a1 + a2 * a2
+    e = b0 * b0 + b1 * b1 + b2 * b2
+    b = a0 * b0 + a1 * b1 + a2 * b2
+    c = a0 * r0 + a1 * r1 + a2 * r2
+    f = b0 * r0 + b1 * r1 + b2 * r2
+    den = a * e - b * b
+    s = (b * f - c * e) / den if den > 1e-12 * a * e else 0.0
+    s = min(max(s, 0.0), 1.0)
+    t = min(max((b * s + f) / max(e, 1e-300), 0.0), 1.0)
+    s = min(max((b * t - c) / max(a, 1e-300), 0.0), 1.0)
+    w0 = r0 + s * a0 - t * b0
+    w1 = r1 + s * a1 - t * b1
+    w2 = r2 + s * a2 - t * b2
+    return math.sqrt(w0 * w0 + w1 * w1 + w2 * w2), s, t
+
+
+_variant, _segseg = _variant_py, _segseg_py  # interpreted here; the compiled kernel calls compiled copies
+
+
+def _self_py(
+    R, p, bottom_in, top_in, va, vb, leg_plate, plate_pairs, sizes, B, T, U, L, d, x, sig, hb, nrm, lp_lb, pp_lb
+):  # pragma: no cover - compiled
+    """Fills the legs' joint centres B, T (G, 3), directions U (G, 3), lengths L (G,); per leg
+    pair the distance d (P,), the closest points on the axes x (P, 2, 3), their σ and dσ/dL
+    sig, hb (P, 2) and the normal nrm (P, 3) from leg b to leg a; the lower bounds lp_lb
+    (Q, 2) of each leg part against each plate and pp_lb (S,) of each plate pair [m]."""
+    G = bottom_in.shape[0]
+    for g in range(G):
+        j = g // 6
+        ln = 0.0
+        for k in range(3):
+            B[g, k] = (
+                p[j, k] + R[j, k, 0] * bottom_in[g, 0] + R[j, k, 1] * bottom_in[g, 1] + R[j, k, 2] * bottom_in[g, 2]
+            )
+            T[g, k] = (
+                p[j + 1, k]
+                + R[j + 1, k, 0] * top_in[g, 0]
+                + R[j + 1, k, 1] * top_in[g, 1]
+                + R[j + 1, k, 2] * top_in[g, 2]
+            )
+            ln += (T[g, k] - B[g, k]) ** 2
+        L[g] = math.sqrt(ln)
+        for k in range(3):
+            U[g, k] = (T[g, k] - B[g, k]) / max(L[g], 1e-300)
+    V = 8 * G  # every leg part with and without each trim: its segment, once
+    vlo, vhi, vhb, vr = np.empty(V), np.empty(V), np.empty(V), np.empty(V)
+    vs, vd = np.empty((V, 3)), np.empty((V, 3))
+    for code in range(V):
+        g, lo, hi, hbc, radius = _variant(code, L, sizes)
+        vlo[code], vhi[code], vhb[code], vr[code] = lo, hi, hbc, radius
+        for k in range(3):
+            vs[code, k] = B[g, k] + lo * U[g, k]
+            vd[code, k] = (hi - lo) * U[g, k] if hi >= lo else 0.0
+    for q in range(d.shape[0]):
+        best, bs, bt, br = math.inf, 0.0, 0.0, 4 * q
+        for r in range(4 * q, 4 * q + 4):
+            ca, cb = va[r], vb[r]
+            if vhi[ca] < vlo[ca] or vhi[cb] < vlo[cb]:
+                continue
+            dist, s, t = _segseg(vs, vd, ca, cb)
+            dist -= vr[ca] + vr[cb]
+            if dist < best:
+                best, bs, bt, br = dist, s, t, r
+        d[q] = best
+        ca, cb = va[br], vb[br]
+        ga, gb = ca // 8, cb // 8
+        sa = vlo[ca] + bs * max(vhi[ca] - vlo[ca], 0.0)
+        sb = vlo[cb] + bt * max(vhi[cb] - vlo[cb], 0.0)
+        sig[q, 0], sig[q, 1] = sa, sb
+        hb[q, 0], hb[q, 1] = bs * vhb[ca], bt * vhb[cb]
+        n2 = 0.0
+        for k in range(3):
+            x[q, 0, k] = B[ga, k] + sa * U[ga, k]
+            x[q, 1, k] = B[gb, k] + sb * U[gb, k]
+            nrm[q, k] = x[q, 0, k] - x[q, 1, k]
+            n2 += nrm[q, k] ** 2
+        if n2 > 1e-30:
+            for k in range(3):
+                nrm[q, k] /= math.sqrt(n2)
+        else:
+            nrm[q, 0], nrm[q, 1], nrm[q, 2] = 0.0, 0.0, 1.0
+    motor_length, rho, half = sizes[0], sizes[6], sizes[5]
+    for q in range(leg_plate.shape[0]):
+        g, kp = leg_plate[q, 0], leg_plate[q, 1]
+        for part in range(2):
+            lo = motor_length if part == 1 else 0.0
+            hi = L[g] if part == 1 else motor_length
+            radius = sizes[3] if part == 1 else sizes[2]
+            if hi < lo:
+                lp_lb[q, part] = math.inf
+                continue
+            h0, h1, c, e = 0.0, 0.0, 0.0, 0.0
+            for k in range(3):
+                a0 = B[g, k] + lo * U[g, k] - p[kp, k]
+                dk = (hi - lo) * U[g, k]
+                h0 += a0 * R[kp, k, 2]
+                h1 += (a0 + dk) * R[kp, k, 2]
+                c -= a0 * dk
+                e += dk * dk
+            s = min(max(c / max(e, 1e-300), 0.0), 1.0)
+            w = 0.0
+            for k in range(3):
+                w += (B[g, k] + (lo + s * (hi - lo)) * U[g, k] - p[kp, k]) ** 2
+            slab = max(min(h0, h1), min(-h0, -h1)) - half - radius
+            lp_lb[q, part] = max(math.sqrt(w) - rho - radius, slab)
+    plate_radius = sizes[4]
+    for q in range(plate_pairs.shape[0]):
+        ka, kb = plate_pairs[q, 0], plate_pairs[q, 1]
+        dc2 = 0.0
+        for k in range(3):
+            dc2 += (p[ka, k] - p[kb, k]) ** 2
+        lb = math.sqrt(dc2) - 2.0 * rho
+        for side in range(2):
+            first, second = (ka, kb) if side == 0 else (kb, ka)
+            cosine, h = 0.0, 0.0
+            for k in range(3):
+                cosine += R[first, k, 2] * R[second, k, 2]
+                h += R[first, k, 2] * (p[second, k] - p[first, k])
+            spread = plate_radius * math.sqrt(max(1.0 - cosine * cosine, 0.0)) + half * abs(cosine) + half
+            lb = max(lb, abs(h) - spread)
+        pp_lb[q] = lb
+
+
+def kernel_available() -> bool:
+    """True when numba is installed (the kernel can be compiled)."""
+    return importlib.util.find_spec("numba") is not None
+
+
+#: The engines of :func:`self_kernel`.
+ENGINES = ("auto", "numba", "numpy")
+
+
+def self_kernel(calls: int = 0, engine: str = "auto") -> Any:
+    """The compiled :func:`_self_py`, or None for the numpy path.
+
+    Args:
+        calls: clearances asked for so far in this process.
+        engine: ``numba`` (the kernel when numba is installed), ``numpy``, or ``auto``:
+            :data:`ENV_VAR` when set, else the kernel once this process has asked for
+            :data:`HOT_CALLS` clearances.
+    """
+    global _kernel
+    if engine not in ENGINES:
+        raise OptionsError(f"collision engine must be one of {', '.join(ENGINES)}, got {short_repr(engine)}")
+    choice = os.environ.get(ENV_VAR, "auto") if engine == "auto" else engine
+    if choice == "numpy" or _kernel is False:
+        return None
+    if _kernel is None:
+        if choice != "numba" and calls < HOT_CALLS:
+            return None
+        if not kernel_available():
+            _kernel = False
+            return None
+        import numba
+
+        jit = numba.njit(cache=True, nogil=True)
+        globals()["_variant"] = jit(_variant_py)
+        globals()["_segseg"] = jit(_segseg_py)
+        _kernel = jit(_self_py)
+    return _kernel

@@ -1,0 +1,220 @@
+"""Scenes: the obstacles around the stack and the floor, read strictly from YAML.
+
+The format (every key but ``obstacles`` or ``floor`` optional; world frame, z up, metres,
+rotation vectors in radians)::
+
+    floor: {z: 0.0}                 # a horizontal plane; bodies must stay above it
+    obstacles:
+      - box: {size: [0.1, 0.1, 0.5], pose: [0.6, 0.0, 0.25, 0.0, 0.0, 0.0]}
+        name: column                # optional, at most 40 characters
+      - cylinder: {radius: 0.02, length: 1.0, pose: [0.5, -0.3, 0.5, 1.5708, 0.0, 0.0]}
+      - sphere: {radius: 0.05, center: [0.4, 0.3, 0.9]}
+
+``size`` is the box's full edge lengths along its own axes; ``pose`` is the box's or the
+cylinder's centre ``(x, y, z)`` and the rotation vector ``(rx, ry, rz)`` of its frame (a
+cylinder's axis is its frame's z). An obstacle without ``name`` is called ``"box 0"``,
+``"cylinder 1"``... by its kind and its index in the list. Counts and sizes are bounded
+(:data:`MAX_OBSTACLES`, :data:`MAX_SIZE`); every refusal is one
+:class:`~assembler_pin.exceptions.SceneError` line naming the entry and what is allowed.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pinocchio as pin
+
+from ..config.checks import shorten
+from ..config.options import is_number
+from ..config.schema import load_yaml, read_text_file
+from ..exceptions import ConfigError, SceneError, short_repr
+
+__all__ = ["MAX_OBSTACLES", "MAX_SCENE_BYTES", "MAX_SIZE", "Obstacle", "Scene", "read_scene", "scene_from_dict"]
+
+#: Most obstacles a scene may hold.
+MAX_OBSTACLES = 256
+#: Largest size, radius, length or coordinate magnitude accepted [m].
+MAX_SIZE = 1e3
+#: Largest scene file read [bytes].
+MAX_SCENE_BYTES = 1 << 20
+#: Longest obstacle name [characters].
+MAX_NAME = 40
+
+_KINDS = ("box", "cylinder", "sphere")
+
+
+@dataclass(frozen=True)
+class Obstacle:
+    """One fixed obstacle.
+
+    Attributes:
+        kind: ``box``, ``cylinder`` or ``sphere``.
+        name: how messages name it.
+        pose: its frame in the world (identity rotation for a sphere) [m].
+        size: box: full edge lengths (3,); cylinder: (radius, length); sphere: (radius,) [m].
+    """
+
+    kind: str
+    name: str
+    pose: pin.SE3
+    size: tuple[float, ...]
+
+    def bounding_capsule(self) -> tuple[np.ndarray, np.ndarray, float]:
+        """A capsule holding the obstacle: start (3,), start→end vector (3,) world [m] and
+        radius [m] (a box: along its longest edge, the half-diagonal of the other two)."""
+        R, p = self.pose.rotation, self.pose.translation
+        if self.kind == "sphere":
+            return p.copy(), np.zeros(3), self.size[0]
+        if self.kind == "cylinder":
+            axis, half, radius = R[:, 2], 0.5 * self.size[1], self.size[0]
+        else:
+            i = int(np.argmax(self.size))
+            axis, half = R[:, i], 0.5 * self.size[i]
+            radius = 0.5 * math.hypot(*(s for k, s in enumerate(self.size) if k != i))
+        return p - half * axis, 2.0 * half * axis, radius
+
+
+@dataclass(frozen=True)
+class Scene:
+    """Obstacles and an optional horizontal floor, world frame.
+
+    Attributes:
+        obstacles: the fixed bodies.
+        floor_z: height of the floor [m], or None for no floor.
+    """
+
+    obstacles: tuple[Obstacle, ...] = field(default_factory=tuple)
+    floor_z: float | None = None
+
+
+def _number(value: Any, where: str, low: float = -MAX_SIZE, high: float = MAX_SIZE, positive: bool = False) -> float:
+    if not is_number(value) or not math.isfinite(float(value)):
+        raise SceneError(shorten(f"scene {where} = {short_repr(value)} is invalid: must be a finite number"))
+    x = float(value)
+    if not low <= x <= high or (positive and x <= 0):
+        bound = f"in (0, {high:g}]" if positive else f"in [{low:g}, {high:g}]"
+        raise SceneError(shorten(f"scene {where} = {short_repr(value)} is invalid: must be {bound} [m]"))
+    return x
+
+
+def _vector(value: Any, where: str, count: int, positive: bool = False) -> list[float]:
+    if not isinstance(value, (list, tuple)) or len(value) != count:
+        raise SceneError(shorten(f"scene {where} = {short_repr(value)} is invalid: must be a list of {count} numbers"))
+    return [_number(v, f"{where}[{i}]", positive=positive) for i, v in enumerate(value)]
+
+
+def _keys(data: Any, where: str, required: tuple[str, ...], optional: tuple[str, ...] = ()) -> Mapping:
+    if not isinstance(data, Mapping):
+        raise SceneError(shorten(f"scene {where} must be a mapping, got {short_repr(data)}"))
+    allowed = required + optional
+    for key in data:
+        if key not in allowed:
+            raise SceneError(
+                shorten(f"unknown scene key '{where}.{shorten(str(key), 20)}'; allowed: {', '.join(allowed)}")
+            )
+    for key in required:
+        if key not in data:
+            raise SceneError(f"scene {where} needs '{key}'")
+    return data
+
+
+def _pose(value: Any, where: str) -> pin.SE3:
+    v = _vector(value, where, 6)
+    rotvec = np.array(v[3:])
+    if np.linalg.norm(rotvec) > 100.0:
+        raise SceneError(
+            shorten(f"scene {where} rotation vector {short_repr(v[3:])} is invalid: must be at most 100 rad")
+        )
+    return pin.SE3(pin.exp3(rotvec), np.array(v[:3]))
+
+
+def _obstacle(entry: Any, index: int) -> Obstacle:
+    where = f"obstacles[{index}]"
+    if not isinstance(entry, Mapping):
+        raise SceneError(shorten(f"scene {where} must be a mapping with one of {', '.join(_KINDS)}"))
+    kinds = [k for k in entry if k in _KINDS]
+    if len(kinds) != 1:
+        raise SceneError(
+            shorten(f"scene {where} must have exactly one of {', '.join(_KINDS)}, got {short_repr(list(entry))}")
+        )
+    kind = kinds[0]
+    _keys(entry, where, (kind,), ("name",))
+    name = entry.get("name", f"{kind} {index}")
+    if not isinstance(name, str) or not name.strip() or len(name) > MAX_NAME or not name.isprintable():
+        raise SceneError(
+            shorten(f"scene {where}.name = {short_repr(name)} is invalid: 1 to {MAX_NAME} printable characters")
+        )
+    body = entry[kind]
+    at = f"{where}.{kind}"
+    if kind == "box":
+        _keys(body, at, ("size", "pose"))
+        return Obstacle(
+            kind, name, _pose(body["pose"], f"{at}.pose"), tuple(_vector(body["size"], f"{at}.size", 3, True))
+        )
+    if kind == "cylinder":
+        _keys(body, at, ("radius", "length", "pose"))
+        size = (
+            _number(body["radius"], f"{at}.radius", positive=True),
+            _number(body["length"], f"{at}.length", positive=True),
+        )
+        return Obstacle(kind, name, _pose(body["pose"], f"{at}.pose"), size)
+    _keys(body, at, ("radius", "center"))
+    centre = np.array(_vector(body["center"], f"{at}.center", 3))
+    return Obstacle(kind, name, pin.SE3(np.eye(3), centre), (_number(body["radius"], f"{at}.radius", positive=True),))
+
+
+def scene_from_dict(data: Any) -> Scene:
+    """A :class:`Scene` from a mapping in the file's layout.
+
+    Raises:
+        SceneError: unknown keys, wrong types, values out of range or too many obstacles.
+    """
+    if data is None:
+        return Scene()
+    doc = _keys(data, "file", (), ("obstacles", "floor"))
+    floor_z = None
+    if "floor" in doc:
+        floor_z = _number(_keys(doc["floor"], "floor", ("z",))["z"], "floor.z")
+    entries = doc.get("obstacles", [])
+    if entries is None:
+        entries = []
+    if not isinstance(entries, list):
+        raise SceneError(shorten(f"scene obstacles must be a list, got {short_repr(entries)}"))
+    if len(entries) > MAX_OBSTACLES:
+        raise SceneError(f"scene has {len(entries)} obstacles; at most {MAX_OBSTACLES} are allowed")
+    obstacles = tuple(_obstacle(e, i) for i, e in enumerate(entries))
+    names = [o.name for o in obstacles]
+    if len(set(names)) != len(names):
+        dup = next(n for n in names if names.count(n) > 1)
+        raise SceneError(shorten(f"scene obstacle name {short_repr(dup)} is given twice"))
+    return Scene(obstacles, floor_z)
+
+
+def read_scene(path: str | Path | Mapping[str, Any] | Scene | None) -> Scene | None:
+    """Read a scene file (or take a mapping, a :class:`Scene` or None as is).
+
+    Raises:
+        SceneError: one line naming the file and the entry: unreadable, not YAML, or invalid.
+    """
+    if path is None or isinstance(path, Scene):
+        return path
+    if isinstance(path, Mapping):
+        return scene_from_dict(path)
+    if not isinstance(path, (str, Path)):
+        raise SceneError(f"a scene must be a YAML path, a mapping, a Scene or None, got {short_repr(path)}")
+    shown = shorten(Path(path).name, 40)
+    text = read_text_file(Path(path), shown, "scene file", MAX_SCENE_BYTES, SceneError)
+    try:
+        data = load_yaml(text, f"scene file '{shown}'")
+    except ConfigError as exc:
+        raise SceneError(str(exc)) from None
+    try:
+        return scene_from_dict(data)
+    except SceneError as exc:
+        message = f"{shown}: {exc}"
+        raise SceneError(message if len(message) <= 200 else shorten(str(exc))) from None

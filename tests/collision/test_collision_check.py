@@ -1,0 +1,259 @@
+"""The clearance of a pose against independent computations: the tests' own segment
+distances and trim rule, coal as a second engine, finite differences for the derivatives,
+and the poses the issue names (crossing legs, a plate through the floor, home, scenarios)."""
+
+from __future__ import annotations
+
+import coal
+import numpy as np
+import pinocchio as pin
+import pytest
+from checks import brute_segment_distance
+
+import assembler_pin as ap
+from assembler_pin.collision import Scene, clearance, read_scene, scene_from_dict
+from assembler_pin.collision.bodies import MOTOR, SHAFT, leg_segments, stack_bodies
+from assembler_pin.collision.kernel import kernel_available
+from assembler_pin.collision.pairs import pair_table
+from assembler_pin.common.messages import binding, describe
+from assembler_pin.scenarios import SCENARIOS
+from assembler_pin.state import evaluate_state
+
+
+@pytest.fixture(scope="module")
+def am():
+    return ap.AssemblerModel.from_config()
+
+
+def _twisted(am, degrees: float) -> np.ndarray:
+    """Home, with plates 1..n turned about their own z by ``degrees``: SP0's legs twist."""
+    R = pin.exp3(np.array([0.0, 0.0, np.deg2rad(degrees)]))
+    plates = np.array([m.homogeneous for m in am.home])
+    plates[1:, :3, :3] = R
+    return plates
+
+
+def _perturbed(am, scale: float, seed: int) -> np.ndarray:
+    rng = np.random.default_rng(seed)
+    out = [am.home[0].homogeneous]
+    for k in range(1, len(am.home)):
+        out.append((pin.exp6(rng.normal(size=6) * scale) * am.home[k]).homogeneous)
+    return np.array(out)
+
+
+def _leg_ends(am, plates, g):
+    b = stack_bodies(am, plates)
+    return b.bottom[g], b.top[g]
+
+
+def _independent_leg_distance(am, plates, ga: int, gb: int, trims: tuple[bool, bool, bool, bool]) -> float:
+    """Two legs' distance from their joint centres alone: each leg is the motor (0 to
+    motor_length from the bottom joint, motor_radius) and the shaft (to the top joint,
+    shaft_radius), trimmed by node_zone at the ends asked; the tests' own minimizer."""
+    leg = am.config.leg
+    best = np.inf
+    segments = []
+    for g, (trim_b, trim_t) in ((ga, trims[:2]), (gb, trims[2:])):
+        b, t = _leg_ends(am, plates, g)
+        L = np.linalg.norm(t - b)
+        u = (t - b) / L
+        parts = []
+        for lo, hi, r in ((0.0, leg.motor_length, leg.motor_radius), (leg.motor_length, L, leg.shaft_radius)):
+            lo = max(lo, leg.node_zone) if trim_b else lo
+            hi = min(hi, L - leg.node_zone) if trim_t else hi
+            if hi >= lo:
+                parts.append((b + lo * u, (hi - lo) * u, r))
+        segments.append(parts)
+    for p1, d1, r1 in segments[0]:
+        for p2, d2, r2 in segments[1]:
+            best = min(best, brute_segment_distance(p1, d1, p2, d2) - r1 - r2)
+    return best
+
+
+def _row(c, a: str, b: str) -> int:
+    names = c.names
+    for k, (i, j) in enumerate(c.pairs):
+        if {names[i], names[j]} == {a, b}:
+            return k
+    raise AssertionError(f"no pair {a} / {b}")
+
+
+def test_pair_rule(am):
+    t = pair_table(am.config)
+    assert len(t.leg_a) == 24 * 23 // 2  # every leg pair
+    assert t.trim.any(axis=1).sum() == 4 * 6 + 3 * 3 * 4  # node pairs: in a platform, and across a plate
+    platform = np.arange(24) // 6
+    assert not any(k in (platform[g], platform[g] + 1) for g, k in t.leg_plate)  # never its own plates
+    assert len(t.leg_plate) == 24 * 3 and len(t.plate_pairs) == 10
+
+
+def test_home_is_clear_and_measured_independently(am):
+    c = clearance(am, am.home)
+    assert c.clear and c.between == ("SP0 leg 0", "SP0 leg 1")
+    want = _independent_leg_distance(am, am.home, 0, 1, (True, False, True, False))  # they share the bottom node
+    assert c.min_distance == pytest.approx(want, abs=1e-7)
+    state = evaluate_state(am, am.home)
+    assert state.feasible and state.to_dict()["clearance"]["between"] == ["SP0 leg 0", "SP0 leg 1"]
+
+
+def test_crossing_legs_are_a_collision(am):
+    plates = _twisted(am, 130.0)
+    c = clearance(am, plates)
+    assert c.between == ("SP0 leg 0", "SP0 leg 2")  # no shared node: checked whole
+    want = _independent_leg_distance(am, plates, 0, 2, (False, False, False, False))
+    assert c.min_distance == pytest.approx(want, abs=1e-7) and want < 0
+    state = evaluate_state(am, plates)
+    assert not state.feasible
+    v = binding([v for v in state.violations if v.kind == "collision"])
+    assert v is not None and v.between == ("SP0 leg 0", "SP0 leg 2")
+    text = describe(v)
+    assert text.startswith("collision: SP0 leg 0 and SP0 leg 2") and " m apart, clearance 0.005 m" in text
+    assert state.to_dict()["violations"][-1]["between"] == ["SP0 leg 0", "SP0 leg 2"]
+
+
+def test_a_plate_through_the_floor_is_a_collision(am):
+    scene = Scene((), floor_z=0.24)  # plate 1's lower face is at home_height - thickness / 2
+    state = evaluate_state(am, am.home, scene=scene)
+    assert not state.feasible and any(v.kind == "collision" and "floor" in v.between for v in state.violations)
+    c = state.clearance
+    want = am.config.home_height - 0.5 * am.config.plate.thickness - 0.24
+    assert c.distances[_row(c, "plate 1", "floor")] == pytest.approx(want, abs=1e-12) and want < 0
+    assert not any("plate 0" in (c.names[i], c.names[j]) and "floor" in (c.names[i], c.names[j]) for i, j in c.pairs)
+
+
+def test_every_leg_pair_against_coal(am):
+    """A random pose: each leg pair's distance through coal's capsules (the same trimmed
+    segments) equals the closed form wherever the two are apart."""
+    plates = _perturbed(am, 0.05, 3)
+    c = clearance(am, plates)
+    b = stack_bodies(am, plates)
+    t = pair_table(am.config)
+    req = coal.DistanceRequest()
+    checked = 0
+    for k in range(len(t.leg_a)):
+        ga, gb = int(t.leg_a[k]), int(t.leg_b[k])
+        best = np.inf
+        for pa in (MOTOR, SHAFT):
+            for pb in (MOTOR, SHAFT):
+                sa, va, loa, hia, _, ra = leg_segments(b, np.array([ga]), np.array([pa]), t.trim[k, 0], t.trim[k, 1])
+                sb, vb, lob, hib, _, rb = leg_segments(b, np.array([gb]), np.array([pb]), t.trim[k, 2], t.trim[k, 3])
+                if hia[0] < loa[0] or hib[0] < lob[0]:
+                    continue
+                shapes = []
+                for s, v, r in ((sa[0], va[0], ra[0]), (sb[0], vb[0], rb[0])):
+                    length = float(np.linalg.norm(v))
+                    R = ap.model.geometry.rotation_z_to(v / length)
+                    shapes += [coal.Capsule(float(r), length), coal.Transform3s(R, s + 0.5 * v)]
+                best = min(best, coal.distance(*shapes, req, coal.DistanceResult()))
+        row = _row(c, f"SP{ga // 6} leg {ga % 6}", f"SP{gb // 6} leg {gb % 6}")
+        if best > 1e-3:
+            assert c.distances[row] == pytest.approx(best, abs=1e-6)
+            checked += 1
+    assert checked > 200
+
+
+TRUSS = {
+    "floor": {"z": 0.0},
+    "obstacles": [
+        {"sphere": {"radius": 0.05, "center": [0.2, 0.0, 0.35]}},
+        {"box": {"size": [0.1, 0.2, 0.05], "pose": [-0.25, 0.05, 0.55, 0.3, 0.2, 0.1]}},
+        {"cylinder": {"radius": 0.02, "length": 0.8, "pose": [0.05, 0.25, 0.7, 1.4, 0.1, 0.0]}},
+    ],
+}
+
+
+def test_derivatives_against_central_differences(am):
+    """∂d/∂η_k of every measured pair within 0.1 m, η_k a world twist of plate k: closed-form
+    pairs to 1e-6, pairs measured by coal (legs and plates against plates, boxes, cylinders)
+    to 1e-4 when apart (GJK on curved shapes) and 1e-3 when overlapping (EPA's depth)."""
+    scene = scene_from_dict(TRUSS)
+    plates = _perturbed(am, 0.04, 7)
+    c = clearance(am, plates, scene)
+    rows = np.flatnonzero(c.exact & (c.distances < 0.1))
+    kinds = {
+        tuple(sorted(("leg" if "leg" in c.names[i] else c.names[i].split()[0]) for i in pair)) for pair in c.pairs[rows]
+    }
+    assert len(rows) > 20 and len(kinds) >= 4, kinds
+    grad = c.gradient(rows)
+    h = 1e-6
+    fd = np.zeros_like(grad)
+    pairs = [tuple(p) for p in c.pairs[rows]]
+    for k in range(len(plates)):
+        for a in range(6):
+            values = []
+            for sign in (1.0, -1.0):
+                eta = np.zeros(6)
+                eta[a] = sign * h
+                moved = plates.copy()
+                moved[k] = (pin.exp6(eta) * pin.SE3(plates[k])).homogeneous
+                other = clearance(am, moved, scene)
+                lookup = {tuple(p): d for p, d in zip(other.pairs.tolist(), other.distances, strict=True)}
+                values.append(np.array([lookup[p] for p in pairs]))
+            fd[:, k, a] = (values[0] - values[1]) / (2 * h)
+    err = np.abs(grad - fd).max(axis=(1, 2))
+    names = [(c.names[i], c.names[j]) for i, j in c.pairs[rows]]
+    through_coal = np.array(["plate" in a + b or "box" in b or "cylinder" in b for a, b in names])
+    apart = c.distances[rows] > 1e-3
+    tol = np.where(through_coal, np.where(apart, 1e-4, 1e-3), 1e-6)
+    bad = np.flatnonzero(err > tol)
+    assert not len(bad), [(names[i], err[i], c.distances[rows[i]]) for i in bad]
+    assert (~through_coal).sum() > 20 and through_coal.sum() >= 3
+
+
+@pytest.fixture(scope="module")
+def scenario_states(am):
+    out = {}
+    for sc in SCENARIOS.values() if isinstance(SCENARIOS, dict) else SCENARIOS:
+        result = ap.solver.pipeline.solve(am, sc.goal)
+        out[sc.name] = (sc, result)
+    return out
+
+
+def test_scenario_poses_are_clear(am, scenario_states):
+    for name, (sc, result) in scenario_states.items():
+        scene = Scene((), sc.floor_z)
+        for state in (result.initial, result.best):
+            c = clearance(am, state.plates, scene)
+            assert c.clear, (name, c)
+            assert c.min_distance > 0.015, (name, c)
+
+
+def test_the_truss_bay_strut_crosses_the_translation_optimum(am, scenario_states):
+    scene = read_scene("examples/truss_bay.yaml")
+    assert clearance(am, am.home, scene).clear
+    _, result = scenario_states["translation"]
+    state = evaluate_state(am, result.best.plates, scene=scene)
+    assert not state.feasible
+    assert state.clearance.between[1] == "lower strut" and state.clearance.min_distance < 0
+
+
+@pytest.mark.skipif(not kernel_available(), reason="numba is not installed")
+@pytest.mark.parametrize("scene", [None, "examples/truss_bay.yaml"])
+def test_the_compiled_kernel_equals_numpy(am, scene):
+    """The same pairs, bounds, distances, bodies and derivatives from both engines."""
+    for plates in (am.home, _perturbed(am, 0.05, 3), _twisted(am, 130.0), _perturbed(am, 0.1, 11)):
+        ref = clearance(am, plates, scene, engine="numpy")
+        got = clearance(am, plates, scene, engine="numba")
+        assert got.between == ref.between and got.min_distance == pytest.approx(ref.min_distance, abs=1e-12)
+        np.testing.assert_array_equal(got.pairs, ref.pairs)
+        np.testing.assert_array_equal(got.exact, ref.exact)
+        np.testing.assert_allclose(got.distances, ref.distances, rtol=0, atol=1e-12)
+        np.testing.assert_allclose(got.gradient(), ref.gradient(), rtol=0, atol=1e-10)
+
+
+def test_an_unknown_engine_is_refused(am):
+    with pytest.raises(ap.exceptions.OptionsError):
+        clearance(am, am.home, engine="gpu")
+
+
+def test_a_scene_leaves_the_stack_s_own_pairs_as_they_are(am):
+    """Every pair of the stack alone has the same distance with a scene around it (the
+    leg–plate pairs coal measures included, whatever obstacles are measured after them)."""
+    scene = scene_from_dict({"obstacles": [{"cylinder": {"radius": 0.01, "length": 0.5, "pose": [3, 0, 1, 0, 0, 0]}}]})
+    for seed in range(6):
+        plates = _perturbed(am, 0.25, seed)
+        alone, around = clearance(am, plates), clearance(am, plates, scene)
+        measured = {tuple(p): d for p, d, e in zip(around.pairs, around.distances, around.exact, strict=True) if e}
+        for pair, d, exact in zip(alone.pairs, alone.distances, alone.exact, strict=True):
+            if exact and tuple(pair) in measured:
+                assert measured[tuple(pair)] == pytest.approx(d, abs=1e-9), pair
