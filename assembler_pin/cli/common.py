@@ -242,7 +242,7 @@ def add_optimize_arguments(p: argparse.ArgumentParser) -> None:
         choices=METHODS,
         default=d.method,
         help=f"slsqp: smooth epigraph form, SciPy SLSQP; ipopt: the same form by IPOPT on the sparse "
-        f"Jacobian (pip install assembler_pin[nlp]); auto: ipopt from 12 platforms (finished by slsqp when it "
+        f"Jacobian (CasADi); auto: ipopt from 12 platforms (finished by slsqp when it "
         f"stops unconverged), else slsqp; paper: the "
         f"paper's non-smooth objective with finite differences (default {d.method})",
     )
