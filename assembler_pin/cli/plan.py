@@ -13,6 +13,7 @@ from .common import (
     config_from_args,
     dumps,
     progress_for,
+    radians_checked,
     wrapped,
     writable_parent,
 )
@@ -81,10 +82,10 @@ def _plan_path(args: argparse.Namespace, am: AssemblerModel):
     from ..kinematics import taa_to_se3
     from ..motion import EEPath, read_waypoints
 
-    first = am.home[-1] if args.from_ is None else taa_to_se3(args.from_, what="--from")
+    first = am.home[-1] if args.from_ is None else taa_to_se3(radians_checked(args.from_, "--from"), what="--from")
     start = am.home if args.from_ is None else None
     if not args.waypoints:
-        return EEPath((first, taa_to_se3(args.to, what="--to")), args.path), start
+        return EEPath((first, taa_to_se3(radians_checked(args.to, "--to"), what="--to")), args.path), start
     path = read_waypoints(args.waypoints, kind=args.path)
     if _same_pose(path.waypoints[0], first):
         return EEPath((first, *path.waypoints[1:]), path.kind, path.times), start
