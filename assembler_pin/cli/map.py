@@ -95,7 +95,7 @@ def _pictures(args: argparse.Namespace, table, configs: list, doc: dict) -> None
 
         with StackViewer(am) as viewer:
             viewer.display(am.home)
-            doc["html"] = str(Path(args.html).resolve())
+            doc["html"] = str(Path(args.html))
             write_map_page(viewer, table, doc["html"], config=configs[0][0])
 
 

@@ -91,7 +91,7 @@ def run(args: argparse.Namespace) -> int:
         with StackViewer(am) as viewer:
             viewer.animate([evaluate_state(am, pa) for pa in result.samples])
             viewer.frame()
-            path = Path(args.html).resolve()
+            path = Path(args.html)
             viewer.static_html(path)
         print(f"wrote {path}")
     return 0 if result.held else 1

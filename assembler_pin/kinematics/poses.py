@@ -180,7 +180,8 @@ def plate_arrays(am: AssemblerModel, plates: PlateArrays | Sequence | np.ndarray
         ArgumentError: ``am`` is not an :class:`AssemblerModel` (e.g. the arguments swapped).
         PoseError: wrong count of plates or a malformed pose.
     """
-    checked_model(am)
+    if isinstance(am, (list, tuple, np.ndarray, PlateArrays)) or hasattr(am, "plates"):
+        checked_model(am)  # plates where the model belongs: the arguments swapped
     plates = _carried_plates(plates)
     if isinstance(plates, PlateArrays):
         if len(plates.p) != am.n + 1:
