@@ -94,7 +94,7 @@ def _pictures(args: argparse.Namespace, table, configs: list, doc: dict) -> None
         from ..viz import StackViewer
 
         with StackViewer(am) as viewer:
-            viewer.display(am.home)
+            viewer.display(am.home, color_forces=False)
             doc["html"] = str(Path(args.html))
             write_map_page(viewer, table, doc["html"], config=configs[0][0])
 
