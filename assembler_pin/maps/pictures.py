@@ -32,12 +32,14 @@ from ..plots.figures import draw_state
 from ..state import evaluate_state
 
 __all__ = [
+    "MAP_FIGSIZE",
     "capacity_bar_html",
     "capacity_range",
     "map_heatmaps",
     "map_slice",
     "point_size",
     "show_map_points",
+    "slice_label",
     "write_map_page",
 ]
 
@@ -73,6 +75,11 @@ def map_slice(table, config: str | None = None, orientation: int = 0) -> tuple[s
     return u_axis, v_axis, out
 
 
+MAP_FIGSIZE = (13.0, 8.6)
+"""Size of :func:`map_heatmaps`' figure [in]: 1950 × 1290 px at the 150 dpi it is saved at,
+its text readable on a screen."""
+
+
 def map_heatmaps(table, am: AssemblerModel, config: str | None = None, orientation: int = 0, title: str = "") -> Figure:
     """Reachability, optimized max|F| [N], payload capacity [kg], EE sag [mm] and weakest EE
     stiffness [N/m] over a 2-D map slice, in a grid of panels (two rows of three, the legend
@@ -83,7 +90,7 @@ def map_heatmaps(table, am: AssemblerModel, config: str | None = None, orientati
     (:func:`capacity_range`). The title names the slice: its fixed axis and value, the
     configuration and the EE orientation."""
     u_axis, v_axis, s = map_slice(table, config, orientation)
-    fig = Figure(figsize=(13.0, 8.6), layout="constrained")
+    fig = Figure(figsize=MAP_FIGSIZE, layout="constrained")
     axes = fig.subplots(2, 3).ravel()
     extent = _extent(s["u"], s["v"])
     home = evaluate_state(am, am.home)
