@@ -12,6 +12,7 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass
+from types import SimpleNamespace
 from typing import TYPE_CHECKING
 
 import meshcat.animation
@@ -26,7 +27,7 @@ from ..model.assembler import AssemblerModel
 from ..model.geometry import DIMENSIONS
 from ..state import StackState, evaluate_state
 from .camera import cylinder_between
-from .colors import force_color, material
+from .colors import color_scale, force_color, material
 from .drawing import payload_rod_transform
 from .placements import as_plates
 
@@ -66,10 +67,6 @@ FORCE_BAND_COVER = 0.94
 def animation_scale(forces: Sequence[np.ndarray], leg, force_scale: str = "auto") -> tuple[float, float]:
     """(tension, compression) [N] where the colours of an animation saturate: the rule of
     :func:`~assembler_pin.viz.colors.color_scale` applied to the largest force of every frame."""
-    from types import SimpleNamespace
-
-    from .colors import color_scale
-
     peak = max((float(np.abs(f).max()) for f in forces), default=0.0)
     return color_scale(SimpleNamespace(max_abs_force=peak), leg, force_scale)
 
