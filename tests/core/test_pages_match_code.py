@@ -136,8 +136,8 @@ def test_the_home_page_lists_every_guide_and_every_extra():
 
 def test_the_map_picture_is_drawn_as_map_png_draws_today():
     """docs/map.png is the output of the command in the comment above it: its size is the
-    figure's of :func:`~assembler_pin.maps.pictures.map_heatmaps` at 150 dpi (the old
-    one-row picture was 2250 × 720), and its caption names the five panels."""
+    figure's of :func:`~assembler_pin.maps.pictures.map_heatmaps` at 150 dpi, and its caption
+    names the five panels."""
     import struct
 
     page = _read("docs/guides/maps.md")
