@@ -119,7 +119,7 @@ def evaluate_state(
     configuration's ``clearance`` gets a ``collision`` violation naming the two bodies.
 
     Args:
-        plates: world poses of plates 0..n, plate 0 first.
+        plates: world poses of plates 0..n, plate 0 first, or a :class:`StackState`.
         goal: optional EE goal to check plate n against.
         tolerance: EE goal tolerance.
         data: a whole-stack Pinocchio ``Data`` the caller owns, for the statics

@@ -34,6 +34,10 @@ Every subcommand follows one rule:
 | 1 | answered, not possible: `success` false; the answer is still printed; files hold only valid content |
 | 2 | refused input: exactly one line on stderr naming what was wrong and what is allowed |
 | 130 | interrupted by Ctrl-C (143 on SIGTERM): one line on stderr, no partial output file |
+| 141 | the reader of the output went away (`assembler-pin solve ... \\| head`): nothing on stderr |
+
+`assembler-pin` alone (or with only `-v`/`-q`) prints its help, the list of subcommands, and
+exits 0.
 
 **Refusals.** A malformed or out-of-range argument, option, configuration or plate file, a
 file that is not UTF-8, JSON nested too deeply, `true` where a number belongs, an output

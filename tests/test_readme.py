@@ -197,7 +197,7 @@ COMMANDS: list[tuple[str, str, str]] = [
     ),
     (r"pip install", "", "installs packages"),
     (r"python -c from assembler_pin .*benchmark_wide_search", "", "300 starts a goal, ~10 s each (test_bench runs 3)"),
-    (r"assembler-pin bench --(truss|speed)$", "", "timings (minutes under --speed)"),
+    (r"assembler-pin bench --(truss|speed|platforms-sweep)$", "", "minutes of timings"),
     (r"assembler-pin bench --targets( --json| --map-cells (0|200))?$", "", "minutes of timings (test_bench runs rows)"),
     (r"python -m pytest", "", "the test suite itself"),
     (r"mkdocs build", "", "builds this site (CI runs it)"),

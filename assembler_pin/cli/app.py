@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import argparse
 import logging
+import os
 import re
 import signal
 import sys
@@ -78,6 +79,12 @@ def _command_of(argv: Sequence[str]) -> str:
 #: Exit statuses of every subcommand: answered and successful, answered "not
 #: possible", refused input, a bug (``EX_SOFTWARE``), interrupted by Ctrl-C (128 + SIGINT).
 EXIT_OK, EXIT_NOT_POSSIBLE, EXIT_REFUSED, EXIT_BUG, EXIT_INTERRUPTED = 0, 1, 2, 70, 130
+#: The reader of the output went away (``… | head``): 128 + SIGPIPE, as a shell command
+#: killed by the signal, without a word on stderr.
+EXIT_PIPE = 141
+
+#: The top-level options: with only these (or nothing), the command lists its subcommands.
+_TOP_FLAGS = frozenset({"-v", "--verbose", "-q", "--quiet"})
 
 
 def main(argv: Sequence[str] | None = None) -> int:
@@ -98,6 +105,9 @@ def main(argv: Sequence[str] | None = None) -> int:
             warnings.simplefilter("default")
             words = sys.argv[1:] if argv is None else list(argv)
             parser = build_parser(only=_command_of(words))
+            if set(words) <= _TOP_FLAGS:  # no subcommand: what there is to run
+                print(parser.format_help(), end="")
+                return EXIT_OK
             try:
                 args = parser.parse_args(words)
             except CLIError as exc:
@@ -123,7 +133,12 @@ def main(argv: Sequence[str] | None = None) -> int:
 def _run(args: argparse.Namespace, command: str) -> int:
     """``args.func(args)`` with every error but an interrupt turned into one line and a status."""
     try:
-        return int(args.func(args))
+        status = int(args.func(args))
+        sys.stdout.flush()  # a closed pipe shows here, not at the interpreter's exit
+        return status
+    except BrokenPipeError:
+        _silence_stdout()
+        return EXIT_PIPE
     except AssemblerError as exc:
         print(f"{command}: error: {_one_line(exc)}", file=sys.stderr)
         return EXIT_REFUSED
@@ -138,6 +153,18 @@ def _run(args: argparse.Namespace, command: str) -> int:
         what = f"{type(exc).__name__}: {_one_line(exc)[:300]}"
         print(f"{command}: internal error (a bug, please report it): {what}{hint}", file=sys.stderr)
         return EXIT_BUG
+
+
+def _silence_stdout() -> None:
+    """Point stdout at the null device, so that the interpreter's last flush of the output
+    nobody reads any more is not an error printed on stderr."""
+    devnull = os.open(os.devnull, os.O_WRONLY)
+    try:
+        os.dup2(devnull, sys.stdout.fileno())
+    except (OSError, ValueError):  # stdout is not a file (captured by a test)
+        pass
+    finally:
+        os.close(devnull)
 
 
 def _log_warning(

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import os
 from typing import TYPE_CHECKING
 
 from ..exceptions import CLIError
@@ -68,6 +69,23 @@ def add_parser(add) -> None:
     p.set_defaults(func=run)
 
 
+def bench_header(am, what: str) -> str:
+    """The two lines above the figures: what they are, on what machine, and how to read a key."""
+    import platform
+
+    import numpy
+    import pinocchio
+
+    machine = (
+        f"Python {platform.python_version()}, pin {pinocchio.__version__}, numpy {numpy.__version__}, "
+        f"{os.cpu_count()} CPUs ({platform.machine()})"
+    )
+    return (
+        f"assembler-pin bench: {what}, {am.n} platforms\non {machine}\n"
+        "units by suffix: _us µs, _ms ms, _s s, _per_s per second; compare figures within one run"
+    )
+
+
 def run(args: argparse.Namespace) -> int:
     """Median times of the hot computations; progress per figure on a terminal."""
     from ..bench.calls import run_benchmarks
@@ -118,6 +136,8 @@ def run(args: argparse.Namespace) -> int:
         print(dumps(results))
         return 0
     scenarios = results.pop("optimize_scenarios", None)
+    print(bench_header(am, f"median of {args.repeat} calls per figure"))
+    print(f"{'figure':>30}  {'median':>10}")
     for key, value in results.items():
         print(f"{key:>30}: {value:10.3f}" if isinstance(value, float | int) else f"{key:>30}: {value}")
     if scenarios:
@@ -184,6 +204,7 @@ def _extra_figures(args: argparse.Namespace, am) -> int:
     if args.json:
         print(dumps(doc))
         return 0
+    print(bench_header(am, "medians"))
     for group, figures in doc.items():
         print(f"{group}:")
         for key, value in figures.items() if isinstance(figures, dict) else [("", figures)]:

@@ -151,12 +151,22 @@ def format_state_table(state: StackState, title: str = "") -> str:
     return finite_text("\n".join(lines))
 
 
+def radians_checked(taa, flag: str, degrees_flag: str | None = None):
+    """``taa`` (x y z rx ry rz) when its rotation vector is at most 2π rad long; a longer
+    one is a rotation typed in degrees, refused pointing at the option in degrees."""
+    angle = math.sqrt(sum(float(x) ** 2 for x in taa[3:]))
+    if angle > 2 * math.pi:
+        hint = f"use {degrees_flag} for degrees" if degrees_flag else "give the rotation vector in radians"
+        raise CLIError(f"{flag}: the rotation vector is {angle:.4g} rad long, more than 2π (a turn): degrees? {hint}")
+    return taa
+
+
 def goal_from_args(args: argparse.Namespace):
     """The EE goal of ``solve``: ``--goal`` (rotation vector in rad) or ``--goal-deg`` (in deg)."""
     from ..kinematics import taa_to_se3
 
     if args.goal is not None:
-        return taa_to_se3(args.goal, what="--goal")
+        return taa_to_se3(radians_checked(args.goal, "--goal", "--goal-deg"), what="--goal")
     if args.goal_deg is not None:
         return taa_to_se3(args.goal_deg, degrees=True, what="--goal-deg")
     raise CLIError("give the EE goal: --goal X Y Z RX RY RZ (m, rad) or --goal-deg X Y Z RX RY RZ (m, deg)")
@@ -282,7 +292,7 @@ def add_optimize_arguments(p: argparse.ArgumentParser) -> None:
         "--method",
         choices=METHODS,
         help=f"slsqp: smooth epigraph form, SciPy SLSQP; ipopt: the same form by IPOPT on the sparse "
-        f"Jacobian (pip install assembler_pin[nlp]); auto: ipopt from 12 platforms (finished by slsqp when it "
+        f"Jacobian (CasADi); auto: ipopt from 12 platforms (finished by slsqp when it "
         f"stops unconverged), else slsqp; paper: the "
         f"paper's non-smooth objective with finite differences (default {d.method})",
     )

@@ -40,7 +40,9 @@ def add_parser(add) -> None:
     )
     p.add_argument("--scheduler", metavar="ADDRESS", help="an existing Dask scheduler, e.g. tcp://10.0.0.5:8786")
     p.add_argument("--batch-size", type=int, default=None, metavar="N", help="cells per task (default automatic)")
-    p.add_argument("--png", metavar="FILE", help="heatmap slices: reachability, max|F|, capacity")
+    p.add_argument(
+        "--png", metavar="FILE", help="heatmaps of one slice: reachability, max|F|, capacity, sag [mm], stiffness"
+    )
     p.add_argument("--html", metavar="FILE", help="the cells as a point cloud colored by capacity, in the viewer")
     p.add_argument("--no-progress", action="store_true", help="no progress line (as the global --quiet)")
     p.add_argument("--json", action="store_true", help="print one JSON object")
@@ -94,8 +96,8 @@ def _pictures(args: argparse.Namespace, table, configs: list, doc: dict) -> None
         from ..viz import StackViewer
 
         with StackViewer(am) as viewer:
-            viewer.display(am.home)
-            doc["html"] = str(Path(args.html).resolve())
+            viewer.display(am.home, color_forces=False)
+            doc["html"] = str(Path(args.html))
             write_map_page(viewer, table, doc["html"], config=configs[0][0])
 
 

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import time
 from typing import TYPE_CHECKING
 
 from ..exceptions import CLIError
@@ -14,6 +15,7 @@ from .common import (
     config_from_args,
     dumps,
     progress_for,
+    radians_checked,
     scene_from_args,
     wrapped,
     writable_parent,
@@ -84,10 +86,10 @@ def _plan_path(args: argparse.Namespace, am: AssemblerModel):
     from ..kinematics import taa_to_se3
     from ..motion import EEPath, read_waypoints
 
-    first = am.home[-1] if args.from_ is None else taa_to_se3(args.from_, what="--from")
+    first = am.home[-1] if args.from_ is None else taa_to_se3(radians_checked(args.from_, "--from"), what="--from")
     start = am.home if args.from_ is None else None
     if not args.waypoints:
-        return EEPath((first, taa_to_se3(args.to, what="--to")), args.path), start
+        return EEPath((first, taa_to_se3(radians_checked(args.to, "--to"), what="--to")), args.path), start
     path = read_waypoints(args.waypoints, kind=args.path)
     if _same_pose(path.waypoints[0], first):
         return EEPath((first, *path.waypoints[1:]), path.kind, path.times), start
@@ -126,6 +128,7 @@ def run(args: argparse.Namespace) -> int:
     from ..motion import PlanOptions
     from ..motion.timing import plan_trajectory
 
+    started = time.perf_counter()
     for option, value in (("--out file", args.out), ("--plot file", args.plot)):
         if value:
             writable_parent(value, option)
@@ -155,7 +158,7 @@ def run(args: argparse.Namespace) -> int:
     if args.json:
         print(dumps(doc))
     else:
-        _print_summary(args, motion, doc)
+        _print_summary(args, motion, doc, time.perf_counter() - started)
     return 0 if motion.success else 1
 
 
@@ -179,7 +182,7 @@ def _write_outputs(args: argparse.Namespace, am: AssemblerModel, motion, prog) -
     return doc
 
 
-def _print_summary(args: argparse.Namespace, motion, doc: dict) -> None:
+def _print_summary(args: argparse.Namespace, motion, doc: dict, elapsed: float) -> None:
     """The text answer of ``plan``: what was planned, the trajectory, the files written."""
     traj = motion.trajectory
     print(wrapped(f"plan: {'success' if doc['success'] else 'FAILED'} — {doc['reason']}"))
@@ -187,8 +190,10 @@ def _print_summary(args: argparse.Namespace, motion, doc: dict) -> None:
     if motion.plan.states:
         print(
             f"{doc['samples']} samples, peak max|F| {doc['peak_max_abs_force']:.2f} N, total leg travel "
-            f"{doc['total_leg_travel_m']:.3f} m, planned in {motion.plan.time_s:.2f} s"
+            f"{doc['total_leg_travel_m']:.3f} m"
         )
+    if motion.replans:
+        print(f"re-planned {motion.replans} time(s) with half steps: an output sample failed its check")
     if traj is not None:
         extent = (
             "the whole path"
@@ -211,6 +216,7 @@ def _print_summary(args: argparse.Namespace, motion, doc: dict) -> None:
     for key in ("out", "plot"):
         if key in doc:
             print(f"wrote {doc[key]}" + ("" if traj is None or traj.complete else " (valid prefix, complete: false)"))
+    print(f"done in {elapsed:.1f} s")
 
 
 def _plan_compare(args: argparse.Namespace, am: AssemblerModel, options) -> int:

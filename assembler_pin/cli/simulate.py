@@ -75,10 +75,13 @@ def run(args: argparse.Namespace) -> int:
         print(f"{'t [s]':>7} {'EE drift [mm]':>14} {'EE turn [deg]':>14} {'max|F| [N]':>11} {'at limit':>9}")
         for k in np.unique(np.linspace(0, len(result.times) - 1, 11).round().astype(int)):
             turn_deg = np.rad2deg(result.ee_rotation_drift[k])
+            unloaded = result.times[k] == 0.0
+            force = f"{'unloaded':>11}" if unloaded else f"{np.abs(result.forces[k]).max():11.3f}"
             print(
                 f"{result.times[k]:7.3f} {1e3 * result.ee_drift[k]:14.3f} {turn_deg:14.3f} "
-                f"{np.abs(result.forces[k]).max():11.3f} {int(result.saturated[k].sum()):9d}"
+                f"{force} {int(result.saturated[k].sum()):9d}"
             )
+        print(hold_note(am, ours, result))
         j, i = np.unravel_index(gap.argmax(), gap.shape)
         print(
             f"final forces vs statics: max difference {gap.max():.3f} N ({leg_label(j, i)}), "
@@ -91,10 +94,28 @@ def run(args: argparse.Namespace) -> int:
         with StackViewer(am) as viewer:
             viewer.animate([evaluate_state(am, pa) for pa in result.samples])
             viewer.frame()
-            path = Path(args.html).resolve()
+            path = Path(args.html)
             viewer.static_html(path)
         print(f"wrote {path}")
     return 0 if result.held else 1
+
+
+def hold_note(am: AssemblerModel, ours, result) -> str:
+    """What the hold table shows, below it: why the first row carries no force, and the EE's
+    drift beside the legs' sag alone (``assembler-pin stiffness``)."""
+    import numpy as np
+
+    from ..compliance import stiffness
+
+    springs = stiffness(am, ours)
+    sag = f"{1e3 * float(np.linalg.norm(springs.sag_translation)):.3f} mm" if springs.success else "none"
+    return (
+        "At t = 0 the servos stand at the commanded lengths and push nothing; they take up the load\n"
+        f"as the stack settles. EE drift {1e3 * result.ee_drift[-1]:.3f} mm; the legs' sag alone "
+        f"('assembler-pin stiffness'): {sag}.\n"
+        "The servos are as stiff as those legs; the rest is MuJoCo's soft ball joints and loop\n"
+        "closures, which the stiffness model takes as rigid (docs: MuJoCo)."
+    )
 
 
 def _simulate_trajectory(args: argparse.Namespace, am: AssemblerModel) -> int:

@@ -253,11 +253,11 @@ def _serve(args: argparse.Namespace, viewer) -> int:
     from ..common.signals import forget_interrupt
 
     if args.html:
-        path = Path(args.html).resolve()
+        path = Path(args.html)
         viewer.static_html(path)
         print(f"wrote {path}")
         if args.open:
-            webbrowser.open(path.as_uri())
+            webbrowser.open(path.resolve().as_uri())
         return 0
     try:
         print(viewer.url, flush=True)

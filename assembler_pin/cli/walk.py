@@ -24,6 +24,14 @@ def add_parser(add) -> None:
         help="COUNT footholds STEP metres apart along +x on the floor z = 0, the first at the origin",
     )
     p.add_argument("--clearance", type=float, default=0.03, help="lift and pre-contact height [m] (default 0.03)")
+    p.add_argument(
+        "--payload",
+        type=float,
+        default=0.0,
+        metavar="KG",
+        help="a tool of this mass on the EE plate, at the config's payload.offset (default 0: a walking "
+        "stack carries no tool; the config's payload.mass is not used)",
+    )
     p.add_argument("--out", metavar="DIR", help="write walk.json and walk.csv (one row per sample) into DIR")
     p.add_argument("--plot", metavar="PNG", help="write max|F| over the walk with its phases marked")
     p.add_argument(
@@ -57,6 +65,20 @@ def _footholds(args: argparse.Namespace):
     raise CLIError("give --footholds FILE or --floor STEP COUNT")
 
 
+def walking_config(cfg, payload: float):
+    """``cfg`` carrying ``payload`` [kg] on its EE plate (the config's own payload mass is the
+    tool of ``solve``; a walking stack carries a tool only when asked). A mass out of range
+    is refused by the configuration's own check (``payload.mass``)."""
+    import dataclasses
+
+    from ..exceptions import ConfigError
+
+    try:
+        return cfg.replace(payload=dataclasses.replace(cfg.payload, mass=payload))
+    except ConfigError:
+        raise CLIError(f"--payload must be a finite mass >= 0 [kg], at most 1e5, got {payload:g}") from None
+
+
 def run(args: argparse.Namespace) -> int:
     """Exit 0 when the walk reaches its last foothold, 1 when it cannot (the valid prefix is
     still printed and written), 2 for refused input."""
@@ -64,7 +86,7 @@ def run(args: argparse.Namespace) -> int:
     from ..model.assembler import AssemblerModel
     from ..walk import WalkOptions, plan_walk
 
-    am = AssemblerModel.from_config(config_from_args(args))
+    am = AssemblerModel.from_config(walking_config(config_from_args(args), args.payload))
     feet, floor_z = _footholds(args)
     options = WalkOptions(clearance=args.clearance, floor_z=floor_z)
     out = Path(args.out) if args.out else None
@@ -85,7 +107,7 @@ def run(args: argparse.Namespace) -> int:
     if out is not None:
         write_walk(am, walk, out)
     if args.plot:
-        plot_walk(walk, args.plot)
+        plot_walk(am, walk, args.plot)
     if args.html:
         view_walk(am, walk, args.html, DEFAULT_FPS if args.fps is None else args.fps)
     print(dumps(doc) if args.json else format_walk(walk))
@@ -125,32 +147,66 @@ def view_walk(am, walk, path: str, fps: float) -> None:
         viewer.static_html(path)
 
 
-def plot_walk(walk, path: str) -> None:
-    """max|F| [N] per sample over the walk, each phase shaded and named."""
+def walk_times(am, walk):
+    """(m,) the time [s] of each sample of the walk when every step runs at the legs' top
+    speed: a step takes its largest commanded length change over ``leg.max_speed``."""
+    import numpy as np
+
+    commanded = [p.commanded for p in walk.phases if len(p.plates)]
+    if not commanded:
+        return np.zeros(0)
+    lengths = np.concatenate(commanded).reshape(-1, am.n * 6)
+    steps = np.abs(np.diff(lengths, axis=0)).max(axis=1) / am.config.leg.max_speed
+    return np.concatenate([[0.0], np.cumsum(steps)])
+
+
+def plot_walk(am, walk, path: str):
+    """max|F| [N] over the walk against time at the legs' top speed, each phase shaded and
+    named, the force limits dashed. Returns the figure (closed once saved)."""
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
-    import numpy as np
 
+    from ..common import palette
     from ..plots.figures import save
 
-    fig, ax = plt.subplots(figsize=(8, 3.2))
+    times = walk_times(am, walk)
+    fig, ax = plt.subplots(figsize=(8, 3.6), layout="constrained")
     start = 0
     shades = {"reach": "#dce9f5", "transfer": "#f3e3c3", "swing": "#dcefdc"}
     for phase in walk.phases:
         m = len(phase.plates)
-        x = np.arange(start, start + m)
-        ax.axvspan(start - 0.5, start + max(m, 1) - 0.5, color=shades[phase.kind], lw=0)
-        if m:
-            ax.plot(x, phase.max_abs_forces, color="#333333", lw=1.2)
-        ax.text(start + max(m, 1) / 2 - 0.5, 0.02, phase.kind, transform=ax.get_xaxis_transform(), ha="center", size=7)
+        if not m:
+            continue
+        t = times[start : start + m]
+        t0 = times[start - 1] if start else 0.0
+        ax.axvspan(t0, t[-1], color=shades[phase.kind], lw=0)
+        ax.plot(t, phase.max_abs_forces, color="#333333", lw=1.2)
+        ax.text((t0 + t[-1]) / 2, 0.02, phase.kind, transform=ax.get_xaxis_transform(), ha="center", size=8)
         start += m
-    ax.set_xlabel("sample")
+    leg = am.config.leg
+    ax.axhline(leg.max_tension, color=palette.hex_color(palette.TENSION), ls="--", lw=1)
+    ax.text(
+        0.005,
+        leg.max_tension,
+        f" force limit {leg.max_tension:g} N",
+        transform=ax.get_yaxis_transform(),
+        va="bottom",
+        size=8,
+    )
+    if leg.max_compression != leg.max_tension:
+        ax.axhline(leg.max_compression, color=palette.hex_color(palette.COMPRESSION), ls="--", lw=1)
+    top = max(leg.max_tension, leg.max_compression)
+    ax.set_ylim(0, 1.12 * top)
+    ax.set_xlabel(f"time at the legs' top speed ({leg.max_speed:g} m/s) [s]")
     ax.set_ylabel("max |F| [N]")
-    ax.set_title(f"walk over {len(walk.footholds)} footholds: {'valid' if walk.success else walk.reason[:70]}", size=9)
+    verdict = "valid" if walk.success else walk.reason[:70]
+    tool = f"{am.config.payload.mass:g} kg tool" if am.config.payload.mass > 0 else "no tool"
+    ax.set_title(f"walk over {len(walk.footholds)} footholds, {tool}: {verdict}", size=10)
     save(fig, path)
     plt.close(fig)
+    return fig
 
 
 def format_walk(walk) -> str:

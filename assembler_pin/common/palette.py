@@ -19,7 +19,7 @@ EE compliance ellipsoid     magenta      translucent ellipsoid at the EE (``view
 violation / at a bound      yellow       viewer balls, figure frames and rings
 EE goal                     gold star    pose views
 capacity (maps)             viridis      dark purple = low, yellow = high, in PNG and HTML alike
-max|F| (maps)               cividis      dark blue = low, yellow = high (a magnitude, no sign)
+max|F| (maps)               cividis_r    yellow = low (better), dark blue = high (a magnitude, no sign)
 reachable (maps)            teal         a grid cell where a valid state was found
 home pose, for scale        dark grey    drawn over the map panels
 not reachable (maps)        dark grey    a grid cell inside the grid with no state found
@@ -133,12 +133,13 @@ force signs). Platforms are told apart by panels, not colours."""
 CAPACITY_CMAP = "viridis"
 """Sequential colormap of the maps' capacity: low = dark purple, high = yellow, in the PNG
 and the HTML point cloud alike, with a colour bar."""
-FORCE_MAGNITUDE_CMAP = "cividis"
-"""Sequential colormap of the maps' optimized max|F| [N] (unsigned: not the force scale)."""
-SAG_CMAP = "magma"
-"""Sequential colormap of the maps' EE sag [m] under gravity and payload."""
+FORCE_MAGNITUDE_CMAP = "cividis_r"
+"""Sequential colormap of the maps' optimized max|F| [N] (unsigned: not the force scale):
+yellow = low. In every map panel yellow is the better end."""
+SAG_CMAP = "magma_r"
+"""Sequential colormap of the maps' EE sag [mm] under gravity and payload: yellow = small."""
 STIFFNESS_CMAP = "plasma"
-"""Sequential colormap of the maps' weakest EE stiffness [N/m]."""
+"""Sequential colormap of the maps' weakest EE stiffness [N/m]: yellow = stiff."""
 REACHABLE: RGB = (0.10, 0.60, 0.55)
 """Teal: a grid cell where a valid state was found (the maps' reachability panel)."""
 SCALE_POSE: RGB = (0.27, 0.27, 0.27)

@@ -231,6 +231,7 @@ def stiffness(
 ) -> StiffnessResult:
     """The EE's tangent stiffness at the loaded equilibrium of the legs commanded to ``plates``.
 
+    ``plates``: world poses of plates 0..n, or a state carrying them (``result.optimized``).
     The legs (springs of ``leg.stiffness``) are commanded to the lengths of ``plates`` (or to
     ``lengths`` [m], e.g. :func:`~assembler_pin.compliance.loaded.compensated_lengths`, whose loaded
     equilibrium is ``plates`` itself); gravity and the payload load them; Newton finds the

@@ -41,10 +41,10 @@ SOLVE_STARTS = ("first", "all")
 #: weighted, normalized sag).
 OBJECTIVES = ("force", "sag", "weighted")
 
-#: The optimizer's methods (:mod:`assembler_pin.optimize`, the default first): ``slsqp``
+#: The optimizer's methods (:mod:`assembler_pin.optimize`; the default is ``auto``): ``slsqp``
 #: (smooth epigraph form, scipy's SLSQP), ``paper`` (the paper's literal form, finite
-#: differences), ``ipopt`` (the smooth form by IPOPT on the sparse constraint Jacobian, the
-#: ``nlp`` extra), ``auto`` (IPOPT for long stacks, SLSQP otherwise).
+#: differences), ``ipopt`` (the smooth form by IPOPT on the sparse constraint Jacobian,
+#: through CasADi), ``auto`` (IPOPT for long stacks, SLSQP otherwise).
 OPTIMIZE_METHODS = ("slsqp", "paper", "ipopt", "auto")
 
 #: Interpolations of an EE path on SE(3): ``screw`` (geodesic) or ``linear`` (line + slerp).

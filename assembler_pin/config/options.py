@@ -78,7 +78,7 @@ DEFAULT_GOAL_TOLERANCE = GoalTolerance()
 
 #: The optimizer's methods (:data:`~assembler_pin.choices.OPTIMIZE_METHODS`): ``slsqp``
 #: (smooth epigraph form, scipy's SLSQP), ``paper`` (the paper's literal form), ``ipopt``
-#: (the smooth form by IPOPT on the sparse Jacobian, the ``nlp`` extra), ``auto`` (by the
+#: (the smooth form by IPOPT on the sparse Jacobian, through CasADi), ``auto`` (by the
 #: stack's size, :data:`AUTO_IPOPT_PLATFORMS`).
 METHODS = OPTIMIZE_METHODS
 
@@ -102,8 +102,8 @@ class OptimizeOptions:
 
     Attributes:
         method: ``"slsqp"`` (smooth epigraph form, analytic gradients, scipy's SLSQP),
-            ``"ipopt"`` (the same form by IPOPT on the sparse constraint Jacobian; needs the
-            ``nlp`` extra), ``"auto"`` (IPOPT from :data:`AUTO_IPOPT_PLATFORMS` platforms up
+            ``"ipopt"`` (the same form by IPOPT on the sparse constraint Jacobian,
+            through CasADi), ``"auto"`` (IPOPT from :data:`AUTO_IPOPT_PLATFORMS` platforms up
             when CasADi is installed, SLSQP otherwise) or ``"paper"``.
         w1: weight of max|F| [1/N]; w2: weight of the plate-deviation term [1/rad].
         ee_tolerance: allow the EE plate to move this far from the goal (position [m],
@@ -191,7 +191,7 @@ class OptimizeOptions:
 
 
 #: What a user without CasADi is told.
-IPOPT_INSTALL_HINT = "method 'ipopt' needs CasADi (IPOPT): pip install assembler_pin[nlp]"
+IPOPT_INSTALL_HINT = "method 'ipopt' needs CasADi (IPOPT), a dependency of assembler_pin: pip install 'casadi>=3.6,<4'"
 
 
 def casadi_missing() -> bool:
@@ -205,7 +205,7 @@ def casadi_missing() -> bool:
 
 
 def _check_casadi() -> None:
-    """OptionsError naming the ``nlp`` extra when CasADi cannot be imported."""
+    """OptionsError saying how to install CasADi when it cannot be imported."""
     if casadi_missing():
         raise OptionsError(IPOPT_INSTALL_HINT)
 

@@ -17,8 +17,8 @@ import pinocchio as pin
 
 from ..common.validation import as_float_array
 from ..config.bounds import BOUNDS
-from ..exceptions import PoseError
-from ..model.assembler import AssemblerModel
+from ..exceptions import ArgumentError, PoseError
+from ..model.assembler import AssemblerModel, checked_model
 
 __all__ = [
     "MAX_ROTATION_VECTOR",
@@ -101,6 +101,11 @@ def to_se3(pose: pin.SE3 | npt.ArrayLike, what: str = "pose") -> pin.SE3:
     Raises:
         PoseError: not 4×4, not finite, bottom row not [0 0 0 1], or not a rotation.
     """
+    if not isinstance(pose, pin.SE3) and _six_numbers(pose):
+        raise PoseError(
+            f"{what}: six numbers are not a pose here; for x y z [m] and a rotation vector [rad] use "
+            "ap.kinematics.taa_to_se3([x, y, z, rx, ry, rz]) (degrees=True for degrees)"
+        )
     matrix = pose.homogeneous if isinstance(pose, pin.SE3) else as_float_array(pose, f"{what} (a 4x4 matrix)", (4, 4))
     if not np.all(np.isfinite(matrix)):
         raise PoseError(f"{what} contains NaN or infinite values")
@@ -118,6 +123,16 @@ def to_se3(pose: pin.SE3 | npt.ArrayLike, what: str = "pose") -> pin.SE3:
     if errors[0] > 1e-14:
         rot = nearest_rotations(rot[None])[0]
     return pin.SE3(rot, matrix[:3, 3].copy())
+
+
+def _six_numbers(value: object) -> bool:
+    """``value`` reads as six numbers (an x y z rx ry rz vector given where a pose belongs)."""
+    if not isinstance(value, (list, tuple, np.ndarray)) or len(value) != 6:
+        return False
+    try:
+        return np.asarray(value, dtype=float).shape == (6,)
+    except (TypeError, ValueError):
+        return False
 
 
 def nearest_rotations(R: np.ndarray) -> np.ndarray:
@@ -193,13 +208,23 @@ def se3_to_taa(pose: pin.SE3) -> np.ndarray:
     return np.concatenate([pose.translation, pin.log3(pose.rotation)])
 
 
-def plate_arrays(am: AssemblerModel, plates: PlateArrays | Sequence | np.ndarray) -> PlateArrays:
+def plate_arrays(am: AssemblerModel, plates: PlateArrays | Sequence | np.ndarray | object) -> PlateArrays:
     """Validate ``n + 1`` plate poses (plate 0 first) and return them as arrays.
 
+    ``plates`` may also be a result that carries them in its ``plates`` attribute (a
+    :class:`~assembler_pin.state.StackState`, e.g. ``result.optimized``, or a successful
+    stack FK result).
+
     Raises:
+        ArgumentError: ``am`` is not an :class:`AssemblerModel` (e.g. the arguments swapped).
         PoseError: wrong count of plates or a malformed pose.
     """
+    if isinstance(am, (list, tuple, np.ndarray, PlateArrays)) or hasattr(am, "plates"):
+        checked_model(am)  # plates where the model belongs: the arguments swapped
+    plates = _carried_plates(plates)
     if isinstance(plates, PlateArrays):
+        if len(plates.p) != am.n + 1:
+            raise PoseError(f"expected {am.n + 1} plate poses (plates 0..{am.n}), got {len(plates.p)}")
         if not plates.__dict__.get("_checked", False):
             _check_plate_arrays(plates, am.n + 1)
         return plates
@@ -214,6 +239,27 @@ def plate_arrays(am: AssemblerModel, plates: PlateArrays | Sequence | np.ndarray
     if matrices.shape[0] != am.n + 1:
         raise PoseError(f"expected {am.n + 1} plate poses (plates 0..{am.n}), got {matrices.shape[0]}")
     return PlateArrays(*checked_rotations(matrices))
+
+
+def _carried_plates(plates: object) -> object:
+    """The :class:`PlateArrays` an object carries as ``plates`` (a state, an FK result),
+    else ``plates`` itself.
+
+    Raises:
+        ArgumentError: ``plates`` is the model (the arguments swapped).
+        PoseError: a result that carries plates but says it failed (``success`` false).
+    """
+    if isinstance(plates, AssemblerModel):
+        raise ArgumentError(
+            "plates must be the n+1 plate poses, got the AssemblerModel: the model comes first (am, plates)"
+        )
+    carried = getattr(plates, "plates", None)
+    if not isinstance(carried, PlateArrays) or isinstance(plates, (list, tuple, np.ndarray)):
+        return plates
+    if getattr(plates, "success", True) is False:
+        why = getattr(plates, "message", "")
+        raise PoseError(f"{type(plates).__name__} did not succeed, its plates are no pose: {why}")
+    return carried
 
 
 def _check_plate_arrays(pa: PlateArrays, count: int) -> None:

@@ -32,12 +32,14 @@ from ..plots.figures import draw_state
 from ..state import evaluate_state
 
 __all__ = [
+    "MAP_FIGSIZE",
     "capacity_bar_html",
     "capacity_range",
     "map_heatmaps",
     "map_slice",
     "point_size",
     "show_map_points",
+    "slice_label",
     "write_map_page",
 ]
 
@@ -73,45 +75,88 @@ def map_slice(table, config: str | None = None, orientation: int = 0) -> tuple[s
     return u_axis, v_axis, out
 
 
+MAP_FIGSIZE = (13.0, 8.6)
+"""Size of :func:`map_heatmaps`' figure [in]: 1950 × 1290 px at the 150 dpi it is saved at,
+its text readable on a screen."""
+
+
 def map_heatmaps(table, am: AssemblerModel, config: str | None = None, orientation: int = 0, title: str = "") -> Figure:
-    """Reachability, optimized max|F| [N] and payload capacity [kg] over a 2-D map slice,
-    the stack's home pose drawn in each panel for scale. Colours are :mod:`~assembler_pin.common.palette`'s:
-    a cell with no valid state is dark grey with an ``x`` in every panel, and where no cell
-    was computed is white, hatched; the capacity scale is that of the HTML point cloud
-    (:func:`capacity_range`), and the legend sits below the panels, hiding nothing."""
+    """Reachability, optimized max|F| [N], payload capacity [kg], EE sag [mm] and weakest EE
+    stiffness [N/m] over a 2-D map slice, in a grid of panels (two rows of three, the legend
+    in the sixth place) readable at screen size, the stack's home pose drawn in each panel for
+    scale. Colours are :mod:`~assembler_pin.common.palette`'s, yellow the better end in every
+    panel: a cell with no valid state is dark grey with an ``x`` in every panel, and where no
+    cell was computed is white, hatched; the capacity scale is that of the HTML point cloud
+    (:func:`capacity_range`). The title names the slice: its fixed axis and value, the
+    configuration and the EE orientation."""
     u_axis, v_axis, s = map_slice(table, config, orientation)
-    fig = Figure(figsize=(25, 5.4), layout="constrained")
-    axes = fig.subplots(1, 5)
+    fig = Figure(figsize=MAP_FIGSIZE, layout="constrained")
+    axes = fig.subplots(2, 3).ravel()
     extent = _extent(s["u"], s["v"])
     home = evaluate_state(am, am.home)
     cap_lo, cap_hi = capacity_range(s["capacity_kg"])
+    values = {**s, "sag_mm": 1e3 * s["sag_m"]}
     panels = (
-        ("reachable", "reachable (a valid pose exists)", ListedColormap([UNREACHABLE, REACHABLE]), "reachable"),
-        ("max_abs_force", f"optimized max|F| [N] at {am.config.payload.mass:g} kg", FORCE_MAGNITUDE_CMAP, "N"),
-        ("capacity_kg", "payload capacity [kg]", CAPACITY_CMAP, "kg"),
-        ("sag_m", "EE sag under gravity and payload [m]", SAG_CMAP, "m"),
-        ("weakest_stiffness_n_per_m", "weakest EE stiffness [N/m]", STIFFNESS_CMAP, "N/m"),
+        ("reachable", "reachable (a valid pose exists)", ListedColormap([UNREACHABLE, REACHABLE]), ""),
+        ("max_abs_force", f"optimized max|F| at {am.config.payload.mass:g} kg", FORCE_MAGNITUDE_CMAP, "N"),
+        ("capacity_kg", "payload capacity", CAPACITY_CMAP, "kg"),
+        ("sag_mm", "EE sag under gravity and payload", SAG_CMAP, "mm"),
+        ("weakest_stiffness_n_per_m", "weakest EE stiffness", STIFFNESS_CMAP, "N/m"),
     )
     unreached = s["reachable"] == 0  # NaN (no cell computed) is neither reached nor unreached
-    for ax, (key, name, cmap, unit) in zip(axes, panels, strict=True):
+    for ax, (key, name, cmap, unit) in zip(axes, panels, strict=False):
         _outside_grid_background(ax)
         lo, hi = (0, 1) if key == "reachable" else (cap_lo, cap_hi) if key == "capacity_kg" else (None, None)
         image = ax.imshow(
-            np.ma.masked_invalid(s[key]), origin="lower", extent=extent, cmap=cmap, aspect="equal", vmin=lo, vmax=hi
+            np.ma.masked_invalid(values[key]),
+            origin="lower",
+            extent=extent,
+            cmap=cmap,
+            aspect="equal",
+            vmin=lo,
+            vmax=hi,
         )
         _mark_unreached(ax, s, unreached, extent)
         draw_state(
             ax, home, (_AXIS[u_axis], _AXIS[v_axis]), hex_color(SCALE_POSE), hex_color(SCALE_POSE_PLATE), "", 0.5
         )
-        ax.set_xlabel(f"{u_axis} [m]")
-        ax.set_ylabel(f"{v_axis} [m]")
-        ax.set_title(name, fontsize=10)
+        ax.set_xlabel(f"{u_axis} [m]", fontsize=11)
+        ax.set_ylabel(f"{v_axis} [m]", fontsize=11)
+        ax.tick_params(labelsize=10)
+        ax.set_title(name + (f" [{unit}]" if unit else ""), fontsize=12)
         if key != "reachable":
-            fig.colorbar(image, ax=ax, shrink=0.8, label=f"{name.split(' [')[0]} [{unit}]")
-    fig.legend(handles=_legend_handles(), fontsize=9, loc="outside lower center", ncols=4, frameon=False)
+            bar = fig.colorbar(image, ax=ax, shrink=0.85, label=f"{name} [{unit}]")
+            bar.ax.tick_params(labelsize=10)
+            bar.set_label(f"{name} [{unit}]", fontsize=10)
+    legend_ax = axes[-1]
+    legend_ax.axis("off")
+    legend_ax.legend(
+        handles=_legend_handles(), fontsize=11, loc="center", frameon=False, title="yellow is better in every panel"
+    )
     reached = np.nan_to_num(s["reachable"]).astype(bool)
-    fig.suptitle(title or f"Capability map: {int(reached.sum())} of {reached.size} cells reachable")
+    fig.suptitle(
+        title
+        or f"Capability map: {int(reached.sum())} of {reached.size} cells reachable\n"
+        f"{slice_label(table, config, orientation)}",
+        fontsize=14,
+    )
     return fig
+
+
+def slice_label(table, config: str | None = None, orientation: int = 0) -> str:
+    """Which slice :func:`map_slice` draws: the fixed axis and its value, the configuration
+    and the EE orientation (rotation vector [deg])."""
+    cols = {c: np.asarray(table.column(c).to_pylist()) for c in ("config", "io", "x", "y", "z")}
+    name = config if config is not None else str(cols["config"][0])
+    keep = (cols["config"] == name) & (cols["io"] == orientation)
+    varying = [a for a in "xyz" if len(np.unique(cols[a][keep])) > 1]
+    fixed = next((a for a in "xyz" if a not in varying), "z")
+    where = f"{fixed} = {cols[fixed][keep].min():g} m"
+    rotation = ""
+    if "rx" in table.column_names:
+        r = [np.asarray(table.column(c).to_pylist())[keep][0] for c in ("rx", "ry", "rz")]
+        rotation = f", EE rotation ({', '.join(f'{np.degrees(v):g}' for v in r)})°"
+    return f"slice {where}, config {name}, orientation {orientation}{rotation}"
 
 
 def capacity_range(capacity: np.ndarray) -> tuple[float, float]:

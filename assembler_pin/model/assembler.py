@@ -311,7 +311,8 @@ def checked_model(am: object, what: str = "am") -> AssemblerModel:
     """``am`` when it is an :class:`AssemblerModel`, else :class:`ArgumentError` naming ``what``."""
     if not isinstance(am, AssemblerModel):
         raise ArgumentError(
-            f"{what} must be an AssemblerModel (AssemblerModel.from_config(...)), got {type(am).__name__}"
+            f"{what} must be an AssemblerModel (AssemblerModel.from_config(...)), the first argument; "
+            f"got {type(am).__name__}"
         )
     return am
 

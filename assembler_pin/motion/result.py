@@ -63,6 +63,8 @@ class MotionResult:
         time_s: wall time of planning, timing and checking [s].
         law_durations: the duration [s] each time law tried reached on the plan
             (:mod:`~assembler_pin.motion.time_law`).
+        replans: how many times the whole path was planned again with half steps because
+            an output sample failed its check (0: the first plan held).
     """
 
     success: bool
@@ -72,6 +74,7 @@ class MotionResult:
     problems: list[str]
     time_s: float
     law_durations: dict[str, float] = field(default_factory=dict)
+    replans: int = 0
 
     @property
     def time_law(self) -> str | None:
@@ -117,6 +120,7 @@ class MotionResult:
             "duration_s": self.duration if self.trajectory is not None else None,
             "time_law": self.time_law,
             "law_durations_s": dict(self.law_durations),
+            "replans": self.replans,
             "peak_max_abs_dynamic_force": (
                 float(np.nanmax(self.trajectory.max_abs_dynamic_force)) if self.trajectory is not None else None
             ),

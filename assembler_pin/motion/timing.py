@@ -23,6 +23,7 @@ Files: :mod:`.trajfile` (format, atomic writer, strict reader); rows against the
 from __future__ import annotations
 
 import dataclasses
+import logging
 import time
 
 import numpy as np
@@ -43,6 +44,8 @@ from .rows import evaluate_rows, trajectory_states
 from .time_law import TIME_LAWS, QuinticLaw, TimeLaw, TimingProblem
 from .toppra_law import OptimalLaw
 from .trajfile import Trajectory, read_trajectory
+
+logger = logging.getLogger(__name__)
 
 __all__ = [
     "plan_trajectory",
@@ -295,8 +298,9 @@ def plan_trajectory(
     t0 = time.perf_counter()
     opts = _checked_plan_inputs(path, options, rate, refinements, time_law)
     progress = checked_progress(progress)
+    attempt, noted = 0, progress
     for attempt in range(refinements + 1):
-        plan = plan_path(am, path, start, opts, progress=progress, scene=scene)
+        plan = plan_path(am, path, start, opts, progress=noted, scene=scene)
         if len(plan.states) < 2:
             return MotionResult(False, plan.reason, plan, None, [plan.reason], time.perf_counter() - t0)
         try:
@@ -305,15 +309,32 @@ def plan_trajectory(
             return MotionResult(False, str(exc), plan, None, [str(exc)], time.perf_counter() - t0)
         if not problems or not plan.success or attempt == refinements:
             break
+        why = one_line(problems[0])[:80]
+        logger.info("re-planning the whole path with half steps (%d of %d): %s", attempt + 1, refinements, why)
+        noted = _replan_progress(progress, attempt + 1, refinements)
         opts = dataclasses.replace(
             opts,
             position_step=opts.position_step / 2,
             rotation_step=opts.rotation_step / 2,
             max_leg_step=opts.max_leg_step / 2,
         )
-    result = _answer(am, plan, traj, s, problems, rate, progress, t0)
+    result = _answer(am, plan, traj, s, problems, rate, noted, t0)
     result.law_durations = durations
+    result.replans = attempt
     return result
+
+
+def _replan_progress(progress: ProgressCallback | None, attempt: int, refinements: int) -> ProgressCallback | None:
+    """``progress`` with every note saying that the path is being planned again."""
+    if progress is None:
+        return None
+    inner = progress
+
+    def noted(done: int, total: int, note: str) -> None:
+        inner(done, total, f"re-plan {attempt}/{refinements} with half steps: {note}")
+
+    inner(0, 1000, f"re-plan {attempt}/{refinements}: a sample failed its check, planning again with half steps")
+    return noted
 
 
 def _checked_plan_inputs(

@@ -22,7 +22,7 @@ Methods:
 * ``"slsqp"`` (default, :mod:`.smooth`): max|F| through an epigraph variable ``s``
   (``-s <= F_i <= s``), so the problem is smooth, and analytic gradients of every force,
   length, deflection and angle (:mod:`assembler_pin.statics.derivatives`) — scipy's SLSQP.
-* ``"ipopt"`` (:mod:`.ipopt`, the ``nlp`` extra): the same epigraph problem, rows and
+* ``"ipopt"`` (:mod:`.ipopt`, through CasADi): the same epigraph problem, rows and
   analytic derivatives, solved by IPOPT (through CasADi) on the constraint Jacobian's
   structural sparsity (platform j's legs move with plates j and j+1, its forces with plates
   j..n); every point IPOPT evaluates is tracked, so the best feasible one is never lost.

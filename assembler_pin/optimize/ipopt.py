@@ -2,7 +2,7 @@
 
 The rows, objective and analytic derivatives of :mod:`.smooth`, in the moment-variable form
 of :mod:`.wrench` (x = [poses in the local chart, the moments carried by each platform, s]):
-IPOPT (through CasADi, the ``nlp`` extra) sees a banded sparse constraint Jacobian, O(n)
+IPOPT (through CasADi) sees a banded sparse constraint Jacobian, O(n)
 non-zeros, where SLSQP factors a dense matrix. The Hessian is IPOPT's limited-memory
 quasi-Newton one, its low-rank part in IPOPT's extended augmented system (one
 factorization per iteration instead of a back-solve per stored pair).

@@ -38,6 +38,7 @@ class _Quantity:
     lower: float
     upper: float
     colors: tuple[str, str]  # lower and upper limit line colours
+    mark_far_limits: bool = False  # a limit off the panel's scale is named at its edge (the forces)
 
 
 LIMIT_VIEW_FRACTION = 0.6
@@ -59,6 +60,30 @@ def _limit_view(ax, lo: float, hi: float, lower: float, upper: float) -> None:
     ax.set_ylim(v0, v1)
 
 
+def _mark_far_limits(ax, limits: tuple[tuple[float, str, str], ...], unit: str) -> None:
+    """Name each limit that lies off the panel's scale at the panel's edge on its side
+    (``▲ tension limit 200 N``), in the limit's colour."""
+    low, high = ax.get_ylim()
+    for value, name, color in limits:
+        if low <= value <= high:
+            continue
+        up = value > high
+        ax.text(
+            0.99,
+            0.97 if up else 0.03,
+            f"{'▲' if up else '▼'} {name} limit {value:g} {unit}",
+            transform=ax.transAxes,
+            ha="right",
+            va="top" if up else "bottom",
+            fontsize=7,
+            color=color,
+        )
+
+
+#: How a margin is written in a panel's title: SI lengths in millimetres.
+_TITLE_UNITS = {"m": ("mm", 1e3), "m/s": ("mm/s", 1e3), "m/s²": ("mm/s²", 1e3)}
+
+
 def _quantity_panel(ax, q: _Quantity, j: int) -> None:
     """Platform ``j``'s six legs of ``q`` (one colour per leg, labelled ``SPj leg i``), its
     limits as dashed lines, and the distance from the data to the nearest limit in the title."""
@@ -73,10 +98,15 @@ def _quantity_panel(ax, q: _Quantity, j: int) -> None:
         ax.plot(q.times, data[:, i], color=hex_color(palette.LEG_CYCLE[i]), lw=1.0, label=leg_label(j, i))
     lo, hi = float(np.nanmin(data)), float(np.nanmax(data))
     _limit_view(ax, lo, hi, q.lower, q.upper)
+    if q.mark_far_limits:
+        _mark_far_limits(ax, ((q.upper, "tension", q.colors[1]), (q.lower, "compression", q.colors[0])), q.unit)
     gap = min(lo - q.lower, q.upper - hi)
     i = int(np.unravel_index(int(np.nanargmin(np.minimum(data - q.lower, q.upper - data))), data.shape)[1])
     verdict = "beyond a limit by" if gap < 0 else "nearest limit"
-    ax.set_title(f"{platform_label(j)} {q.name}: {verdict} {abs(gap):.4g} {q.unit} (leg {i})", fontsize=8, loc="left")
+    unit, scale = _TITLE_UNITS.get(q.unit, (q.unit, 1.0))
+    ax.set_title(
+        f"{platform_label(j)} {q.name}: {verdict} {scale * abs(gap):.4g} {unit} (leg {i})", fontsize=8, loc="left"
+    )
 
 
 def _trajectory_quantities(am: AssemblerModel, traj, states, state_times) -> list[_Quantity]:
@@ -110,6 +140,7 @@ def _trajectory_quantities(am: AssemblerModel, traj, states, state_times) -> lis
             -leg.max_compression,
             leg.max_tension,
             (hex_color(palette.COMPRESSION), hex_color(palette.TENSION)),
+            mark_far_limits=True,
         ),
     ] + (
         []
@@ -123,6 +154,7 @@ def _trajectory_quantities(am: AssemblerModel, traj, states, state_times) -> lis
                 -leg.max_compression,
                 leg.max_tension,
                 (hex_color(palette.COMPRESSION), hex_color(palette.TENSION)),
+                mark_far_limits=True,
             )
         ]
     )
@@ -176,9 +208,15 @@ def trajectory_plot(
     verdict = "every sample valid" if not infeasible.any() else f"{int(infeasible.sum())} samples INVALID (yellow)"
     law = traj.meta.get("time_law", "quintic")
     dynamic = "" if traj.dynamic_forces is None else f" ({np.nanmax(traj.max_abs_dynamic_force):.1f} N with the motion)"
+    note = (
+        "\nthe time-optimal law (TOPP-RA) is bang-bang: a leg that sets the pace switches between its "
+        "acceleration limits"
+        if law == "optimal"
+        else ""
+    )
     fig.suptitle(
         f"{title}: {law} time law, {traj.duration:.1f} s, peak max|F| {np.nanmax(traj.max_abs_force):.1f} N"
-        f"{dynamic}, {verdict}"
+        f"{dynamic}, {verdict}{note}"
     )
     return fig
 
@@ -190,6 +228,7 @@ def _max_force_panel(column, t: np.ndarray, max_abs_force: np.ndarray, leg: LegC
     peak = float(np.nanmax(max_abs_force))
     limit = min(leg.max_tension, leg.max_compression)
     _limit_view(ax, float(np.nanmin(max_abs_force)), peak, -limit, limit)
+    _mark_far_limits(ax, ((limit, "force", hex_color(palette.TENSION)),), "N")
     ax.set_title(f"max|F| of the stack: nearest limit {limit - peak:.3g} N", fontsize=8, loc="left")
     ax.legend(loc="upper left", bbox_to_anchor=(1.02, 1.0), fontsize=7, frameon=False)
     for other in column[1:]:

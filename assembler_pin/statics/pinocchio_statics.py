@@ -214,7 +214,8 @@ def solve_statics(
     free-flyer rows leave a 6×6 system for the six actuator forces.
 
     Args:
-        plates: world poses of plates 0..n (see :func:`~assembler_pin.kinematics.plate_arrays`).
+        plates: world poses of plates 0..n, or a state carrying them
+            (see :func:`~assembler_pin.kinematics.plate_arrays`).
         raise_on_singular: raise :class:`SingularConfigurationError` instead of returning
             a result flagged ``singular``.
         legs: the leg state of these plates when the caller has it already (saves

@@ -1,15 +1,18 @@
 """Motions for the viewer: states interpolated in leg-length space, and the animated force sleeves.
 
-meshcat animates transforms and visibility but not material colours, so a leg's force colour
-in an animation is a sleeve of its force level's colour around its middle: one hidden sleeve
-per leg and level (:func:`make_force_bands`), the one of the frame's level shown
-(:func:`force_band_frame`). World frame O, metres, newtons.
+meshcat animates transforms, scales and visibility but not material colours, so a leg's force
+colour in an animation is a sleeve of its force level's colour over the leg, joint to joint:
+one hidden sleeve per leg and level (:func:`make_force_bands`), the one of the frame's level
+shown and stretched to the leg's length (:func:`force_band_frame`). The levels span the
+colour scale of the whole animation (:func:`animation_scale`), so that the colours and the
+colour bar say the same. World frame O, metres, newtons.
 """
 
 from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass
+from types import SimpleNamespace
 from typing import TYPE_CHECKING
 
 import meshcat.animation
@@ -24,7 +27,7 @@ from ..model.assembler import AssemblerModel
 from ..model.geometry import DIMENSIONS
 from ..state import StackState, evaluate_state
 from .camera import cylinder_between
-from .colors import force_color, material
+from .colors import color_scale, force_color, material
 from .drawing import payload_rod_transform
 from .placements import as_plates
 
@@ -32,11 +35,14 @@ if TYPE_CHECKING:
     from ..walk import WalkResult
 
 __all__ = [
+    "FORCE_BAND_COVER",
     "FORCE_BAND_LENGTH",
     "FORCE_BAND_LEVELS",
     "WALK_PHASE_RGB",
     "PhaseSpan",
     "WalkFrame",
+    "animation_scale",
+    "band_levels",
     "build_animation",
     "build_walk_animation",
     "force_band_frame",
@@ -48,10 +54,21 @@ __all__ = [
     "walk_frames",
 ]
 
-FORCE_BAND_LEVELS = np.linspace(-1.0, 1.0, 11)
-"""Force levels (fraction of the compression / tension limit) of an animation's leg sleeves."""
+FORCE_BAND_LEVELS = np.linspace(-1.0, 1.0, 21)
+"""Force levels (fraction of the colour scale's compression / tension end) of an animation's
+leg sleeves."""
 FORCE_BAND_LENGTH = 0.08
-"""Length of an animated leg's force sleeve [m]."""
+"""Length of an animated leg's force sleeve as made [m]; each frame stretches it to
+:data:`FORCE_BAND_COVER` of the leg."""
+FORCE_BAND_COVER = 0.94
+"""Fraction of a leg's joint-to-joint length its force sleeve covers in an animation."""
+
+
+def animation_scale(forces: Sequence[np.ndarray], leg, force_scale: str = "auto") -> tuple[float, float]:
+    """(tension, compression) [N] where the colours of an animation saturate: the rule of
+    :func:`~assembler_pin.viz.colors.color_scale` applied to the largest force of every frame."""
+    peak = max((float(np.abs(f).max()) for f in forces), default=0.0)
+    return color_scale(SimpleNamespace(max_abs_force=peak), leg, force_scale)
 
 
 def interpolate_states(
@@ -105,10 +122,17 @@ def interpolate_states(
     return states
 
 
-def build_animation(viewer, states: Sequence[StackState | PlateArrays], fps: float, color_forces: bool):
+def build_animation(
+    viewer,
+    states: Sequence[StackState | PlateArrays],
+    fps: float,
+    color_forces: bool,
+    scale: tuple[float, float] | None = None,
+):
     """The meshcat animation of ``states`` in a :class:`~assembler_pin.viz.StackViewer`: frame k
     moves every body of its main stack and the payload rod to ``states[k]`` and, with
-    ``color_forces``, shows each leg's force sleeve (built by :func:`make_force_bands`)."""
+    ``color_forces``, shows each leg's force sleeve (built by :func:`make_force_bands` with the
+    same ``scale``, (tension, compression) [N]; default the force limits)."""
     am = viewer.am
     anim = meshcat.animation.Animation(default_framerate=fps)
     rod = am.config.payload.offset > 0 and am.config.payload.mass > 0
@@ -121,18 +145,24 @@ def build_animation(viewer, states: Sequence[StackState | PlateArrays], fps: flo
                 T_rod = payload_rod_transform(am, plates.R[-1], plates.p[-1])
                 frame[viewer.scene_path("payload_rod")]["rod"].set_transform(T_rod)
             if color_forces and isinstance(state, StackState):
-                force_band_frame(frame[viewer.scene_path("force_bands")], am, state)
+                force_band_frame(frame[viewer.scene_path("force_bands")], am, state, scale)
     return anim
 
 
-def make_force_bands(root, am: AssemblerModel) -> None:
-    """One hidden sleeve per leg and force level under the meshcat node ``root``, at
-    ``root/<leg name>/level<k>`` (:func:`force_band_frame` shows one per frame)."""
-    root.delete()
+def _scale(am: AssemblerModel, scale: tuple[float, float] | None) -> tuple[float, float]:
     leg = am.config.leg
+    return (leg.max_tension, leg.max_compression) if scale is None else (float(scale[0]), float(scale[1]))
+
+
+def make_force_bands(root, am: AssemblerModel, scale: tuple[float, float] | None = None) -> None:
+    """One hidden sleeve per leg and force level under the meshcat node ``root``, at
+    ``root/<leg name>/level<k>`` (:func:`force_band_frame` shows one per frame); the levels
+    span ``scale`` = (tension, compression) [N] (default the force limits)."""
+    root.delete()
+    tension, compression = _scale(am, scale)
     levels = FORCE_BAND_LEVELS
-    forces = np.where(levels >= 0, levels * leg.max_tension, levels * leg.max_compression)
-    colors = force_color(forces, leg.max_tension, leg.max_compression)
+    forces = np.where(levels >= 0, levels * tension, levels * compression)
+    colors = force_color(forces, tension, compression)
     shape = mg.Cylinder(FORCE_BAND_LENGTH, 1.3 * DIMENSIONS.motor_radius)
     for j in range(am.n):
         for i in range(6):
@@ -142,25 +172,39 @@ def make_force_bands(root, am: AssemblerModel) -> None:
                 node.set_property("visible", False)
 
 
-def force_band_frame(root, am: AssemblerModel, state: StackState) -> None:
-    """In one animation frame (``root`` its node of the sleeves), place and show the sleeve
-    of each leg's force level and hide the others."""
-    _band_frame(root, am, state.forces, state.legs.bottom_points, state.legs.top_points)
+def force_band_frame(root, am: AssemblerModel, state: StackState, scale: tuple[float, float] | None = None) -> None:
+    """In one animation frame (``root`` its node of the sleeves), place, stretch over the leg
+    and show the sleeve of each leg's force level on ``scale`` and hide the others."""
+    _band_frame(root, am, state.forces, state.legs.bottom_points, state.legs.top_points, scale)
 
 
-def _band_frame(root, am: AssemblerModel, forces: np.ndarray, bottom: np.ndarray, top: np.ndarray) -> None:
+def band_levels(am: AssemblerModel, forces: np.ndarray, scale: tuple[float, float] | None = None) -> np.ndarray:
+    """(n, 6) the sleeve level (index into :data:`FORCE_BAND_LEVELS`) of each leg force [N]."""
+    tension, compression = _scale(am, scale)
+    fraction = np.where(forces >= 0, forces / tension, forces / compression)
+    return np.abs(FORCE_BAND_LEVELS[None, None, :] - np.clip(fraction, -1, 1)[..., None]).argmin(axis=-1)
+
+
+def _band_frame(
+    root,
+    am: AssemblerModel,
+    forces: np.ndarray,
+    bottom: np.ndarray,
+    top: np.ndarray,
+    scale: tuple[float, float] | None = None,
+) -> None:
     """:func:`force_band_frame` of leg forces (n, 6) [N] and joint centres (n, 6, 3) [m]."""
-    leg = am.config.leg
-    fraction = np.where(forces >= 0, forces / leg.max_tension, forces / leg.max_compression)
-    level = np.abs(FORCE_BAND_LEVELS[None, None, :] - np.clip(fraction, -1, 1)[..., None]).argmin(axis=-1)
+    level = band_levels(am, forces, scale)
     for j in range(am.n):
         for i in range(6):
             T = cylinder_between(bottom[j, i], top[j, i])
+            stretch = FORCE_BAND_COVER * float(np.linalg.norm(top[j, i] - bottom[j, i])) / FORCE_BAND_LENGTH
             for k in range(len(FORCE_BAND_LEVELS)):
                 node = root[names.leg(j, i)][f"level{k}"]
                 node.set_property("visible", "boolean", bool(k == level[j, i]))
                 if k == level[j, i]:
                     node.set_transform(T)
+                    node.set_property("scale", "vector3", [1.0, stretch, 1.0])
 
 
 # ---------------------------------------------------------------------- the walk
@@ -287,7 +331,9 @@ def make_phase_labels(root, at: np.ndarray) -> None:
         node.set_property("visible", False)
 
 
-def build_walk_animation(viewer, frames: Sequence[WalkFrame], fps: float, markers: str):
+def build_walk_animation(
+    viewer, frames: Sequence[WalkFrame], fps: float, markers: str, scale: tuple[float, float] | None = None
+):
     """The meshcat animation of a walk in a :class:`~assembler_pin.viz.StackViewer`: frame k
     places every body of the main stack and the payload rod at ``frames[k].plates``, shows each
     leg's force sleeve for the forces of its phase's support (sleeves by :func:`make_force_bands`)
@@ -304,7 +350,7 @@ def build_walk_animation(viewer, frames: Sequence[WalkFrame], fps: float, marker
                 T_rod = payload_rod_transform(am, f.plates.R[-1], f.plates.p[-1])
                 frame[viewer.scene_path("payload_rod")]["rod"].set_transform(T_rod)
             bottom, top = leg_vectors(am, f.plates)[:2]
-            _band_frame(frame[viewer.scene_path("force_bands")], am, f.forces, bottom, top)
+            _band_frame(frame[viewer.scene_path("force_bands")], am, f.forces, bottom, top, scale)
             for foot in (0, -1):
                 for kind in WALK_PHASE_RGB:
                     node = _held_node(frame[markers], foot, kind)

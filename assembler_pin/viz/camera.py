@@ -39,9 +39,14 @@ class Camera:
     position: np.ndarray
 
 
+DEFAULT_ELEVATION_DEG = 25.0
+"""How far above the horizontal the default camera looks down [deg]: high enough that the
+floor grid reads as a floor, not a band, low enough that the plates stay apart."""
+
+
 def camera_for_points(
     points: npt.ArrayLike,
-    elevation_deg: float = 12.0,
+    elevation_deg: float = DEFAULT_ELEVATION_DEG,
     azimuth_deg: float = -90.0,
     margin: float = 1.15,
     aspect: float = 4.0 / 3.0,

@@ -48,16 +48,24 @@ def _color_bar(tension: float, compression: float) -> str:
     )
 
 
-def overlay_html(title: str, items: Iterable[LegendItem], force_range: tuple[float, float]) -> str:
-    """The overlay's HTML: ``title``, the legend ``items`` and the colour bar of the leg forces,
-    saturating at ``force_range`` = (tension, compression) [N]."""
-    tension, compression = force_range
+#: The legend's line for meshcat's world axes, drawn at the world origin.
+AXES_HTML = (
+    '<div id="assembler-axes">world axes at the origin: <b style="color:#d62728">x</b> '
+    '<b style="color:#2ca02c">y</b> <b style="color:#1f5fd6">z</b> (thin lines)</div>'
+)
+
+
+def overlay_html(title: str, items: Iterable[LegendItem], force_range: tuple[float, float] | None) -> str:
+    """The overlay's HTML: ``title``, the legend ``items``, the world axes and the colour bar
+    of the leg forces, saturating at ``force_range`` = (tension, compression) [N] (no bar when
+    None: the legs carry no force colours)."""
+    bar = "" if force_range is None else _color_bar(*force_range)
     return (
         '<div id="assembler-overlay" style="position:absolute;top:8px;left:8px;z-index:10;'
         "max-width:330px;background:rgba(255,255,255,0.8);padding:6px 8px;border-radius:4px;font:12px sans-serif;"
         f'color:#222;pointer-events:none"><div id="assembler-title" style="font-weight:bold;'
         f'margin-bottom:6px">{html_lib.escape(title or "Assembler")}</div>'
-        f'<div id="assembler-legend">{_legend(items)}</div>{_color_bar(tension, compression)}</div>'
+        f'<div id="assembler-legend">{_legend(items)}{AXES_HTML}</div>{bar}</div>'
     )
 
 

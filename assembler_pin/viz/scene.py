@@ -33,7 +33,7 @@ from ..state import StackState, evaluate_state
 from . import animation as anim_mod
 from . import drawing, overlay
 from . import placements as pl
-from .camera import Camera, camera_for_points, point_camera
+from .camera import DEFAULT_ELEVATION_DEG, Camera, camera_for_points, point_camera
 from .colors import (
     PAYLOAD_RGBA,
     VIOLATION_RGBA,
@@ -102,6 +102,7 @@ class StackScene:
         self.state: StackState | None = None
         self.title = ""
         self.force_range = (am.config.leg.max_tension, am.config.leg.max_compression)
+        self.forces_shown = True  # the legs carry force colours: legend and colour bar say so
         self._animated = False
         self.viz = self._make_visualizer(prefix)
         self._leg_geoms = pl.leg_geometries(am, self.visual_model)
@@ -179,12 +180,8 @@ class StackScene:
         self.state = state
         self._clear_animation()
         self.force_range = self.color_scale(state, force_scale or self.force_scale)
-        colors = force_color(state.forces, *self.force_range)
-        for (j, i), gids in self._leg_geoms.items():
-            for gid in gids:
-                g = self.visual_model.geometryObjects[gid]
-                rgba = [*colors[j, i], 1.0] if color_forces else list(g.meshColor)
-                self.viz.loadViewerGeometryObject(g, pin.GeometryType.VISUAL, rgba)
+        self.forces_shown = color_forces
+        self._color_legs(state, color_forces)
         self._place(self.viz, state)
         drawing.draw_violations(self.meshcat[self.scene_path("violations")], state if mark_violations else None)
         rod = self.scene_path("payload_rod")
@@ -192,6 +189,16 @@ class StackScene:
             self._add_root(rod)  # the rod's root carries the framing shift
         self._extra_points["stack"] = pl.stack_points(self.am, state)
         return state
+
+    def _color_legs(self, state: StackState, color_forces: bool) -> None:
+        """Colour motor and shaft of every leg by its force on :attr:`force_range` (else the
+        URDF's colours)."""
+        colors = force_color(state.forces, *self.force_range)
+        for (j, i), gids in self._leg_geoms.items():
+            for gid in gids:
+                g = self.visual_model.geometryObjects[gid]
+                rgba = [*colors[j, i], 1.0] if color_forces else list(g.meshColor)
+                self.viz.loadViewerGeometryObject(g, pin.GeometryType.VISUAL, rgba)
 
     def color_scale(self, state: StackState, force_scale: str = "auto") -> tuple[float, float]:
         """(tension, compression) [N] at which the leg colors saturate (see :data:`FORCE_SCALES`)."""
@@ -223,19 +230,29 @@ class StackScene:
         :meth:`display` removes the animation. Build ``states`` with
         :func:`~assembler_pin.viz.animation.interpolate_states` or
         :func:`~assembler_pin.motion.timing.trajectory_states`. ``fps``: frames per second;
-        ``color_forces``: animate each leg's force color too (``states`` must be states).
+        ``color_forces``: animate each leg's force color too (``states`` must be states): every
+        frame recolours each leg (a sleeve joint to joint) on one scale, that of the whole
+        sequence's forces (:func:`~assembler_pin.viz.animation.animation_scale`), which the
+        colour bar shows.
         """
         if len(states) < 2:
             raise AssemblerError("an animation needs at least two states")
         if color_forces and not all(isinstance(st, StackState) for st in states):
             raise AssemblerError("color_forces needs StackState frames (their forces)")
+        scale = None
         if color_forces:
-            anim_mod.make_force_bands(self.meshcat[self.scene_path("force_bands")], self.am)
+            forces = [st.forces for st in states if isinstance(st, StackState)]
+            scale = anim_mod.animation_scale(forces, self.am.config.leg, self.force_scale)
+            anim_mod.make_force_bands(self.meshcat[self.scene_path("force_bands")], self.am, scale)
             self._add_root(self.scene_path("force_bands"))
         first = states[0]
-        self.display(first if isinstance(first, StackState) else evaluate_state(self.am, first))
+        first_state = first if isinstance(first, StackState) else evaluate_state(self.am, first)
+        self.display(first_state)
+        if scale is not None:  # one scale for the whole animation: the legs, the sleeves, the bar
+            self.force_range = scale
+            self._color_legs(first_state, True)
         self.meshcat.set_animation(
-            anim_mod.build_animation(self, states, fps, color_forces), play=play, repetitions=repetitions
+            anim_mod.build_animation(self, states, fps, color_forces, scale), play=play, repetitions=repetitions
         )
         self._extra_points.update({f"anim{k}": pl.stack_points(self.am, st) for k, st in enumerate(states)})
         self._animated = True
@@ -266,14 +283,16 @@ class StackScene:
 
     def overlay_html(self) -> str:
         """The page's overlay: title, legend of every color and marker drawn, color bar [N]."""
-        items = overlay.force_items() + list(self._legend.values())
+        items = (overlay.force_items() if self.forces_shown else []) + list(self._legend.values())
         if self.state is not None and self.violating_legs(self.state):
             items.append((VIOLATION_RGBA, "yellow ball: leg violating a limit"))
         if self.am.config.payload.mass > 0:
             items.append((PAYLOAD_RGBA, f"payload {self.am.config.payload.mass:g} kg"))
-        return overlay.overlay_html(self.title, items, self.force_range)
+        return overlay.overlay_html(self.title, items, self.force_range if self.forces_shown else None)
 
-    def frame(self, elevation_deg: float = 12.0, azimuth_deg: float = -90.0, show_grid: bool = True) -> Camera:
+    def frame(
+        self, elevation_deg: float = DEFAULT_ELEVATION_DEG, azimuth_deg: float = -90.0, show_grid: bool = True
+    ) -> Camera:
         """Point the camera at everything drawn, from the side (z up), framing it whole
         (the scene is translated by :attr:`scene_offset`: meshcat orbits the origin)."""
         if not self._extra_points:

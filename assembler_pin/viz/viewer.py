@@ -141,8 +141,8 @@ class StackViewer(StackScene):
         phase's colour (:data:`~.animation.WALK_PHASE_RGB`), a brown disc at every foothold
         (``{prefix}_walk/footholds/<k>``), the phase's name above the walk frame by frame
         (``{prefix}_walk/labels/<kind>``), and in the legend each phase with its frames and
-        seconds. The legs' own colour is the URDF's: the force is the sleeve's, its scale (the
-        colour bar) the force limits. Returns the phases' spans.
+        seconds. The legs' force colour is the sleeve's, joint to joint, on one scale for the
+        whole walk (its largest force, the colour bar's). Returns the phases' spans.
 
         Raises:
             ViewerError: the walk has no sample, or ``fps`` is not a positive number.
@@ -153,7 +153,8 @@ class StackViewer(StackScene):
         if not (isinstance(fps, (int, float)) and 0 < fps < 1e4):
             raise ViewerError(f"fps must be a number in (0, 10000), got {fps!r}")
         self.display(frames[0].plates, color_forces=False, mark_violations=False)
-        anim_mod.make_force_bands(self.meshcat[self.scene_path("force_bands")], self.am)
+        scale = anim_mod.animation_scale([f.forces for f in frames], self.am.config.leg, self.force_scale)
+        anim_mod.make_force_bands(self.meshcat[self.scene_path("force_bands")], self.am, scale)
         self._add_root(self.scene_path("force_bands"))
         root = self.scene_path("walk")
         anim_mod.make_walk_markers(self.meshcat[root], self.am, walk.footholds)
@@ -162,7 +163,7 @@ class StackViewer(StackScene):
         label = np.array([feet[:, 0].mean(), feet[:, 1].min(), top + 0.12])
         anim_mod.make_phase_labels(self.meshcat[root], label)
         self._add_root(root, np.vstack([feet, label]))
-        animation = anim_mod.build_walk_animation(self, frames, fps, root)
+        animation = anim_mod.build_walk_animation(self, frames, fps, root, scale)
         self.meshcat.set_animation(animation, play=play, repetitions=repetitions)
         step = max(1, len(frames) // 50)
         self._extra_points.update(
@@ -171,8 +172,8 @@ class StackViewer(StackScene):
         self._animated = True
         self._place(self.viz, frames[0].plates)
         spans = anim_mod.phase_spans(frames, fps)
-        leg = self.am.config.leg
-        self.force_range = (leg.max_tension, leg.max_compression)  # where the sleeves saturate
+        self.force_range = scale  # where the sleeves saturate: the whole walk's forces
+        self.forces_shown = True
         self._walk_legend(spans, root)
         peak = max(float(np.abs(f.forces).max()) for f in frames)
         verdict = "valid" if walk.success else f"not possible ({walk.reason[:80]})"

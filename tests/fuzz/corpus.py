@@ -640,7 +640,8 @@ def _export_cases() -> list[CliCase]:
 
 def _global_cases() -> list[CliCase]:
     return [
-        _case("cli.nothing", []),
+        _case("cli.nothing", [], "answer"),  # the help: the list of subcommands, exit 0
+        _case("cli.only_flags", ["-q", "-v"], "answer"),
         _case("cli.unknown_command", "frobnicate"),
         _case("cli.unknown_option", "statics --home --bogus"),
         _case("cli.config_missing_value", "statics --home --config"),

@@ -393,7 +393,8 @@ def test_map_png_marks_unreachable_and_outside_cells_and_hides_nothing(map_png):
     from matplotlib.patches import Rectangle
 
     fig, hidden = map_png
-    assert not fig.axes[0].get_legend() and fig.legends
+    legends = [ax for ax in fig.axes if ax.get_legend()]
+    assert len(legends) == 1 and not legends[0].images and not legends[0].axison  # the sixth place
     assert hidden == []
     panels = [ax for ax in fig.axes if ax.images]
     assert len(panels) == 5  # reachable, max|F|, capacity, sag, weakest stiffness
@@ -405,6 +406,42 @@ def test_map_png_marks_unreachable_and_outside_cells_and_hides_nothing(map_png):
         hatched = [p for p in ax.patches if isinstance(p, Rectangle) and p.get_hatch() == palette.OUTSIDE_GRID_HATCH]
         assert hatched and np.allclose(hatched[0].get_facecolor()[:3], palette.OUTSIDE_GRID)
         assert np.allclose(to_rgb(ax.get_facecolor()), palette.OUTSIDE_GRID)
+
+
+def test_map_png_reads_at_screen_size_and_yellow_is_better(map_png):
+    """Panels in a grid (two rows), text of at least 10 pt inside the canvas, the sag in mm,
+    yellow the better end of every colour scale, and the slice named in the title."""
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+
+    fig = map_png[0]
+    panels = [ax for ax in fig.axes if ax.images]
+    rows = {round(ax.get_position().y0, 2) for ax in panels}
+    assert len(rows) == 2 and fig.get_figwidth() * 150 <= 2000
+    renderer = FigureCanvasAgg(fig).get_renderer()
+    fig.draw(renderer)
+    for ax in fig.axes:
+        box = ax.get_tightbbox(renderer)
+        assert box.x0 >= -0.5 and box.y0 >= -0.5 and box.x1 <= fig.bbox.width + 0.5, ax.get_title()
+        for label in (ax.xaxis.label, ax.yaxis.label, ax.title):
+            assert not label.get_text() or label.get_fontsize() >= 10
+    titles = {ax.get_title(): ax for ax in panels}
+    sag = next(ax for name, ax in titles.items() if "sag" in name)
+    assert "[mm]" in sag.get_title() and np.nanmax(sag.images[0].get_array()) == pytest.approx(1e3 * 7e-5)
+
+    def yellowness(rgb):  # red + green - blue: yellow high, dark blue / purple / black low
+        return rgb[0] + rgb[1] - rgb[2]
+
+    better = {"max|F|": min, "sag": min, "capacity": max, "stiffness": max}
+    for name, ax in titles.items():
+        pick = next((f for key, f in better.items() if key in name), None)
+        if pick is None:
+            continue
+        image = ax.images[0]
+        data = np.ma.compressed(image.get_array())
+        good, bad = pick(data), (max if pick is min else min)(data)
+        assert yellowness(_image_rgb(image, good)) > yellowness(_image_rgb(image, bad)), name
+    title = fig._suptitle.get_text()
+    assert "slice y = 0 m" in title and "config default" in title and "orientation 0" in title
 
 
 def test_map_pictures_name_no_colour_of_their_own():

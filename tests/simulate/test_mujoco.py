@@ -220,3 +220,18 @@ def test_servos_follow_a_planned_trajectory(am, tmp_path):
     path = motion.trajectory.write(tmp_path / "t.csv")
     assert main(["simulate", "--trajectory", str(path), "--json"]) == 0
     assert main(["simulate", "--trajectory", str(path), "--html", str(tmp_path / "x.html")]) == 2
+
+
+def test_cli_hold_text_explains_its_first_row_and_the_drift(am, capsys):
+    """A loaded stack's first row is not a 0 N force, and the drift stands beside the legs' sag."""
+    from assembler_pin.cli import main
+
+    assert main(["simulate", "--home", "--seconds", "0.3", "--samples", "5"]) == 0
+    lines = capsys.readouterr().out.splitlines()
+    first = lines[2].split()
+    assert first[0] == "0.000" and first[3] == "unloaded"
+    assert all(float(line.split()[3]) > 10 for line in lines[3:7])
+    note = " ".join(lines)
+    sag = 1e3 * float(np.linalg.norm(__import__("assembler_pin").stiffness(am, am.home).sag_translation))
+    assert f"the legs' sag alone ('assembler-pin stiffness'): {sag:.3f} mm" in note
+    assert "ball joints" in note

@@ -18,6 +18,7 @@ import assembler_pin as ap
 from assembler_pin.common.naming import names
 from assembler_pin.exceptions import ViewerError
 from assembler_pin.viz import StackViewer, interpolate_states
+from assembler_pin.viz.animation import FORCE_BAND_LEVELS
 from assembler_pin.walk import WalkPhase, WalkResult, turned_model
 from assembler_pin.walk.footholds import TURN_OVER
 
@@ -148,17 +149,23 @@ def first_plate(walk, span, k: int) -> np.ndarray:
 
 
 def test_the_sleeves_show_each_samples_own_forces(am, walk, page):
-    """Sleeve level of every leg = nearest tenth of its force over the limit of its sign, from
-    the phase's forces (a transfer's load moves; the pose does not)."""
-    _, _, _, clips, _ = page
+    """Sleeve level of every leg = nearest twentieth of its force over the colour scale, the
+    walk's largest force (at least a tenth of the limit), from the phase's forces (a
+    transfer's load moves; the pose does not); the colour bar reads that scale."""
+    viewer, _, _, clips, _ = page
     leg = am.config.leg
-    for frame, (_, _, F, _, _) in enumerate(_samples(walk)):
-        fraction = np.clip(np.where(F >= 0, F / leg.max_tension, F / leg.max_compression), -1.0, 1.0)
-        want = np.rint(5.0 * (fraction + 1.0)).astype(int)
+    samples = list(_samples(walk))
+    peak = max(
+        max(float(np.abs(F).max()) for _, _, F, _, _ in samples), 0.1 * min(leg.max_tension, leg.max_compression)
+    )
+    assert viewer.force_range == pytest.approx((peak, peak))
+    levels = len(FORCE_BAND_LEVELS)
+    for frame, (_, _, F, _, _) in enumerate(samples):
+        want = np.rint((levels - 1) / 2 * (np.clip(F / peak, -1.0, 1.0) + 1.0)).astype(int)
         for j in range(am.n):
             for i in range(6):
                 root = f"/meshcat/assembler_force_bands/{names.leg(j, i)}"
-                shown = [lv for lv in range(11) if clips[f"{root}/level{lv}"][".visible"][frame]["value"]]
+                shown = [lv for lv in range(levels) if clips[f"{root}/level{lv}"][".visible"][frame]["value"]]
                 assert shown == [want[j, i]], (frame, j, i)
 
 
