@@ -13,9 +13,9 @@ Quick start::
 
 from __future__ import annotations
 
-import importlib
-import importlib.util
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
+
+from .common.lazy import lazy_attributes
 
 #: public name -> the module that defines it; imported on first use, so that
 #: ``import assembler_pin`` (and ``assembler-pin --help``) stays light. These are the names a
@@ -67,20 +67,7 @@ _LAZY: dict[str, str] = {
 __all__ = sorted(_LAZY)
 
 
-def __getattr__(name: str) -> Any:
-    module = _LAZY.get(name)
-    if module is None:
-        if importlib.util.find_spec(f"{__name__}.{name}") is not None:  # a subpackage or module
-            return importlib.import_module(f".{name}", __name__)
-        raise AttributeError(f"module 'assembler_pin' has no attribute {name!r}")
-    value = getattr(importlib.import_module(module, __name__), name)
-    globals()[name] = value
-    return value
-
-
-def __dir__() -> list[str]:
-    return sorted(set(globals()) | set(_LAZY))
-
+__getattr__, __dir__ = lazy_attributes(__name__, globals(), _LAZY, submodules=True)
 
 if TYPE_CHECKING:  # for type checkers and IDEs: the same names, imported eagerly
     from .compliance import compensated_lengths, loaded_pose, stiffness

@@ -13,8 +13,9 @@ without numpy (the fast ``statics --home`` answer).
 
 from __future__ import annotations
 
-import importlib
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
+
+from ..common.lazy import lazy_attributes
 
 _LAZY = {
     "NEAR": ".check",
@@ -29,13 +30,7 @@ _LAZY = {
 __all__ = ["NEAR", "Clearance", "Obstacle", "Scene", "clearance", "read_scene", "scene_from_dict"]
 
 
-def __getattr__(name: str) -> Any:
-    module = _LAZY.get(name)
-    if module is None:
-        raise AttributeError(f"module 'assembler_pin.collision' has no attribute {name!r}")
-    value = getattr(importlib.import_module(module, __name__), name)
-    globals()[name] = value
-    return value
+__getattr__, __dir__ = lazy_attributes(__name__, globals(), _LAZY)
 
 
 if TYPE_CHECKING:

@@ -17,8 +17,9 @@ The names below are imported on first use, so that ``statics --home`` (which imp
 
 from __future__ import annotations
 
-import importlib
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
+
+from ..common.lazy import lazy_attributes
 
 #: public name -> the module of this package that defines it.
 _LAZY: dict[str, str] = {
@@ -44,18 +45,7 @@ __all__ = [
 ]
 
 
-def __getattr__(name: str) -> Any:
-    module = _LAZY.get(name)
-    if module is None:
-        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-    value = getattr(importlib.import_module(module, __name__), name)
-    globals()[name] = value
-    return value
-
-
-def __dir__() -> list[str]:
-    return sorted(set(globals()) | set(_LAZY))
-
+__getattr__, __dir__ = lazy_attributes(__name__, globals(), _LAZY)
 
 if TYPE_CHECKING:  # for type checkers and IDEs: the same names, imported eagerly
     from .closed_form import CONDITION_LIMIT
