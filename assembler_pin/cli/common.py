@@ -154,7 +154,10 @@ def format_state_table(state: StackState, title: str = "") -> str:
 def radians_checked(taa, flag: str, degrees_flag: str | None = None):
     """``taa`` (x y z rx ry rz) when its rotation vector is at most 2π rad long; a longer
     one is a rotation typed in degrees, refused pointing at the option in degrees."""
-    angle = math.sqrt(sum(float(x) ** 2 for x in taa[3:]))
+    rotation = [float(x) for x in taa[3:]]
+    if not all(math.isfinite(x) for x in rotation):  # refused with its numbers where the pose is read
+        return taa
+    angle = math.hypot(*rotation)  # no overflow for finite components, however large
     if angle > 2 * math.pi:
         hint = f"use {degrees_flag} for degrees" if degrees_flag else "give the rotation vector in radians"
         raise CLIError(f"{flag}: the rotation vector is {angle:.4g} rad long, more than 2π (a turn): degrees? {hint}")

@@ -29,6 +29,9 @@ def test_statics_stiffness_adds_the_blocks_of_stiffness_json(capsys):
     for key, value in plain.items():
         if isinstance(value, (bool, str)) or value is None or key == "violations":
             assert statics_part[key] == value, key
+        elif key == "clearance":  # the closest pair: the same two bodies, the same distance
+            assert statics_part[key]["between"] == value["between"]
+            assert statics_part[key]["min_distance_m"] == pytest.approx(value["min_distance_m"], abs=1e-9)
         else:
             # deflections at home are 0 to rounding: arccos near 1 turns one ulp into ~1e-6°
             atol = 1e-5 if key == "deflection_deg" else 1e-9

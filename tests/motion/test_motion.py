@@ -253,13 +253,19 @@ def test_cli_view_trajectory_page_shows_each_legs_force_level(am, tmp_path, plan
     # the frames' forces, independently: FK of the file's lengths at the animation's samples
     traj = read_trajectory(traj_file)
     picks = np.unique(np.round(np.linspace(0, len(traj.times) - 1, 6)).astype(int))
+    from assembler_pin.viz.colors import FORCE_SCALE_FLOOR
+
     leg = am.config.leg
     guess = evaluate_state(am, am.home).plates
-    for frame, k in enumerate(picks):
+    frames = []
+    for k in picks:
         fk = stack_forward_kinematics(am, traj.lengths[k], base=am.home[0], guess=guess)
         guess = fk.plates
-        forces = evaluate_state(am, fk.plates).forces
-        fraction = np.where(forces >= 0, forces / leg.max_tension, forces / leg.max_compression)
+        frames.append(evaluate_state(am, fk.plates).forces)
+    # one scale for the whole animation: its largest force, at least the floor of the "auto" scale
+    scale = max(max(np.abs(f).max() for f in frames), FORCE_SCALE_FLOOR * min(leg.max_tension, leg.max_compression))
+    for frame, forces in enumerate(frames):
+        fraction = forces / scale
         for j in range(am.n):
             for i in range(6):
                 shown = [lvl for (jj, ii, lvl), keys in visible.items() if (jj, ii) == (j, i) and keys[frame]]
