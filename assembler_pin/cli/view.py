@@ -16,10 +16,12 @@ if TYPE_CHECKING:
 from .common import (
     add_carrier_arguments,
     add_goal_arguments,
+    add_scene_argument,
     carrier_from_args,
     config_from_args,
     goal_from_args,
     plates_from_args,
+    scene_from_args,
     writable_parent,
 )
 
@@ -57,6 +59,11 @@ def add_parser(add) -> None:
         help="with --goal: animate initial -> optimized in STEPS leg-length steps",
     )
     p.add_argument("--no-arm", action="store_true", help="with --goal: do not draw the helper arm")
+    add_scene_argument(
+        p,
+        "drawn with the stack; the shown pose's closest pair of bodies marked, its distance [m] in the legend; "
+        "--goal/--scenario solved keeping clear of it (not with --carrier)",
+    )
     _add_compliance_arguments(p)
     p.add_argument(
         "--host",
@@ -177,6 +184,8 @@ def _check_options(args: argparse.Namespace) -> None:
         raise CLIError("--loaded and --ellipsoid draw one pose: give --home, --plates, --goal or --scenario")
     if args.html:
         writable_parent(args.html, "--html file")
+    if args.scene and args.carrier:
+        raise CLIError("--scene is checked on a fixed base and is not available with --carrier")
 
 
 def _view_goal(args: argparse.Namespace, am: AssemblerModel, viewer) -> StackState:
@@ -190,12 +199,12 @@ def _view_goal(args: argparse.Namespace, am: AssemblerModel, viewer) -> StackSta
         from ..scenarios import scenario
 
         args.goal = list(se3_to_taa(scenario(args.scenario).goal))
-    result = solve(am, goal_from_args(args))
+    result = solve(am, goal_from_args(args), scene=viewer.scene)
     if result.initial is None and result.optimized is None:
         raise CLIError(f"no pose to show: {result.message}")
     arm = getattr(getattr(result, "initial_result", None), "arm_points", None)
     viewer.show_comparison(result.initial, result.optimized, None if args.no_arm else arm)
-    viewer.set_title(_view_title(args, result))
+    viewer.set_title(_with_clearance(_view_title(args, result), viewer))
     if args.animate and result.initial is not None and result.optimized is not None:
         from ..viz import interpolate_states
 
@@ -212,8 +221,16 @@ def _view_plates(args: argparse.Namespace, am: AssemblerModel, viewer) -> StackS
     shown = viewer.display(plates)
     verdict = "" if shown.feasible else " (VIOLATES limits)"
     name = "Home pose" if args.home else Path(args.plates).name
-    viewer.set_title(f"{name} — max|F| {shown.max_abs_force:.1f} N{verdict}")
+    viewer.set_title(_with_clearance(f"{name} — max|F| {shown.max_abs_force:.1f} N{verdict}", viewer))
     return shown
+
+
+def _with_clearance(title: str, viewer) -> str:
+    """``title`` and, with a scene, the marked closest pair (distance [m] and the two bodies)."""
+    pair = viewer.closest
+    if pair is None:
+        return title
+    return f"{title}; clearance {pair.distance:.4f} m ({pair.between[0]} – {pair.between[1]})"
 
 
 def _draw(args: argparse.Namespace, am: AssemblerModel, viewer) -> StackState:
@@ -277,14 +294,17 @@ def run(args: argparse.Namespace) -> int:
     from ..viz import StackViewer
 
     _check_options(args)
+    scene = scene_from_args(args)  # a bad scene is refused before the server starts
     am = AssemblerModel.from_config(config_from_args(args))
     restore_signals = interrupt_on_signals()  # kill / a closed terminal stop it as Ctrl-C does
     viewer = None
     try:
-        viewer = StackViewer(am, host=args.host, force_scale=args.force_scale)
+        viewer = StackViewer(am, host=args.host, force_scale=args.force_scale, scene=scene)
         shown = _draw(args, am, viewer)
         feasible = "yes" if shown.feasible else "NO"
         print(f"max |F| = {shown.max_abs_force:.3f} N, feasible: {feasible}", file=sys.stderr)
+        if viewer.closest is not None:
+            print(viewer.closest.label, file=sys.stderr)
         return _serve(args, viewer)
     except KeyboardInterrupt as stop:  # stopped before the view was ready
         forget_interrupt()

@@ -151,6 +151,26 @@ class Clearance:
         a, b = self.between
         return f"Clearance({self.min_distance:.4g} m between {a} and {b}, limit {self.limit} m)"
 
+    def witness_points(self) -> tuple[np.ndarray, np.ndarray] | None:
+        """The closest pair's two witness points (3,), (3,), world [m]: on the surface of
+        ``between[0]`` and ``between[1]``, ``min_distance`` apart along the pair's normal
+        (the first point is the second moved by ``min_distance`` times the unit normal from
+        the second body to the first); None when no pair is checked.
+
+        A leg's closest point is on its axis: its surface point is that point moved by the
+        radius of its motor or shaft (whichever holds it) towards the other body.
+        """
+        if not math.isfinite(self.min_distance) or not len(self.distances):
+            return None
+        r = self._rows
+        i = int(np.flatnonzero(r.dist <= self.min_distance + 1e-12)[0])
+        n = r.normal[i]
+        a = r.point[i, 0].copy()
+        if r.kind[i, 0] == _LEG:
+            leg = self._bodies.cfg.leg
+            a -= (leg.motor_radius if r.sigma[i, 0] <= leg.motor_length else leg.shaft_radius) * n
+        return a, a - self.min_distance * n
+
     def gradient(self, rows: np.ndarray | Sequence[int] | None = None) -> np.ndarray:
         """Derivatives of the pair distances with respect to the plates' world twists.
 

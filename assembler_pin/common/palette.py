@@ -17,6 +17,8 @@ payload                     orange       cube and rod in the viewer
 loaded pose (exaggerated)   teal         translucent ghost in the viewer (``view --loaded``)
 EE compliance ellipsoid     magenta      translucent ellipsoid at the EE (``view --ellipsoid``)
 violation / at a bound      yellow       viewer balls, figure frames and rings
+obstacle (scene)            stone        translucent boxes, cylinders, spheres (``view --scene``)
+closest pair                cyan         segment and end balls between two witness points
 EE goal                     gold star    pose views
 capacity (maps)             viridis      dark purple = low, yellow = high, in PNG and HTML alike
 max|F| (maps)               cividis_r    yellow = low (better), dark blue = high (a magnitude, no sign)
@@ -41,6 +43,7 @@ __all__ = [
     "BACKGROUND_TOP",
     "CAPACITY_CMAP",
     "CARRIER",
+    "CLOSEST_PAIR",
     "COMPLIANCE",
     "COMPRESSION",
     "FLOOR",
@@ -53,6 +56,8 @@ __all__ = [
     "LIMIT",
     "LOADED",
     "NEUTRAL",
+    "OBSTACLE",
+    "OBSTACLE_OPACITY",
     "OPTIMIZED",
     "OUTSIDE_GRID",
     "OUTSIDE_GRID_EDGE",
@@ -110,6 +115,12 @@ BACKGROUND_BOTTOM: RGB = (0.86, 0.87, 0.88)
 
 VIOLATION: RGB = (1.0, 0.85, 0.0)
 """Yellow: a leg violating a limit (viewer), a state violating one (figures)."""
+OBSTACLE: RGB = (0.72, 0.68, 0.58)
+"""Stone: a scene's obstacles in the viewer (translucent; the floor plane is :data:`FLOOR`)."""
+OBSTACLE_OPACITY = 0.45
+"""Opacity of the viewer's obstacles and floor plane (the stack stays visible behind them)."""
+CLOSEST_PAIR: RGB = (0.0, 0.80, 1.0)
+"""Cyan: the segment between the witness points of the closest pair of bodies."""
 LIMIT: RGB = (0.25, 0.25, 0.25)
 """Dark grey: dashed limit lines that are not a force sign (stroke, speed, acceleration)."""
 GOAL_FACE: RGB = (1.0, 0.84, 0.0)
@@ -117,7 +128,7 @@ GOAL_FACE: RGB = (1.0, 0.84, 0.0)
 GOAL_EDGE: RGB = (0.0, 0.0, 0.0)
 """Black: the EE goal star's edge and its z-axis arrow."""
 FLOOR: RGB = (0.55, 0.27, 0.07)
-"""Brown: the floor line."""
+"""Brown: the floor line; the viewer's translucent floor plane."""
 
 LEG_CYCLE: tuple[RGB, ...] = (
     (0.106, 0.620, 0.467),

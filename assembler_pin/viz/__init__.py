@@ -13,6 +13,7 @@ concern per module:
 * :mod:`.overlay` — the page's title, legend and colour bar (HTML/CSS);
 * :mod:`.animation` — :func:`interpolate_states`, force sleeves, meshcat animations;
 * :mod:`.compliance` — the loaded pose (exaggerated) and the compliance ellipsoid;
+* :mod:`.obstacles` — a scene's obstacles and floor, the closest pair of bodies marked;
 * :mod:`.scene` — :class:`StackScene`: the server, the main stack, animations, the page;
 * :mod:`.viewer` — :class:`StackViewer`: a scene that also draws beside the stack;
 * :mod:`.server` — the meshcat server process: its page listens on 127.0.0.1 unless another

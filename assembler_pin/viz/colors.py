@@ -19,12 +19,15 @@ __all__ = [
     "ARM_LINK_RGBA",
     "BACKGROUND_RGB",
     "CARRIER_RGBA",
+    "CLOSEST_PAIR_RGBA",
     "COMPLIANCE_RGBA",
     "COMPRESSION_RGB",
+    "FLOOR_RGBA",
     "FORCE_SCALE_FLOOR",
     "GHOST_RGBA",
     "LOADED_RGBA",
     "NEUTRAL_RGB",
+    "OBSTACLE_RGBA",
     "PAYLOAD_RGBA",
     "PAYLOAD_ROD_RGBA",
     "TENSION_RGB",
@@ -62,6 +65,13 @@ BACKGROUND_RGB = (np.array(palette.BACKGROUND_TOP), np.array(palette.BACKGROUND_
 """Neutral background, top and bottom."""
 VIOLATION_RGBA = np.array(palette.rgba(palette.VIOLATION, 0.9))
 """Yellow: the ball marking a leg that violates a limit."""
+
+OBSTACLE_RGBA = np.array(palette.rgba(palette.OBSTACLE, palette.OBSTACLE_OPACITY))
+"""Translucent stone: a scene's obstacles."""
+FLOOR_RGBA = np.array(palette.rgba(palette.FLOOR, 0.5 * palette.OBSTACLE_OPACITY))
+"""Translucent brown: a scene's floor plane."""
+CLOSEST_PAIR_RGBA = np.array(palette.rgba(palette.CLOSEST_PAIR))
+"""Cyan: the closest pair's segment and its two end balls."""
 
 
 def force_color(forces: npt.ArrayLike, max_tension: float, max_compression: float) -> np.ndarray:

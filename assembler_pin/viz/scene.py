@@ -24,6 +24,8 @@ import numpy.typing as npt
 import pinocchio as pin
 from pinocchio.visualize import MeshcatVisualizer
 
+from ..collision.check import clearance
+from ..collision.scene import Scene, read_scene
 from ..common.files import write_atomic
 from ..config.choices import FORCE_SCALES
 from ..exceptions import AssemblerError, ViewerError
@@ -31,10 +33,13 @@ from ..kinematics import PlateArrays, q_from_plates
 from ..model.assembler import WHOLE_DATA_MAX_PLATFORMS, AssemblerModel
 from ..state import StackState, evaluate_state
 from . import animation as anim_mod
-from . import drawing, overlay
+from . import drawing, obstacles, overlay
 from . import placements as pl
 from .camera import DEFAULT_ELEVATION_DEG, Camera, camera_for_points, point_camera
 from .colors import (
+    CLOSEST_PAIR_RGBA,
+    FLOOR_RGBA,
+    OBSTACLE_RGBA,
     PAYLOAD_RGBA,
     VIOLATION_RGBA,
     color_scale,
@@ -66,12 +71,18 @@ class StackScene:
             this machine only; ``0.0.0.0``: every interface).
         port: web port of the started server (default: the first free one from 7000).
         force_scale: default color scale of the legs (:data:`FORCE_SCALES`).
+        scene: obstacles and a floor (a :class:`~assembler_pin.collision.scene.Scene` or a
+            scene file), drawn with the first pose shown; every pose shown then has its
+            clearance taken with them and its closest pair marked
+            (:mod:`~assembler_pin.viz.obstacles`).
 
     Attributes:
         viz: the :class:`pinocchio.visualize.MeshcatVisualizer` of the main stack.
         server: the meshcat server subprocess this viewer started (None when borrowed).
         meshcat: the underlying ``meshcat.Visualizer``.
         scene_offset: translation applied to the whole scene for framing [m].
+        scene: the obstacles and floor drawn, or None.
+        closest: the closest pair marked on the pose shown, or None.
     """
 
     def __init__(
@@ -83,7 +94,11 @@ class StackScene:
         host: str = DEFAULT_HOST,
         port: int | None = None,
         force_scale: str = "auto",
+        scene: Scene | str | None = None,
     ) -> None:
+        self.scene: Scene | None = read_scene(scene)  # refused before a server starts
+        self.closest: obstacles.ClosestPair | None = None
+        self._scene_drawn = False
         if force_scale not in FORCE_SCALES:
             raise ViewerError(f"force_scale must be one of {', '.join(FORCE_SCALES)}, got {force_scale!r}")
         self.force_scale, self.am, self.prefix = force_scale, am, prefix
@@ -176,7 +191,7 @@ class StackScene:
             force_scale: where the colors saturate (:data:`FORCE_SCALES`; default the
                 viewer's); the numbers are in :attr:`force_range` and on the color bar.
         """
-        state = pose if isinstance(pose, StackState) else evaluate_state(self.am, pose)
+        state = pose if isinstance(pose, StackState) else evaluate_state(self.am, pose, scene=self.scene)
         self.state = state
         self._clear_animation()
         self.force_range = self.color_scale(state, force_scale or self.force_scale)
@@ -188,7 +203,42 @@ class StackScene:
         if drawing.draw_payload_rod(self.meshcat[rod]["rod"], self.am, state.plates.R[-1], state.plates.p[-1]):
             self._add_root(rod)  # the rod's root carries the framing shift
         self._extra_points["stack"] = pl.stack_points(self.am, state)
+        if self.scene is not None:
+            self._draw_scene()
+            self.show_closest_pair(state if mark_violations else None)
         return state
+
+    def _draw_scene(self) -> None:
+        """The scene's obstacles and floor at ``{prefix}_obstacles`` (once), named in the legend."""
+        if self.scene is None or self._scene_drawn:
+            return
+        root = self.scene_path("obstacles")
+        pts = obstacles.draw_scene(self.meshcat[root], self.scene, self._extra_points["stack"])
+        self._add_root(root, pts if len(pts) else None)
+        names = [o.name for o in self.scene.obstacles]
+        shown = ", ".join(names[:8]) + (f" and {len(names) - 8} more" if len(names) > 8 else "")
+        if names:
+            self._legend[f"{root}/obstacles"] = (OBSTACLE_RGBA, f"obstacles: {shown}")
+        if self.scene.floor_z is not None:
+            self._legend[f"{root}/floor"] = (FLOOR_RGBA, f"floor at z = {self.scene.floor_z:g} m")
+        self._scene_drawn = True
+
+    def show_closest_pair(self, pose: Pose | None) -> obstacles.ClosestPair | None:
+        """Mark the closest pair of bodies of ``pose`` (its clearance with :attr:`scene`): a
+        cyan segment between the two witness points at ``{prefix}_closest``, its distance [m]
+        and the two bodies in the legend. None removes the mark. Returns what is marked."""
+        root = self.scene_path("closest")
+        self._legend.pop(root, None)
+        pair = None
+        if pose is not None:
+            plates = pl.as_plates(self.am, pose)
+            pair = obstacles.closest_pair(clearance(self.am, plates, self.scene))
+        obstacles.draw_closest_pair(self.meshcat[root], pair)
+        self.closest = pair
+        if pair is not None:
+            self._add_root(root)
+            self._legend[root] = (CLOSEST_PAIR_RGBA, pair.label)
+        return pair
 
     def _color_legs(self, state: StackState, color_forces: bool) -> None:
         """Colour motor and shaft of every leg by its force on :attr:`force_range` (else the
@@ -246,8 +296,10 @@ class StackScene:
             anim_mod.make_force_bands(self.meshcat[self.scene_path("force_bands")], self.am, scale)
             self._add_root(self.scene_path("force_bands"))
         first = states[0]
-        first_state = first if isinstance(first, StackState) else evaluate_state(self.am, first)
+        first_state = first if isinstance(first, StackState) else evaluate_state(self.am, first, scene=self.scene)
         self.display(first_state)
+        if self.scene is not None:  # one pose's mark would stand still while the poses move
+            self.show_closest_pair(None)
         if scale is not None:  # one scale for the whole animation: the legs, the sleeves, the bar
             self.force_range = scale
             self._color_legs(first_state, True)

@@ -180,6 +180,12 @@ def _scene_cases() -> list[CliCase]:
         for n in refuse[:3]
     ]
     cases += [
+        _case(f"scene.view.{Path(n).stem}", ["view", "--home", "--html", "{d}/view.html", "--scene", f"{{d}}/{n}"])
+        for n in refuse[:3]
+    ]
+    cases += [
+        _case("scene.view_missing", "view --home --html {d}/view.html --scene {d}/no_such_scene.yaml"),
+        _case("scene.view_carrier", "view --home --carrier ur5 --html {d}/view.html --scene {d}/scene_ok.yaml"),
         _case("scene.missing", "statics --home --json --scene {d}/no_such_scene.yaml"),
         _case("scene.directory", "statics --home --json --scene {d}"),
         # a sphere around the home EE plate: an answer, infeasible with a collision
