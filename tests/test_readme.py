@@ -206,6 +206,11 @@ COMMANDS: list[tuple[str, str, str]] = [
     (r"assembler-pin view --home( --host \S+)?$", "", "serves a live page until Ctrl-C (test_viewer.py runs one)"),
     (r"assembler-pin view --plates examples/poses\.json --html \S+$", SLOW, ""),
     (
+        r"assembler-pin view --(home|scenario translation) --scene examples/truss_bay\.yaml --html \S+$",
+        "",
+        "a page with the scene and its closest pair (viz/test_scene_view.py draws both and checks them)",
+    ),
+    (
         r"assembler-pin reproduce --out",
         "",
         "every scenario with its random-pose references (core/test_reproduce.py)",
