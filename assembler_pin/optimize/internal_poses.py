@@ -106,11 +106,10 @@ def _restarted(
     restart from the same point stalls again; one with the rows kept a little further inside
     (:data:`RESTART_MARGINS`) leaves the corner, and a second with the asked margin ends on
     the optimum. Each restart is kept only when it is valid and no worse."""
-    slsqp = opts  # resolved: SLSQP ran
     for extra in RESTART_MARGINS:
-        inside = _optimized(am, result.optimized.plates, goal, replace_margin(slsqp, extra), motion, scene)
+        inside = _optimized(am, result.optimized.plates, goal, replace_margin(opts, extra), motion, scene)
         start = inside.optimized if inside.success else result.optimized
-        again = _optimized(am, start.plates, goal, slsqp, motion, scene)
+        again = _optimized(am, start.plates, goal, opts, motion, scene)
         if again.success and again.objective_optimized <= result.objective_optimized + 1e-9:
             result = _continued(result, again, inside)
         if result.optimal:
@@ -123,15 +122,16 @@ def replace_margin(opts: OptimizeOptions, extra: float) -> OptimizeOptions:
     return dataclasses.replace(opts, limit_margin=max(opts.limit_margin, 0.0) + extra)
 
 
-def _continued(first: OptimizeResult, *later: OptimizeResult) -> OptimizeResult:
+def _continued(first: OptimizeResult, *later: OptimizeResult, how: str = "") -> OptimizeResult:
     """The last of ``later`` as the outcome of ``first`` continued: the start, counters and
-    times of them all."""
+    times of them all; ``how`` says how it went on (default: restarted where it stopped)."""
     last = later[-1]
     runs = (first, *later)
     methods = list(dict.fromkeys(r.method for r in runs))
+    how = how or f"restarted from where {first.method} stopped"
     return dataclasses.replace(
         last,
-        message=one_line(f"{last.message} (restarted from where {first.method} stopped)"),
+        message=one_line(f"{last.message} ({how})"),
         iterations=sum(r.iterations for r in runs),
         evaluations=sum(r.evaluations for r in runs),
         gradient_evaluations=sum(r.gradient_evaluations for r in runs),
@@ -161,18 +161,7 @@ def _polished(
     polish = _optimized(am, ipopt.optimized.plates, goal, dataclasses.replace(opts, method="slsqp"), motion)
     if not polish.success or polish.objective_optimized > ipopt.objective_optimized + 1e-9:
         return ipopt
-    return dataclasses.replace(
-        polish,
-        message=one_line(f"{polish.message} (SLSQP from the best state met by {ipopt.solver_message})"),
-        iterations=ipopt.iterations + polish.iterations,
-        evaluations=ipopt.evaluations + polish.evaluations,
-        gradient_evaluations=ipopt.gradient_evaluations + polish.gradient_evaluations,
-        time_s=ipopt.time_s + polish.time_s,
-        initial=ipopt.initial,
-        objective_initial=ipopt.objective_initial,
-        sag_initial=ipopt.sag_initial,
-        method="ipopt+slsqp",
-    )
+    return _continued(ipopt, polish, how=f"SLSQP from the best state met by {ipopt.solver_message}")
 
 
 def _optimized(
