@@ -32,6 +32,7 @@ segment end that follows the top joint.
 
 from __future__ import annotations
 
+import dataclasses
 import functools
 import logging
 import math
@@ -41,6 +42,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..config.schema import AssemblerConfig
+from ..exceptions import SceneError
 from ..kinematics import PlateArrays, plate_arrays
 from ..model.assembler import AssemblerModel
 from ..model.geometry import LEGS_PER_PLATFORM, leg_geometry
@@ -131,6 +133,7 @@ class Clearance:
     exact: np.ndarray
     _parts: list[_Rows] = field(repr=False)
     _bodies: StackBodies = field(repr=False)
+    _reversed: bool = field(default=False, repr=False)  # plates given in the reverse order (a turned model)
 
     @functools.cached_property
     def _rows(self) -> _Rows:
@@ -203,7 +206,7 @@ class Clearance:
             j = g // LEGS_PER_PLATFORM
             for plate, c, anchor in ((j, c_bottom, b.bottom[g]), (j + 1, c_top, b.top[g])):
                 np.add.at(out, (at, plate), sign * np.hstack([c, np.cross(anchor, c)]))
-        return out
+        return out[:, ::-1].copy() if self._reversed else out
 
 
 # ---------------------------------------------------------------- closed forms
@@ -225,12 +228,13 @@ def _variant_index(t, G: int) -> tuple[np.ndarray, np.ndarray]:
     return va, vb
 
 
-def _legs_all_parts(bodies: StackBodies, trim_bottom=False) -> tuple[np.ndarray, ...]:
+def _legs_all_parts(bodies: StackBodies, trim_bottom=False, trim_top=False) -> tuple[np.ndarray, ...]:
     G = len(bodies.length)
     g = np.repeat(np.arange(G), 2)
     part = np.tile(np.array([MOTOR, SHAFT]), G)
     tb = np.repeat(np.asarray(trim_bottom), 2) if np.ndim(trim_bottom) else trim_bottom
-    return (g, part, *_capsule_rows(bodies, g, part, tb, False))
+    tt = np.repeat(np.asarray(trim_top), 2) if np.ndim(trim_top) else trim_top
+    return (g, part, *_capsule_rows(bodies, g, part, tb, tt))
 
 
 def _leg_rows_from_parts(g, d, s, start, vec, lo, hi, hb, other_body, other_kind, other_index, other_point, normal):
@@ -253,11 +257,13 @@ def _leg_rows_from_parts(g, d, s, start, vec, lo, hi, hb, other_body, other_kind
     )
 
 
-def _floor(bodies: StackBodies, floor_z: float, floor_id: int) -> _Rows:
-    """Every leg (platform 0's beyond the node zone of its bottom joint) and plates 1..n
-    against the floor (a half-space below ``floor_z``): exact, signed."""
-    t = pair_table(bodies.cfg)
-    g, _, start, vec, lo, hi, hb, radius = _legs_all_parts(bodies, t.floor_trim)
+def _floor(bodies: StackBodies, floor_z: float, floor_id: int, standing: tuple[int, ...] = (0,)) -> _Rows:
+    """Every leg and every plate against the floor (a half-space below ``floor_z``): exact,
+    signed; but not the ``standing`` plates, nor a leg's ``node_zone`` at a standing plate."""
+    G = len(bodies.length)
+    platform = np.arange(G) // LEGS_PER_PLATFORM
+    on = np.asarray(standing, dtype=int)
+    g, _, start, vec, lo, hi, hb, radius = _legs_all_parts(bodies, np.isin(platform, on), np.isin(platform + 1, on))
     z0, z1 = start[:, 2], start[:, 2] + vec[:, 2]
     s = (z1 < z0).astype(float)
     x = start + s[:, None] * vec
@@ -273,10 +279,9 @@ def _floor(bodies: StackBodies, floor_z: float, floor_id: int) -> _Rows:
         )
     ]
     cfg = bodies.cfg
-    k = np.arange(1, len(bodies.p))
+    k = np.setdiff1d(np.arange(len(bodies.p)), on)
     if len(k):
         low, height = cylinder_lowest_point(bodies.p[k], bodies.R[k][:, :, 2], cfg.plate.radius, cfg.plate.thickness)
-        G = len(bodies.length)
         below = low.copy()
         below[:, 2] = floor_z
         rows.append(
@@ -729,6 +734,19 @@ def _numpy_pass(am: AssemblerModel, pa: PlateArrays) -> tuple[StackBodies, _Rows
     return bodies, rows, (lp.reshape(-1, 2), pp)
 
 
+def _turned_clearance(am: AssemblerModel, plates, scene: Scene | None, engine: str) -> Clearance:
+    """The clearance of a turned model's plates (:attr:`AssemblerModel.physical`): the original
+    stack's at the same bodies, its derivatives in the turned model's plate order (a world twist
+    of turned plate k is the same twist of original plate n−k)."""
+    assert am.physical is not None
+    original, flip = am.physical
+    pa = plate_arrays(am, plates)
+    bodies = PlateArrays(np.matmul(pa.R[::-1], flip.T), pa.p[::-1].copy())
+    if scene is not None:
+        scene = dataclasses.replace(scene, standing=tuple(sorted(am.n - k for k in scene.standing)))
+    return dataclasses.replace(clearance(original, bodies, scene, engine), _reversed=True)
+
+
 def clearance(
     am: AssemblerModel,
     plates: PlateArrays | Sequence | np.ndarray,
@@ -750,8 +768,12 @@ def clearance(
         a :class:`Clearance` (distances [m], world frame).
     """
     global _calls
-    _calls += 1
     scene = read_scene(scene)
+    if am.physical is not None:  # a stack seen from its other end: its bodies are the original's
+        return _turned_clearance(am, plates, scene, engine)
+    _calls += 1
+    if scene is not None and any(k > am.n for k in scene.standing):
+        raise SceneError(f"scene standing {scene.standing} names a plate beyond plate {am.n}")
     kernel = self_kernel(_calls, engine)
     pa = plate_arrays(am, plates)
     if kernel is None:
@@ -766,7 +788,7 @@ def clearance(
         names = [*names, *(o.name for o in scene.obstacles)] + (["floor"] if scene.floor_z is not None else [])
         ids = {o.name: len(stack_body_names(cfg.platforms)) + i for i, o in enumerate(scene.obstacles)}
         if scene.floor_z is not None:
-            exact.append(_floor(bodies, scene.floor_z, len(names) - 1))
+            exact.append(_floor(bodies, scene.floor_z, len(names) - 1, scene.standing))
         for o in scene.obstacles:
             if o.kind == "sphere":
                 exact.append(_sphere(bodies, o, ids[o.name]))

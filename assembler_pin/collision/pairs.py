@@ -11,10 +11,10 @@ numbered ``g = 6 j + i`` (platform j, leg i); plates ``k = 0..n``.
 * **Leg against plate**, every plate but the two the leg's joints sit on.
 * **Plate against plate**, every pair of plates (neighbours too: a lean can bring two rims
   together).
-* **Scene**: every leg and every plate against every obstacle; every leg and plates 1..n
-  against the floor, but not the base plate (it stands on the floor by design) and not the
-  first ``leg.node_zone`` of a leg of platform 0 from its bottom joint (its joint sits on
-  the base plate).
+* **Scene**: every leg and every plate against every obstacle; every leg and every plate
+  against the floor, but not the plates standing on it (:attr:`Scene.standing
+  <assembler_pin.collision.scene.Scene.standing>`: the base plate; a walk's foot as it lands
+  or lifts off) and not the first ``leg.node_zone`` of a leg from a joint on a standing plate.
 
 The table depends on the configuration only and is built once per configuration.
 """
@@ -73,8 +73,6 @@ class PairTable:
             at its bottom, at its top (the shared node's end).
         leg_plate: (Q, 2) (leg, plate) pairs.
         plate_pairs: (S, 2) (plate, plate) pairs.
-        floor_trim: (6n,) booleans: the leg's bottom end is not checked against the floor
-            (platform 0's legs).
     """
 
     leg_a: np.ndarray
@@ -82,7 +80,6 @@ class PairTable:
     trim: np.ndarray
     leg_plate: np.ndarray
     plate_pairs: np.ndarray
-    floor_trim: np.ndarray
 
 
 @per_config
@@ -104,4 +101,4 @@ def pair_table(cfg: AssemblerConfig) -> PairTable:
     platform = np.arange(G) // LEGS_PER_PLATFORM
     leg_plate = np.array([(g, k) for g in range(G) for k in range(n + 1) if k not in (platform[g], platform[g] + 1)])
     plate_pairs = np.array([(k, m) for k in range(n + 1) for m in range(k + 1, n + 1)]).reshape(-1, 2)
-    return PairTable(a, b, trim, leg_plate.reshape(-1, 2).astype(int), plate_pairs.astype(int), platform == 0)
+    return PairTable(a, b, trim, leg_plate.reshape(-1, 2).astype(int), plate_pairs.astype(int))

@@ -86,10 +86,22 @@ class Scene:
     Attributes:
         obstacles: the fixed bodies.
         floor_z: height of the floor [m], or None for no floor.
+        standing: the plates that stand on the floor by design (plate indices of the stack
+            checked): they are not checked against the floor, nor is the first
+            ``leg.node_zone`` of a leg from its joint on one of them. ``(0,)``, the base plate,
+            unless a walk's foot lands or lifts off (:func:`~assembler_pin.walk.plan_walk`).
+            Not a key of the file.
     """
 
     obstacles: tuple[Obstacle, ...] = field(default_factory=tuple)
     floor_z: float | None = None
+    standing: tuple[int, ...] = (0,)
+
+    def __post_init__(self) -> None:
+        if not isinstance(self.standing, tuple) or not all(
+            isinstance(k, int) and not isinstance(k, bool) and 0 <= k <= 1024 for k in self.standing
+        ):
+            raise SceneError(f"scene standing must be a tuple of plate indices, got {short_repr(self.standing)}")
 
 
 def _number(value: Any, where: str, low: float = -MAX_SIZE, high: float = MAX_SIZE, positive: bool = False) -> float:

@@ -85,6 +85,11 @@ class AssemblerModel:
     """The models every computation runs on: (inner platforms, last platform with the payload)."""
     stack_plan: StackPlan = field(init=False, repr=False)
     """Their constants for this stack (:class:`~assembler_pin.model.platform.StackPlan`)."""
+    physical: tuple[AssemblerModel, np.ndarray] | None = field(default=None, init=False, repr=False)
+    """Set when this model is another stack seen from its other end
+    (:func:`~assembler_pin.supports.turned.turned_model`): that stack, and the constant rotation
+    of each of its plate frames into this model's (plate k here is plate n−k there). The
+    bodies' sizes and their clearance are that stack's."""
 
     def __repr__(self) -> str:
         return (

@@ -153,6 +153,7 @@ def _turned(original: AssemblerModel) -> TurnedModel:
         flip = _flip(k * math.pi / 3.0)
         perm = _permutation(original, model, flip)
         if perm is not None:
+            model.physical = (original, flip.rotation)  # its bodies are the original's (collisions)
             return TurnedModel(model, original, flip, perm)
     raise AssertionError("no turn of the plates about z maps the design onto itself")  # the design guarantees one
 

@@ -16,6 +16,7 @@ from assembler_pin.collision.bodies import MOTOR, SHAFT, leg_segments, stack_bod
 from assembler_pin.collision.kernel import kernel_available
 from assembler_pin.collision.pairs import pair_table
 from assembler_pin.common.messages import binding, describe
+from assembler_pin.exceptions import SceneError
 from assembler_pin.scenarios import SCENARIOS
 from assembler_pin.state import evaluate_state
 
@@ -257,3 +258,63 @@ def test_a_scene_leaves_the_stack_s_own_pairs_as_they_are(am):
         for pair, d, exact in zip(alone.pairs, alone.distances, alone.exact, strict=True):
             if exact and tuple(pair) in measured:
                 assert measured[tuple(pair)] == pytest.approx(d, abs=1e-9), pair
+
+
+def test_standing_plates_are_not_checked_against_the_floor(am):
+    """A plate on the floor (a walk's foot) and its legs' node zones are left out when it
+    stands; the rest of those legs is measured, by the test's own lowest-point formula."""
+    import dataclasses
+
+    n = am.n
+    plates = np.array([m.homogeneous for m in am.home])
+    floor = float(plates[n, 2, 3])  # the floor through plate n's joint plane
+    free = clearance(am, plates, Scene((), floor_z=floor))
+    assert free.distances[_row(free, f"plate {n}", "floor")] == pytest.approx(-0.5 * am.config.plate.thickness)
+    stood = clearance(am, plates, Scene((), floor_z=floor, standing=(0, n)))
+    on_floor = [stood.names[i] for i, j in stood.pairs if stood.names[j] == "floor"]
+    assert f"plate {n}" not in on_floor and "plate 0" not in on_floor and "plate 1" in on_floor
+    b = stack_bodies(am, plates)
+    leg, zone = am.config.leg, am.config.leg.node_zone
+    for g in range(6 * (n - 1), 6 * n):  # the last platform's legs: their top zone is left out
+        # each part's lowest point: the motor on [0, motor_length], the shaft up to L - zone
+        z = b.bottom[g, 2] + np.array([0.0, leg.motor_length, b.length[g] - zone]) * b.axis[g, 2]
+        motor = min(z[0], z[1]) - leg.motor_radius
+        shaft = min(z[1], z[2]) - leg.shaft_radius
+        want = min(motor, shaft) - floor
+        got = stood.distances[_row(stood, f"SP{n - 1} leg {g % 6}", "floor")]
+        assert got == pytest.approx(want, abs=1e-12)
+    with pytest.raises(SceneError, match="beyond plate"):
+        clearance(am, plates, dataclasses.replace(Scene((), floor_z=floor), standing=(n + 1,)))
+    with pytest.raises(SceneError, match="standing"):
+        Scene((), standing=[0])  # type: ignore[arg-type]
+
+
+def test_a_turned_model_measures_the_original_bodies(am):
+    """The stack modelled from its EE plate has the original's bodies (the motor at the lower
+    joint of the physical leg): the same distances at the same pose, the derivatives in the
+    turned plate order, held to central differences in the turned model's own twists."""
+    from assembler_pin.supports.turned import turned_model
+
+    tm = turned_model(am)
+    plates = _perturbed(am, 0.03, 11)
+    scene = scene_from_dict(TRUSS)
+    c = clearance(am, plates, scene)
+    turned = tm.plates(plates)
+    t = clearance(tm.model, turned, Scene(scene.obstacles, scene.floor_z, standing=(am.n,)))
+    assert np.array_equal(c.pairs, t.pairs) and np.abs(c.distances - t.distances).max() < 1e-12
+    assert t.between == c.between
+    rows = np.flatnonzero(t.exact & (t.distances < 0.1))[:12]
+    grad = t.gradient(rows)
+    h = 1e-6
+    for k in (1, am.n - 1):
+        for a in (0, 4):
+            values = []
+            for sign in (1.0, -1.0):
+                eta = np.zeros(6)
+                eta[a] = sign * h
+                moved = turned.se3_list() if hasattr(turned, "se3_list") else [turned.se3(i) for i in range(am.n + 1)]
+                moved[k] = pin.exp6(eta) * moved[k]
+                other = clearance(tm.model, moved, Scene(scene.obstacles, scene.floor_z, standing=(am.n,)))
+                values.append(other.distances[rows])
+            fd = (values[0] - values[1]) / (2 * h)
+            assert np.abs(grad[:, k, a] - fd).max() < 1e-4, (k, a)
