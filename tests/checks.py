@@ -377,3 +377,37 @@ def brute_segment_distance(p1, d1, p2, d2) -> float:
         f, [grid[i], grid[j]], bounds=[(0, 1), (0, 1)], method="L-BFGS-B", options={"ftol": 1e-16, "gtol": 1e-14}
     )
     return float(np.sqrt(min(res.fun, dist[i, j] ** 2)))
+
+
+def _points_to_axis(points: np.ndarray, start: np.ndarray, vec: np.ndarray) -> np.ndarray:
+    s = np.clip((points - start) @ vec / (vec @ vec), 0.0, 1.0)
+    return np.linalg.norm(points - (start + s[:, None] * vec), axis=1)
+
+
+def strut_distance(cfg, plates: np.ndarray, start: np.ndarray, vec: np.ndarray, radius: float) -> float:
+    """The smallest distance [m] from a strut (a capsule: axis ``start`` → ``start + vec``,
+    ``radius``; a cylinder's flat ends are farther) to a plate (its rims and faces sampled every
+    ~1 mm) or a leg (its axis sampled every 0.5 mm, minus the capsule's radius), plates (n+1, 4, 4)."""
+    angles = np.linspace(0.0, 2 * np.pi, 1080, endpoint=False)
+    rings = np.linspace(0.0, cfg.plate.radius, 60)
+    disc = np.array(
+        [[r * np.cos(a), r * np.sin(a)] for r in rings for a in angles[::6]]
+        + [[cfg.plate.radius * np.cos(a), cfg.plate.radius * np.sin(a)] for a in angles]
+    )
+    best = np.inf
+    for T in plates:
+        for z in (-0.5 * cfg.plate.thickness, 0.5 * cfg.plate.thickness):
+            local = np.column_stack([disc, np.full(len(disc), z)])
+            world = local @ T[:3, :3].T + T[:3, 3]
+            best = min(best, float(_points_to_axis(world, start, vec).min()) - radius)
+    for j in range(cfg.platforms):
+        bottom, top = design_anchors(cfg, j)
+        for i in range(6):
+            b = plates[j][:3, :3] @ bottom[i] + plates[j][:3, 3]
+            t = plates[j + 1][:3, :3] @ top[i] + plates[j + 1][:3, 3]
+            L = np.linalg.norm(t - b)
+            sigma = np.linspace(0.0, L, int(L / 5e-4) + 2)
+            pts = b + sigma[:, None] * (t - b) / L
+            r = np.where(sigma <= cfg.leg.motor_length, cfg.leg.motor_radius, cfg.leg.shaft_radius)
+            best = min(best, float((_points_to_axis(pts, start, vec) - r).min()) - radius)
+    return best

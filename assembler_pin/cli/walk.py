@@ -6,7 +6,7 @@ import argparse
 from pathlib import Path
 
 from ..exceptions import CLIError
-from .common import config_from_args, dumps, progress_for, writable_parent
+from .common import add_scene_argument, config_from_args, dumps, progress_for, scene_from_args, writable_parent
 
 DEFAULT_FPS = 10.0
 """``walk --html``: samples of the walk shown per second, by default."""
@@ -40,6 +40,9 @@ def add_parser(add) -> None:
         help="write a standalone page animating every sample (legs by force, held feet, footholds)",
     )
     p.add_argument("--fps", type=float, help="with --html: samples shown per second (default 10)")
+    add_scene_argument(
+        p, "every reach and swing keeps its clearance at and between samples; the footholds on its floor"
+    )
     p.add_argument("--json", action="store_true", help="print one JSON object")
     p.set_defaults(func=run)
 
@@ -98,9 +101,10 @@ def run(args: argparse.Namespace) -> int:
         if not args.html:
             raise CLIError("--fps needs --html (it sets the page's samples per second)")
         check_bound("walk.fps", args.fps, "--fps", CLIError)
+    scene = scene_from_args(args)
     prog = progress_for(args, "walk")
     try:
-        walk = plan_walk(am, feet, options=options, progress=prog)
+        walk = plan_walk(am, feet, options=options, progress=prog, scene=scene)
     finally:
         prog.close()
     doc = walk.to_dict()
@@ -222,4 +226,7 @@ def format_walk(walk) -> str:
         lines.append(
             f"  {k:2d} {p.kind:8s} support {p.support:4s} foothold {p.step:2d} {len(p.plates):4d} samples {peak}{state}"
         )
+        if p.clearance is not None and walk.scene is not None:
+            a, b = p.clearance.between
+            lines.append(f"       clearance {p.clearance.min_distance:.4f} m ({a} and {b})")
     return "\n".join(line[:100] for line in lines)

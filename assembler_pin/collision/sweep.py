@@ -1,16 +1,23 @@
 """The clearance between two poses of a motion: a conservative bound from the two ends.
 
 Every body of the stack is a segment with a radius (a leg's motor and shaft) or a flat
-cylinder (a plate). From one pose to another a leg's axis segment moves, in the Hausdorff
-distance, by at most the largest move of its ends (the joint centres and the motor's end:
-a segment is the convex hull of its ends), and a plate by at most ``|Δp| + ρ θ`` (``θ`` the
-angle of its rotation, ``ρ`` its rim's distance from its centre). A distance between two
-bodies changes by at most the sum of their moves (obstacles do not move), so along a motion
-from pose A to pose B whose bodies move by at most ``δ`` in all, the clearance stays at least
-``(d_A + d_B) / 2 - δ`` (:func:`swept_bound`). This holds where the motion between A and B
-does not go further than its chord (the move from A to an intermediate pose and from there
-to B add up to the move from A to B); the planner makes it so by bisecting until the bound
-holds, so the residual is of second order in the step.
+cylinder (a plate). From one pose to another a leg's axis moves, in the Hausdorff distance,
+by at most the largest move of its joint centres and its motor's end (each of its two
+segments is the convex hull of its ends), and a plate by at most ``|Δp| + ρ θ`` (``θ`` the
+angle of its rotation, ``ρ`` its rim's distance from its centre): :func:`body_moves`.
+Obstacles and the floor do not move.
+
+The distance of two bodies ``a`` and ``b`` changes by at most the sum of their moves. Along a
+motion from pose A to pose B in which each body moves by at most its move from A to B (the
+move from A to an intermediate pose and from there to B add up to no more than the chord),
+the pair's distance at any intermediate pose is at least ``d_A − x`` and at least
+``d_B − (m_a + m_b − x)`` for some ``x``, so at least their mean::
+
+    d(t) >= (d_A + d_B − m_a − m_b) / 2
+
+and the clearance is at least the smallest of these over the pairs (:func:`swept_bound`). The
+planner bisects (stack FK of the midpoint lengths) where the bound is below the clearance,
+so what the chord assumption leaves out is of second order in the step.
 
 Frames: world; lengths [m]; angles [rad].
 """
@@ -25,8 +32,9 @@ import numpy as np
 from ..kinematics import PlateArrays, plate_arrays
 from ..kinematics.legs import leg_points
 from ..model.assembler import AssemblerModel
+from .check import Clearance
 
-__all__ = ["body_move", "swept_bound"]
+__all__ = ["body_moves", "swept_bound"]
 
 
 def _ends(am: AssemblerModel, pa: PlateArrays) -> np.ndarray:
@@ -38,22 +46,47 @@ def _ends(am: AssemblerModel, pa: PlateArrays) -> np.ndarray:
     return np.stack([bottom, bottom + am.config.leg.motor_length * u, top])
 
 
-def body_move(
+def _bodies(am: AssemblerModel, plates) -> tuple[AssemblerModel, PlateArrays]:
+    """The model whose bodies these are and their plates (a turned model's are its original's,
+    :attr:`~assembler_pin.model.assembler.AssemblerModel.physical`)."""
+    pa = plate_arrays(am, plates)
+    if am.physical is None:
+        return am, pa
+    original, flip = am.physical
+    return original, PlateArrays(np.matmul(pa.R[::-1], flip.T), pa.p[::-1].copy())
+
+
+def body_moves(
     am: AssemblerModel, a: PlateArrays | Sequence | np.ndarray, b: PlateArrays | Sequence | np.ndarray
-) -> float:
-    """The largest move [m] of any body of the stack (legs, plates) from pose ``a`` to pose
-    ``b``, in the Hausdorff distance of its axis segments or of its cylinder."""
-    pa, pb = plate_arrays(am, a), plate_arrays(am, b)
-    legs = float(np.linalg.norm(_ends(am, pa) - _ends(am, pb), axis=2).max()) if am.n else 0.0
-    plate = am.config.plate
+) -> np.ndarray:
+    """The move [m] of every body of the stack from pose ``a`` to pose ``b``: (7n+1,) in the
+    order of :func:`~assembler_pin.collision.bodies.stack_body_names` (legs ``6 j + i``, then
+    plates 0..n), each the Hausdorff distance of its axis segments or of its cylinder."""
+    model, pa = _bodies(am, a)
+    _, pb = _bodies(am, b)
+    legs = np.linalg.norm(_ends(model, pa) - _ends(model, pb), axis=2).max(axis=0)
+    plate = model.config.plate
     rho = math.hypot(plate.radius, 0.5 * plate.thickness)
     turn = np.einsum("kji,kjl->kil", pa.R, pb.R)  # R_a^T R_b
     cos = np.clip((np.trace(turn, axis1=1, axis2=2) - 1.0) / 2.0, -1.0, 1.0)
-    plates = float((np.linalg.norm(pb.p - pa.p, axis=1) + rho * np.arccos(cos)).max())
-    return max(legs, plates)
+    plates = np.linalg.norm(pb.p - pa.p, axis=1) + rho * np.arccos(cos)
+    return np.concatenate([legs, plates])
 
 
-def swept_bound(d_a: float, d_b: float, move: float) -> float:
-    """A lower bound [m] of the clearance along a motion from a pose of clearance ``d_a`` to one
-    of clearance ``d_b`` whose bodies move by at most ``move`` (:func:`body_move`)."""
-    return 0.5 * (d_a + d_b) - move
+def swept_bound(a: Clearance, b: Clearance, moves: np.ndarray) -> float:
+    """A lower bound [m] of the clearance along a motion from a pose of clearance ``a`` to one of
+    clearance ``b`` (the same pairs, the same scene), the stack's bodies moving by ``moves``
+    (:func:`body_moves`): the smallest ``(d_A + d_B − m_a − m_b) / 2`` over the pairs
+    (module doc); ``inf`` when no pair is checked.
+
+    Raises:
+        ValueError: the two clearances do not hold the same pairs.
+    """
+    if a.pairs.shape != b.pairs.shape or not np.array_equal(a.pairs, b.pairs):
+        raise ValueError("the two clearances must hold the same pairs (one scene, one stack)")
+    if not len(a.distances):
+        return math.inf
+    m = np.zeros(len(a.names))
+    m[: len(moves)] = moves
+    bound = 0.5 * (a.distances + b.distances - m[a.pairs[:, 0]] - m[a.pairs[:, 1]])
+    return float(bound.min())

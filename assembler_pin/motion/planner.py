@@ -14,11 +14,12 @@ Between two samples the leg lengths are interpolated and the stack checked there
 reason and the valid prefix — never a gap.
 
 With a scene (``plan_path(..., scene=...)``) every sample keeps its clearance (the optimizer's
-clearance rows) and so does the motion between samples: between two checked poses the
-clearance stays at least ``(d_A + d_B) / 2 - δ`` (:func:`~assembler_pin.collision.sweep.swept_bound`,
-``δ`` the largest move of any body), and where that bound is below the clearance the interval
-is bisected (stack FK of the midpoint lengths) up to :data:`SWEEP_DEPTH` times; an interval
-still not proven clear is a ``collision`` between samples.
+clearance rows) and so does the motion between samples: between two checked poses each pair
+of bodies stays at least ``(d_A + d_B − m_a − m_b) / 2`` apart
+(:func:`~assembler_pin.collision.sweep.swept_bound`, ``m`` each body's move), and where the
+smallest of these is below the clearance the interval is bisected (stack FK of the midpoint
+lengths) up to :data:`SWEEP_DEPTH` times; an interval still not proven clear is a
+``collision`` between samples.
 """
 
 from __future__ import annotations
@@ -34,7 +35,7 @@ import numpy as np
 import pinocchio as pin
 
 from ..collision.scene import Scene, read_scene
-from ..collision.sweep import body_move, swept_bound
+from ..collision.sweep import body_moves, swept_bound
 from ..common.messages import binding, describe, one_line
 from ..common.progress import ProgressCallback, checked_progress
 from ..config.bounds import BOUNDS
@@ -176,7 +177,7 @@ def _swept_problem(am: AssemblerModel, a: StackState, b: StackState, scene: Scen
     if a.clearance is None or b.clearance is None:
         return ""
     limit = a.clearance.limit
-    bound = swept_bound(a.clearance.min_distance, b.clearance.min_distance, body_move(am, a.plates, b.plates))
+    bound = swept_bound(a.clearance, b.clearance, body_moves(am, a.plates, b.plates))
     if bound >= limit:
         return ""
     if depth >= SWEEP_DEPTH:
@@ -254,13 +255,13 @@ def _step(
     motion = MotionTerm(prev.leg_lengths, opts.max_leg_step, opts.w3)
     result = optimize_internal_poses(am, _with_ee(prev.plates, goal), goal, opts.optimize, motion=motion, scene=scene)
     solve_s = result.time_s
-    if not _kept(am, result, opts):
+    if not _kept(am, result, opts, scene):
         second = optimize_internal_poses(
             am, _spread(prev.plates, goal), goal, opts.optimize, motion=motion, scene=scene
         )
         solve_s += second.time_s
-        if not _kept(am, second, opts):
-            return None, _not_kept_reason(am, result, opts), solve_s, (0.0, 0.0)
+        if not _kept(am, second, opts, scene):
+            return None, _not_kept_reason(am, result, opts, scene), solve_s, (0.0, 0.0)
         result = second
     state = result.optimized
     jump = float(np.abs(state.leg_lengths - prev.leg_lengths).max())
@@ -273,11 +274,19 @@ def _step(
     return state, "", solve_s, (dev_p, dev_r)
 
 
-def _not_kept_reason(am: AssemblerModel, result: OptimizeResult, opts: PlanOptions) -> str:
+def _not_kept_reason(am: AssemblerModel, result: OptimizeResult, opts: PlanOptions, scene: Scene | None = None) -> str:
     """Why a sample's run gave no sample: its own message, or for a valid state that came
-    within the plan's margin of a limit, which leg and which limit."""
+    within the plan's margin of a limit, which leg and which limit, or which two bodies."""
     if not result.success:
         return result.message
+    if _clearance_short(result, opts, scene) > GEOMETRIC_MARGIN:
+        near = result.optimized.clearance
+        assert near is not None
+        a, b = near.between
+        return (
+            f"collision: {a} and {b} would come within the plan's margin ({opts.limit_margin:g} m) "
+            f"of the clearance ({near.min_distance:.6g} m apart, clearance {near.limit:g} m)"
+        )
     rows = _margin_rows(am, result, opts)
     kind, j, i = np.unravel_index(int(np.argmin(rows)), rows.shape)
     cause = ("leg stroke", "leg stroke", "joint deflection", "joint deflection", "leg stroke")[kind]
@@ -290,15 +299,27 @@ def _margin_rows(am: AssemblerModel, result: OptimizeResult, opts: PlanOptions) 
     return leg_limit_margins(am.config.leg, legs.lengths, np.cos(legs.deflection), legs.rise, opts.limit_margin)
 
 
-def _kept(am: AssemblerModel, result: OptimizeResult, opts: PlanOptions) -> bool:
+def _clearance_short(result: OptimizeResult, opts: PlanOptions, scene: Scene | None) -> float:
+    """How far [m] the returned state's clearance falls short of the clearance plus the plan's
+    ``limit_margin`` (0 without a scene: the clearance is then checked, not kept)."""
+    near = result.optimized.clearance
+    if scene is None or near is None:
+        return 0.0
+    return max(0.0, near.limit + opts.limit_margin - near.min_distance)
+
+
+def _kept(am: AssemblerModel, result: OptimizeResult, opts: PlanOptions, scene: Scene | None = None) -> bool:
     """Whether a sample's run gives a sample: an optimum, or a valid state whose legs keep the
-    plan's ``limit_margin`` inside their limits (a valid state nearer a limit, such as a
-    stalled run's start, could leave it between the samples)."""
+    plan's ``limit_margin`` inside their limits and, with a scene, whose clearance is that much
+    above the clearance (a valid state nearer a limit, such as a stalled run's start, could
+    leave it between the samples)."""
     if not result.success:
         return False
     if result.optimal:
         return True
-    return bool(np.all(_margin_rows(am, result, opts) >= -GEOMETRIC_MARGIN))
+    return bool(np.all(_margin_rows(am, result, opts) >= -GEOMETRIC_MARGIN)) and (
+        _clearance_short(result, opts, scene) <= GEOMETRIC_MARGIN
+    )
 
 
 def _start_state(

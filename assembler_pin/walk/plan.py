@@ -25,6 +25,16 @@ the base on ``footholds[2]``, the EE on ``footholds[3]`` ... Each step is two ph
 Reach and swing samples are rigid poses (commanded = pin-to-pin lengths), like the package's
 trajectories; a walk that cannot go on ends with ``success`` false, the reason, and the valid
 prefix (the phases done, and the valid samples of the one that failed).
+
+**Among obstacles** (``scene=``): every reach and swing sample keeps its clearance from the
+scene's obstacles and floor and from the stack's own bodies, at the samples and between them
+(:func:`~assembler_pin.motion.planner.plan_path` with the scene). The feet stand on the
+scene's floor (every foothold on it): the held foot's plate, and the moving foot's while it
+lifts off or lands (on its foothold's normal, at most ``clearance`` from it), are not checked
+against the floor, nor are their legs' ``leg.node_zone`` at them
+(:attr:`~assembler_pin.collision.scene.Scene.standing`); every other body is, the moving
+foot's plate included from its lift-off height on. The swing is planned on the turned model,
+whose bodies are the stack's own (:func:`~assembler_pin.collision.check.clearance`).
 """
 
 from __future__ import annotations
@@ -38,14 +48,18 @@ from dataclasses import dataclass, field
 import numpy as np
 import pinocchio as pin
 
+from ..collision.check import Clearance, clearance
+from ..collision.scene import Scene, read_scene
 from ..common.progress import ProgressCallback, checked_progress
 from ..config.bounds import check_bound
 from ..config.options import checked_options
+from ..constraints import Violation
 from ..exceptions import WalkError
 from ..kinematics import PlateArrays, leg_vectors, plate_arrays
 from ..model.assembler import AssemblerModel, checked_model
 from ..motion.paths import EEPath
 from ..motion.planner import PlanOptions, check_plan_work, plan_path
+from ..state import StackState
 from ..supports.choice import CHECK_TOLERANCE, ChosenDistribution, chosen_distribution, force_bounds, held_equilibrium
 from ..supports.turned import turned_model
 from ..supports.two_point import two_point_statics
@@ -104,6 +118,8 @@ class WalkPhase:
             tension positive, with the phase's support.
         complete: the phase reached its end; reason: why not ("" when complete).
         chosen: a transfer's chosen distribution (min max|F|) at its pose, else None.
+        clearance: the smallest clearance of its samples (the stack's own bodies, and the
+            scene's with one), None without a sample.
     """
 
     kind: str
@@ -116,6 +132,7 @@ class WalkPhase:
     complete: bool
     reason: str = ""
     chosen: ChosenDistribution | None = None
+    clearance: Clearance | None = None
 
     @property
     def max_abs_forces(self) -> np.ndarray:
@@ -133,6 +150,7 @@ class WalkPhase:
             "max_abs_force": float(self.max_abs_forces.max()) if len(self.plates) else None,
             "max_abs_forces": self.max_abs_forces.tolist(),
             "chosen": None if self.chosen is None else self.chosen.to_dict(),
+            "clearance": None if self.clearance is None else self.clearance.to_dict(),
         }
 
 
@@ -146,12 +164,16 @@ class WalkResult:
         footholds: the footholds (world frames).
         phases: the phases planned, in order (the valid prefix when it failed: the last one
             may be incomplete).
+        scene: the obstacles and floor the walk was planned among (None: none).
+        lift: the lift-off and pre-contact height it was planned with [m].
     """
 
     success: bool
     reason: str
     footholds: tuple[pin.SE3, ...]
     phases: list[WalkPhase]
+    scene: Scene | None = None
+    lift: float = 0.0
 
     @property
     def max_abs_force(self) -> float:
@@ -254,28 +276,62 @@ def _below_floor(am: AssemblerModel, pa: PlateArrays, floor_z: float | None) -> 
     return f"a joint centre goes {1e3 * (floor_z - low):.3g} mm below the floor" if low < floor_z - 1e-6 else ""
 
 
+def _segments(
+    points: tuple[pin.SE3, ...], lift: bool, scene: Scene | None, n: int
+) -> list[tuple[tuple[pin.SE3, ...], Scene | None]]:
+    """The moving plate's path in pieces, each with the scene it is planned in: without a scene
+    one piece; with one, the lift-off (when ``lift``) and the landing, along the foothold's
+    normal, in the scene where both feet stand, and the arcs between them in the scene where
+    the held foot alone stands."""
+    if scene is None:
+        return [(points, None)]
+    held, both = dataclasses.replace(scene, standing=(0,)), dataclasses.replace(scene, standing=(0, n))
+    last = len(points) - 2  # the pre-contact point opens the landing (clearance > 0 with a scene)
+    out: list[tuple[tuple[pin.SE3, ...], Scene | None]] = [(points[:2], both)] if lift else []
+    out.append((points[1 if lift else 0 : last + 1], held))
+    out.append((points[last:], both))
+    return out
+
+
 def _move_phase(
-    am: AssemblerModel, cur: PlateArrays, stance: str, step: int, foothold: pin.SE3, lift: bool, opts: WalkOptions
+    am: AssemblerModel,
+    cur: PlateArrays,
+    stance: str,
+    step: int,
+    foothold: pin.SE3,
+    lift: bool,
+    opts: WalkOptions,
+    scene: Scene | None = None,
 ) -> WalkPhase:
     """Reach (base held, the EE moves) or swing (EE held, the base moves, on the turned model)
-    from the physical pose ``cur`` to the foothold ``step``."""
+    from the physical pose ``cur`` to the foothold ``step``, among ``scene``'s bodies."""
     tm = turned_model(am)
     turned = stance == "ee"
     model = tm.model if turned else am
     start = tm.plates(cur) if turned else cur
     target = plate_target(foothold, "base") * tm.flip if turned else plate_target(foothold, "ee")
+    kind = "swing" if turned else "reach"
     far = _out_of_reach(am, start.se3(0), target)
     if far:
         empty = np.zeros((0, am.n, 6))
-        return WalkPhase("swing" if turned else "reach", stance, step, [], empty, empty, empty, False, far)
+        return WalkPhase(kind, stance, step, [], empty, empty, empty, False, far)
     apex = start.se3(0) * model.home[-1]
-    path = EEPath(_waypoints(start.se3(0), apex, start.se3(am.n), target, opts.clearance, lift), kind="linear")
-    plan = plan_path(model, path, start=start, options=opts.plan)
+    points = _waypoints(start.se3(0), apex, start.se3(am.n), target, opts.clearance, lift)
+    states: list[StackState] = []
+    reason = ""
+    begin: StackState | PlateArrays = start
+    for piece, where in _segments(points, lift, scene, am.n):
+        plan = plan_path(model, EEPath(piece, kind="linear"), start=begin, options=opts.plan, scene=where)
+        states += plan.states[1:] if states else plan.states
+        if not plan.success:
+            reason = plan.reason
+            break
+        begin = plan.states[-1]
     plates: list[PlateArrays] = []
     lengths: list[np.ndarray] = []
     forces: list[np.ndarray] = []
-    reason = "" if plan.success else plan.reason
-    for state in plan.states:
+    nearest: Clearance | None = None
+    for state in states:
         pa = tm.original_plates(state.plates) if turned else state.plates
         low = _below_floor(am, pa, opts.floor_z)
         if low:
@@ -284,14 +340,23 @@ def _move_phase(
         plates.append(pa)
         lengths.append(tm.original_legs(state.leg_lengths) if turned else state.leg_lengths)
         forces.append(tm.original_legs(state.forces) if turned else state.forces)
+        if state.clearance is not None and (nearest is None or state.clearance.min_distance < nearest.min_distance):
+            nearest = state.clearance
     L, F = np.array(lengths).reshape(-1, am.n, 6), np.array(forces).reshape(-1, am.n, 6)
-    kind = "swing" if turned else "reach"
-    return WalkPhase(kind, stance, step, plates, L, L.copy(), F, not reason, reason)
+    return WalkPhase(kind, stance, step, plates, L, L.copy(), F, not reason, reason, clearance=nearest)
 
 
-def _transfer_phase(am: AssemblerModel, pose: PlateArrays, stance: str, step: int, opts: WalkOptions) -> WalkPhase:
+def _transfer_phase(
+    am: AssemblerModel, pose: PlateArrays, stance: str, step: int, opts: WalkOptions, scene: Scene | None = None
+) -> WalkPhase:
     """Both feet held at ``pose``: the load moves from the ``stance`` foot to the other one."""
     n, k = am.n, float(am.config.leg.stiffness)
+    near = clearance(am, pose, None if scene is None else dataclasses.replace(scene, standing=(0, n)))
+    if not near.clear:
+        why = str(Violation("collision", None, None, near.min_distance, near.limit, near.between))
+        return WalkPhase(
+            "transfer", "both", step, [], np.zeros((0, n, 6)), np.zeros((0, n, 6)), np.zeros((0, n, 6)), False, why
+        )
     eq = held_equilibrium(am, pose, "both")
     if isinstance(eq, str):
         return WalkPhase(
@@ -327,6 +392,7 @@ def _transfer_phase(am: AssemblerModel, pose: PlateArrays, stance: str, step: in
         not reason,
         reason,
         chosen,
+        near if m else None,
     )
 
 
@@ -347,12 +413,26 @@ def _check_walk_work(am: AssemblerModel, start: PlateArrays, feet: Sequence[pin.
         where[foot] = feet[k].translation
 
 
+def _walk_scene(scene: Scene | None, opts: WalkOptions) -> Scene | None:
+    """The scene a walk is planned among: ``scene`` with the walk's floor (module doc)."""
+    if scene is None:
+        return None
+    if opts.clearance <= 0.0:
+        raise WalkError("with a scene the feet lift off and land along their normals: clearance must be > 0 m")
+    if scene.floor_z is None:
+        return scene if opts.floor_z is None else dataclasses.replace(scene, floor_z=float(opts.floor_z))
+    if opts.floor_z is not None and abs(opts.floor_z - scene.floor_z) > 1e-9:
+        raise WalkError(f"the walk's floor z = {opts.floor_z:g} m is not the scene's floor z = {scene.floor_z:g} m")
+    return scene
+
+
 def plan_walk(
     am: AssemblerModel,
     footholds: object,
     start: PlateArrays | list | None = None,
     options: WalkOptions | None = None,
     progress: ProgressCallback | None = None,
+    scene: Scene | str | None = None,
 ) -> WalkResult:
     """The inchworm walk over ``footholds`` (module doc): reach / transfer / swing / transfer ...
 
@@ -363,6 +443,11 @@ def plan_walk(
             pose standing on it.
         options: :class:`WalkOptions`.
         progress: called as ``(phases done, phases, note)``.
+        scene: obstacles and floor (:class:`~assembler_pin.collision.scene.Scene`, a scene file
+            or None): every reach and swing sample, and the motion between samples, keep the
+            configuration's ``clearance`` from them (module doc). With a floor in the scene the
+            footholds must lie on it; ``options.floor_z``, when given, must be its height, and
+            without a floor in the scene it becomes the scene's floor.
 
     Returns:
         A :class:`WalkResult`; ``success`` false with the reason and the valid prefix when a
@@ -370,12 +455,17 @@ def plan_walk(
         :func:`verify_walk` before success is reported.
 
     Raises:
-        WalkError: malformed or overlapping footholds, off the floor, a start off footholds[0].
+        WalkError: malformed or overlapping footholds, off the floor, a start off footholds[0],
+            a scene whose floor is not the walk's, or a scene with ``clearance`` 0 (the feet
+            must lift off and land along their normals).
+        SceneError: a scene file that is not one.
     """
     am = checked_model(am)
     progress = checked_progress(progress)
     opts = checked_options(options, WalkOptions, "options")
-    feet = checked_footholds(am, footholds, opts.floor_z)
+    scene = _walk_scene(read_scene(scene), opts)
+    floor_z = opts.floor_z if scene is None else scene.floor_z
+    feet = checked_footholds(am, footholds, floor_z)
     cur = _start_plates(am, feet[0], start)
     _check_walk_work(am, cur, feet, opts)
     stance, phases, total = "base", [], 2 * (len(feet) - 1)
@@ -383,19 +473,20 @@ def plan_walk(
         moving = _other(stance)
         for make in ("move", "transfer"):
             if make == "move":
-                phase = _move_phase(am, cur, stance, step, feet[step], step >= 2, opts)
+                phase = _move_phase(am, cur, stance, step, feet[step], step >= 2, opts, scene)
             else:
-                phase = _transfer_phase(am, cur, stance, step, opts)
+                phase = _transfer_phase(am, cur, stance, step, opts, scene)
             phases.append(phase)
             if progress is not None:
                 progress(len(phases), total, f"walk: {phase.kind} to foothold {step}")
             if not phase.complete:
                 foot = "EE" if stance == "base" else "base"
                 what = "the load cannot move to" if make == "transfer" else f"the {foot} foot cannot reach"
-                return WalkResult(False, f"step {step}: {what} foothold {step}: {phase.reason}", feet, phases)
+                reason = f"step {step}: {what} foothold {step}: {phase.reason}"
+                return WalkResult(False, reason, feet, phases, scene, opts.clearance)
             cur = phase.plates[-1]
         stance = moving
-    result = WalkResult(True, "reached the last foothold", feet, phases)
+    result = WalkResult(True, "reached the last foothold", feet, phases, scene, opts.clearance)
     problems = verify_walk(am, result)
     if problems:
         return dataclasses.replace(result, success=False, reason=f"a sample does not check: {problems[0]}")

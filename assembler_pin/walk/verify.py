@@ -6,13 +6,22 @@ every limit of that model holds; its forces are that support's statics; the held
 move. Transfer samples: the pose's kinematic limits; the forces within the force limits and
 the stroke; the commanded lengths applied through the elastic solve held at both ends give the
 forces back. Phases follow one another without a jump, and a moving foot ends on its foothold.
+Among a scene (``walk.scene``), every sample's clearance is measured again on the stack's own
+bodies: at least the configuration's ``clearance`` with the held feet standing, and the moving
+foot too when the sample puts it on its foothold's normal within ``walk.lift`` of the
+foothold it leaves or lands on (:mod:`assembler_pin.walk.plan`).
 """
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 import pinocchio as pin
 
+from ..collision.check import clearance
+from ..collision.scene import Scene
+from ..constraints import Violation
 from ..kinematics import PlateArrays, stack_forward_kinematics
 from ..model.assembler import AssemblerModel
 from ..motion.guess import on_se3
@@ -63,6 +72,34 @@ def _moving_sample(am: AssemblerModel, phase, i: int) -> str:
     return ""
 
 
+def _on_normal(pose: pin.SE3, target: pin.SE3, lift: float) -> bool:
+    """True when ``pose`` is ``target`` moved along its own z by at most ``lift`` [m]."""
+    rel = target.actInv(pose)
+    turn = float(np.linalg.norm(pin.log3(rel.rotation)))
+    x, y, z = rel.translation
+    return turn <= SAMPLE_TOLERANCE and float(np.hypot(x, y)) <= SAMPLE_TOLERANCE and abs(z) <= lift + SAMPLE_TOLERANCE
+
+
+def _standing(am: AssemblerModel, walk, k: int, phase, pa: PlateArrays) -> tuple[int, ...]:
+    """The plates of sample ``pa`` of phase ``k`` that stand on the floor (module doc)."""
+    n = am.n
+    if phase.kind == "transfer":
+        return (0, n)
+    foot, plate, held = ("ee", n, 0) if phase.kind == "reach" else ("base", 0, n)
+    ends = [phase.step] + ([phase.step - 2] if phase.step >= 2 else [])
+    if any(_on_normal(pa.se3(plate), plate_target(walk.footholds[s], foot), walk.lift) for s in ends):
+        return (0, n)
+    return (held,)
+
+
+def _clearance_problem(am: AssemblerModel, walk, k: int, phase, i: int, scene: Scene) -> str:
+    pa = phase.plates[i]
+    near = clearance(am, pa, dataclasses.replace(scene, standing=_standing(am, walk, k, phase, pa)))
+    if near.clear:
+        return ""
+    return str(Violation("collision", None, None, near.min_distance, near.limit, near.between))
+
+
 def _transfer_sample(am: AssemblerModel, phase, i: int) -> str:
     pa, F = phase.plates[i], phase.forces[i]
     state = evaluate_state(am, pa)
@@ -90,6 +127,8 @@ def verify_walk(am: AssemblerModel, walk) -> list[str]:
         check = _transfer_sample if phase.kind == "transfer" else _moving_sample
         for i in range(len(phase.plates)):
             problem = check(am, phase, i)
+            if not problem and walk.scene is not None:
+                problem = _clearance_problem(am, walk, k, phase, i, walk.scene)
             if problem:
                 out.append(f"{where}, sample {i}: {problem}")
         if phase.complete and phase.kind != "transfer":

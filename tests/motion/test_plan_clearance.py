@@ -4,8 +4,9 @@ own distances (sampled plate surfaces, leg capsules) at stack FK of the interpol
 from __future__ import annotations
 
 import numpy as np
+import pinocchio as pin
 import pytest
-from checks import design_anchors
+from checks import strut_distance
 
 import assembler_pin as ap
 from assembler_pin.collision import scene_from_dict
@@ -18,40 +19,10 @@ STRUT = {"name": "strut", "cylinder": {"radius": 0.015, "length": 0.6, "pose": [
 GOAL = [0.08, 0.0, 0.94, 0.0, 0.0, 0.0]
 
 
-def _points_to_axis(points: np.ndarray, start: np.ndarray, vec: np.ndarray) -> np.ndarray:
-    s = np.clip((points - start) @ vec / (vec @ vec), 0.0, 1.0)
-    return np.linalg.norm(points - (start + s[:, None] * vec), axis=1)
-
-
 def _strut_distance(cfg, plates: np.ndarray) -> float:
-    """The smallest distance from the strut to a plate (its rims and faces sampled every
-    ~1 mm) or a leg (its axis sampled every 0.5 mm, minus the capsule's radius)."""
-    radius, length = STRUT["cylinder"]["radius"], STRUT["cylinder"]["length"]
+    length = STRUT["cylinder"]["length"]
     start = np.array([0.19, -0.5 * length, 0.3])
-    vec = np.array([0.0, length, 0.0])
-    angles = np.linspace(0.0, 2 * np.pi, 1080, endpoint=False)
-    rings = np.linspace(0.0, cfg.plate.radius, 60)
-    disc = np.array(
-        [[r * np.cos(a), r * np.sin(a)] for r in rings for a in angles[::6]]
-        + [[cfg.plate.radius * np.cos(a), cfg.plate.radius * np.sin(a)] for a in angles]
-    )
-    best = np.inf
-    for T in plates:
-        for z in (-0.5 * cfg.plate.thickness, 0.5 * cfg.plate.thickness):
-            local = np.column_stack([disc, np.full(len(disc), z)])
-            world = local @ T[:3, :3].T + T[:3, 3]
-            best = min(best, float(_points_to_axis(world, start, vec).min()) - radius)
-    for j in range(cfg.platforms):
-        bottom, top = design_anchors(cfg, j)
-        for i in range(6):
-            b = plates[j][:3, :3] @ bottom[i] + plates[j][:3, 3]
-            t = plates[j + 1][:3, :3] @ top[i] + plates[j + 1][:3, 3]
-            L = np.linalg.norm(t - b)
-            sigma = np.linspace(0.0, L, int(L / 5e-4) + 2)
-            pts = b + sigma[:, None] * (t - b) / L
-            r = np.where(sigma <= cfg.leg.motor_length, cfg.leg.motor_radius, cfg.leg.shaft_radius)
-            best = min(best, float((_points_to_axis(pts, start, vec) - r).min()) - radius)
-    return best
+    return strut_distance(cfg, plates, start, np.array([0.0, length, 0.0]), STRUT["cylinder"]["radius"])
 
 
 @pytest.fixture(scope="module")
@@ -81,13 +52,31 @@ def test_a_plan_past_a_strut_keeps_its_clearance_between_samples(am, plans):
 
 
 def test_the_sweep_bound_holds_on_the_plan(am, plans):
-    from assembler_pin.collision.sweep import body_move, swept_bound
+    """Each pair's bound from the two ends, with each body's move measured here from the
+    joint centres and the plates, is at most that pair's distance at stack-FK poses between."""
+    from assembler_pin.collision import clearance
+    from assembler_pin.collision.sweep import body_moves, swept_bound
 
     _, kept = plans
-    for a, b in zip(kept.states[:-1], kept.states[1:], strict=True):
-        move = body_move(am, a.plates, b.plates)
-        assert 0.0 < move < 0.02
-        assert swept_bound(a.clearance.min_distance, b.clearance.min_distance, move) <= min(
-            a.clearance.min_distance, b.clearance.min_distance
-        )
-    assert ap.collision.sweep.swept_bound(0.01, 0.01, 0.0) == 0.01
+    scene = scene_from_dict({"obstacles": [STRUT]})
+    cfg = am.config
+    rho = np.hypot(cfg.plate.radius, 0.5 * cfg.plate.thickness)
+    tight = np.inf
+    for a, b in list(zip(kept.states[:-1], kept.states[1:], strict=True))[::3]:
+        moves = body_moves(am, a.plates, b.plates)
+        ends = [np.concatenate([d.reshape(-1, 3) for d in ap.kinematics.leg_vectors(am, s.plates)[:2]]) for s in (a, b)]
+        joint_move = np.linalg.norm(ends[0] - ends[1], axis=1)  # bottoms then tops
+        assert np.all(moves[: 6 * am.n] >= np.maximum(joint_move[: 6 * am.n], joint_move[6 * am.n :]) - 1e-15)
+        turn = [np.linalg.norm(pin.log3(a.plates.R[k].T @ b.plates.R[k])) for k in range(am.n + 1)]
+        want = np.linalg.norm(a.plates.p - b.plates.p, axis=1) + rho * np.array(turn)
+        assert np.allclose(moves[6 * am.n :], want, atol=1e-12)
+        bound = swept_bound(a.clearance, b.clearance, moves)
+        assert bound <= min(a.clearance.min_distance, b.clearance.min_distance)
+        for t in np.linspace(0.1, 0.9, 5):
+            fk = stack_forward_kinematics(
+                am, (1 - t) * a.leg_lengths + t * b.leg_lengths, base=a.plates.se3(0), guess=a.plates.as_se3()
+            )
+            between = clearance(am, fk.plates, scene)
+            assert between.min_distance >= bound - 1e-12
+            tight = min(tight, between.min_distance - bound)
+    assert tight < 5e-3  # the bound is not vacuous
