@@ -137,8 +137,9 @@ def write_walk(am, walk, out: Path) -> None:
 
 
 def view_walk(am, walk, path: str, fps: float) -> None:
-    """The standalone page animating the walk (:meth:`~assembler_pin.viz.StackViewer.show_walk`),
-    written atomically; a walk without a sample writes none and says so on stderr."""
+    """The standalone page animating the walk (:meth:`~assembler_pin.viz.StackViewer.show_walk`)
+    among its scene's obstacles and floor, written atomically; a walk without a sample writes
+    none and says so on stderr."""
     import sys
 
     from ..viz import StackViewer
@@ -146,7 +147,7 @@ def view_walk(am, walk, path: str, fps: float) -> None:
     if not any(len(p.plates) for p in walk.phases):
         print(f"walk: no sample to animate, {path} not written", file=sys.stderr)
         return
-    with StackViewer(am) as viewer:
+    with StackViewer(am, scene=walk.scene) as viewer:  # the obstacles and floor it walked among
         viewer.show_walk(walk, fps=fps)
         viewer.static_html(path)
 

@@ -199,3 +199,21 @@ def test_the_phase_is_named_frame_by_frame(walk, page):
         assert shown == [k == kind for k in kinds], kind
     labels = [c for c in cmds if c["type"] == "set_object" and "/assembler_walk/labels/" in c["path"]]
     assert len(labels) == 3 and all(c["object"]["textures"] for c in labels)  # the name is an image
+
+
+def test_a_walk_among_obstacles_draws_them(am, walk, tmp_path):
+    """``walk --scene ... --html``: the page draws the scene the walk was planned among."""
+    import dataclasses
+
+    from assembler_pin.cli.walk import view_walk
+    from assembler_pin.collision import scene_from_dict
+
+    post = {"name": "post", "box": {"size": [0.1, 0.1, 0.4], "pose": [0.9, 0.4, 0.2, 0.0, 0.0, 0.0]}}
+    among = dataclasses.replace(walk, scene=scene_from_dict({"floor": {"z": 0.0}, "obstacles": [post]}))
+    page = tmp_path / "walk.html"
+    view_walk(am, among, str(page), FPS)
+    html = page.read_text()
+    objects = {c["path"]: c for c in page_commands(html) if c["type"] == "set_object"}
+    assert "/meshcat/assembler_obstacles/box_0" in objects and "/meshcat/assembler_obstacles/floor" in objects
+    assert "obstacles: post" in html
+    assert any(c["type"] == "set_animation" for c in page_commands(html))
