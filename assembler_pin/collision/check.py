@@ -324,58 +324,74 @@ def _z_to(u: np.ndarray) -> np.ndarray:
     return np.array([[x[0], y[0], ux], [x[1], y[1], uy], [x[2], y[2], uz]])
 
 
+_REQUEST: list = []  # coal's distance request, made once
+
+
 def _coal_distance(shape_a, R_a, p_a, shape_b, R_b, p_b) -> tuple[float, np.ndarray, np.ndarray, np.ndarray]:
+    """coal's signed distance [m] of two shapes at their world poses, the witness points on
+    each (3,), (3,) world [m] and the unit normal from b to a."""
     coal = _coal()
-    req, res = coal.DistanceRequest(), coal.DistanceResult()
-    req.gjk_tolerance = GJK_TOLERANCE
-    req.gjk_max_iterations = 1000
-    d = coal.distance(shape_a, coal.Transform3s(R_a, p_a), shape_b, coal.Transform3s(R_b, p_b), req, res)
+    if not _REQUEST:
+        req = coal.DistanceRequest()
+        req.gjk_tolerance = GJK_TOLERANCE
+        req.gjk_max_iterations = 1000
+        _REQUEST.append(req)
+    res = coal.DistanceResult()
+    d = coal.distance(shape_a, coal.Transform3s(R_a, p_a), shape_b, coal.Transform3s(R_b, p_b), _REQUEST[0], res)
     wa, wb = np.array(res.getNearestPoint1()), np.array(res.getNearestPoint2())
     return float(d), wa, wb, -np.array(res.normal)
 
 
-def _measure_capsule(bodies, g, start, vec, lo, hi, hb, radius, other):
-    """coal's distance between one leg capsule and ``other = (shape, R, p)``."""
-    if hi < lo:
-        return None
-    length = max(hi - lo, 1e-12)
-    capsule = _coal().Capsule(radius, length)
-    d, wa, wb, n = _coal_distance(capsule, _z_to(bodies.axis[g]), start + 0.5 * vec, *other)
-    s = float(np.clip(np.dot(wa - start, bodies.axis[g]) / length, 0.0, 1.0))
-    return d, start + s * vec, wb, n, lo + s * max(hi - lo, 0.0), s * hb
-
-
 def _measure_leg(bodies: StackBodies, g: int, lb: np.ndarray, other: tuple) -> tuple | None:
     """One leg against a body coal measures (``other``: shape, R, p): both parts whose bound
-    ``lb`` (2,) is finite, the closer one ``(d, x_a, x_b, n, σ_a, dσ_a/dL)``; None for none."""
+    ``lb`` (2,) is finite (the capsules of
+    :func:`~assembler_pin.collision.bodies.leg_segments`, untrimmed), the closer one
+    ``(d, x_a, x_b, n, σ_a, dσ_a/dL)`` (x_a on the axis, world [m]); None for none."""
+    leg = bodies.cfg.leg
+    bottom, axis, L = bodies.bottom[g], bodies.axis[g], float(bodies.length[g])
+    turn = _z_to(axis)
     best = None
     for part in (MOTOR, SHAFT):
         if not math.isfinite(lb[part]):
             continue
-        start, vec, lo, hi, hb, radius = (x[0] for x in leg_segments(bodies, np.array([g]), np.array([part])))
-        got = _measure_capsule(bodies, g, start, vec, lo, hi, hb, radius, other)
-        if got is not None and (best is None or got[0] < best[0]):
-            best = got
+        if part == MOTOR:
+            lo, hi, hb, radius = 0.0, leg.motor_length, 0.0, leg.motor_radius
+        else:
+            lo, hi, hb, radius = leg.motor_length, L, 1.0, leg.shaft_radius
+        if hi < lo:
+            continue
+        length = max(hi - lo, 1e-12)
+        start, vec = bottom + lo * axis, (hi - lo) * axis
+        d, wa, wb, n = _coal_distance(_coal().Capsule(radius, length), turn, start + 0.5 * vec, *other)
+        s = min(max(float(np.dot(wa - start, axis)) / length, 0.0), 1.0)
+        if best is None or d < best[0]:
+            best = (d, start + s * vec, wb, n, lo + s * (hi - lo), s * hb)
     return best
 
 
 def _solids_pass(bodies: StackBodies, lay: _Layout, dist: np.ndarray, parts: tuple) -> np.ndarray:
     """Lower bounds of every leg and plate against every box and cylinder, in one pass over
-    (obstacles × bodies): each obstacle held in its bounding capsule, each leg part in its
-    capsule, each plate in its bounding sphere; written into ``dist`` at the obstacles' rows
-    (per obstacle: its G legs, the smaller bound of their two parts, then its plates).
+    (obstacles × bodies), written into ``dist`` at the obstacles' rows (per obstacle: its G
+    legs, the smaller bound of their two parts, then its plates). A leg part is held in its
+    capsule, a plate in its bounding sphere; each obstacle in its bounding capsule and between
+    the two faces of each of its slabs (a box's three, a cylinder's caps): the larger bound.
     Returns the legs' bounds per part (N, G, 2) [m] (:func:`_measure_leg`)."""
     c0, cv, cr = lay.cores  # (N, 3), (N, 3), (N,) world [m]
+    centre, axes, half = lay.slabs  # (N, 3), (N, 3, 3) axes as columns, (N, 3) [m]
     _, _, start, vec, lo, hi, _, radius = parts
     d_axis = segment_segment(start[None], vec[None], c0[:, None], cv[:, None])[0]  # (N, 2G)
-    lb = d_axis - cr[:, None] - radius
+    h0 = np.matmul(start[None] - centre[:, None], axes)  # (N, 2G, 3): the ends along each axis
+    h1 = h0 + np.matmul(vec[None], axes)
+    slab = np.maximum(np.minimum(h0, h1), -np.maximum(h0, h1)) - half[:, None]
+    lb = np.maximum(d_axis - cr[:, None], slab.max(axis=2)) - radius
     lb[:, hi < lo] = np.inf
     lb = lb.reshape(len(cr), lay.G, 2)
-    d_plate = segment_point(c0[:, None], cv[:, None], bodies.p)[0]  # (N, K)
     rho = math.hypot(lay.cfg.plate.radius, 0.5 * lay.cfg.plate.thickness)
+    d_plate = segment_point(c0[:, None], cv[:, None], bodies.p)[0] - cr[:, None]  # (N, K)
+    h = np.abs(np.matmul(bodies.p[None] - centre[:, None], axes)) - half[:, None]
     block = dist[lay.solid_at : lay.solid_at + len(cr) * (lay.G + lay.K)].reshape(len(cr), lay.G + lay.K)
     block[:, : lay.G] = lb.min(axis=2)
-    block[:, lay.G :] = d_plate - rho - cr[:, None]
+    block[:, lay.G :] = np.maximum(d_plate, h.max(axis=2)) - rho
     return lb
 
 
@@ -412,6 +428,7 @@ class _Layout:
     solid_at: int
     solids: tuple[Obstacle, ...]
     cores: tuple[np.ndarray, np.ndarray, np.ndarray]  # bounding capsules: start, vector (N, 3), radius (N,) [m]
+    slabs: tuple[np.ndarray, np.ndarray, np.ndarray]  # centre (N, 3), axes (N, 3, 3) as columns, half widths (N, 3) [m]
 
     @property
     def m(self) -> int:
@@ -499,7 +516,20 @@ def _build_layout(cfg: AssemblerConfig, scene: Scene | None) -> _Layout:
             np.array([c[1] for c in cores], dtype=float).reshape(-1, 3),
             np.array([c[2] for c in cores], dtype=float),
         ),
+        (
+            np.array([o.pose.translation for o in solids], dtype=float).reshape(-1, 3),
+            np.array([o.pose.rotation for o in solids], dtype=float).reshape(-1, 3, 3),
+            np.array([_half_widths(o) for o in solids], dtype=float).reshape(-1, 3),
+        ),
     )
+
+
+def _half_widths(o: Obstacle) -> tuple[float, float, float]:
+    """Half the width of a box or a cylinder between the faces of its slabs, along its own
+    axes [m] (a cylinder has one slab, its caps: ``inf`` across it)."""
+    if o.kind == "box":
+        return (0.5 * o.size[0], 0.5 * o.size[1], 0.5 * o.size[2])
+    return (math.inf, math.inf, 0.5 * o.size[1])
 
 
 _LAYOUTS: dict[tuple, _Layout] = {}
@@ -523,11 +553,13 @@ _SHAPES: dict[int, tuple] = {}
 
 
 def _shapes(lay: _Layout) -> tuple:
-    """coal's plate cylinder and the layout's boxes and cylinders, made once per layout."""
+    """coal's plate cylinder and the layout's boxes and cylinders (shape, R, p), made once per
+    layout."""
     hit = _SHAPES.get(id(lay))
     if hit is None or hit[0] is not lay:
         plate = _coal().Cylinder(lay.cfg.plate.radius, max(lay.cfg.plate.thickness, 1e-9))
-        hit = (lay, plate, [_obstacle_shape(o) for o in lay.solids])
+        solids = [(_obstacle_shape(o), o.pose.rotation, o.pose.translation) for o in lay.solids]
+        hit = (lay, plate, solids)
         if len(_SHAPES) >= 16:
             _SHAPES.pop(next(iter(_SHAPES)))
         _SHAPES[id(lay)] = hit
@@ -609,7 +641,7 @@ def _scene_pass(src: _Source) -> None:
 def _measure_row(src: _Source, r: int) -> None:
     """coal's distance of the screened row ``r``, into the source's arrays."""
     lay, bodies = src.layout, src.bodies()
-    plate, solid_shapes = _shapes(lay)
+    plate, solids = _shapes(lay)
     i = r - lay.X
     got: tuple | None
     if i < lay.Q:  # a leg against a plate it does not sit on
@@ -620,8 +652,7 @@ def _measure_row(src: _Source, r: int) -> None:
         got = (*_coal_distance(plate, bodies.R[a], bodies.p[a], plate, bodies.R[b], bodies.p[b]), 0.0, 0.0)
     else:  # a leg or a plate against a box or a cylinder
         o, j = divmod(i - lay.Q - lay.S, lay.G + lay.K)
-        obstacle = lay.solids[o]
-        fixed = (solid_shapes[o], obstacle.pose.rotation, obstacle.pose.translation)
+        fixed = solids[o]
         if j < lay.G:
             assert src.solid_lb is not None
             got = _measure_leg(bodies, j, src.solid_lb[o, j], fixed)
