@@ -8,14 +8,20 @@ pair distances with respect to the plate poses.
 
 **Which engine.** Capsule–capsule (every leg pair, ~1100 capsule pairs for four platforms),
 capsule–sphere, capsule–floor, plate–floor and plate–sphere distances are closed forms
-(:mod:`~assembler_pin.collision.distance`), vectorized in numpy. Plates against legs, plates
+(:mod:`~assembler_pin.collision.distance`), vectorized in numpy (the stack's own pairs also
+compiled: :mod:`~assembler_pin.collision.kernel`); a scene's pairs go in one pass per kind of
+obstacle (every sphere together, every box and cylinder together). Plates against legs, plates
 and boxes or cylinders, and legs against boxes or cylinders have no closed form here: a cheap
-lower bound (bounding spheres, and for a plate the slab of its two faces) screens every such
-pair, and only those within :data:`NEAR` of the clearance go to coal's GJK
-(``coal.distance``, ~0.6 µs per pair with shapes made once, plus ~3 µs of Python around each
-call). Pinocchio's ``GeometryModel`` + ``computeDistances`` would run all ~1200 pairs of a
-four-platform stack in C++ at ~0.6 µs each, and updating the 48 capsules' placements and
-lengths from Python costs more again: the vectorized closed form is the faster of the two.
+lower bound (bounding capsules and spheres, and the slabs between parallel faces: a plate's
+two, a box's three pairs, a cylinder's caps) screens every such pair, and only those within
+:data:`NEAR` of the clearance go to coal's GJK (``coal.distance``, ~1 µs per pair with shapes
+made once, plus a few µs of Python around each call). Pinocchio's ``GeometryModel`` +
+``computeDistances`` would run all ~1200 pairs of a four-platform stack in C++ at ~0.6 µs
+each, and updating the 48 capsules' placements and lengths from Python costs more again: the
+vectorized closed form is the faster of the two.
+
+The rows of a configuration and a scene (``_Layout``: pairs, order, the kernel's inputs)
+are built once per configuration object and obstacle tuple; a call fills one distance array.
 
 **Distances** are between surfaces [m], negative when two bodies overlap (for capsules, the
 distance of the axes minus the radii; for coal pairs, coal's signed distance). Pairs the

@@ -11,8 +11,8 @@ stays the reference, and the tests hold the two to 1e-12 m.
 numba is optional (the ``fast`` extra). ``cache=True`` compiles the kernel once per install
 and Python version (a few seconds, the first time only); after that, importing numba and
 loading the cached kernel still take about 1.3 s in each new process, which would make a
-single ``statics`` or ``solve`` call slower, not faster (the numpy pass costs ~0.6 ms, the
-kernel ~0.08 ms: the load pays for itself after ~2500 clearances). So
+single ``statics`` or ``solve`` call slower, not faster (a self clearance costs ~0.3 ms on
+numpy, ~0.04 ms on the kernel: the load pays for itself after ~5000 clearances). So
 :func:`~assembler_pin.collision.check.clearance` loads the kernel only in a process that has
 asked for :data:`HOT_CALLS` clearances (a map, a long walk, ``bench``), or when
 ``ASSEMBLER_PIN_COLLISION`` is ``numba``; ``numpy`` keeps the numpy path. A ``plan`` or a
