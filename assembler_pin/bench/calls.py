@@ -14,7 +14,6 @@ from typing import Any
 
 import numpy as np
 
-from ..collision.check import clearance
 from ..common.progress import ProgressCallback
 from ..config.bounds import check_bound
 from ..helper_arm import initial_condition
@@ -24,6 +23,7 @@ from ..optimize import OptimizeOptions, optimize_internal_poses
 from ..scenarios import SCENARIOS
 from ..solver.pipeline import solve
 from ..statics.pinocchio_statics import solve_statics, solve_statics_batch
+from .collision import benchmark_clearance, benchmark_solve_scene
 from .speed import benchmark_startup
 from .timing import LEVEL_GRID, median_time_us, random_reachable_plates
 
@@ -48,8 +48,11 @@ def run_benchmarks(
     progress: ProgressCallback | None = None,
 ) -> dict[str, Any]:
     """Median per-call times [µs] of statics, SP FK, stack FK, closed-form q and the
-    self-collision clearance (:func:`~assembler_pin.collision.check.clearance`: the compiled
-    kernel when numba is installed, and numpy), then the
+    clearance (:func:`~assembler_pin.bench.collision.benchmark_clearance`: the stack's own
+    pairs on the compiled kernel and on numpy, ``clearance_us``, ``clearance_numpy_us``, and
+    among the truss bay, ``clearance_scene_us``), ``solve`` with a scene of ten obstacles
+    against without (:func:`~assembler_pin.bench.collision.benchmark_solve_scene`:
+    ``solve_free_ms``, ``solve_scene_ms``, ``solve_scene_ratio``), then the
     helper-arm initial condition (:func:`benchmark_initial_condition`: ``initial_scenarios_ms``,
     ``initial_random_ms`` [ms], ``initial_success_rate``), the CLI start-up in fresh processes
     beside its targets (``cli_help_s``, ``cli_statics_home_json_s``, ``bare_python_s`` [s],
@@ -75,8 +78,8 @@ def run_benchmarks(
         "sp_fk_us": lambda: median_time_us(lambda: sp_forward_kinematics(am, 0, pick()[0][0]), repeat),
         "stack_fk_us": lambda: median_time_us(lambda: stack_forward_kinematics(am, pick()[0]), repeat),
         "q_from_plates_us": lambda: median_time_us(lambda: q_from_plates(am, pick()[1]), repeat),
-        "clearance_us": lambda: median_time_us(lambda: clearance(am, pick()[1], engine="numba"), repeat),
-        "clearance_numpy_us": lambda: median_time_us(lambda: clearance(am, pick()[1], engine="numpy"), repeat),
+        "clearance": lambda: benchmark_clearance(am, [s[1] for s in samples], repeat),
+        "solve_scene": lambda: benchmark_solve_scene(am, rounds=1 if quick else 5),
         "statics_from_matrices_us": lambda: median_time_us(lambda: solve_statics(am, pick()[1].as_matrices()), repeat),
         "statics_batch_stacks_per_s": lambda: (
             len(batch) / (1e-6 * median_time_us(lambda: solve_statics_batch(am, batch), 5))

@@ -2,10 +2,10 @@
 
 ``assembler-pin bench --targets`` runs :func:`benchmark_targets` and prints
 :func:`format_targets`: BLAS threads, ``solve`` on random and on grid goals, one
-optimization of long stacks, one stack's statics, batched statics and a capability map's
-memory on two local workers. Each row says what was measured, its target and whether it
-is met; a figure that could not be measured here (numba, CasADi or Dask missing) is shown
-as such and counts as not met.
+optimization of long stacks, one stack's statics, batched statics, one stack's clearance and
+``solve`` among ten obstacles, and a capability map's memory on two local workers. Each row
+says what was measured, its target and whether it is met; a figure that could not be
+measured here (numba, CasADi or Dask missing) is shown as such and counts as not met.
 
 Library functions (no printing), one BLAS thread in the timed calls; times are wall times
 of this process on this machine (a loaded machine moves them, the comparisons made in one
@@ -35,6 +35,7 @@ from ..maps import parse_grid, run_map
 from ..model.assembler import AssemblerModel
 from ..optimize import optimize_internal_poses
 from ..statics.kernel import ENV_VAR
+from .collision import benchmark_clearance, benchmark_solve_scene
 from .speed import (
     THREAD_GOALS,
     benchmark_long_stacks,
@@ -221,7 +222,8 @@ def benchmark_map_memory(cells: int = MAP_MEMORY_CELLS, workers: int = 2) -> dic
 
 def benchmark_targets(am: AssemblerModel, map_cells: int = MAP_MEMORY_CELLS, quick: bool = False) -> dict[str, Any]:
     """Every figure of :func:`target_rows`, one group per row family (the functions of
-    :mod:`~assembler_pin.bench.speed` and :func:`benchmark_map_memory`), each timed call
+    :mod:`~assembler_pin.bench.speed`, :mod:`~assembler_pin.bench.collision` and
+    :func:`benchmark_map_memory`), each timed call
     under one BLAS thread. ``map_cells=0`` skips the map. ``quick``: a smoke test of the
     bench (4 random goals, no grid, long stacks of 4 and 8 platforms, small batches), not
     figures."""
@@ -242,6 +244,11 @@ def benchmark_targets(am: AssemblerModel, map_cells: int = MAP_MEMORY_CELLS, qui
         doc["single_statics"] = benchmark_single_statics(platforms=(4,), repeat=20 if quick else 300)
         batches = (1_000, 10_000) if quick else (1_000, 100_000)
         doc["statics_kernel"] = benchmark_statics_kernel(am, batch_sizes=batches, repeat=20 if quick else 200)
+        poses = [random_reachable_plates(am, np.random.default_rng(k))[1] for k in range(20)]
+        doc["collision"] = {
+            **benchmark_clearance(am, poses, repeat=20 if quick else 300),
+            **benchmark_solve_scene(am, rounds=1 if quick else 5),
+        }
     if map_cells:
         try:
             doc["map_memory"] = benchmark_map_memory(map_cells)
@@ -329,6 +336,8 @@ TARGET_SPECS: tuple[tuple[str, str, str, float, float, str], ...] = (
     ("IPOPT time per iteration ∝ n^p, p", "long_stacks", "ipopt_per_iteration_exponent", 1, 1.5, "<="),
     ("one stack's statics from arrays, n = 4 [µs]", "single_statics", "n4_kernel_us", 1, 20, "<="),
     ("one stack's statics from 4×4 matrices, n = 4 [µs]", "single_statics", "n4_kernel_4x4_us", 1, 40, "<="),
+    ("self-collision clearance, one stack, compiled kernel [µs]", "collision", "clearance_us", 1, 50, "<="),
+    ("solve with ten obstacles against without [×]", "collision", "solve_scene_ratio", 1, 2, "<="),
     ("batched statics, 100,000 stacks [stacks/s]", "statics_kernel", "numba_100000_stacks_per_s", 1, 250_000, ">="),
     ("batched statics, peak memory per stack [KB]", "statics_kernel", "numba_100000_peak_kb_per_stack", 1, 1.0, "<="),
     ("map, peak memory per worker [MB]", "map_memory", "worker_peak_mb", 1, 300, "<="),

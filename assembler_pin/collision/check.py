@@ -8,14 +8,20 @@ pair distances with respect to the plate poses.
 
 **Which engine.** Capsule–capsule (every leg pair, ~1100 capsule pairs for four platforms),
 capsule–sphere, capsule–floor, plate–floor and plate–sphere distances are closed forms
-(:mod:`~assembler_pin.collision.distance`), vectorized in numpy. Plates against legs, plates
+(:mod:`~assembler_pin.collision.distance`), vectorized in numpy (the stack's own pairs also
+compiled: :mod:`~assembler_pin.collision.kernel`); a scene's pairs go in one pass per kind of
+obstacle (every sphere together, every box and cylinder together). Plates against legs, plates
 and boxes or cylinders, and legs against boxes or cylinders have no closed form here: a cheap
-lower bound (bounding spheres, and for a plate the slab of its two faces) screens every such
-pair, and only those within :data:`NEAR` of the clearance go to coal's GJK
-(``coal.distance``, ~0.6 µs per pair with shapes made once, plus ~3 µs of Python around each
-call). Pinocchio's ``GeometryModel`` + ``computeDistances`` would run all ~1200 pairs of a
-four-platform stack in C++ at ~0.6 µs each, and updating the 48 capsules' placements and
-lengths from Python costs more again: the vectorized closed form is the faster of the two.
+lower bound (bounding capsules and spheres, and the slabs between parallel faces: a plate's
+two, a box's three pairs, a cylinder's caps) screens every such pair, and only those within
+:data:`NEAR` of the clearance go to coal's GJK (``coal.distance``, ~1 µs per pair with shapes
+made once, plus a few µs of Python around each call). Pinocchio's ``GeometryModel`` +
+``computeDistances`` would run all ~1200 pairs of a four-platform stack in C++ at ~0.6 µs
+each, and updating the 48 capsules' placements and lengths from Python costs more again: the
+vectorized closed form is the faster of the two.
+
+The rows of a configuration and a scene (``_Layout``: pairs, order, the kernel's inputs)
+are built once per configuration object and obstacle tuple; a call fills one distance array.
 
 **Distances** are between surfaces [m], negative when two bodies overlap (for capsules, the
 distance of the axes minus the radii; for coal pairs, coal's signed distance). Pairs the
@@ -36,7 +42,7 @@ import dataclasses
 import functools
 import logging
 import math
-from collections.abc import Callable, Sequence
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -54,7 +60,7 @@ from .distance import (
     segment_segment,
     segment_segment_columns,
 )
-from .kernel import self_kernel
+from .kernel import ROW_HB, ROW_NORMAL, ROW_SIGMA, ROW_WIDTH, ROW_XA, ROW_XB, self_kernel
 from .pairs import pair_table, per_config
 from .scene import Obstacle, Scene, read_scene
 
@@ -90,18 +96,6 @@ class _Rows:
     normal: np.ndarray  # (m, 3) unit normal from body b to body a
 
 
-def _empty_rows() -> _Rows:
-    z = np.zeros
-    return _Rows(
-        z(0), z(0, bool), z((0, 2), int), z((0, 2), int), z((0, 2), int), z((0, 2)), z((0, 2)), z((0, 2, 3)), z((0, 3))
-    )
-
-
-def _concat(rows: list[_Rows]) -> _Rows:
-    rows = [r for r in rows if len(r.dist)] or [_empty_rows()]
-    return _Rows(*(np.concatenate([getattr(r, f) for r in rows]) for f in _Rows.__dataclass_fields__))
-
-
 def _unit(v: np.ndarray) -> np.ndarray:
     norm = np.sqrt(np.einsum("...k,...k->...", v, v))
     fallback = np.broadcast_to(np.array([0.0, 0.0, 1.0]), v.shape)
@@ -131,14 +125,17 @@ class Clearance:
     pairs: np.ndarray
     distances: np.ndarray
     exact: np.ndarray
-    _parts: list[_Rows] = field(repr=False)
-    _bodies: StackBodies = field(repr=False)
+    _source: _Source = field(repr=False)
     _reversed: bool = field(default=False, repr=False)  # plates given in the reverse order (a turned model)
 
     @functools.cached_property
     def _rows(self) -> _Rows:
         """Every row's closest points and normal (built on first use: the derivatives)."""
-        return _concat(self._parts)
+        return self._source.rows()
+
+    @property
+    def _bodies(self) -> StackBodies:
+        return self._source.bodies()
 
     @property
     def clear(self) -> bool:
@@ -210,14 +207,7 @@ class Clearance:
 
 
 # ---------------------------------------------------------------- closed forms
-def _capsule_rows(
-    bodies: StackBodies, legs: np.ndarray, part: np.ndarray, trim_bottom=False, trim_top=False
-) -> tuple[np.ndarray, ...]:
-    start, vec, lo, hi, hb, radius = leg_segments(bodies, legs, part, trim_bottom, trim_top)
-    return start, vec, lo, hi, hb, radius
-
-
-def _variant_index(t, G: int) -> tuple[np.ndarray, np.ndarray]:
+def _variant_index(t) -> tuple[np.ndarray, np.ndarray]:
     """Rows of the leg–leg capsule pairs (4 per leg pair: motor/shaft × motor/shaft) as
     indices into the 8 variants of each leg part (part × bottom trim × top trim)."""
     parts_a = np.tile(np.array([MOTOR, MOTOR, SHAFT, SHAFT]), len(t.leg_a))
@@ -229,126 +219,88 @@ def _variant_index(t, G: int) -> tuple[np.ndarray, np.ndarray]:
 
 
 def _legs_all_parts(bodies: StackBodies, trim_bottom=False, trim_top=False) -> tuple[np.ndarray, ...]:
+    """Every leg's motor and shaft (rows 2g, 2g+1): leg, part and
+    :func:`~assembler_pin.collision.bodies.leg_segments` (trims given per leg or for all)."""
     G = len(bodies.length)
     g = np.repeat(np.arange(G), 2)
     part = np.tile(np.array([MOTOR, SHAFT]), G)
     tb = np.repeat(np.asarray(trim_bottom), 2) if np.ndim(trim_bottom) else trim_bottom
     tt = np.repeat(np.asarray(trim_top), 2) if np.ndim(trim_top) else trim_top
-    return (g, part, *_capsule_rows(bodies, g, part, tb, tt))
+    return (g, part, *leg_segments(bodies, g, part, tb, tt))
 
 
-def _leg_rows_from_parts(g, d, s, start, vec, lo, hi, hb, other_body, other_kind, other_index, other_point, normal):
-    """Reduce per-capsule rows (2 per leg, motor then shaft) to one row per leg."""
-    m = len(d) // 2
-    best = np.argmin(d.reshape(m, 2), axis=1) + 2 * np.arange(m)
-    x = start[best] + s[best, None] * vec[best]
-    sig = lo[best] + s[best] * np.maximum(hi[best] - lo[best], 0.0)
-    z = np.zeros(m)
-    return _Rows(
-        d[best],
-        np.ones(m, bool),
-        np.stack([g[best], other_body[best]], 1),
-        np.stack([np.full(m, _LEG), other_kind[best]], 1),
-        np.stack([g[best], other_index[best]], 1),
-        np.stack([sig, z], 1),
-        np.stack([s[best] * hb[best], z], 1),
-        np.stack([x, other_point[best]], 1),
-        normal[best],
-    )
+def _best_parts(d: np.ndarray, s: np.ndarray, start, vec, lo, hi, hb) -> tuple[np.ndarray, ...]:
+    """Per leg, the closer of its two parts: distances ``d`` (..., 2G) [m] and the parameters
+    ``s`` of the closest points on the parts (:func:`_legs_all_parts`' rows) → the distance
+    (..., G) [m], the closest point on the axis (..., G, 3) world [m], its σ [m] and dσ/dL."""
+    G = d.shape[-1] // 2
+    pick = np.argmin(d.reshape(*d.shape[:-1], G, 2), axis=-1) + 2 * np.arange(G)
+    best, sb = np.take_along_axis(d, pick, axis=-1), np.take_along_axis(s, pick, axis=-1)
+    x = start[pick] + sb[..., None] * vec[pick]
+    sigma = lo[pick] + sb * np.maximum(hi[pick] - lo[pick], 0.0)
+    return best, x, sigma, sb * hb[pick]
 
 
-def _floor(bodies: StackBodies, floor_z: float, floor_id: int, standing: tuple[int, ...] = (0,)) -> _Rows:
-    """Every leg and every plate against the floor (a half-space below ``floor_z``): exact,
-    signed; but not the ``standing`` plates, nor a leg's ``node_zone`` at a standing plate."""
-    G = len(bodies.length)
-    platform = np.arange(G) // LEGS_PER_PLATFORM
-    on = np.asarray(standing, dtype=int)
-    g, _, start, vec, lo, hi, hb, radius = _legs_all_parts(bodies, np.isin(platform, on), np.isin(platform + 1, on))
-    z0, z1 = start[:, 2], start[:, 2] + vec[:, 2]
-    s = (z1 < z0).astype(float)
-    x = start + s[:, None] * vec
-    d = x[:, 2] - floor_z - radius
+def _floor_pass(bodies: StackBodies, lay: _Layout, dist: np.ndarray) -> list[tuple]:
+    """Every leg and plate against the floor (a half-space below ``z``): exact, signed, written
+    into ``dist`` at the floor's rows; but not the standing plates, nor a leg's ``node_zone``
+    at a standing plate. Returns the rows' closest points (:attr:`_Source.scene_rows`)."""
+    assert lay.floor is not None
+    at, floor_z, trim_bottom, trim_top, k = lay.floor
+    _, _, start, vec, lo, hi, hb, radius = _legs_all_parts(bodies, trim_bottom, trim_top)
+    s = (vec[:, 2] < 0.0).astype(float)  # the lower end
+    d = start[:, 2] + s * vec[:, 2] - floor_z - radius
     d[hi < lo] = np.inf
-    m = len(d)
+    best, x, sigma, hbest = _best_parts(d, s, start, vec, lo, hi, hb)
+    G = len(best)
+    dist[at : at + G] = best
     on_floor = x.copy()
     on_floor[:, 2] = floor_z
-    up = np.broadcast_to(np.array([0.0, 0.0, 1.0]), (m, 3))
-    rows = [
-        _leg_rows_from_parts(
-            g, d, s, start, vec, lo, hi, hb, np.full(m, floor_id), np.full(m, _FIXED), np.zeros(m, int), on_floor, up
-        )
-    ]
-    cfg = bodies.cfg
-    k = np.setdiff1d(np.arange(len(bodies.p)), on)
+    out: list[tuple] = [(at, sigma, hbest, np.stack([x, on_floor], 1), _up(G))]
     if len(k):
-        low, height = cylinder_lowest_point(bodies.p[k], bodies.R[k][:, :, 2], cfg.plate.radius, cfg.plate.thickness)
+        plate = lay.cfg.plate
+        low, height = cylinder_lowest_point(bodies.p[k], bodies.R[k][:, :, 2], plate.radius, plate.thickness)
+        dist[at + G : at + G + len(k)] = height - floor_z
         below = low.copy()
         below[:, 2] = floor_z
-        rows.append(
-            _Rows(
-                height - floor_z,
-                np.ones(len(k), bool),
-                np.stack([G + k, np.full(len(k), floor_id)], 1),
-                np.stack([np.full(len(k), _PLATE), np.full(len(k), _FIXED)], 1),
-                np.stack([k, np.zeros(len(k), int)], 1),
-                np.zeros((len(k), 2)),
-                np.zeros((len(k), 2)),
-                np.stack([low, below], 1),
-                np.broadcast_to(np.array([0.0, 0.0, 1.0]), (len(k), 3)).copy(),
-            )
-        )
-    return _concat(rows)
+        out.append((at + G, None, None, np.stack([low, below], 1), _up(len(k))))
+    return out
 
 
-def _sphere(bodies: StackBodies, obstacle: Obstacle, body_id: int) -> _Rows:
-    """Every leg and plate against a sphere: closed forms, exact."""
-    centre, r = obstacle.pose.translation, obstacle.size[0]
-    g, _, start, vec, lo, hi, hb, radius = _legs_all_parts(bodies)
-    d_axis, s = segment_point(start, vec, centre)
-    x = start + s[:, None] * vec
-    d = d_axis - radius - r
-    d[hi < lo] = np.inf
-    n = _unit(x - centre)
-    m = len(d)
-    rows = [
-        _leg_rows_from_parts(
-            g,
-            d,
-            s,
-            start,
-            vec,
-            lo,
-            hi,
-            hb,
-            np.full(m, body_id),
-            np.full(m, _FIXED),
-            np.zeros(m, int),
-            centre + r * n,
-            n,
-        )
-    ]
-    cfg = bodies.cfg
-    local = np.einsum("kji,kj->ki", bodies.R, centre - bodies.p)  # Rᵀ (c - p)
+def _up(m: int) -> np.ndarray:
+    up = np.zeros((m, 3))
+    up[:, 2] = 1.0
+    return up
+
+
+def _spheres_pass(bodies: StackBodies, lay: _Layout, dist: np.ndarray, parts: tuple) -> list[tuple]:
+    """Every leg and plate against every sphere, in one pass over (spheres × bodies): closed
+    forms, exact, written into ``dist`` at the spheres' rows (per sphere: its G legs, then its
+    plates). Returns the rows' closest points and normals (:attr:`_Source.scene_rows`)."""
+    centre, r = lay.centres, lay.radii  # (N, 3), (N,) world [m]
+    _, _, start, vec, lo, hi, hb, radius = parts
+    d_axis, s = segment_point(start[None], vec[None], centre[:, None])  # (N, 2G)
+    d = d_axis - radius - r[:, None]
+    d[:, hi < lo] = np.inf
+    best, x, sigma, hbest = _best_parts(d, s, start, vec, lo, hi, hb)  # (N, G)
+    n = _unit(x - centre[:, None])
+    cfg, R, p = lay.cfg, bodies.R, bodies.p
+    local = np.einsum("kji,skj->ski", R, centre[:, None] - p)  # Rᵀ (c - p), (N, K, 3)
     dc, closest = point_in_cylinder_distance(local, cfg.plate.radius, cfg.plate.thickness)
-    on_plate = bodies.p + np.einsum("kij,kj->ki", bodies.R, closest)
-    k = np.arange(len(bodies.p))
-    nk = _unit(on_plate - centre)
-    nk = np.where((dc < 0)[:, None], -nk, nk)
-    G = len(bodies.length)
-    rows.append(
-        _Rows(
-            dc - r,
-            np.ones(len(k), bool),
-            np.stack([G + k, np.full(len(k), body_id)], 1),
-            np.stack([np.full(len(k), _PLATE), np.full(len(k), _FIXED)], 1),
-            np.stack([k, np.zeros(len(k), int)], 1),
-            np.zeros((len(k), 2)),
-            np.zeros((len(k), 2)),
-            np.stack([on_plate, centre + r * nk], 1),
-            nk,
-        )
-    )
-    return _concat(rows)
+    on_plate = p + np.einsum("kij,skj->ski", R, closest)
+    nk = _unit(on_plate - centre[:, None])
+    nk = np.where((dc < 0)[..., None], -nk, nk)
+    N, G, K = len(r), lay.G, lay.K
+    block = dist[lay.sphere_at : lay.sphere_at + N * (G + K)].reshape(N, G + K)
+    block[:, :G] = best
+    block[:, G:] = dc - r[:, None]
+    point = np.empty((N, G + K, 2, 3))
+    point[:, :G, 0], point[:, :G, 1] = x, centre[:, None] + r[:, None, None] * n
+    point[:, G:, 0], point[:, G:, 1] = on_plate, centre[:, None] + r[:, None, None] * nk
+    sig, hbv = np.zeros((N, G + K)), np.zeros((N, G + K))
+    sig[:, :G], hbv[:, :G] = sigma, hbest
+    normal = np.concatenate([n, nk], axis=1)
+    return [(lay.sphere_at, sig.ravel(), hbv.ravel(), point.reshape(-1, 2, 3), normal.reshape(-1, 3))]
 
 
 # ---------------------------------------------------------------- coal pairs
@@ -378,217 +330,367 @@ def _z_to(u: np.ndarray) -> np.ndarray:
     return np.array([[x[0], y[0], ux], [x[1], y[1], uy], [x[2], y[2], uz]])
 
 
+_REQUEST: list = []  # coal's distance request, made once
+
+
 def _coal_distance(shape_a, R_a, p_a, shape_b, R_b, p_b) -> tuple[float, np.ndarray, np.ndarray, np.ndarray]:
+    """coal's signed distance [m] of two shapes at their world poses, the witness points on
+    each (3,), (3,) world [m] and the unit normal from b to a."""
     coal = _coal()
-    req, res = coal.DistanceRequest(), coal.DistanceResult()
-    req.gjk_tolerance = GJK_TOLERANCE
-    req.gjk_max_iterations = 1000
-    d = coal.distance(shape_a, coal.Transform3s(R_a, p_a), shape_b, coal.Transform3s(R_b, p_b), req, res)
+    if not _REQUEST:
+        req = coal.DistanceRequest()
+        req.gjk_tolerance = GJK_TOLERANCE
+        req.gjk_max_iterations = 1000
+        _REQUEST.append(req)
+    res = coal.DistanceResult()
+    d = coal.distance(shape_a, coal.Transform3s(R_a, p_a), shape_b, coal.Transform3s(R_b, p_b), _REQUEST[0], res)
     wa, wb = np.array(res.getNearestPoint1()), np.array(res.getNearestPoint2())
     return float(d), wa, wb, -np.array(res.normal)
 
 
-@dataclass
-class _Screened:
-    """Pairs measured by coal on demand: their lower bounds and how to measure each."""
-
-    rows: _Rows
-    measure: Callable[[int], tuple | None]  # row → (d, x_a, x_b, n, sigma_a, hb_a) or None
-
-
-def _leg_screen(
-    bodies: StackBodies,
-    g: np.ndarray,
-    core: tuple[np.ndarray, np.ndarray, np.ndarray],
-    slab: tuple[np.ndarray, float] | None = None,
-) -> np.ndarray:
-    """Lower bounds (m, 2) of the motor and the shaft of each leg ``g`` (m,) against bodies held
-    in capsules ``core = (start, vector, radius)`` (one per leg, or one for all), and optionally
-    in the slab of a plate (``(normal, half-thickness)``, about the core's start)."""
-    part = np.tile(np.array([MOTOR, SHAFT]), len(g))
-    start, vec, lo, hi, _, radius = leg_segments(bodies, np.repeat(g, 2), part)
-    c0, c1, cr = _repeat_core(core, len(g))
-    if np.any(core[1]):
-        d_axis, _, _ = segment_segment(start, vec, c0, c1)
-    else:  # bodies held in spheres (the plates): the segment to a point
-        d_axis, _ = segment_point(start, vec, c0)
-    lb = d_axis - cr - radius
-    if slab is not None:
-        normal, half = np.repeat(slab[0], 2, axis=0), slab[1]
-        h0 = np.einsum("ij,ij->i", start - c0, normal)
-        h1 = h0 + np.einsum("ij,ij->i", vec, normal)
-        lb = np.maximum(lb, np.maximum(np.minimum(h0, h1), np.minimum(-h0, -h1)) - half - radius)
-    lb[hi < lo] = np.inf
-    return lb.reshape(-1, 2)
+def _measure_leg(bodies: StackBodies, g: int, lb: np.ndarray, other: tuple) -> tuple | None:
+    """One leg against a body coal measures (``other``: shape, R, p): both parts whose bound
+    ``lb`` (2,) is finite (the capsules of
+    :func:`~assembler_pin.collision.bodies.leg_segments`, untrimmed), the closer one
+    ``(d, x_a, x_b, n, σ_a, dσ_a/dL)`` (x_a on the axis, world [m]); None for none."""
+    leg = bodies.cfg.leg
+    bottom, axis, L = bodies.bottom[g], bodies.axis[g], float(bodies.length[g])
+    turn = _z_to(axis)
+    best = None
+    for part in (MOTOR, SHAFT):
+        if not math.isfinite(lb[part]):
+            continue
+        if part == MOTOR:
+            lo, hi, hb, radius = 0.0, leg.motor_length, 0.0, leg.motor_radius
+        else:
+            lo, hi, hb, radius = leg.motor_length, L, 1.0, leg.shaft_radius
+        if hi < lo:
+            continue
+        length = max(hi - lo, 1e-12)
+        start, vec = bottom + lo * axis, (hi - lo) * axis
+        d, wa, wb, n = _coal_distance(_coal().Capsule(radius, length), turn, start + 0.5 * vec, *other)
+        s = min(max(float(np.dot(wa - start, axis)) / length, 0.0), 1.0)
+        if best is None or d < best[0]:
+            best = (d, start + s * vec, wb, n, lo + s * (hi - lo), s * hb)
+    return best
 
 
-def _repeat_core(core: tuple, m: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    start, vec, radius = core
-    start = np.broadcast_to(start, (m, 3))
-    vec = np.broadcast_to(vec, (m, 3))
-    radius = np.broadcast_to(radius, (m,))
-    return np.repeat(start, 2, axis=0), np.repeat(vec, 2, axis=0), np.repeat(radius, 2)
+def _solids_pass(bodies: StackBodies, lay: _Layout, dist: np.ndarray, parts: tuple) -> np.ndarray:
+    """Lower bounds of every leg and plate against every box and cylinder, in one pass over
+    (obstacles × bodies), written into ``dist`` at the obstacles' rows (per obstacle: its G
+    legs, the smaller bound of their two parts, then its plates). A leg part is held in its
+    capsule, a plate in its bounding sphere; each obstacle in its bounding capsule and between
+    the two faces of each of its slabs (a box's three, a cylinder's caps): the larger bound.
+    Returns the legs' bounds per part (N, G, 2) [m] (:func:`_measure_leg`)."""
+    c0, cv, cr = lay.cores  # (N, 3), (N, 3), (N,) world [m]
+    centre, axes, half = lay.slabs  # (N, 3), (N, 3, 3) axes as columns, (N, 3) [m]
+    _, _, start, vec, lo, hi, _, radius = parts
+    d_axis = segment_segment(start[None], vec[None], c0[:, None], cv[:, None])[0]  # (N, 2G)
+    h0 = np.matmul(start[None] - centre[:, None], axes)  # (N, 2G, 3): the ends along each axis
+    h1 = h0 + np.matmul(vec[None], axes)
+    slab = np.maximum(np.minimum(h0, h1), -np.maximum(h0, h1)) - half[:, None]
+    lb = np.maximum(d_axis - cr[:, None], slab.max(axis=2)) - radius
+    lb[:, hi < lo] = np.inf
+    lb = lb.reshape(len(cr), lay.G, 2)
+    rho = math.hypot(lay.cfg.plate.radius, 0.5 * lay.cfg.plate.thickness)
+    d_plate = segment_point(c0[:, None], cv[:, None], bodies.p)[0] - cr[:, None]  # (N, K)
+    h = np.abs(np.matmul(bodies.p[None] - centre[:, None], axes)) - half[:, None]
+    block = dist[lay.solid_at : lay.solid_at + len(cr) * (lay.G + lay.K)].reshape(len(cr), lay.G + lay.K)
+    block[:, : lay.G] = lb.min(axis=2)
+    block[:, lay.G :] = np.maximum(d_plate, h.max(axis=2)) - rho
+    return lb
 
 
-def _screened_rows(lb: np.ndarray, body: np.ndarray, kind: np.ndarray, index: np.ndarray) -> _Rows:
-    """Rows known by their lower bounds ``lb`` only (not measured yet)."""
-    m = len(lb)
-    return _Rows(
-        lb,
-        np.zeros(m, bool),
-        body,
+# ---------------------------------------------------------------- the rows of a scene
+@dataclass(frozen=True)
+class _Layout:
+    """The rows of one configuration and scene, in the order of every clearance's arrays,
+    the same call after call (:class:`~assembler_pin.optimize.rows.ClearanceRows` needs a fixed
+    count and order): first the exact ones, the ``P`` leg pairs (the kernel's), the floor's (the
+    ``G`` legs, then the plates not standing), each sphere's (its ``G`` legs, then its ``K``
+    plates); then, from row ``X``, the screened ones: the ``Q`` leg–plate pairs, the ``S`` plate
+    pairs, each box's or cylinder's (its legs, then its plates)."""
+
+    cfg: AssemblerConfig
+    scene: Scene | None
+    names: tuple[str, ...]
+    pairs: np.ndarray  # (m, 2) body ids (read-only: shared by every clearance)
+    kind: np.ndarray  # (m, 2) carrier kinds
+    index: np.ndarray  # (m, 2) leg g or plate k
+    exact: np.ndarray  # (m,) the exact rows (a template)
+    G: int
+    K: int
+    P: int
+    Q: int
+    S: int
+    X: int
+    kernel_inputs: tuple
+    leg_plate: np.ndarray  # (Q, 2) (leg, plate)
+    plate_pairs: np.ndarray  # (S, 2)
+    floor: tuple | None  # (first row, z [m], trim bottom (G,), trim top (G,), plates checked)
+    sphere_at: int
+    centres: np.ndarray  # (spheres, 3) world [m]
+    radii: np.ndarray  # (spheres,) [m]
+    solid_at: int
+    solids: tuple[Obstacle, ...]
+    cores: tuple[np.ndarray, np.ndarray, np.ndarray]  # bounding capsules: start, vector (N, 3), radius (N,) [m]
+    slabs: tuple[np.ndarray, np.ndarray, np.ndarray]  # centre (N, 3), axes (N, 3, 3) as columns, half widths (N, 3) [m]
+
+    @property
+    def m(self) -> int:
+        """The count of rows."""
+        return len(self.pairs)
+
+
+def _block(m: int, body: tuple, kind: tuple, index: tuple) -> tuple[np.ndarray, ...]:
+    """Static columns of ``m`` rows: each of ``body``, ``kind``, ``index`` a pair of (m,) arrays
+    or scalars."""
+    columns = (body, kind, index)
+    return tuple(np.stack([np.broadcast_to(a, m), np.broadcast_to(b, m)], 1).astype(int) for a, b in columns)
+
+
+def _build_layout(cfg: AssemblerConfig, scene: Scene | None) -> _Layout:
+    t = pair_table(cfg)
+    G, K = LEGS_PER_PLATFORM * cfg.platforms, cfg.platforms + 1
+    legs, plates = np.arange(G), np.arange(K)
+    own = stack_body_names(cfg.platforms)
+    names = tuple(own)
+    blocks = [_block(len(t.leg_a), (t.leg_a, t.leg_b), (_LEG, _LEG), (t.leg_a, t.leg_b))]
+    obstacles = () if scene is None else scene.obstacles
+    floor = None
+    if scene is not None:
+        names = (*own, *(o.name for o in obstacles)) + (("floor",) if scene.floor_z is not None else ())
+    ids = {o.name: len(own) + i for i, o in enumerate(obstacles)}
+
+    def rows() -> int:
+        return sum(len(b[0]) for b in blocks)
+
+    def against(oid: int, k: np.ndarray = plates) -> None:
+        blocks.append(_block(G, (legs, oid), (_LEG, _FIXED), (legs, 0)))
+        blocks.append(_block(len(k), (G + k, oid), (_PLATE, _FIXED), (k, 0)))
+
+    if scene is not None and scene.floor_z is not None:
+        on = np.asarray(scene.standing, dtype=int)
+        platform = legs // LEGS_PER_PLATFORM
+        k = np.setdiff1d(plates, on)
+        floor = (rows(), float(scene.floor_z), np.isin(platform, on), np.isin(platform + 1, on), k)
+        against(len(names) - 1, k)
+    spheres = [o for o in obstacles if o.kind == "sphere"]
+    sphere_at = rows()
+    for o in spheres:
+        against(ids[o.name])
+    X = rows()
+    g, k = t.leg_plate[:, 0], t.leg_plate[:, 1]
+    blocks.append(_block(len(g), (g, G + k), (_LEG, _PLATE), (g, k)))
+    ka, kb = t.plate_pairs[:, 0], t.plate_pairs[:, 1]
+    blocks.append(_block(len(ka), (G + ka, G + kb), (_PLATE, _PLATE), (ka, kb)))
+    solids = tuple(o for o in obstacles if o.kind != "sphere")
+    solid_at = rows()
+    for o in solids:
+        against(ids[o.name])
+    pairs, kind, index = (np.concatenate([b[i] for b in blocks]).reshape(-1, 2) for i in range(3))
+    for a in (pairs, kind, index):
+        a.flags.writeable = False
+    exact = np.zeros(len(pairs), bool)
+    exact[:X] = True
+    cores = [o.bounding_capsule() for o in solids]
+    return _Layout(
+        cfg,
+        scene,
+        names,
+        pairs,
         kind,
         index,
-        np.zeros((m, 2)),
-        np.zeros((m, 2)),
-        np.zeros((m, 2, 3)),
-        _UP[:m].copy(),
+        exact,
+        G,
+        K,
+        len(t.leg_a),
+        len(g),
+        len(ka),
+        X,
+        _kernel_inputs(cfg),
+        t.leg_plate,
+        t.plate_pairs,
+        floor,
+        sphere_at,
+        np.array([o.pose.translation for o in spheres], dtype=float).reshape(-1, 3),
+        np.array([o.size[0] for o in spheres], dtype=float),
+        solid_at,
+        solids,
+        (
+            np.array([c[0] for c in cores], dtype=float).reshape(-1, 3),
+            np.array([c[1] for c in cores], dtype=float).reshape(-1, 3),
+            np.array([c[2] for c in cores], dtype=float),
+        ),
+        (
+            np.array([o.pose.translation for o in solids], dtype=float).reshape(-1, 3),
+            np.array([o.pose.rotation for o in solids], dtype=float).reshape(-1, 3, 3),
+            np.array([_half_widths(o) for o in solids], dtype=float).reshape(-1, 3),
+        ),
     )
 
 
-_UP = np.tile(np.array([0.0, 0.0, 1.0]), (4096, 1))
+def _half_widths(o: Obstacle) -> tuple[float, float, float]:
+    """Half the width of a box or a cylinder between the faces of its slabs, along its own
+    axes [m] (a cylinder has one slab, its caps: ``inf`` across it)."""
+    if o.kind == "box":
+        return (0.5 * o.size[0], 0.5 * o.size[1], 0.5 * o.size[2])
+    return (math.inf, math.inf, 0.5 * o.size[1])
 
 
-def _coal_leg_rows(
-    bodies: StackBodies,
-    g: np.ndarray,
-    lb: np.ndarray,
-    static: tuple[np.ndarray, np.ndarray, np.ndarray],
-    other: Callable[[int], tuple],
-) -> _Screened:
-    """One row per leg ``g`` against a body coal measures (``other(r)``: shape, R, p), known by
-    the smaller bound of its two parts ``lb`` (m, 2) until measured (both parts, the smaller)."""
-
-    def measure(r: int) -> tuple | None:
-        best = None
-        for part in (MOTOR, SHAFT):
-            if not np.isfinite(lb[r, part]):
-                continue
-            start, vec, lo, hi, hb, radius = (x[0] for x in leg_segments(bodies, g[r : r + 1], np.array([part])))
-            got = _measure_capsule(bodies, int(g[r]), start, vec, lo, hi, hb, radius, other(r))
-            if got is not None and (best is None or got[0] < best[0]):
-                best = got
-        return best
-
-    return _Screened(_screened_rows(lb.min(axis=1), *static), measure)
+_LAYOUTS: dict[tuple, _Layout] = {}
 
 
-def _measure_capsule(bodies, g, start, vec, lo, hi, hb, radius, other):
-    """coal's distance between one leg capsule and ``other = (shape, R, p)``."""
-    if hi < lo:
-        return None
-    length = max(hi - lo, 1e-12)
-    capsule = _coal().Capsule(radius, length)
-    d, wa, wb, n = _coal_distance(capsule, _z_to(bodies.axis[g]), start + 0.5 * vec, *other)
-    s = float(np.clip(np.dot(wa - start, bodies.axis[g]) / length, 0.0, 1.0))
-    return d, start + s * vec, wb, n, lo + s * max(hi - lo, 0.0), s * hb
+def _layout(cfg: AssemblerConfig, scene: Scene | None) -> _Layout:
+    """The rows of ``cfg`` and ``scene``, built once per configuration object and obstacle
+    tuple (by identity: a scene rebuilt from its file builds them again), floor and standing."""
+    key = (id(cfg),) if scene is None else (id(cfg), id(scene.obstacles), scene.floor_z, scene.standing)
+    hit = _LAYOUTS.get(key)
+    if hit is not None and hit.cfg is cfg and (scene is None or (hit.scene and hit.scene.obstacles is scene.obstacles)):
+        return hit
+    lay = _build_layout(cfg, scene)
+    if len(_LAYOUTS) >= 16:
+        _LAYOUTS.pop(next(iter(_LAYOUTS)))
+    _LAYOUTS[key] = lay
+    return lay
 
 
-@per_config
-def _static_rows(cfg: AssemblerConfig) -> tuple:
-    """The bodies, carrier kinds and indices of the leg–plate and plate–plate rows."""
-    t = pair_table(cfg)
-    G = LEGS_PER_PLATFORM * cfg.platforms
-    g, k = t.leg_plate[:, 0], t.leg_plate[:, 1]
-    legs_plates = (np.stack([g, G + k], 1), np.stack([np.full(len(g), _LEG), np.full(len(g), _PLATE)], 1), t.leg_plate)
-    ka, kb = t.plate_pairs[:, 0], t.plate_pairs[:, 1]
-    plates = (np.stack([G + ka, G + kb], 1), np.full((len(ka), 2), _PLATE), t.plate_pairs)
-    legs = np.stack([t.leg_a, t.leg_b], 1)
-    self_pairs = np.concatenate([legs, legs_plates[0], plates[0]])  # the rows of the stack alone
-    return legs_plates, plates, self_pairs
+_SHAPES: dict[int, tuple] = {}
 
 
-class _PlateShape:
-    """The plates' coal cylinder, made on the first measurement that needs it."""
-
-    def __init__(self, cfg: AssemblerConfig) -> None:
-        self.cfg, self.shape = cfg, None
-
-    def __call__(self):
-        if self.shape is None:
-            self.shape = _coal().Cylinder(self.cfg.plate.radius, max(self.cfg.plate.thickness, 1e-9))
-        return self.shape
-
-
-def _screened_pairs(
-    bodies: StackBodies, scene: Scene | None, ids: dict, bounds: tuple[np.ndarray, np.ndarray]
-) -> list[_Screened]:
-    """The pairs coal measures, with their lower bounds (``bounds``: the self pass's leg–plate
-    (Q, 2) and plate–plate (S,) bounds; the obstacles' computed here)."""
-    cfg = bodies.cfg
-    t = pair_table(cfg)
-    G = len(bodies.length)
-    plate = _PlateShape(cfg)
-    rho = math.hypot(cfg.plate.radius, 0.5 * cfg.plate.thickness)
-    legs_plates, plates, _ = _static_rows(cfg)
-    out: list[_Screened] = []
-    if len(t.leg_plate):  # legs against the plates they do not sit on
-        g, k = t.leg_plate[:, 0], t.leg_plate[:, 1]
-        lb = bounds[0]
-
-        def plate_of(r: int, k: np.ndarray = k) -> tuple:  # k bound now: the loop below rebinds the name
-            return plate(), bodies.R[k[r]], bodies.p[k[r]]
-
-        out.append(_coal_leg_rows(bodies, g, lb, legs_plates, plate_of))
-    if len(t.plate_pairs):  # plate against plate
-        ka, kb = t.plate_pairs[:, 0], t.plate_pairs[:, 1]
-        lbp = bounds[1]
-
-        def plate_pair(r: int) -> tuple:
-            a, b = int(ka[r]), int(kb[r])
-            d, wa, wb, n = _coal_distance(plate(), bodies.R[a], bodies.p[a], plate(), bodies.R[b], bodies.p[b])
-            return d, wa, wb, n, 0.0, 0.0
-
-        out.append(_Screened(_screened_rows(lbp, *plates), plate_pair))
-    if scene is None:
-        return out
-    legs = np.arange(G)
-    for o in scene.obstacles:
-        if o.kind == "sphere":
-            continue
-        shape, oid = _obstacle_shape(o), ids[o.name]
-        fixed = (shape, o.pose.rotation, o.pose.translation)
-        core_start, core_vec, core_r = o.bounding_capsule()
-        lb = _leg_screen(bodies, legs, (core_start, core_vec, np.array(core_r)))
-        legs_static = (
-            np.stack([legs, np.full(G, oid)], 1),
-            np.stack([np.full(G, _LEG), np.full(G, _FIXED)], 1),
-            np.stack([legs, np.zeros(G, int)], 1),
-        )
-
-        def obstacle_of(r: int, fixed: tuple = fixed) -> tuple:
-            return fixed
-
-        out.append(_coal_leg_rows(bodies, legs, lb, legs_static, obstacle_of))
-        k = np.arange(len(bodies.p))
-        lbk = segment_point(
-            np.broadcast_to(core_start, bodies.p.shape), np.broadcast_to(core_vec, bodies.p.shape), bodies.p
-        )[0]
-        mk = len(k)
-        plates_static = (
-            np.stack([G + k, np.full(mk, oid)], 1),
-            np.stack([np.full(mk, _PLATE), np.full(mk, _FIXED)], 1),
-            np.stack([k, np.zeros(mk, int)], 1),
-        )
-
-        def plate_obstacle(r: int, fixed: tuple = fixed) -> tuple:
-            d, wa, wb, n = _coal_distance(plate(), bodies.R[r], bodies.p[r], *fixed)
-            return d, wa, wb, n, 0.0, 0.0
-
-        out.append(_Screened(_screened_rows(lbk - rho - core_r, *plates_static), plate_obstacle))
-    return out
+def _shapes(lay: _Layout) -> tuple:
+    """coal's plate cylinder and the layout's boxes and cylinders (shape, R, p), made once per
+    layout."""
+    hit = _SHAPES.get(id(lay))
+    if hit is None or hit[0] is not lay:
+        plate = _coal().Cylinder(lay.cfg.plate.radius, max(lay.cfg.plate.thickness, 1e-9))
+        solids = [(_obstacle_shape(o), o.pose.rotation, o.pose.translation) for o in lay.solids]
+        hit = (lay, plate, solids)
+        if len(_SHAPES) >= 16:
+            _SHAPES.pop(next(iter(_SHAPES)))
+        _SHAPES[id(lay)] = hit
+    return hit[1], hit[2]
 
 
-def _measure(screened: _Screened, r: int) -> None:
-    got = screened.measure(r)
-    rows = screened.rows
-    rows.exact[r] = True
+# ---------------------------------------------------------------- one call
+class _Source:
+    """The arrays of one clearance: the plate poses, the legs' joint centres and directions
+    (``btu`` (3, G, 3)) and lengths, the leg-pair rows (:data:`~assembler_pin.collision.kernel.ROW_WIDTH`
+    columns), every row's distance and exactness, the legs' bounds per part against plates
+    and obstacles, the scene's closed-form rows' points and what coal measured. The bodies and
+    every row's closest points are built from them on first use."""
+
+    __slots__ = (
+        "R",
+        "_bodies",
+        "btu",
+        "dist",
+        "exact",
+        "got",
+        "layout",
+        "legs",
+        "length",
+        "lp",
+        "p",
+        "scene_rows",
+        "solid_lb",
+    )
+
+    def __init__(self, layout, R, p, btu, length, legs, dist, lp) -> None:
+        self.layout, self.R, self.p, self.btu, self.length = layout, R, p, btu, length
+        self.legs, self.dist, self.lp = legs, dist, lp
+        self.exact = layout.exact.copy()
+        self.solid_lb: np.ndarray | None = None
+        self.scene_rows: list[tuple] = []  # (first row, σ_a, dσ_a/dL or None, points (m, 2, 3), normals (m, 3))
+        self.got: dict[int, tuple] = {}  # coal's rows: (x_a, x_b, n, σ_a, dσ_a/dL)
+        self._bodies: StackBodies | None = None
+
+    def bodies(self) -> StackBodies:
+        """The stack's bodies (world frame)."""
+        if self._bodies is None:
+            b = self.btu
+            self._bodies = StackBodies(self.layout.cfg, b[0], b[1], b[2], self.length, self.R, self.p)
+        return self._bodies
+
+    def rows(self) -> _Rows:
+        """Every row with its closest points and normal."""
+        lay, legs = self.layout, self.legs
+        m, P = lay.m, lay.P
+        sigma, hb, point, normal = np.zeros((m, 2)), np.zeros((m, 2)), np.zeros((m, 2, 3)), _up(m)
+        point[:P, 0], point[:P, 1] = legs[:, ROW_XA : ROW_XA + 3], legs[:, ROW_XB : ROW_XB + 3]
+        normal[:P] = legs[:, ROW_NORMAL : ROW_NORMAL + 3]
+        sigma[:P], hb[:P] = legs[:, ROW_SIGMA : ROW_SIGMA + 2], legs[:, ROW_HB : ROW_HB + 2]
+        for at, sig, h, pt, nm in self.scene_rows:
+            stop = at + len(pt)
+            if sig is not None:
+                sigma[at:stop, 0], hb[at:stop, 0] = sig, h
+            point[at:stop], normal[at:stop] = pt, nm
+        for r, (xa, xb, n, sig, h) in self.got.items():
+            point[r, 0], point[r, 1], normal[r], sigma[r, 0], hb[r, 0] = xa, xb, n, sig, h
+        return _Rows(self.dist, self.exact, lay.pairs, lay.kind, lay.index, sigma, hb, point, normal)
+
+
+def _scene_pass(src: _Source) -> None:
+    """The scene's rows: the floor and the spheres exactly, the boxes' and cylinders' bounds."""
+    lay = src.layout
+    bodies = src.bodies()
+    if lay.floor is not None:
+        src.scene_rows += _floor_pass(bodies, lay, src.dist)
+    if len(lay.radii) or lay.solids:
+        parts = _legs_all_parts(bodies)
+        if len(lay.radii):
+            src.scene_rows += _spheres_pass(bodies, lay, src.dist, parts)
+        if lay.solids:
+            src.solid_lb = _solids_pass(bodies, lay, src.dist, parts)
+
+
+def _measure_row(src: _Source, r: int) -> None:
+    """coal's distance of the screened row ``r``, into the source's arrays."""
+    lay, bodies = src.layout, src.bodies()
+    plate, solids = _shapes(lay)
+    i = r - lay.X
+    got: tuple | None
+    if i < lay.Q:  # a leg against a plate it does not sit on
+        g, k = int(lay.leg_plate[i, 0]), int(lay.leg_plate[i, 1])
+        got = _measure_leg(bodies, g, src.lp[i], (plate, bodies.R[k], bodies.p[k]))
+    elif i < lay.Q + lay.S:  # plate against plate
+        a, b = (int(v) for v in lay.plate_pairs[i - lay.Q])
+        got = (*_coal_distance(plate, bodies.R[a], bodies.p[a], plate, bodies.R[b], bodies.p[b]), 0.0, 0.0)
+    else:  # a leg or a plate against a box or a cylinder
+        o, j = divmod(i - lay.Q - lay.S, lay.G + lay.K)
+        fixed = solids[o]
+        if j < lay.G:
+            assert src.solid_lb is not None
+            got = _measure_leg(bodies, j, src.solid_lb[o, j], fixed)
+        else:
+            k = j - lay.G
+            got = (*_coal_distance(plate, bodies.R[k], bodies.p[k], *fixed), 0.0, 0.0)
+    src.exact[r] = True
     if got is None:
-        rows.dist[r] = np.inf
+        src.dist[r] = np.inf
         return
-    d, xa, xb, n, sigma, hb = got
-    rows.dist[r], rows.point[r, 0], rows.point[r, 1], rows.normal[r] = d, xa, xb, n
-    rows.sigma[r, 0], rows.hb[r, 0] = sigma, hb
+    src.dist[r] = got[0]
+    src.got[r] = got[1:]
+
+
+def _measure_near(src: _Source, horizon: float) -> None:
+    """coal measures the screened rows within ``horizon`` [m], then those whose bound is below
+    the smallest distance until none is: the smallest distance is exact."""
+    lay, dist = src.layout, src.dist
+    X = lay.X
+    best = float(dist[:X].min()) if X else math.inf
+    if lay.m == X:
+        return
+    screened, exact = dist[X:], src.exact[X:]
+    todo = np.flatnonzero(screened < horizon)
+    while True:
+        if len(todo):
+            for i in todo.tolist():
+                _measure_row(src, X + i)
+            best = min(best, float(screened[todo].min()))
+        todo = np.flatnonzero((screened < best) & ~exact)
+        if not len(todo):
+            return
 
 
 _calls = 0  # clearances asked for in this process (the kernel is loaded when they are many)
@@ -598,8 +700,7 @@ _calls = 0  # clearances asked for in this process (the kernel is loaded when th
 def _kernel_inputs(cfg: AssemblerConfig) -> tuple:
     """The kernel's constant inputs for a configuration: anchors, variant pairs, pair lists, sizes."""
     t = pair_table(cfg)
-    G = LEGS_PER_PLATFORM * cfg.platforms
-    va, vb = _variant_index(t, G)
+    va, vb = _variant_index(t)
     sizes = np.array(
         [
             cfg.leg.motor_length,
@@ -614,20 +715,15 @@ def _kernel_inputs(cfg: AssemblerConfig) -> tuple:
     geometry = leg_geometry(cfg)
     bottom = np.ascontiguousarray(geometry.bottom_in_plate.reshape(-1, 3))
     top = np.ascontiguousarray(geometry.top_in_plate.reshape(-1, 3))
-    legs = np.stack([t.leg_a, t.leg_b], 1)
-    return bottom, top, va, vb, t.leg_plate, t.plate_pairs, sizes, legs, np.zeros((len(legs), 2), int)
+    return bottom, top, va, vb, t.leg_plate, t.plate_pairs, sizes
 
 
-def _kernel_pass(am: AssemblerModel, pa: PlateArrays, kernel) -> tuple[StackBodies, _Rows, tuple]:
-    """Bodies, leg–leg rows and the coal pairs' bounds from the compiled kernel."""
-    bottom, top, va, vb, leg_plate, plate_pairs, sizes, legs, kinds = _kernel_inputs(am.config)
-    G, P = len(bottom), len(legs)
-    B, T, U, L = np.empty((G, 3)), np.empty((G, 3)), np.empty((G, 3)), np.empty(G)
-    d, x, sig, hb, nrm = np.empty(P), np.empty((P, 2, 3)), np.empty((P, 2)), np.empty((P, 2)), np.empty((P, 3))
-    lp, pp = np.empty((len(leg_plate), 2)), np.empty(len(plate_pairs))
-    kernel(pa.R, pa.p, bottom, top, va, vb, leg_plate, plate_pairs, sizes, B, T, U, L, d, x, sig, hb, nrm, lp, pp)
-    bodies = StackBodies(am.config, B, T, U, L, pa.R, pa.p)
-    return bodies, _Rows(d, np.ones(P, bool), legs, kinds, legs, sig, hb, x, nrm), (lp, pp)
+def _kernel_pass(lay: _Layout, pa: PlateArrays, kernel, dist: np.ndarray) -> _Source:
+    """The stack's own rows from the compiled kernel: leg pairs exact, the coal pairs' bounds
+    (written into ``dist``). Every array is made for this call: the clearance owns them."""
+    btu, length, legs, lp = np.empty((3, lay.G, 3)), np.empty(lay.G), np.empty((lay.P, ROW_WIDTH)), np.empty((lay.Q, 2))
+    kernel(pa.R, pa.p, *lay.kernel_inputs, lay.X, btu, length, dist, legs, lp)
+    return _Source(lay, pa.R, pa.p, btu, length, legs, dist, lp)
 
 
 @per_config
@@ -656,11 +752,11 @@ def _numpy_inputs(cfg: AssemblerConfig) -> tuple:
     return g, lo, a1, b1, a2, b2, ia, ib, radius_sum, plate_of, bottom, top, lp_g, lp_k, lp_shaft, plate_pairs
 
 
-def _numpy_pass(am: AssemblerModel, pa: PlateArrays) -> tuple[StackBodies, _Rows, tuple]:
-    """The kernel's pass in numpy (:func:`_kernel_pass`'s outputs): bodies, leg–leg rows and
-    the coal pairs' bounds. Points are kept as columns (3, m) and gathered with ``np.take``:
-    the cost of this pass is the count of numpy calls, not the pairs."""
-    cfg = am.config
+def _numpy_pass(lay: _Layout, pa: PlateArrays, dist: np.ndarray) -> _Source:
+    """The kernel's pass in numpy (:func:`_kernel_pass`'s outputs, the same into ``dist``).
+    Points are kept as columns (3, m) and gathered with ``np.take``: the cost of this pass is
+    the count of numpy calls, not the pairs."""
+    cfg = lay.cfg
     g, lo, a1, b1, a2, b2, ia, ib, radius_sum, plate_of, bottom_in, top_in, lp_g, lp_k, lp_shaft, plate_pairs = (
         _numpy_inputs(cfg)
     )
@@ -689,22 +785,14 @@ def _numpy_pass(am: AssemblerModel, pa: PlateArrays) -> tuple[StackBodies, _Rows
     best = np.argmin(d.reshape(P, 4), axis=1) + 4 * np.arange(P)
     va, vb, sb, ub = ia[best], ib[best], s[best], u[best]
     full = np.maximum(span, 0.0)
-    sig = np.stack([lo[va] + sb * full[va], lo[vb] + ub * full[vb]], 1)
     xa = take(start, va, axis=1) + sb * take(seg, va, axis=1)
     xb = take(start, vb, axis=1) + ub * take(seg, vb, axis=1)
-    x = np.stack([xa.T, xb.T], 1)
-    legs = np.stack([g[va], g[vb]], 1)
-    rows = _Rows(
-        d[best],
-        np.ones(P, bool),
-        legs,
-        np.zeros((P, 2), int),
-        legs,
-        sig,
-        np.stack([sb * hb[va], ub * hb[vb]], 1),
-        x,
-        _unit((xa - xb).T),
-    )
+    legs = np.empty((P, ROW_WIDTH))
+    legs[:, ROW_XA : ROW_XA + 3], legs[:, ROW_XB : ROW_XB + 3] = xa.T, xb.T
+    legs[:, ROW_NORMAL : ROW_NORMAL + 3] = _unit((xa - xb).T)
+    legs[:, ROW_SIGMA], legs[:, ROW_SIGMA + 1] = lo[va] + sb * full[va], lo[vb] + ub * full[vb]
+    legs[:, ROW_HB], legs[:, ROW_HB + 1] = sb * hb[va], ub * hb[vb]
+    dist[:P] = d[best]
     # lower bounds: a leg part against a plate (its bounding sphere, and the slab of its faces)
     leg = cfg.leg
     half, rho = 0.5 * cfg.plate.thickness, math.hypot(cfg.plate.radius, 0.5 * cfg.plate.thickness)
@@ -715,11 +803,11 @@ def _numpy_pass(am: AssemblerModel, pa: PlateArrays) -> tuple[StackBodies, _Rows
     a0 = bottom[lp_g] + lo_p[:, None] * axis[lp_g] - p[lp_k]  # from the plate's centre
     dk = (hi_p - lo_p)[:, None] * axis[lp_g]
     normal = R[lp_k][:, :, 2]
-    dist, _ = segment_point(a0, dk, np.zeros(3))
+    d_centre, _ = segment_point(a0, dk, np.zeros(3))
     h0 = np.einsum("ij,ij->i", a0, normal)
     h1 = h0 + np.einsum("ij,ij->i", dk, normal)
     slab = np.maximum(np.minimum(h0, h1), -np.maximum(h0, h1)) - half - r_p
-    lp = np.maximum(dist - rho - r_p, slab)
+    lp = np.maximum(d_centre - rho - r_p, slab)
     lp[hi_p < lo_p] = np.inf
     # plate against plate: bounding spheres, and each one's slab against the other's spread
     ka, kb = plate_pairs[:, 0], plate_pairs[:, 1]
@@ -730,8 +818,11 @@ def _numpy_pass(am: AssemblerModel, pa: PlateArrays) -> tuple[StackBodies, _Rows
     spread = cfg.plate.radius * np.sqrt(np.maximum(1.0 - c * c, 0.0)) + half * np.abs(c) + half
     h = np.maximum(np.abs(np.einsum("ij,ij->i", na, dc)), np.abs(np.einsum("ij,ij->i", nb, dc)))
     pp = np.maximum(pp, h - spread)
-    bodies = StackBodies(cfg, bottom, top, axis, length, R, p)
-    return bodies, rows, (lp.reshape(-1, 2), pp)
+    lp = lp.reshape(-1, 2)
+    X, Q = lay.X, len(lp)
+    dist[X : X + Q] = lp.min(axis=1)
+    dist[X + Q : X + Q + len(pp)] = pp
+    return _Source(lay, R, p, np.stack([bottom, top, axis]), length, legs, dist, lp)
 
 
 def _turned_clearance(am: AssemblerModel, plates, scene: Scene | None, engine: str) -> Clearance:
@@ -776,45 +867,18 @@ def clearance(
         raise SceneError(f"scene standing {scene.standing} names a plate beyond plate {am.n}")
     kernel = self_kernel(_calls, engine)
     pa = plate_arrays(am, plates)
-    if kernel is None:
-        bodies, leg_rows, bounds = _numpy_pass(am, pa)
-    else:
-        bodies, leg_rows, bounds = _kernel_pass(am, pa, kernel)
-    cfg = bodies.cfg
-    names: Sequence[str] = stack_body_names(cfg.platforms)
-    ids: dict[str, int] = {}
-    exact = [leg_rows]
+    cfg = am.config
+    lay = _layout(cfg, scene)
+    dist = np.empty(lay.m)
+    src = _numpy_pass(lay, pa, dist) if kernel is None else _kernel_pass(lay, pa, kernel, dist)
     if scene is not None:
-        names = [*names, *(o.name for o in scene.obstacles)] + (["floor"] if scene.floor_z is not None else [])
-        ids = {o.name: len(stack_body_names(cfg.platforms)) + i for i, o in enumerate(scene.obstacles)}
-        if scene.floor_z is not None:
-            exact.append(_floor(bodies, scene.floor_z, len(names) - 1, scene.standing))
-        for o in scene.obstacles:
-            if o.kind == "sphere":
-                exact.append(_sphere(bodies, o, ids[o.name]))
-    screened = _screened_pairs(bodies, scene, ids, bounds)
-    horizon = cfg.clearance + NEAR
-    for sc in screened:
-        for i in np.nonzero(sc.rows.dist < horizon)[0]:
-            _measure(sc, int(i))
-    best_exact = min((float(np.min(e.dist)) for e in exact if len(e.dist)), default=math.inf)
-    while True:  # the smallest distance exact: measure bounds below it until none is
-        best = min(
-            [best_exact] + [float(np.min(sc.rows.dist[sc.rows.exact])) for sc in screened if sc.rows.exact.any()]
-        )
-        pending = [(sc, int(i)) for sc in screened for i in np.nonzero(~sc.rows.exact & (sc.rows.dist < best))[0]]
-        if not pending:
-            break
-        for sc, row in pending:
-            _measure(sc, row)
-    parts = exact + [sc.rows for sc in screened]
-    dist = np.concatenate([r.dist for r in parts])
-    exact_rows = np.concatenate([r.exact for r in parts])
-    pairs = _static_rows(cfg)[2] if scene is None else np.concatenate([r.body for r in parts])
+        _scene_pass(src)
+    _measure_near(src, cfg.clearance + NEAR)
     if len(dist):
-        dmin = float(np.min(dist))
-        first = int(np.flatnonzero(dist <= dmin + 1e-12)[0])
-        between = (names[pairs[first, 0]], names[pairs[first, 1]])
+        dmin = float(dist.min())
+        first = int(np.argmax(dist <= dmin + 1e-12))
+        pair = lay.pairs[first]
+        between = (lay.names[pair[0]], lay.names[pair[1]])
     else:
         dmin, between = math.inf, ("", "")
-    return Clearance(dmin, between, cfg.clearance, names, pairs, dist, exact_rows, parts, bodies)
+    return Clearance(dmin, between, cfg.clearance, lay.names, lay.pairs, dist, src.exact, src)

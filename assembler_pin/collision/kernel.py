@@ -11,8 +11,8 @@ stays the reference, and the tests hold the two to 1e-12 m.
 numba is optional (the ``fast`` extra). ``cache=True`` compiles the kernel once per install
 and Python version (a few seconds, the first time only); after that, importing numba and
 loading the cached kernel still take about 1.3 s in each new process, which would make a
-single ``statics`` or ``solve`` call slower, not faster (the numpy pass costs ~0.6 ms, the
-kernel ~0.08 ms: the load pays for itself after ~2500 clearances). So
+single ``statics`` or ``solve`` call slower, not faster (a self clearance costs ~0.3 ms on
+numpy, ~0.04 ms on the kernel: the load pays for itself after ~5000 clearances). So
 :func:`~assembler_pin.collision.check.clearance` loads the kernel only in a process that has
 asked for :data:`HOT_CALLS` clearances (a map, a long walk, ``bench``), or when
 ``ASSEMBLER_PIN_COLLISION`` is ``numba``; ``numpy`` keeps the numpy path. A ``plan`` or a
@@ -32,7 +32,7 @@ import numpy as np
 
 from ..exceptions import OptionsError, short_repr
 
-__all__ = ["ENGINES", "ENV_VAR", "HOT_CALLS", "SIZE_NAMES", "kernel_available", "self_kernel"]
+__all__ = ["ENGINES", "ENV_VAR", "HOT_CALLS", "ROW_WIDTH", "SIZE_NAMES", "kernel_available", "self_kernel"]
 
 #: Environment variable choosing the self-collision engine: ``numba``, ``numpy`` or unset (auto).
 ENV_VAR = "ASSEMBLER_PIN_COLLISION"
@@ -66,39 +66,29 @@ def _variant_py(code, L, sizes):  # pragma: no cover - compiled
     return g, lo, hi, hb, radius
 
 
-def _segseg_py(start, vec, i, j):  # pragma: no cover - compiled
-    """(distance, s, t) of the segments ``start[i] + s vec[i]`` and ``start[j] + t vec[j]``
-    (the closed form of :func:`~assembler_pin.collision.distance.segment_segment`)."""
-    r0, r1, r2 = start[i, 0] - start[j, 0], start[i, 1] - start[j, 1], start[i, 2] - start[j, 2]
-    a0, a1, a2 = vec[i, 0], vec[i, 1], vec[i, 2]
-    b0, b1, b2 = vec[j, 0], vec[j, 1], vec[j, 2]
-    a = a0 * a0 + a1 * a1 + a2 * a2
-    e = b0 * b0 + b1 * b1 + b2 * b2
-    b = a0 * b0 + a1 * b1 + a2 * b2
-    c = a0 * r0 + a1 * r1 + a2 * r2
-    f = b0 * r0 + b1 * r1 + b2 * r2
-    den = a * e - b * b
-    s = (b * f - c * e) / den if den > 1e-12 * a * e else 0.0
-    s = min(max(s, 0.0), 1.0)
-    t = min(max((b * s + f) / max(e, 1e-300), 0.0), 1.0)
-    s = min(max((b * t - c) / max(a, 1e-300), 0.0), 1.0)
-    w0 = r0 + s * a0 - t * b0
-    w1 = r1 + s * a1 - t * b1
-    w2 = r2 + s * a2 - t * b2
-    return math.sqrt(w0 * w0 + w1 * w1 + w2 * w2), s, t
+_variant = _variant_py  # interpreted here; the compiled kernel calls a compiled copy
 
-
-_variant, _segseg = _variant_py, _segseg_py  # interpreted here; the compiled kernel calls compiled copies
+#: Columns of the kernel's leg-pair rows: the closest points on the two axes (x_a, x_b),
+#: the unit normal from leg b to leg a, σ of the two points [m], dσ/dL of the two points.
+ROW_XA, ROW_XB, ROW_NORMAL, ROW_SIGMA, ROW_HB, ROW_WIDTH = 0, 3, 6, 9, 11, 13
 
 
 def _self_py(
-    R, p, bottom_in, top_in, va, vb, leg_plate, plate_pairs, sizes, B, T, U, L, d, x, sig, hb, nrm, lp_lb, pp_lb
+    R, p, bottom_in, top_in, va, vb, leg_plate, plate_pairs, sizes, base, BTU, L, dist, rows, lp_lb
 ):  # pragma: no cover - compiled
-    """Fills the legs' joint centres B, T (G, 3), directions U (G, 3), lengths L (G,); per leg
-    pair the distance d (P,), the closest points on the axes x (P, 2, 3), their σ and dσ/dL
-    sig, hb (P, 2) and the normal nrm (P, 3) from leg b to leg a; the lower bounds lp_lb
-    (Q, 2) of each leg part against each plate and pp_lb (S,) of each plate pair [m]."""
+    """Fills the legs' joint centres ``BTU[0]``, ``BTU[1]`` (G, 3), directions ``BTU[2]`` (G, 3)
+    and lengths L (G,) [m]; per leg pair q the distance ``dist[q]`` [m] and its row ``rows[q]``
+    (:data:`ROW_XA`...: closest points on the axes, world [m], normal from leg b to leg a, σ
+    [m], dσ/dL); the lower bounds lp_lb (Q, 2) of each leg part against each plate, their
+    smaller one in ``dist[base + q]``, and of each plate pair in ``dist[base + Q + q]`` [m].
+
+    Each capsule pair is the closed form of
+    :func:`~assembler_pin.collision.distance.segment_segment` written on the two axes'
+    parameters: per leg pair, the scalars ``u_a · u_b``, ``u_a · Δ`` and ``u_b · Δ`` (``Δ`` the
+    offset of the bottom joints) give its dot products, and ``1 / |d|²`` comes once per leg
+    part; the distance is taken from the 3-vector between the two closest points."""
     G = bottom_in.shape[0]
+    B, T, U = BTU[0], BTU[1], BTU[2]
     for g in range(G):
         j = g // 6
         ln = 0.0
@@ -116,45 +106,66 @@ def _self_py(
         L[g] = math.sqrt(ln)
         for k in range(3):
             U[g, k] = (T[g, k] - B[g, k]) / max(L[g], 1e-300)
-    V = 8 * G  # every leg part with and without each trim: its segment, once
+    V = 8 * G  # every leg part with and without each trim: its span, once
     vlo, vhi, vhb, vr = np.empty(V), np.empty(V), np.empty(V), np.empty(V)
-    vs, vd = np.empty((V, 3)), np.empty((V, 3))
+    vlen, vsq, vinv = np.empty(V), np.empty(V), np.empty(V)
     for code in range(V):
         g, lo, hi, hbc, radius = _variant(code, L, sizes)
         vlo[code], vhi[code], vhb[code], vr[code] = lo, hi, hbc, radius
-        for k in range(3):
-            vs[code, k] = B[g, k] + lo * U[g, k]
-            vd[code, k] = (hi - lo) * U[g, k] if hi >= lo else 0.0
-    for q in range(d.shape[0]):
-        best, bs, bt, br = math.inf, 0.0, 0.0, 4 * q
+        span = hi - lo if hi >= lo else 0.0
+        vlen[code], vsq[code] = span, span * span
+        vinv[code] = 1.0 / max(span * span, 1e-300)
+    for q in range(rows.shape[0]):
+        ga, gb = va[4 * q] // 8, vb[4 * q] // 8
+        D0, D1, D2 = B[ga, 0] - B[gb, 0], B[ga, 1] - B[gb, 1], B[ga, 2] - B[gb, 2]
+        ua0, ua1, ua2 = U[ga, 0], U[ga, 1], U[ga, 2]
+        ub0, ub1, ub2 = U[gb, 0], U[gb, 1], U[gb, 2]
+        uab = ua0 * ub0 + ua1 * ub1 + ua2 * ub2
+        wa = ua0 * D0 + ua1 * D1 + ua2 * D2
+        wb = ub0 * D0 + ub1 * D1 + ub2 * D2
+        br = 4 * q
+        best, bs, bt = math.inf, 0.0, 0.0
+        bsa, bsb = vlo[va[br]], vlo[vb[br]]
         for r in range(4 * q, 4 * q + 4):
             ca, cb = va[r], vb[r]
             if vhi[ca] < vlo[ca] or vhi[cb] < vlo[cb]:
                 continue
-            dist, s, t = _segseg(vs, vd, ca, cb)
-            dist -= vr[ca] + vr[cb]
-            if dist < best:
-                best, bs, bt, br = dist, s, t, r
-        d[q] = best
-        ca, cb = va[br], vb[br]
-        ga, gb = ca // 8, cb // 8
-        sa = vlo[ca] + bs * max(vhi[ca] - vlo[ca], 0.0)
-        sb = vlo[cb] + bt * max(vhi[cb] - vlo[cb], 0.0)
-        sig[q, 0], sig[q, 1] = sa, sb
-        hb[q, 0], hb[q, 1] = bs * vhb[ca], bt * vhb[cb]
+            la, lb = vlo[ca], vlo[cb]
+            na, nb = vlen[ca], vlen[cb]
+            a, e = vsq[ca], vsq[cb]
+            b = na * nb * uab
+            c = na * (wa + la - lb * uab)
+            f = nb * (wb + la * uab - lb)
+            den = a * e - b * b
+            s = (b * f - c * e) / den if den > 1e-12 * a * e else 0.0
+            s = min(max(s, 0.0), 1.0)
+            t = min(max((b * s + f) * vinv[cb], 0.0), 1.0)
+            s = min(max((b * t - c) * vinv[ca], 0.0), 1.0)
+            sa, sb = la + s * na, lb + t * nb
+            w0 = D0 + sa * ua0 - sb * ub0
+            w1 = D1 + sa * ua1 - sb * ub1
+            w2 = D2 + sa * ua2 - sb * ub2
+            d = math.sqrt(w0 * w0 + w1 * w1 + w2 * w2) - vr[ca] - vr[cb]
+            if d < best:
+                best, bs, bt, br, bsa, bsb = d, s, t, r, sa, sb
+        dist[q] = best
+        rows[q, 9], rows[q, 10] = bsa, bsb
+        rows[q, 11], rows[q, 12] = bs * vhb[va[br]], bt * vhb[vb[br]]
         n2 = 0.0
         for k in range(3):
-            x[q, 0, k] = B[ga, k] + sa * U[ga, k]
-            x[q, 1, k] = B[gb, k] + sb * U[gb, k]
-            nrm[q, k] = x[q, 0, k] - x[q, 1, k]
-            n2 += nrm[q, k] ** 2
+            xa = B[ga, k] + bsa * U[ga, k]
+            xb = B[gb, k] + bsb * U[gb, k]
+            rows[q, k], rows[q, 3 + k], rows[q, 6 + k] = xa, xb, xa - xb
+            n2 += (xa - xb) ** 2
         if n2 > 1e-30:
+            norm = math.sqrt(n2)
             for k in range(3):
-                nrm[q, k] /= math.sqrt(n2)
+                rows[q, 6 + k] /= norm
         else:
-            nrm[q, 0], nrm[q, 1], nrm[q, 2] = 0.0, 0.0, 1.0
+            rows[q, 6], rows[q, 7], rows[q, 8] = 0.0, 0.0, 1.0
     motor_length, rho, half = sizes[0], sizes[6], sizes[5]
-    for q in range(leg_plate.shape[0]):
+    Q = leg_plate.shape[0]
+    for q in range(Q):
         g, kp = leg_plate[q, 0], leg_plate[q, 1]
         for part in range(2):
             lo = motor_length if part == 1 else 0.0
@@ -177,6 +188,7 @@ def _self_py(
                 w += (B[g, k] + (lo + s * (hi - lo)) * U[g, k] - p[kp, k]) ** 2
             slab = max(min(h0, h1), min(-h0, -h1)) - half - radius
             lp_lb[q, part] = max(math.sqrt(w) - rho - radius, slab)
+        dist[base + q] = min(lp_lb[q, 0], lp_lb[q, 1])
     plate_radius = sizes[4]
     for q in range(plate_pairs.shape[0]):
         ka, kb = plate_pairs[q, 0], plate_pairs[q, 1]
@@ -192,7 +204,7 @@ def _self_py(
                 h += R[first, k, 2] * (p[second, k] - p[first, k])
             spread = plate_radius * math.sqrt(max(1.0 - cosine * cosine, 0.0)) + half * abs(cosine) + half
             lb = max(lb, abs(h) - spread)
-        pp_lb[q] = lb
+        dist[base + Q + q] = lb
 
 
 def kernel_available() -> bool:
@@ -229,6 +241,5 @@ def self_kernel(calls: int = 0, engine: str = "auto") -> Any:
 
         jit = numba.njit(cache=True, nogil=True)
         globals()["_variant"] = jit(_variant_py)
-        globals()["_segseg"] = jit(_segseg_py)
         _kernel = jit(_self_py)
     return _kernel

@@ -163,3 +163,36 @@ def test_wide_search_answers_with_a_state_that_meets_every_constraint_or_none(am
     row = benchmark_wide_search(am, [tuple(np.array([0.1, 0.0, 0.8])), (0.0, 0.0, 2.0)], starts=3)
     assert row["searched"] == 2 and row["solved_by_search"] == 1 and row["found"][0][0] == [0.1, 0.0, 0.8]
     json.dumps(row)  # numpy scalars of the grid's goals come back as floats (bench --targets --json)
+
+
+def test_the_bench_truss_bay_is_the_example_and_the_solve_scene_has_ten_obstacles():
+    from assembler_pin.bench.collision import SOLVE_SCENE, TRUSS_BAY
+    from assembler_pin.collision import read_scene, scene_from_dict
+
+    example, bench = read_scene("examples/truss_bay.yaml"), scene_from_dict(TRUSS_BAY)
+    assert example is not None and bench.floor_z == example.floor_z
+    assert [(o.name, o.kind, o.size) for o in bench.obstacles] == [(o.name, o.kind, o.size) for o in example.obstacles]
+    for a, b in zip(bench.obstacles, example.obstacles, strict=True):
+        assert np.array_equal(a.pose.homogeneous, b.pose.homogeneous), a.name
+    assert len(scene_from_dict(SOLVE_SCENE).obstacles) == 10
+
+
+def test_collision_rows_time_real_calls_and_are_held_to_their_targets(am):
+    """The clearance row times each engine and the truss bay; the solve row finds the same
+    optimum with and without its scene (the obstacles are near, not in the way); the targets
+    read the group."""
+    import importlib.util
+
+    from assembler_pin.bench.collision import benchmark_clearance, benchmark_solve_scene
+    from assembler_pin.bench.targets import target_rows
+
+    poses = [random_reachable_plates(am, np.random.default_rng(k))[1] for k in range(2)]
+    row = benchmark_clearance(am, poses, repeat=3)
+    keys = ("clearance_us", "clearance_numpy_us", "clearance_scene_us")
+    timed = keys if importlib.util.find_spec("numba") else keys[1:]
+    assert all(0 < row[k] < 1e6 for k in timed), row
+    solved = benchmark_solve_scene(am, rounds=1)
+    assert solved["solve_scene_same_optimum"] and solved["solve_scene_ratio"] > 0
+    rows = {r.what: r for r in target_rows({"collision": {"clearance_us": 45.0, "solve_scene_ratio": 2.5}})}
+    assert rows["self-collision clearance, one stack, compiled kernel [µs]"].met
+    assert not rows["solve with ten obstacles against without [×]"].met
