@@ -107,7 +107,7 @@ class Problem:
         self.ee = EETolerance(goal, opts.ee_tolerance, self.chart) if opts.ee_tolerance is not None else None
         self.motion_rows = MotionRows(motion, GEOMETRIC_MARGIN) if motion is not None else None
         margin = max(opts.limit_margin, 0.0) + CLEARANCE_MARGIN
-        self.clearance_rows = ClearanceRows(am, scene, margin) if scene is not None else None
+        self.clearance_rows = ClearanceRows(am, scene, margin, start) if scene is not None else None
         self._sag: tuple[Point, float] | None = None
         self._sag_grad: tuple[ChartDerivatives, np.ndarray] | None = None
         self.best: tuple[float, np.ndarray] | None = None

@@ -25,6 +25,7 @@ from ..collision.scene import Scene
 from ..config.options import GoalTolerance
 from ..config.schema import LegConfig
 from ..constraints import leg_limit_margins
+from ..kinematics import PlateArrays
 from ..model.assembler import AssemblerModel
 from .charts import LocalChart, TaaChart
 from .options import MotionTerm
@@ -169,27 +170,44 @@ class SagRows:
 
 
 class ClearanceRows:
-    """``min(d - clearance - margin, BAND) >= 0`` for every pair of bodies
+    """``min(d - clearance - margin, BAND) >= 0`` for the pairs of bodies
     :func:`~assembler_pin.collision.check.clearance` checks [m]: the stack's own pairs and,
     with a scene, every body against every obstacle and the floor.
 
-    The count of rows is fixed (every pair, in the clearance's order), as SLSQP needs; a pair
-    farther than ``BAND`` beyond its bound is held at ``BAND`` with a zero gradient, so only the
-    pairs within the band move the solver, and pairs the clearance only bounds from below
-    (beyond ``NEAR``) are never read. Each row's gradient is
+    The count of rows is fixed for a run, as SLSQP needs: one row for each pair within
+    ``BAND + REACH`` of its bound at the run's start (its own row), and one more row for the
+    nearest of all the other pairs (the smallest of their values, its gradient the nearest
+    pair's), so that no pair is left unguarded while the solver's work grows with the near
+    pairs only (a four-platform stack among ten obstacles: ~85 rows of ~680). A pair farther
+    than ``BAND`` beyond its bound is held at ``BAND`` with a zero gradient, so only the pairs
+    within the band move the solver, and pairs the clearance only bounds from below (beyond
+    ``NEAR``) are never read. Each row's gradient is
     :meth:`~assembler_pin.collision.check.Clearance.gradient` (per world twist of the plates,
     the envelope theorem) through the chart's twist Jacobian ``B``; the tests hold it to
-    central differences. A row is the smallest of a leg pair's capsule pairs: continuous, with
-    a kink where the closest pair switches, which SLSQP's line search tolerates.
+    central differences. A row is the smallest of a leg pair's capsule pairs, and the last row
+    the smallest of the far pairs: continuous, with a kink where the closest pair switches,
+    which SLSQP's line search tolerates.
     """
 
     #: Rows beyond this distance from their bound are held constant [m] (within ``NEAR``, so
     #: every row in the band is an exact distance).
     BAND = 0.5 * NEAR
+    #: Pairs within ``BAND + REACH`` of their bound at the start have their own row [m].
+    REACH = 0.1
 
-    def __init__(self, am: AssemblerModel, scene: Scene | None, margin: float) -> None:
+    def __init__(
+        self, am: AssemblerModel, scene: Scene | None, margin: float, start: PlateArrays | None = None
+    ) -> None:
+        """``start``: the run's start plates (their near pairs get their own rows); None: every
+        pair has its own row."""
         self.am, self.scene, self.margin = am, scene, float(margin)
         self._last: tuple[Point, Clearance] | None = None
+        self.own: np.ndarray | None = None  # the pairs with their own row (None: all)
+        self.rest: np.ndarray = np.zeros(0, dtype=int)  # the pairs guarded by the last row
+        if start is not None:
+            c = clearance(am, start, scene)
+            near = c.distances - (c.limit + self.margin) < self.BAND + self.REACH
+            self.own, self.rest = np.flatnonzero(near), np.flatnonzero(~near)
 
     def measure(self, p: Point) -> Clearance:
         """The clearance at the point (computed once per point)."""
@@ -197,17 +215,27 @@ class ClearanceRows:
             self._last = (p, clearance(self.am, p.plates, self.scene))
         return self._last[1]
 
-    def values(self, p: Point) -> np.ndarray:
-        """(pairs,) [m]."""
+    def _all(self, p: Point) -> tuple[Clearance, np.ndarray]:
         c = self.measure(p)
-        return np.minimum(c.distances - (c.limit + self.margin), self.BAND)
+        return c, np.minimum(c.distances - (c.limit + self.margin), self.BAND)
+
+    def values(self, p: Point) -> np.ndarray:
+        """(rows,) [m]: the own rows, then the nearest of the rest (when there is a rest)."""
+        _, v = self._all(p)
+        if self.own is None:
+            return v
+        tail = [float(v[self.rest].min())] if len(self.rest) else []
+        return np.concatenate([v[self.own], tail])
 
     def jacobian(self, p: Point, d: ChartDerivatives) -> np.ndarray:
-        """(pairs, m), in the order of :meth:`values`: zero outside the band."""
-        c = self.measure(p)
-        near = np.flatnonzero(c.distances - (c.limit + self.margin) < self.BAND)
-        out = np.zeros((len(c.distances), d.B.shape[1]))
+        """(rows, m), in the order of :meth:`values`: zero outside the band."""
+        c, v = self._all(p)
+        pairs = np.arange(len(v)) if self.own is None else self.own
+        if self.own is not None and len(self.rest):
+            pairs = np.append(pairs, self.rest[int(np.argmin(v[self.rest]))])
+        near = np.flatnonzero(v[pairs] < self.BAND)
+        out = np.zeros((len(pairs), d.B.shape[1]))
         if len(near):
-            world = c.gradient(near)[:, 1:, :].reshape(len(near), -1)  # plates 1..n (plate 0 is fixed)
+            world = c.gradient(pairs[near])[:, 1:, :].reshape(len(near), -1)  # plates 1..n (plate 0 is fixed)
             out[near] = d.chart(world)
         return out
