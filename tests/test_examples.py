@@ -35,12 +35,15 @@ def test_every_example_is_documented_and_read():
     """Each file of examples/ is named in its README and parsed by the strict reader of its kind."""
     readme = (EXAMPLES / "README.md").read_text(encoding="utf-8")
     files = sorted(p.name for p in EXAMPLES.iterdir() if p.name != "README.md")
-    assert files == sorted([*CONFIGS, "poses.json", "waypoints.json", "waypoints.csv", "truss_bay.yaml"])
+    scenes = ["truss_bay.yaml", "walk_strut.yaml"]
+    assert files == sorted([*CONFIGS, "poses.json", "waypoints.json", "waypoints.csv", *scenes])
     for name in files:
         assert f"`{name}`" in readme, name
     for name in CONFIGS:
         AssemblerModel.from_config(load_config(EXAMPLES / name))
     assert len(read_scene(EXAMPLES / "truss_bay.yaml").obstacles) == 9
+    strut = read_scene(EXAMPLES / "walk_strut.yaml")
+    assert strut.floor_z == 0.0 and [o.name for o in strut.obstacles] == ["strut"]
 
 
 def test_config_example_holds_every_key_at_its_default():

@@ -5,20 +5,22 @@ interpolated legs; the feet stand on the scene's floor only at their footholds."
 from __future__ import annotations
 
 import json
+from pathlib import Path
 
 import numpy as np
 import pinocchio as pin
 import pytest
 from checks import design_anchors, strut_distance
 
-from assembler_pin.collision import Scene, scene_from_dict
+from assembler_pin.collision import Scene, read_scene
 from assembler_pin.exceptions import WalkError
 from assembler_pin.kinematics import stack_forward_kinematics
 from assembler_pin.walk import WalkOptions, plan_walk, plate_target, verify_walk
 from assembler_pin.walk.footholds import floor_footholds
 
-#: A strut behind the stack: the free walk's plate 2 passes 11.7 mm into it as the stack bends.
-STRUT = {"name": "strut", "cylinder": {"radius": 0.015, "length": 0.6, "pose": [-0.2, 0.0, 0.55, np.pi / 2, 0, 0]}}
+#: examples/walk_strut.yaml: a strut behind the stack (its axis from start to start + vector, its
+#: radius); the free walk's plate 2 passes 11.7 mm into it as the stack bends.
+EXAMPLE = Path(__file__).resolve().parents[2] / "examples" / "walk_strut.yaml"
 AXIS = (np.array([-0.2, -0.3, 0.55]), np.array([0.0, 0.6, 0.0]), 0.015)
 
 
@@ -44,7 +46,11 @@ def _legs_lowest(cfg, plates: np.ndarray, platforms) -> float:
 @pytest.fixture(scope="module")
 def walks(am):
     feet = floor_footholds(0.5, 2)
-    scene = scene_from_dict({"floor": {"z": 0.0}, "obstacles": [STRUT]})
+    scene = read_scene(EXAMPLE)
+    (strut,) = scene.obstacles
+    start, vector, radius = AXIS
+    assert np.allclose(strut.pose.translation, start + 0.5 * vector) and strut.size == (radius, 0.6)
+    assert abs(strut.pose.rotation[:, 2] @ vector / 0.6) > 1 - 1e-12 and scene.floor_z == 0.0  # its axis along y
     return plan_walk(am, feet), plan_walk(am, feet, scene=scene)
 
 
