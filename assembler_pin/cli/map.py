@@ -7,7 +7,16 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from ..exceptions import CLIError
-from .common import config_from_args, dumps, finite_range, progress_for, wrapped, writable_parent
+from .common import (
+    add_scene_argument,
+    config_from_args,
+    dumps,
+    finite_range,
+    progress_for,
+    scene_from_args,
+    wrapped,
+    writable_parent,
+)
 
 if TYPE_CHECKING:
     from ..config.schema import AssemblerConfig
@@ -40,8 +49,9 @@ def add_parser(add) -> None:
     )
     p.add_argument("--scheduler", metavar="ADDRESS", help="an existing Dask scheduler, e.g. tcp://10.0.0.5:8786")
     p.add_argument("--batch-size", type=int, default=None, metavar="N", help="cells per task (default automatic)")
+    add_scene_argument(p, "every cell's pose keeps its clearance from it (part of the map: a rerun needs the same)")
     p.add_argument(
-        "--png", metavar="FILE", help="heatmaps of one slice: reachability, max|F|, capacity, sag [mm], stiffness"
+        "--png", metavar="FILE", help="heatmaps of one slice: clearance [mm], max|F|, capacity, sag [mm], stiffness"
     )
     p.add_argument("--html", metavar="FILE", help="the cells as a point cloud colored by capacity, in the viewer")
     p.add_argument("--no-progress", action="store_true", help="no progress line (as the global --quiet)")
@@ -50,7 +60,8 @@ def add_parser(add) -> None:
 
 
 def _check_options(args: argparse.Namespace):
-    """The grid of ``--grid``/``--orientations``, every other option checked before any work."""
+    """The grid of ``--grid``/``--orientations`` and the scene of ``--scene`` (or None), every
+    other option checked before any work."""
     from ..config.bounds import check_bound
     from ..maps import parse_grid
     from ..maps.cluster import check_scheduler
@@ -67,7 +78,7 @@ def _check_options(args: argparse.Namespace):
     grid = parse_grid(args.grid, args.orientations, configs=len(args.sweep) if args.sweep else 1)
     if args.png and len(grid.varying_axes()) != 2:
         raise CLIError(f"--png draws a map varying along two position axes; --grid varies along {grid.varying_axes()}")
-    return grid
+    return grid, scene_from_args(args)
 
 
 def _configs(args: argparse.Namespace) -> list[tuple[str, AssemblerConfig]]:
@@ -90,7 +101,8 @@ def _pictures(args: argparse.Namespace, table, configs: list, doc: dict) -> None
         from ..maps.pictures import map_heatmaps
         from ..plots.figures import save
 
-        doc["png"] = str(save(map_heatmaps(table, am, configs[0][0]), args.png))
+        scene = Path(args.scene).name if args.scene else ""
+        doc["png"] = str(save(map_heatmaps(table, am, configs[0][0], scene=scene), args.png))
     if args.html:
         from ..maps.pictures import write_map_page
         from ..viz import StackViewer
@@ -108,7 +120,7 @@ def run(args: argparse.Namespace) -> int:
     """
     from ..maps import read_map, run_map
 
-    grid = _check_options(args)
+    grid, scene = _check_options(args)
     configs = _configs(args)
     prog = None if args.no_progress else progress_for(args, "map")
     try:
@@ -120,6 +132,7 @@ def run(args: argparse.Namespace) -> int:
             scheduler=args.scheduler,
             batch_size=args.batch_size,
             progress=prog,
+            scene=scene,
         )
     finally:
         if prog is not None:
@@ -140,6 +153,7 @@ def _summary(args: argparse.Namespace, table, cells: int, run) -> dict[str, Any]
     import numpy as np
 
     force = np.asarray(table.column("max_abs_force").to_pylist(), dtype=float)
+    near = np.asarray(table.column("clearance_m").to_pylist(), dtype=float)  # null: NaN
     cap = np.asarray(table.column("capacity_kg").to_pylist(), dtype=float)
     reach = np.asarray(table.column("reachable").to_pylist(), dtype=bool)
     return {
@@ -153,6 +167,8 @@ def _summary(args: argparse.Namespace, table, cells: int, run) -> dict[str, Any]
         "reachable": int(reach.sum()),
         "max_abs_force_range": finite_range(force),
         "capacity_kg_range": finite_range(cap),
+        "clearance_m_range": finite_range(near),
+        "scene": str(Path(args.scene)) if args.scene else None,
     }
 
 
@@ -171,6 +187,10 @@ def _print_summary(doc: dict[str, Any], run, rows: int) -> None:
     if doc["capacity_kg_range"]:
         lo, hi = doc["capacity_kg_range"]
         print(f"payload capacity: {lo:.2f} – {hi:.2f} kg")
+    if doc["clearance_m_range"]:
+        lo, hi = doc["clearance_m_range"]
+        within = f" (scene {doc['scene']})" if doc["scene"] else ""
+        print(f"clearance: {1e3 * lo:.1f} – {1e3 * hi:.1f} mm{within}")
     for key in ("png", "html"):
         if key in doc:
             print(f"wrote {doc[key]}")

@@ -43,6 +43,7 @@ __all__ = [
     "BACKGROUND_TOP",
     "CAPACITY_CMAP",
     "CARRIER",
+    "CLEARANCE_CMAP",
     "CLOSEST_PAIR",
     "COMPLIANCE",
     "COMPRESSION",
@@ -151,6 +152,9 @@ SAG_CMAP = "magma_r"
 """Sequential colormap of the maps' EE sag [mm] under gravity and payload: yellow = small."""
 STIFFNESS_CMAP = "plasma"
 """Sequential colormap of the maps' weakest EE stiffness [N/m]: yellow = stiff."""
+CLEARANCE_CMAP = "inferno"
+"""Sequential colormap of the maps' clearance [mm]: black = close to a collision, pale
+yellow = far from one."""
 REACHABLE: RGB = (0.10, 0.60, 0.55)
 """Teal: a grid cell where a valid state was found (the maps' reachability panel)."""
 SCALE_POSE: RGB = (0.27, 0.27, 0.27)

@@ -15,13 +15,17 @@ from collections.abc import Sequence
 from typing import TypedDict
 
 import numpy as np
+import pinocchio as pin
 
+from ..collision.check import clearance
+from ..collision.scene import Obstacle, Scene
 from ..common.labels import leg_label
 from ..compliance.ee_stiffness import stiffness
 from ..config.schema import AssemblerConfig, config_from_dict
 from ..constraints import leg_limit_margins
 from ..exceptions import AssemblerError
 from ..helper_arm import HelperArmOptions
+from ..kinematics import PlateArrays
 from ..model.assembler import AssemblerModel
 from ..optimize import OptimizeOptions
 from ..solver.capacity import PayloadModels, payload_capacity
@@ -38,6 +42,10 @@ __all__ = [
     "config_hash",
     "config_key",
     "models_for",
+    "pose_columns",
+    "scene_from_key",
+    "scene_hash",
+    "scene_key",
     "solver_hash",
 ]
 
@@ -64,6 +72,9 @@ COLUMNS = (
     "weakest_stiffness_n_per_m",
     "solve_time_s",
     "capacity_time_s",
+    "clearance_m",
+    "clearance_between",
+    "plates_xyzquat",
     "key",
 )
 """The columns of a map file, in order. Positions [m], rotation vector [rad], forces [N];
@@ -71,6 +82,13 @@ COLUMNS = (
 :func:`~assembler_pin.compliance.ee_stiffness.stiffness`, legs of ``leg.stiffness``), and
 ``weakest_stiffness_n_per_m`` its smallest principal stiffness under a pure force [N/m] (both
 NaN where no pose was optimized or the stiffness is not defined);
+``clearance_m``: the clearance [m] of the cell's pose (:func:`~assembler_pin.collision.check.clearance`:
+the smallest distance between two bodies that must not touch, the map's scene included) and
+``clearance_between`` those two bodies' names; ``plates_xyzquat``: the cell's pose, the world
+poses of plates 0..n as ``x, y, z, qx, qy, qz, qw`` each (7 (n+1) numbers, pinocchio's
+``SE3ToXYZQUAT``). The cell's pose is the optimum at the configured payload, or, where only a
+lighter payload is held, the capacity's pose; without a pose ``plates_xyzquat`` and
+``clearance_between`` are empty and ``clearance_m`` is null (as it is when no pair is checked);
 ``key``: what the row was computed from (:func:`cell_key`)."""
 
 
@@ -85,6 +103,7 @@ CAPACITY_OPTIONS: _CapacitySettings = {"rtol": 1e-3, "max_iterations": 12}
 """The payload-capacity search settings of every cell (:func:`~assembler_pin.solver.capacity.payload_capacity`)."""
 
 _MODELS: dict[str, PayloadModels] = {}
+_SCENES: dict[str, Scene] = {}
 
 
 def config_key(cfg: AssemblerConfig) -> str:
@@ -113,11 +132,53 @@ def solver_hash() -> str:
     return _sha(json.dumps(settings, sort_keys=True, default=repr))
 
 
-def cell_key(config_sha: str, solver_sha: str, cell: Cell) -> str:
-    """What a row was computed from: the configuration's and the solver's hashes and the cell's
-    goal (position [m] and rotation vector [rad], exactly). A row is reused only under its key."""
+def scene_key(scene: Scene | None) -> str:
+    """A scene as canonical JSON text (``""`` for none): what a worker rebuilds it from, bit for
+    bit (every number by its ``repr``, each obstacle's frame as its rotation matrix and its
+    translation [m]), and what a map records it by (:func:`scene_hash`)."""
+    if scene is None:
+        return ""
+    obstacles = [
+        {
+            "kind": o.kind,
+            "name": o.name,
+            "rotation": o.pose.rotation.tolist(),
+            "translation": o.pose.translation.tolist(),
+            "size": [float(v) for v in o.size],
+        }
+        for o in scene.obstacles
+    ]
+    doc = {"floor_z": scene.floor_z, "standing": list(scene.standing), "obstacles": obstacles}
+    return json.dumps(doc, sort_keys=True)
+
+
+def scene_from_key(key: str) -> Scene | None:
+    """The scene of :func:`scene_key` (None for ``""``), built once per process."""
+    if not key:
+        return None
+    if key not in _SCENES:
+        doc = json.loads(key)
+        frames = [pin.SE3(np.array(o["rotation"]), np.array(o["translation"])) for o in doc["obstacles"]]
+        obstacles = tuple(
+            Obstacle(o["kind"], o["name"], frame, tuple(o["size"]))
+            for o, frame in zip(doc["obstacles"], frames, strict=True)
+        )
+        _SCENES[key] = Scene(obstacles, doc["floor_z"], tuple(doc["standing"]))
+    return _SCENES[key]
+
+
+def scene_hash(scene: Scene | None) -> str | None:
+    """The SHA-256 of a scene's canonical content (:func:`scene_key`), None without a scene."""
+    return None if scene is None else _sha(scene_key(scene))
+
+
+def cell_key(config_sha: str, solver_sha: str, cell: Cell, scene_sha: str | None = None) -> str:
+    """What a row was computed from: the configuration's and the solver's hashes, the scene's
+    (none: the key of a map without a scene) and the cell's goal (position [m] and rotation
+    vector [rad], exactly). A row is reused only under its key."""
     goal = ",".join(float(v).hex() for v in (*cell.position, *cell.rotation))
-    return _sha(f"{config_sha}|{solver_sha}|{goal}")[:32]
+    scene = "" if scene_sha is None else f"|scene {scene_sha}"
+    return _sha(f"{config_sha}|{solver_sha}|{goal}{scene}")[:32]
 
 
 def models_for(key: str) -> PayloadModels:
@@ -152,8 +213,24 @@ def cell_stiffness(am: AssemblerModel, state: StackState) -> tuple[float, float]
     return float(np.linalg.norm(result.sag_translation)), result.weakest_stiffness
 
 
-def compute_cell(models: PayloadModels, cell: Cell, config_name: str = "") -> dict:
-    """The row of one cell (see :data:`COLUMNS`)."""
+def pose_columns(am: AssemblerModel, plates: PlateArrays | None, scene: Scene | None) -> dict:
+    """``clearance_m`` [m], ``clearance_between`` and ``plates_xyzquat`` of a cell's pose
+    (world frame; see :data:`COLUMNS`): null, empty and empty without a pose."""
+    if plates is None:
+        return {"clearance_m": None, "clearance_between": [], "plates_xyzquat": []}
+    near = clearance(am, plates, scene)
+    found = math.isfinite(near.min_distance)
+    xyzquat = [float(v) for k in range(len(plates)) for v in pin.SE3ToXYZQUAT(plates.se3(k))]
+    return {
+        "clearance_m": float(near.min_distance) if found else None,
+        "clearance_between": list(near.between) if found else [],
+        "plates_xyzquat": xyzquat,
+    }
+
+
+def compute_cell(models: PayloadModels, cell: Cell, config_name: str = "", scene: Scene | None = None) -> dict:
+    """The row of one cell (see :data:`COLUMNS`): every optimization keeps its clearance from
+    ``scene`` (obstacles and floor, world frame) when one is given."""
     am = models.base
     row = {
         "config": config_name,
@@ -178,11 +255,12 @@ def compute_cell(models: PayloadModels, cell: Cell, config_name: str = "") -> di
         "weakest_stiffness_n_per_m": math.nan,
         "solve_time_s": 0.0,
         "capacity_time_s": 0.0,
+        **pose_columns(am, None, scene),
         "key": "",
     }
     goal = cell.goal()
     t0 = time.perf_counter()
-    result = solve(am, goal)
+    result = solve(am, goal, scene=scene)
     row["solve_time_s"] = time.perf_counter() - t0
     state = result.optimized if result.success else None
     if state is not None:
@@ -190,6 +268,7 @@ def compute_cell(models: PayloadModels, cell: Cell, config_name: str = "") -> di
         row["max_abs_force"] = state.max_abs_force
         row["binding"] = geometric_binding(am, state)
         row["sag_m"], row["weakest_stiffness_n_per_m"] = cell_stiffness(am, state)
+        row |= pose_columns(am, state.plates, scene)
     else:
         row["reason"] = result.message
     if state is None and not result.initial_result.success:
@@ -197,27 +276,35 @@ def compute_cell(models: PayloadModels, cell: Cell, config_name: str = "") -> di
     arm = result.initial_result.plates_if_valid()
     start = None if state is None else state.plates
     opts = CAPACITY_OPTIONS
-    cap = payload_capacity(am, goal, models, opts["rtol"], opts["max_iterations"], start, state is None, arm)
+    cap = payload_capacity(
+        am, goal, models, opts["rtol"], opts["max_iterations"], start, state is None, arm, scene=scene
+    )
     row["capacity_time_s"] = cap.time_s
     if cap.success:
         row["reachable"] = True  # some payload (possibly lighter than configured) is held there
         row["capacity_kg"], row["capacity_binding"] = cap.capacity_kg, cap.binding
         if state is None:
             row["reason"] = f"reachable only below the configured payload: {result.message}"
+            row |= pose_columns(am, cap.plates, scene)
     return row
 
 
-def compute_batch(key: str, cells: Sequence[Cell], config_name: str = "") -> list[dict]:
+def compute_batch(key: str, cells: Sequence[Cell], config_name: str = "", scene: str = "") -> list[dict]:
     """The rows of a batch of cells of one configuration (the unit of work of a map).
 
     BLAS runs on one thread here, as in Dask's worker processes, so a cell gives the same
     numbers in this process, a local cluster or a remote one (multithreaded BLAS sums in
     another order, and the optimizer can amplify that into another local optimum).
+
+    Args:
+        key: the configuration (:func:`config_key`).
+        scene: the scene (:func:`scene_key`; ``""`` for none).
     """
     try:
         from threadpoolctl import threadpool_limits
     except ImportError:
         raise AssemblerError("maps need threadpoolctl: pip install 'assembler_pin[maps]'") from None
     models = models_for(key)
+    obstacles = scene_from_key(scene)
     with threadpool_limits(limits=1):
-        return [compute_cell(models, cell, config_name) for cell in cells]
+        return [compute_cell(models, cell, config_name, obstacles) for cell in cells]

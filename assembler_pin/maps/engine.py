@@ -10,8 +10,8 @@ and reuses them for every batch. Batches are a few cells each, so scheduling cos
 against solves of tens to hundreds of milliseconds; a bounded number of batches is in flight
 at a time. Every finished batch is written at once, atomically, as its own Parquet part in
 the output directory (:mod:`.store`). A rerun into the same directory reuses a finished cell
-only when its goal, its configuration's content and the solver settings are those of the
-run (a directory holding another map is refused), and computes only the others, so a crash,
+only when its goal, its configuration's content, the solver settings and the scene are those
+of the run (a directory holding another map is refused), and computes only the others, so a crash,
 a Ctrl-C or a lost worker loses no finished cell (Dask also retries a batch whose worker
 died). On Ctrl-C the cluster is stopped, no partial part is left, and ``KeyboardInterrupt``
 propagates to the caller.
@@ -27,11 +27,12 @@ from collections.abc import Iterator, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
+from ..collision.scene import Scene, read_scene
 from ..common.progress import ProgressCallback
 from ..config.bounds import check_bound
 from ..config.schema import AssemblerConfig
 from ..exceptions import AssemblerError, MapError
-from .cells import COLUMNS, cell_key, compute_batch, config_hash, config_key, solver_hash
+from .cells import COLUMNS, cell_key, compute_batch, config_hash, config_key, scene_hash, scene_key, solver_hash
 from .cluster import check_scheduler, client_for, stop
 from .grid import Cell, Grid
 from .store import (
@@ -169,13 +170,13 @@ def _check_args(grid, configs, workers, scheduler, batch_size, progress) -> list
     return pairs
 
 
-def _done_rows(parts, grid: Grid, shas: dict[str, str], solver: str) -> set[tuple[str, int]]:
-    """(config, cell) of every finished row, each checked to be of this map."""
+def _done_rows(parts, grid: Grid, shas: dict[str, str], solver: str, scene: str | None) -> set[tuple[str, int]]:
+    """(config, cell) of every finished row, each checked to be of this map (``scene``: its hash)."""
     done: set[tuple[str, int]] = set()
     for path, table in parts:
         rows = zip(*(table.column(c).to_pylist() for c in ("config", "cell", "key")), strict=True)
         for name, cell, key in rows:
-            ok = name in shas and 0 <= cell < len(grid) and key == cell_key(shas[name], solver, grid.cell(cell))
+            ok = name in shas and 0 <= cell < len(grid) and key == cell_key(shas[name], solver, grid.cell(cell), scene)
             if not ok:
                 where = f"map part {path} holds a row of another map (config {name!r}, cell {cell})"
                 raise MapError(f"{where}: delete it (its cells are recomputed on the next run)")
@@ -199,8 +200,9 @@ def _batches(grid: Grid, pairs, done: set[tuple[str, int]], size: int) -> Iterat
 class _Writer:
     """Writes each finished batch as a part with its rows' keys, and reports progress."""
 
-    def __init__(self, out: Path, shas: dict[str, str], solver: str, total: int, progress) -> None:
-        self.out, self.shas, self.solver, self.total, self.progress = out, shas, solver, total, progress
+    def __init__(self, out: Path, shas: dict[str, str], solver: str, scene: str | None, total: int, progress) -> None:
+        self.out, self.shas, self.solver, self.scene = out, shas, solver, scene
+        self.total, self.progress = total, progress
         self.done = 0
         self.tags = {name: sha[:8] for name, sha in shas.items()}
         if progress is not None:
@@ -211,18 +213,18 @@ class _Writer:
         if [r.get("cell") for r in rows] != [c.id for c in cells] or any(set(r) != set(COLUMNS) for r in rows):
             raise MapError(f"a batch of config {name!r} returned rows that are not those of its cells")
         for row, cell in zip(rows, cells, strict=True):
-            row["key"] = cell_key(self.shas[name], self.solver, cell)
+            row["key"] = cell_key(self.shas[name], self.solver, cell, self.scene)
         write_part(self.out, rows, self.tags[name])
         self.done += len(rows)
         if self.progress is not None:
             self.progress(self.done, self.total, "cells")
 
 
-def _run_serial(batches: Iterator[Batch], write: _Writer) -> int:
+def _run_serial(batches: Iterator[Batch], write: _Writer, scene: str) -> int:
     count = 0
     for batch in batches:
         name, key, cells = batch
-        write(batch, compute_batch(key, cells, name))
+        write(batch, compute_batch(key, cells, name, scene))
         count += 1
     return count
 
@@ -239,8 +241,11 @@ def _result(future, batch: Batch) -> list[dict]:
         ) from None
 
 
-def _run_dask(batches: Iterator[Batch], write: _Writer, scheduler: str | None, n_workers: int) -> tuple[int, int]:
-    """(batches sent, workers) of a run on Dask; at most two batches per worker in flight."""
+def _run_dask(
+    batches: Iterator[Batch], write: _Writer, scheduler: str | None, n_workers: int, scene: str
+) -> tuple[int, int]:
+    """(batches sent, workers) of a run on Dask; at most two batches per worker in flight
+    (``scene``: :func:`~.cells.scene_key`, sent with every batch)."""
     from distributed import as_completed
 
     client, cluster = client_for(scheduler, n_workers)
@@ -256,7 +261,7 @@ def _run_dask(batches: Iterator[Batch], write: _Writer, scheduler: str | None, n
             batch = next(batches, None)
             if batch is not None:
                 name, key, cells = batch
-                future = client.submit(compute_batch, key, cells, name, pure=False, retries=2)
+                future = client.submit(compute_batch, key, cells, name, scene, pure=False, retries=2)
                 pending[future.key] = batch
                 queue.add(future)
                 sent += 1
@@ -283,6 +288,7 @@ def run_map(
     scheduler: str | None = None,
     batch_size: int | None = None,
     progress: ProgressCallback | None = None,
+    scene: Scene | str | Path | None = None,
 ) -> MapRun:
     """Compute every cell of ``grid`` for each configuration not yet in ``out``.
 
@@ -298,28 +304,35 @@ def run_map(
         batch_size: cells per task (default: about four tasks per worker, at most 16 cells;
             bounds key ``map.batch_size``).
         progress: called as ``progress(done, total, "cells")`` as parts are written.
+        scene: obstacles and floor (:class:`~assembler_pin.collision.scene.Scene`, a scene
+            file or its mapping; world frame): every cell's optimizations keep their clearance
+            from them, a goal no pose reaches clear of them is an unreachable cell, and every
+            cell records its pose's clearance. The scene is part of the map: a directory
+            computed with another scene (or none) is refused.
 
     Raises:
         MapError: an argument (named), the directory, one of its parts, or the cluster.
+        SceneError: ``scene`` cannot be read (one line).
         KeyboardInterrupt: on Ctrl-C, after the cluster is stopped; finished parts stay.
     """
     pairs = _check_args(grid, configs, workers, scheduler, batch_size, progress or None)
+    obstacles = read_scene(scene)
     out = _out_dir(out, create=True)
     shas = {name: config_hash(cfg) for name, cfg in pairs}
-    solver = solver_hash()
-    check_manifest(out, manifest_for(grid, shas, solver))
+    solver, scene_sha, scene_text = solver_hash(), scene_hash(obstacles), scene_key(obstacles)
+    check_manifest(out, manifest_for(grid, shas, solver, scene_sha))
     remove_stale_temporaries(out)
-    done = _done_rows(read_parts(out), grid, shas, solver)
+    done = _done_rows(read_parts(out), grid, shas, solver, scene_sha)
     remaining = len(grid) * len(pairs) - len(done)
     n_workers = 0 if scheduler is None and workers == 0 else int(workers or os.cpu_count() or 1)
     size = int(batch_size or max(1, min(16, math.ceil(remaining / (4 * max(n_workers, 1))))))
     batches = _batches(grid, pairs, done, size)
-    write = _Writer(out, shas, solver, remaining, progress or None)
+    write = _Writer(out, shas, solver, scene_sha, remaining, progress or None)
     t0 = time.perf_counter()
     if n_workers == 0 and scheduler is None:
-        sent = _run_serial(batches, write)
+        sent = _run_serial(batches, write, scene_text)
     elif remaining:
-        sent, n_workers = _run_dask(batches, write, scheduler, n_workers)
+        sent, n_workers = _run_dask(batches, write, scheduler, n_workers, scene_text)
     else:
         sent = 0
     run = MapRun(write.done, len(done), sent, n_workers, time.perf_counter() - t0, out)

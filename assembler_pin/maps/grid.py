@@ -141,7 +141,9 @@ def _number(text: str, what: str) -> float:
 
 
 def _shown(text: str) -> str:
-    return repr(text) if len(text) <= 30 else repr(text[:27] + "...")
+    """``text`` quoted for a message, escapes included, in at most 32 characters."""
+    shown = repr(text)
+    return shown if len(shown) <= 32 else shown[:28] + "..." + shown[0]
 
 
 def _axis_spec(axis: str, text: str) -> tuple[float, float, int]:

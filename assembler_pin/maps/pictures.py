@@ -10,14 +10,15 @@ from matplotlib.figure import Figure
 from ..common.files import write_atomic
 from ..common.palette import (
     CAPACITY_CMAP,
+    CLEARANCE_CMAP,
     FORCE_MAGNITUDE_CMAP,
+    LIMIT,
     OUTSIDE_GRID,
     OUTSIDE_GRID_EDGE,
     OUTSIDE_GRID_HATCH,
     PAGE_EDGE,
     PAGE_INK,
     PAGE_PANEL,
-    REACHABLE,
     SAG_CMAP,
     SCALE_POSE,
     SCALE_POSE_PLATE,
@@ -35,6 +36,7 @@ __all__ = [
     "MAP_FIGSIZE",
     "capacity_bar_html",
     "capacity_range",
+    "clearance_range",
     "map_heatmaps",
     "map_slice",
     "point_size",
@@ -50,7 +52,8 @@ def map_slice(table, config: str | None = None, orientation: int = 0) -> tuple[s
     """The 2-D slice of a map table: (u axis, v axis, columns gridded as (len(v), len(u)) arrays
     plus ``u`` and ``v`` values [m]). The slice is the first configuration (or ``config``),
     the given orientation index, and the first value of the fixed position axis."""
-    cols = {c: np.asarray(table.column(c).to_pylist()) for c in table.column_names}
+    scalars = [c for c in table.column_names if c not in ("clearance_between", "plates_xyzquat")]
+    cols = {c: np.asarray(table.column(c).to_pylist()) for c in scalars}
     if not len(cols.get("cell", [])):
         raise AssemblerError("the map is empty")
     name = config if config is not None else cols["config"][0]
@@ -68,9 +71,9 @@ def map_slice(table, config: str | None = None, orientation: int = 0) -> tuple[s
     u, v = np.unique(cols[u_axis]), np.unique(cols[v_axis])
     iu, iv = np.searchsorted(u, cols[u_axis]), np.searchsorted(v, cols[v_axis])
     out: dict[str, np.ndarray] = {"u": u, "v": v}
-    for c in ("reachable", "max_abs_force", "capacity_kg", "sag_m", "weakest_stiffness_n_per_m"):
+    for c in ("reachable", "max_abs_force", "capacity_kg", "sag_m", "weakest_stiffness_n_per_m", "clearance_m"):
         grid = np.full((len(v), len(u)), np.nan)
-        grid[iv, iu] = cols[c].astype(float)
+        grid[iv, iu] = cols[c].astype(float)  # a null clearance (no pose) is NaN
         out[c] = grid
     return u_axis, v_axis, out
 
@@ -80,24 +83,43 @@ MAP_FIGSIZE = (13.0, 8.6)
 its text readable on a screen."""
 
 
-def map_heatmaps(table, am: AssemblerModel, config: str | None = None, orientation: int = 0, title: str = "") -> Figure:
-    """Reachability, optimized max|F| [N], payload capacity [kg], EE sag [mm] and weakest EE
+def clearance_range(clearance_mm: np.ndarray, limit_mm: float) -> tuple[float, float]:
+    """The clearance colour scale [mm]: from contact (0 mm, or the deepest overlap) to the
+    largest finite value (at least the limit plus 1 mm), so that the limit is on the colour
+    bar above its dark end."""
+    c = np.asarray(clearance_mm, dtype=float)
+    ok = np.isfinite(c)
+    lo = min(0.0, float(c[ok].min())) if ok.any() else 0.0
+    hi = max(float(c[ok].max()), limit_mm + 1.0) if ok.any() else limit_mm + 1.0
+    return lo, max(hi, lo + 1.0)
+
+
+def map_heatmaps(
+    table, am: AssemblerModel, config: str | None = None, orientation: int = 0, title: str = "", scene: str = ""
+) -> Figure:
+    """Clearance [mm], optimized max|F| [N], payload capacity [kg], EE sag [mm] and weakest EE
     stiffness [N/m] over a 2-D map slice, in a grid of panels (two rows of three, the legend
     in the sixth place) readable at screen size, the stack's home pose drawn in each panel for
     scale. Colours are :mod:`~assembler_pin.common.palette`'s, yellow the better end in every
-    panel: a cell with no valid state is dark grey with an ``x`` in every panel, and where no
-    cell was computed is white, hatched; the capacity scale is that of the HTML point cloud
-    (:func:`capacity_range`). The title names the slice: its fixed axis and value, the
-    configuration and the EE orientation."""
+    panel: a cell with no valid state is dark grey with an ``x`` in every panel (so every
+    panel shows where the stack reaches), and where no cell was computed is white, hatched;
+    the capacity scale is that of the HTML point cloud (:func:`capacity_range`), the clearance
+    scale holds the configuration's ``clearance`` limit, drawn on its colour bar. The title
+    names the slice: its fixed axis and value, the configuration, the EE orientation and
+    ``scene`` (a name for the scene the map was computed with, if any)."""
     u_axis, v_axis, s = map_slice(table, config, orientation)
     fig = Figure(figsize=MAP_FIGSIZE, layout="constrained")
     axes = fig.subplots(2, 3).ravel()
     extent = _extent(s["u"], s["v"])
     home = evaluate_state(am, am.home)
-    cap_lo, cap_hi = capacity_range(s["capacity_kg"])
-    values = {**s, "sag_mm": 1e3 * s["sag_m"]}
+    limit_mm = 1e3 * am.config.clearance
+    values = {**s, "sag_mm": 1e3 * s["sag_m"], "clearance_mm": 1e3 * s["clearance_m"]}
+    scales = {
+        "capacity_kg": capacity_range(s["capacity_kg"]),
+        "clearance_mm": clearance_range(values["clearance_mm"], limit_mm),
+    }
     panels = (
-        ("reachable", "reachable (a valid pose exists)", ListedColormap([UNREACHABLE, REACHABLE]), ""),
+        ("clearance_mm", "clearance of the nearest two bodies", CLEARANCE_CMAP, "mm"),
         ("max_abs_force", f"optimized max|F| at {am.config.payload.mass:g} kg", FORCE_MAGNITUDE_CMAP, "N"),
         ("capacity_kg", "payload capacity", CAPACITY_CMAP, "kg"),
         ("sag_mm", "EE sag under gravity and payload", SAG_CMAP, "mm"),
@@ -106,7 +128,7 @@ def map_heatmaps(table, am: AssemblerModel, config: str | None = None, orientati
     unreached = s["reachable"] == 0  # NaN (no cell computed) is neither reached nor unreached
     for ax, (key, name, cmap, unit) in zip(axes, panels, strict=False):
         _outside_grid_background(ax)
-        lo, hi = (0, 1) if key == "reachable" else (cap_lo, cap_hi) if key == "capacity_kg" else (None, None)
+        lo, hi = scales.get(key, (None, None))
         image = ax.imshow(
             np.ma.masked_invalid(values[key]),
             origin="lower",
@@ -123,20 +145,24 @@ def map_heatmaps(table, am: AssemblerModel, config: str | None = None, orientati
         ax.set_xlabel(f"{u_axis} [m]", fontsize=11)
         ax.set_ylabel(f"{v_axis} [m]", fontsize=11)
         ax.tick_params(labelsize=10)
-        ax.set_title(name + (f" [{unit}]" if unit else ""), fontsize=12)
-        if key != "reachable":
-            bar = fig.colorbar(image, ax=ax, shrink=0.85, label=f"{name} [{unit}]")
-            bar.ax.tick_params(labelsize=10)
-            bar.set_label(f"{name} [{unit}]", fontsize=10)
+        ax.set_title(f"{name} [{unit}]", fontsize=12)
+        bar = fig.colorbar(image, ax=ax, shrink=0.85, label=f"{name} [{unit}]")
+        bar.ax.tick_params(labelsize=10)
+        bar.set_label(f"{name} [{unit}]", fontsize=10)
+        if key == "clearance_mm":
+            bar.ax.axhline(limit_mm, color=hex_color(OUTSIDE_GRID), lw=4.0)  # readable on dark and light
+            bar.ax.axhline(limit_mm, color=hex_color(LIMIT), lw=2.0, ls="--")
+            bar.set_label(f"clearance [mm] (dashed: the limit, {limit_mm:g} mm)", fontsize=10)
     legend_ax = axes[-1]
     legend_ax.axis("off")
     legend_ax.legend(
         handles=_legend_handles(), fontsize=11, loc="center", frameon=False, title="yellow is better in every panel"
     )
     reached = np.nan_to_num(s["reachable"]).astype(bool)
+    within = f", scene {scene}" if scene else ""
     fig.suptitle(
         title
-        or f"Capability map: {int(reached.sum())} of {reached.size} cells reachable\n"
+        or f"Capability map: {int(reached.sum())} of {reached.size} cells reachable{within}\n"
         f"{slice_label(table, config, orientation)}",
         fontsize=14,
     )
@@ -214,9 +240,9 @@ def _legend_handles() -> list:
     from matplotlib.patches import Patch
 
     return [
-        Patch(facecolor=REACHABLE, label="reachable"),
         Patch(facecolor=UNREACHABLE, label="not reachable (marked x)"),
         Patch(facecolor=OUTSIDE_GRID, edgecolor=OUTSIDE_GRID_EDGE, hatch=OUTSIDE_GRID_HATCH, label="outside the grid"),
+        Line2D([], [], color=LIMIT, lw=2.5, ls="--", label="clearance limit (on its colour bar)"),
         Line2D([], [], color=SCALE_POSE, label="home pose, for scale"),
     ]
 

@@ -1,7 +1,7 @@
 """A map directory on disk: its manifest, its Parquet parts, and the strict reader of both.
 
-A map directory holds one map: ``map.json`` (the manifest: the grid's, every configuration's
-and the solver settings' hashes) and one ``part-*.parquet`` file per finished batch, each row
+A map directory holds one map: ``map.json`` (the manifest: the grid's, every configuration's,
+the solver settings' and the scene's hashes) and one ``part-*.parquet`` file per finished batch, each row
 carrying the ``key`` of what it was computed from (:func:`~.cells.cell_key`). Every file is
 written atomically (:func:`~assembler_pin.common.files.atomic_path`): a part is whole or absent.
 A directory that holds another map, a part that cannot be read, has another schema, repeats
@@ -9,7 +9,9 @@ a cell or holds a row computed from anything else is refused with one line
 (:class:`~assembler_pin.exceptions.MapError`); its rows are never mixed into an answer.
 
 Each part carries the SHA-256 of its rows in its Parquet metadata (:data:`CHECKSUM_KEY`),
-verified whenever it is read: a part edited after it was written is refused. The manifest is
+verified whenever it is read: a part edited after it was written is refused, and so is a row
+whose clearance or pose columns hold what a cell never records (NaN, a clearance below
+:data:`MIN_CLEARANCE`, other than two body names, a pose of another length). The manifest is
 read only when it is a regular file of at most ``map.manifest_bytes`` (never a pipe or a
 device read whole).
 """
@@ -19,6 +21,7 @@ from __future__ import annotations
 import contextlib
 import hashlib
 import json
+import math
 import os
 import stat
 from pathlib import Path
@@ -43,7 +46,11 @@ __all__ = [
 MANIFEST = "map.json"
 """The manifest's file name in a map directory."""
 FORMAT = "assembler_pin map"
-VERSION = 4  # 3: the sag and weakest-stiffness columns; 4: parts carry a checksum
+VERSION = 5  # 3: sag and weakest stiffness; 4: parts carry a checksum; 5: clearance, pose, scene
+MIN_CLEARANCE = -1.0
+"""The smallest clearance a row may hold [m]: bodies overlapping by more are not a pose."""
+MAX_BODY_NAME = 80
+"""The longest body name a row's ``clearance_between`` may hold [characters]."""
 CHECKSUM_KEY = b"assembler_pin.sha256"
 """The key of a part's checksum in its Parquet schema metadata."""
 _HOW = "use another --out directory, or delete this one to start afresh"
@@ -65,6 +72,8 @@ def schema():
     types = {c: pa.string() for c in ("config", "reason", "capacity_binding", "binding", "key")}
     types |= {c: pa.int64() for c in ("cell", "ix", "iy", "iz", "io")}
     types["reachable"] = pa.bool_()
+    types["clearance_between"] = pa.list_(pa.string())
+    types["plates_xyzquat"] = pa.list_(pa.float64())
     return pa.schema([(c, types.get(c, pa.float64())) for c in COLUMNS])
 
 
@@ -75,8 +84,9 @@ def grid_hash(grid: Grid) -> str:
     return hashlib.sha256(json.dumps(doc).encode()).hexdigest()
 
 
-def manifest_for(grid: Grid, configs: dict[str, str], solver: str) -> dict:
-    """The manifest of a map: ``configs`` maps each configuration's name to its hash."""
+def manifest_for(grid: Grid, configs: dict[str, str], solver: str, scene: str | None = None) -> dict:
+    """The manifest of a map: ``configs`` maps each configuration's name to its hash;
+    ``scene`` is the scene's hash (:func:`~.cells.scene_hash`), None for a map without one."""
     return {
         "format": FORMAT,
         "version": VERSION,
@@ -84,6 +94,7 @@ def manifest_for(grid: Grid, configs: dict[str, str], solver: str) -> dict:
         "grid": grid_hash(grid),
         "configs": dict(sorted(configs.items())),
         "solver": solver,
+        "scene": scene,
     }
 
 
@@ -112,8 +123,12 @@ def _read_manifest(path: Path) -> dict:
         doc = json.loads(data.decode("utf-8"))
     except (OSError, UnicodeDecodeError, ValueError, RecursionError):
         raise MapError(f"the map manifest {path} cannot be read as JSON: {_HOW}") from None
-    keys = {"format", "version", "shape", "grid", "configs", "solver"}
-    if not isinstance(doc, dict) or doc.get("format") != FORMAT or set(doc) != keys:
+    keys = {"format", "version", "shape", "grid", "configs", "solver", "scene"}
+    if not isinstance(doc, dict) or doc.get("format") != FORMAT:
+        raise MapError(f"{path} is not an assembler_pin map manifest: {_HOW}")
+    if doc.get("version") != VERSION and isinstance(doc.get("version"), int):
+        return doc  # another version: named by the caller, whatever its keys
+    if set(doc) != keys:
         raise MapError(f"{path} is not an assembler_pin map manifest: {_HOW}")
     return doc
 
@@ -138,6 +153,9 @@ def read_manifest(out: Path) -> dict:
         raise MapError(f"{path} is not an assembler_pin map manifest (configs): {_HOW}")
     if not (isinstance(shape, list) and shape and all(type(v) is int and v > 0 for v in shape)):
         raise MapError(f"{path} is not an assembler_pin map manifest (shape): {_HOW}")
+    scene = doc["scene"]
+    if not (scene is None or (isinstance(scene, str) and len(scene) == 64 and scene.isalnum())):
+        raise MapError(f"{path} is not an assembler_pin map manifest (scene): {_HOW}")
     return doc
 
 
@@ -153,7 +171,7 @@ def check_manifest(out: Path, wanted: dict) -> None:
     have = _read_manifest(path)
     if have == wanted:
         return
-    named = (("version", "version"), ("grid", "grid"), ("solver settings", "solver"))
+    named = (("version", "version"), ("grid", "grid"), ("solver settings", "solver"), ("scene", "scene"))
     differs = [what for what, key in named if have.get(key) != wanted[key]]
     old, new = have.get("configs"), wanted["configs"]
     if not isinstance(old, dict) or set(old) != set(new):
@@ -202,7 +220,47 @@ def _read_part(path: Path, pa, pq):
         raise _bad_part(path, "does not match its checksum (its rows were changed after it was written)")
     if table.column("config").null_count or table.column("cell").null_count or table.column("key").null_count:
         raise _bad_part(path, "holds rows without config, cell or key")
+    _check_pose_columns(path, table)
     return table
+
+
+def _pose_problem(reachable: object, distance: object, between: object, plates: object) -> str:
+    """What is wrong with a row's reachability, clearance and pose columns ("" when nothing)."""
+    if not isinstance(reachable, bool):
+        return "no reachable value"
+    if distance is not None and not (isinstance(distance, float) and math.isfinite(distance)):
+        return f"clearance_m {distance!r:.20} (a finite number, or null without a pose)"
+    if distance is not None and distance < MIN_CLEARANCE:
+        return f"clearance_m {distance:.6g} m, below {MIN_CLEARANCE:g} m"
+    if not isinstance(between, list):
+        return "no clearance_between list"
+    want = 0 if distance is None else 2
+    if len(between) != want:
+        return f"{len(between)} clearance_between names, not {want} (two bodies with a clearance, none without)"
+    for name in between:
+        if not (isinstance(name, str) and name.strip() and len(name) <= MAX_BODY_NAME and name.isprintable()):
+            return f"clearance_between name {name!r:.40} (1 to {MAX_BODY_NAME} printable characters)"
+    if not isinstance(plates, list):
+        return "no plates_xyzquat list"
+    if not reachable:
+        return "" if not plates and distance is None else "a pose or a clearance, not being reachable"
+    if len(plates) < 14 or len(plates) % 7:
+        return f"{len(plates)} plates_xyzquat numbers, not 7 per plate of two or more plates"
+    if not all(isinstance(v, float) and math.isfinite(v) for v in plates):
+        return "plates_xyzquat numbers that are not finite"
+    quats = (plates[k + 3 : k + 7] for k in range(0, len(plates), 7))
+    if any(abs(math.sqrt(sum(q * q for q in quat)) - 1.0) > 1e-6 for quat in quats):
+        return "plates_xyzquat quaternions that are not of unit norm"
+    return ""
+
+
+def _check_pose_columns(path: Path, table) -> None:
+    """Refuse a row whose clearance or pose columns hold what a cell never records."""
+    names = ("cell", "reachable", "clearance_m", "clearance_between", "plates_xyzquat")
+    for cell, *values in zip(*(table.column(c).to_pylist() for c in names), strict=True):
+        why = _pose_problem(*values)
+        if why:
+            raise _bad_part(path, f"holds cell {cell} with {why}")
 
 
 def read_parts(out: Path) -> list:

@@ -29,6 +29,7 @@ from dataclasses import dataclass, field
 import numpy as np
 import pinocchio as pin
 
+from ..collision.scene import Scene, read_scene
 from ..common.labels import leg_label
 from ..common.messages import binding, describe, one_line
 from ..common.threads import one_blas_thread
@@ -206,10 +207,10 @@ class CapacityResult:
         )
 
 
-def _probe(model: AssemblerModel, goal: pin.SE3, arm: PlateArrays | None) -> PlateArrays | None:
+def _probe(model: AssemblerModel, goal: pin.SE3, arm: PlateArrays | None, scene: Scene | None) -> PlateArrays | None:
     """A valid pose holding ``model``'s payload from the solver's starts (or None)."""
     for start in optimizer_starts(model, goal, arm).values():
-        result = optimize_internal_poses(model, start, goal)
+        result = optimize_internal_poses(model, start, goal, scene=scene)
         if result.success:
             return result.optimized.plates
     return None
@@ -225,6 +226,7 @@ def payload_capacity(
     start: PlateArrays | None = None,
     configured_failed: bool = False,
     arm_start: PlateArrays | None = None,
+    scene: Scene | str | None = None,
 ) -> CapacityResult:
     """The heaviest payload [kg] some valid internal pose holds at ``goal``.
 
@@ -244,7 +246,10 @@ def payload_capacity(
         start: a valid pose for the goal at the configured payload, if the caller has one.
         configured_failed: the caller's solve at the configured payload failed (start from
             the solve without payload).
-        arm_start: the helper arm's valid pose for the goal, if the caller has it.
+        arm_start: the helper arm's valid pose for the goal, if the caller has it (a start
+            only: it need not clear the scene).
+        scene: obstacles and floor (:class:`~assembler_pin.collision.scene.Scene` or a scene
+            file): every optimization keeps its clearance from them, and ``start`` must too.
     """
     am = checked_model(am)
     if not (is_number(rtol) and 0 < rtol < 0.5):
@@ -254,14 +259,15 @@ def payload_capacity(
         raise ArgumentError(f"models must be PayloadModels(am) (or None), got {type(models).__name__}")
     t0 = time.perf_counter()
     goal = to_se3(goal, "goal")
-    start = _checked_start(am, goal, start, "start", forces=not configured_failed)
+    scene = read_scene(scene)
+    start = _checked_start(am, goal, start, "start", forces=not configured_failed, scene=scene)
     arm_start = _checked_start(am, goal, arm_start, "arm_start", forces=False)
     models = models or PayloadModels(am)
-    plates, why = _valid_start(am, goal, models, start, configured_failed)
+    plates, why = _valid_start(am, goal, models, start, configured_failed, scene)
     if plates is None:
         message = one_line(f"no valid pose for the goal even without payload: {why or 'none given'}")
         return CapacityResult(False, math.nan, "", None, message, 1, [], time.perf_counter() - t0)
-    climb = _Climb(models, goal, plates, _ArmStart(am, goal, arm_start), float(am.config.payload.mass))
+    climb = _Climb(models, goal, plates, _ArmStart(am, goal, arm_start), float(am.config.payload.mass), scene)
     message = climb.run(rtol, max_iterations)
     label = f"{leg_label(*climb.binding)} {climb.kind}" if climb.binding is not None else ""
     answer = CapacityResult(
@@ -283,10 +289,15 @@ _FORCE_KINDS = frozenset({"tension", "compression", "non_finite_force"})
 
 
 def _checked_start(
-    am: AssemblerModel, goal: pin.SE3, start: PlateArrays | None, what: str, forces: bool
+    am: AssemblerModel,
+    goal: pin.SE3,
+    start: PlateArrays | None,
+    what: str,
+    forces: bool,
+    scene: Scene | None = None,
 ) -> PlateArrays | None:
     """``start`` as plates when it is a valid pose at ``goal`` (every limit, or every limit but
-    the forces when not ``forces``); None stays None.
+    the forces when not ``forces``; its clearance measured with ``scene``); None stays None.
 
     Raises:
         PoseError: malformed plates, or a pose off the goal or beyond a limit (naming the first).
@@ -294,7 +305,7 @@ def _checked_start(
     if start is None:
         return None
     pa = plate_arrays(am, start)
-    state = evaluate_state(am, pa, goal=goal)
+    state = evaluate_state(am, pa, goal=goal, scene=scene)
     bad = [v for v in state.violations if forces or v.kind not in _FORCE_KINDS]
     if bad:
         raise PoseError(one_line(f"{what} is not a valid pose at the goal: {describe(binding(bad))}"))
@@ -307,6 +318,7 @@ def _valid_start(
     models: PayloadModels,
     start: PlateArrays | None,
     configured_failed: bool,
+    scene: Scene | None,
 ) -> tuple[PlateArrays | None, str]:
     """A valid pose for the goal: ``start``, else the solve at the configured payload (unless
     it is known to fail), else the solve without payload; None when none exists. With it, the
@@ -314,7 +326,7 @@ def _valid_start(
     why: list[str] = []
 
     def solved(mass: float) -> PlateArrays | None:
-        result = solve(models.at(mass), goal)
+        result = solve(models.at(mass), goal, scene=scene)
         why.append(result.message)
         return result.optimized.plates if result.success and result.optimized is not None else None
 
@@ -343,8 +355,16 @@ class _Climb:
     the new pose's capacity; at a fixed point, probe the solver's starts for
     :data:`GLOBAL_PROBE` more."""
 
-    def __init__(self, models: PayloadModels, goal: pin.SE3, plates: PlateArrays, arm: _ArmStart, mass: float) -> None:
-        self.models, self.goal, self.arm = models, goal, arm
+    def __init__(
+        self,
+        models: PayloadModels,
+        goal: pin.SE3,
+        plates: PlateArrays,
+        arm: _ArmStart,
+        mass: float,
+        scene: Scene | None = None,
+    ) -> None:
+        self.models, self.goal, self.arm, self.scene = models, goal, arm, scene
         self.iterations = 1
         self.take(plates)
         self.history = [(mass, self.cap)]
@@ -358,7 +378,7 @@ class _Climb:
         """Climb until the gain is below ``rtol`` and no start holds more; the message."""
         while self.iterations < max_iterations and np.isfinite(self.cap) and self.cap >= 0:
             cap = self.cap
-            result = optimize_internal_poses(self.models.at(cap), self.plates, self.goal)
+            result = optimize_internal_poses(self.models.at(cap), self.plates, self.goal, scene=self.scene)
             self.iterations += 1
             new_cap = pose_capacity(self.models, result.optimized.plates)[0] if result.success else -1.0
             self.history.append((cap, new_cap))
@@ -377,7 +397,7 @@ class _Climb:
         """A local fixed point: do the solver's starts (helper arm, home, screw) hold
         :data:`GLOBAL_PROBE` more? Moves to the first that does."""
         probe = self.cap * (1 + GLOBAL_PROBE)
-        found = _probe(self.models.at(probe), self.goal, self.arm.plates())
+        found = _probe(self.models.at(probe), self.goal, self.arm.plates(), self.scene)
         self.iterations += 1
         self.history.append((probe, pose_capacity(self.models, found)[0] if found is not None else -1.0))
         if found is None:

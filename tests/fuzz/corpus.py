@@ -183,6 +183,8 @@ def _scene_cases() -> list[CliCase]:
         _case(f"scene.view.{Path(n).stem}", ["view", "--home", "--html", "{d}/view.html", "--scene", f"{{d}}/{n}"])
         for n in refuse[:3]
     ]
+    far_map = "map --json --workers 0 --no-progress --grid x=5,y=0,z=0.5 --out {d}/map_{case} --scene"
+    cases += [_case(f"scene.map.{Path(n).stem}", [*far_map.split(), f"{{d}}/{n}"]) for n in refuse[:3]]
     cases += [
         _case("scene.view_missing", "view --home --html {d}/view.html --scene {d}/no_such_scene.yaml"),
         _case("scene.view_carrier", "view --home --carrier ur5 --html {d}/view.html --scene {d}/scene_ok.yaml"),

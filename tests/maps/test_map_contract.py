@@ -467,10 +467,10 @@ from assembler_pin.maps import cells, parse_grid, run_map
 real = cells.compute_cell
 
 
-def slow_second_cell(models, cell, name=""):
+def slow_second_cell(models, cell, name="", scene=None):
     if cell.id == 1:
         time.sleep(120)  # interrupted here
-    return real(models, cell, name)
+    return real(models, cell, name, scene)
 
 
 cells.compute_cell = slow_second_cell

@@ -16,6 +16,7 @@ from assembler_pin.maps.store import read_parts, schema, write_part
 from assembler_pin.state import evaluate_state
 
 NEW = ("sag_m", "weakest_stiffness_n_per_m")
+POSE = [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.24, 0.0, 0.0, 0.0, 1.0]  # two plates, x y z qx qy qz qw
 
 
 def test_cell_stiffness_is_the_stiffness_of_the_pose(am, random_poses):
@@ -44,6 +45,7 @@ def _rows(n: int) -> list[dict]:
         row |= {"config": "default", "cell": k, "ix": ix, "iy": 0, "iz": iz, "io": 0, "reachable": True}
         row |= {"x": 0.2 + 0.1 * ix, "y": 0.0, "z": 0.8 + 0.1 * iz, "reason": "", "key": f"k{k}"}
         row |= {"capacity_binding": "", "binding": "", "sag_m": 1e-4 * (k + 1), "weakest_stiffness_n_per_m": 3e4 - k}
+        row |= {"clearance_m": 0.02, "clearance_between": ["SP0 leg 0", "SP0 leg 1"], "plates_xyzquat": POSE}
         rows.append(row)
     return rows
 

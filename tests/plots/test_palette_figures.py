@@ -320,6 +320,7 @@ def _map_table():
             "capacity_kg": cap,
             "sag_m": [1e-5 * k if r else None for k, r in enumerate(reach)],
             "weakest_stiffness_n_per_m": [1e4 + 1e3 * k if r else None for k, r in enumerate(reach)],
+            "clearance_m": [0.006 + 2e-3 * k if r else None for k, r in enumerate(reach)],
         }
     )
 
@@ -397,7 +398,7 @@ def test_map_png_marks_unreachable_and_outside_cells_and_hides_nothing(map_png):
     assert len(legends) == 1 and not legends[0].images and not legends[0].axison  # the sixth place
     assert hidden == []
     panels = [ax for ax in fig.axes if ax.images]
-    assert len(panels) == 5  # reachable, max|F|, capacity, sag, weakest stiffness
+    assert len(panels) == 5  # clearance, max|F|, capacity, sag, weakest stiffness
     for ax in panels:
         marks = [c for c in ax.collections if isinstance(c, PathCollection) and c.get_label() == "not reachable"]
         assert marks and len(marks[0].get_offsets()) == 2
@@ -431,7 +432,7 @@ def test_map_png_reads_at_screen_size_and_yellow_is_better(map_png):
     def yellowness(rgb):  # red + green - blue: yellow high, dark blue / purple / black low
         return rgb[0] + rgb[1] - rgb[2]
 
-    better = {"max|F|": min, "sag": min, "capacity": max, "stiffness": max}
+    better = {"max|F|": min, "sag": min, "capacity": max, "stiffness": max, "clearance": max}
     for name, ax in titles.items():
         pick = next((f for key, f in better.items() if key in name), None)
         if pick is None:
@@ -444,13 +445,27 @@ def test_map_png_reads_at_screen_size_and_yellow_is_better(map_png):
     assert "slice y = 0 m" in title and "config default" in title and "orientation 0" in title
 
 
+def test_map_png_marks_the_clearance_limit_on_its_colour_bar(map_png, am):
+    """The clearance panel [mm]: its scale reaches down to the configuration's limit, drawn
+    dashed on its colour bar, whose label names it."""
+    fig = map_png[0]
+    bar = next(ax for ax in fig.axes if ax.get_ylabel().startswith("clearance [mm]"))
+    limit = 1e3 * am.config.clearance
+    dashed = [line for line in bar.lines if line.get_linestyle() == "--"]
+    assert dashed and all(np.allclose(line.get_ydata(), limit) for line in dashed)
+    lo, hi = sorted(bar.get_ylim())
+    assert lo <= limit < hi and f"{limit:g} mm" in bar.get_ylabel()
+    panel = next(ax for ax in fig.axes if ax.images and ax.get_title().startswith("clearance"))
+    assert panel.get_title().endswith("[mm]") and panel.images[0].cmap.name == palette.CLEARANCE_CMAP
+
+
 def test_map_pictures_name_no_colour_of_their_own():
     """Every colour and colormap of maps/pictures.py comes from the palette."""
     from assembler_pin.maps import pictures
 
     source = inspect.getsource(pictures)
     assert not re.search(r"#[0-9a-fA-F]{3,8}\b", source)
-    assert not re.search(r"\"(magma|viridis|cividis|gray|grey|plasma)(_r)?\"", source)
+    assert not re.search(r"\"(magma|viridis|cividis|gray|grey|plasma|inferno)(_r)?\"", source)
     assert not re.search(r"rgba?\(\s*\d", source)
 
 
