@@ -169,6 +169,7 @@ def run(args: argparse.Namespace) -> int:
     if carrier is not None:
         return _solve_on_carrier(args, am, carrier, q, goal, helper)
     starts = args.starts or SOLVE_STARTS[0]
+    scene = scene_from_args(args)
     result = solve(
         am,
         goal,
@@ -176,14 +177,14 @@ def run(args: argparse.Namespace) -> int:
         options=options,
         helper_options=helper,
         starts=starts,
-        scene=scene_from_args(args),
+        scene=scene,
     )
     capacity = None
     if args.capacity:
         from ..solver.capacity import payload_capacity
 
         start = result.optimized.plates if result.success and result.optimized is not None else None
-        capacity = payload_capacity(am, goal, start=start)
+        capacity = payload_capacity(am, goal, start=start, scene=scene)  # every pose clear of the scene
     written = _write_plates(args.out, result) if args.out else None
     if args.json:
         doc = result.to_dict()

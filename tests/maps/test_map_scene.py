@@ -174,3 +174,23 @@ def test_the_payload_capacity_keeps_its_clearance_from_the_scene(am):
     assert clearance(am, held.plates, scene).min_distance >= am.config.clearance
     assert clearance(am, free.plates, scene).min_distance < 0
     assert held.capacity_kg <= free.capacity_kg * (1 + 1e-3)
+
+
+def test_solve_capacity_with_a_scene_keeps_its_clearance(am, tmp_path, capsys):
+    """``solve --capacity --scene``: the capacity is searched among the scene's obstacles (the
+    API's capacity with the scene from the same start), below the free capacity where the
+    strut binds."""
+    from assembler_pin.solver.capacity import payload_capacity
+
+    path = tmp_path / "strut.yaml"
+    path.write_text(yaml.safe_dump(STRUT))
+    argv = ["solve", "--goal", "0.5", "0", "0.8", "0", "0", "0", "--capacity", "--scene", str(path), "--json"]
+    assert main(argv) == 0
+    doc = json.loads(capsys.readouterr().out)
+    goal = pin.SE3(np.eye(3), np.array([0.5, 0.0, 0.8]))
+    scene = read_scene(STRUT)
+    start = ap.solve(am, goal, scene=scene).optimized.plates
+    held = payload_capacity(am, goal, start=start, scene=scene)
+    free = payload_capacity(am, goal, start=start)
+    assert doc["capacity"]["capacity_kg"] == pytest.approx(held.capacity_kg, rel=1e-9)
+    assert held.capacity_kg < free.capacity_kg * (1 - 1e-3)
