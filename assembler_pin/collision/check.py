@@ -693,9 +693,6 @@ def _measure_near(src: _Source, horizon: float) -> None:
             return
 
 
-_calls = 0  # clearances asked for in this process (the kernel is loaded when they are many)
-
-
 @per_config
 def _kernel_inputs(cfg: AssemblerConfig) -> tuple:
     """The kernel's constant inputs for a configuration: anchors, variant pairs, pair lists, sizes."""
@@ -858,14 +855,12 @@ def clearance(
     Returns:
         a :class:`Clearance` (distances [m], world frame).
     """
-    global _calls
     scene = read_scene(scene)
     if am.physical is not None:  # a stack seen from its other end: its bodies are the original's
         return _turned_clearance(am, plates, scene, engine)
-    _calls += 1
     if scene is not None and any(k > am.n for k in scene.standing):
         raise SceneError(f"scene standing {scene.standing} names a plate beyond plate {am.n}")
-    kernel = self_kernel(_calls, engine)
+    kernel = self_kernel(engine)
     pa = plate_arrays(am, plates)
     cfg = am.config
     lay = _layout(cfg, scene)

@@ -10,13 +10,12 @@ stays the reference, and the tests hold the two to 1e-12 m.
 
 numba is optional (the ``fast`` extra). ``cache=True`` compiles the kernel once per install
 and Python version (a few seconds, the first time only); after that, importing numba and
-loading the cached kernel still take about 1.3 s in each new process, which would make a
-single ``statics`` or ``solve`` call slower, not faster (a self clearance costs ~0.3 ms on
-numpy, ~0.04 ms on the kernel: the load pays for itself after ~5000 clearances). So
-:func:`~assembler_pin.collision.check.clearance` loads the kernel only in a process that has
-asked for :data:`HOT_CALLS` clearances (a map, a long walk, ``bench``), or when
-``ASSEMBLER_PIN_COLLISION`` is ``numba``; ``numpy`` keeps the numpy path. A ``plan`` or a
-``solve`` stays on numpy.
+loading the cached kernel still take about 1.3 s in each new process (a self clearance costs
+~0.3 ms on numpy, ~0.04 ms on the kernel: the load pays for itself after ~5000 clearances).
+The two paths agree to rounding, not bit for bit, so an answer must not depend on which one a
+process happens to run: :func:`~assembler_pin.collision.check.clearance` takes the numpy path
+unless asked for the kernel (``engine="numba"``, or ``ASSEMBLER_PIN_COLLISION=numba`` for a
+whole process: a long map or walk, ``bench``), whatever the process has computed before.
 
 Frames: world, z up; lengths [m].
 """
@@ -32,13 +31,10 @@ import numpy as np
 
 from ..exceptions import OptionsError, short_repr
 
-__all__ = ["ENGINES", "ENV_VAR", "HOT_CALLS", "ROW_WIDTH", "SIZE_NAMES", "kernel_available", "self_kernel"]
+__all__ = ["ENGINES", "ENV_VAR", "ROW_WIDTH", "SIZE_NAMES", "kernel_available", "self_kernel"]
 
 #: Environment variable choosing the self-collision engine: ``numba``, ``numpy`` or unset (auto).
 ENV_VAR = "ASSEMBLER_PIN_COLLISION"
-
-#: In ``auto``, the kernel is loaded at this many clearance calls in one process.
-HOT_CALLS = 3000
 
 #: The entries of the kernel's ``sizes`` array.
 SIZE_NAMES = ("motor_length", "node_zone", "motor_radius", "shaft_radius", "plate_radius", "half_thickness", "rho")
@@ -216,24 +212,28 @@ def kernel_available() -> bool:
 ENGINES = ("auto", "numba", "numpy")
 
 
-def self_kernel(calls: int = 0, engine: str = "auto") -> Any:
+def self_kernel(engine: str = "auto") -> Any:
     """The compiled :func:`_self_py`, or None for the numpy path.
 
     Args:
-        calls: clearances asked for so far in this process.
         engine: ``numba`` (the kernel when numba is installed), ``numpy``, or ``auto``:
-            :data:`ENV_VAR` when set, else the kernel once this process has asked for
-            :data:`HOT_CALLS` clearances.
+            :data:`ENV_VAR` when set, else numpy (the same path in every process, whatever it
+            computed before).
+
+    Raises:
+        OptionsError: an unknown engine, or :data:`ENV_VAR` set to one.
     """
     global _kernel
     if engine not in ENGINES:
         raise OptionsError(f"collision engine must be one of {', '.join(ENGINES)}, got {short_repr(engine)}")
-    choice = os.environ.get(ENV_VAR, "auto") if engine == "auto" else engine
-    if choice == "numpy" or _kernel is False:
+    choice = engine
+    if engine == "auto":
+        choice = os.environ.get(ENV_VAR, "") or "numpy"
+        if choice not in ENGINES:
+            raise OptionsError(f"{ENV_VAR} must be one of {', '.join(ENGINES)}, got {short_repr(choice)}")
+    if choice != "numba" or _kernel is False:
         return None
     if _kernel is None:
-        if choice != "numba" and calls < HOT_CALLS:
-            return None
         if not kernel_available():
             _kernel = False
             return None

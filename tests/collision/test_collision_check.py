@@ -379,3 +379,20 @@ def test_the_scene_pass_equals_one_obstacle_at_a_time(am, engine):
                     assert bound <= measured + 1e-10, (a, b, bound, measured)
         assert seen == len(c.pairs)  # every row of the whole scene compared
     assert coal_rows >= 6 and closed_rows >= 10, (coal_rows, closed_rows)
+
+
+def test_auto_takes_numpy_whatever_the_process_ran_before(am, monkeypatch):
+    """The default engine does not switch after the kernel was loaded: the same distances, bit
+    for bit, as the numpy path; an unknown engine in the environment is refused in one line."""
+    from assembler_pin.collision.kernel import ENV_VAR
+    from assembler_pin.exceptions import OptionsError
+
+    monkeypatch.delenv(ENV_VAR, raising=False)
+    plates = _perturbed(am, 0.03, 5)
+    if kernel_available():
+        clearance(am, plates, engine="numba")  # the kernel is loaded in this process now
+    auto, reference = clearance(am, plates), clearance(am, plates, engine="numpy")
+    assert np.array_equal(auto.distances, reference.distances)
+    monkeypatch.setenv(ENV_VAR, "fast")
+    with pytest.raises(OptionsError, match="ASSEMBLER_PIN_COLLISION must be one of"):
+        clearance(am, plates)
