@@ -123,7 +123,7 @@ def test_no_payload_capacity_is_exit_1(monkeypatch, capsys):
         def to_dict(self):
             return {"success": False, "message": self.message}
 
-    monkeypatch.setattr(capacity, "payload_capacity", lambda am, goal, start=None: NoCapacity())
+    monkeypatch.setattr(capacity, "payload_capacity", lambda am, goal, start=None, scene=None: NoCapacity())
     code, out, _ = _run(capsys, ["solve", "--goal", *REACHABLE, "--capacity", "--json"])
     doc = json.loads(out)
     assert code == 1 and doc["success"] is True and doc["capacity"]["success"] is False
