@@ -64,7 +64,7 @@ from .kernel import ROW_HB, ROW_NORMAL, ROW_SIGMA, ROW_WIDTH, ROW_XA, ROW_XB, se
 from .pairs import pair_table, per_config
 from .scene import Obstacle, Scene, read_scene
 
-__all__ = ["GJK_TOLERANCE", "NEAR", "Clearance", "clearance"]
+__all__ = ["GJK_TOLERANCE", "NEAR", "Clearance", "clearance", "physical_bodies"]
 
 logger = logging.getLogger(__name__)
 
@@ -822,14 +822,25 @@ def _numpy_pass(lay: _Layout, pa: PlateArrays, dist: np.ndarray) -> _Source:
     return _Source(lay, R, p, np.stack([bottom, top, axis]), length, legs, dist, lp)
 
 
+def physical_bodies(
+    am: AssemblerModel, plates: PlateArrays | Sequence | np.ndarray
+) -> tuple[AssemblerModel, PlateArrays]:
+    """The model whose bodies the plates carry and the plates in its order: ``am`` and the
+    plates, or for a stack seen from its other end
+    (:attr:`~assembler_pin.model.assembler.AssemblerModel.physical`) the original stack and the
+    same bodies' plates (plate k there is plate n−k here, its frame turned back)."""
+    pa = plate_arrays(am, plates)
+    if am.physical is None:
+        return am, pa
+    original, flip = am.physical
+    return original, PlateArrays(np.matmul(pa.R[::-1], flip.T), pa.p[::-1].copy())
+
+
 def _turned_clearance(am: AssemblerModel, plates, scene: Scene | None, engine: str) -> Clearance:
     """The clearance of a turned model's plates (:attr:`AssemblerModel.physical`): the original
     stack's at the same bodies, its derivatives in the turned model's plate order (a world twist
     of turned plate k is the same twist of original plate n−k)."""
-    assert am.physical is not None
-    original, flip = am.physical
-    pa = plate_arrays(am, plates)
-    bodies = PlateArrays(np.matmul(pa.R[::-1], flip.T), pa.p[::-1].copy())
+    original, bodies = physical_bodies(am, plates)
     if scene is not None:
         scene = dataclasses.replace(scene, standing=tuple(sorted(am.n - k for k in scene.standing)))
     return dataclasses.replace(clearance(original, bodies, scene, engine), _reversed=True)

@@ -29,10 +29,10 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from ..kinematics import PlateArrays, plate_arrays
+from ..kinematics import PlateArrays
 from ..kinematics.legs import leg_points
 from ..model.assembler import AssemblerModel
-from .check import Clearance
+from .check import Clearance, physical_bodies
 
 __all__ = ["body_moves", "swept_bound"]
 
@@ -46,24 +46,14 @@ def _ends(am: AssemblerModel, pa: PlateArrays) -> np.ndarray:
     return np.stack([bottom, bottom + am.config.leg.motor_length * u, top])
 
 
-def _bodies(am: AssemblerModel, plates) -> tuple[AssemblerModel, PlateArrays]:
-    """The model whose bodies these are and their plates (a turned model's are its original's,
-    :attr:`~assembler_pin.model.assembler.AssemblerModel.physical`)."""
-    pa = plate_arrays(am, plates)
-    if am.physical is None:
-        return am, pa
-    original, flip = am.physical
-    return original, PlateArrays(np.matmul(pa.R[::-1], flip.T), pa.p[::-1].copy())
-
-
 def body_moves(
     am: AssemblerModel, a: PlateArrays | Sequence | np.ndarray, b: PlateArrays | Sequence | np.ndarray
 ) -> np.ndarray:
     """The move [m] of every body of the stack from pose ``a`` to pose ``b``: (7n+1,) in the
     order of :func:`~assembler_pin.collision.bodies.stack_body_names` (legs ``6 j + i``, then
     plates 0..n), each the Hausdorff distance of its axis segments or of its cylinder."""
-    model, pa = _bodies(am, a)
-    _, pb = _bodies(am, b)
+    model, pa = physical_bodies(am, a)
+    _, pb = physical_bodies(am, b)
     legs = np.linalg.norm(_ends(model, pa) - _ends(model, pb), axis=2).max(axis=0)
     plate = model.config.plate
     rho = math.hypot(plate.radius, 0.5 * plate.thickness)
