@@ -175,7 +175,7 @@ def _optimized(
     """One run of the method of ``opts`` (resolved, not ``auto``) from ``start``."""
     tolerance = opts.ee_tolerance or opts.goal_tolerance
     initial_state = evaluate_state(am, start, goal=goal, tolerance=tolerance, scene=scene)
-    problem = Problem(am, start, goal, opts, initial_state.feasible, motion, scene)
+    problem = Problem(am, start, goal, opts, initial_state.feasible, motion, scene, initial_state.clearance)
     check = _Check(am, goal, tolerance, opts, motion, problem.objective, scene)
     omega0 = check.score(initial_state)
     if problem.nx_pose == 0:

@@ -21,6 +21,7 @@ from typing import cast
 import numpy as np
 import pinocchio as pin
 
+from ..collision.check import Clearance, clearance
 from ..collision.scene import Scene
 from ..config.options import GEOMETRIC_MARGIN, SMOOTH_METHODS, OptimizeOptions
 from ..exceptions import SingularConfigurationError, _SingularIterateError
@@ -69,6 +70,8 @@ class Problem:
         motion: continuity with a previous sample (smooth method only).
         scene: obstacles and floor: with one (an empty scene too) the clearance rows
             (:class:`~.rows.ClearanceRows`) keep every checked pair apart; None: no such rows.
+        start_clearance: the start's clearance in ``scene`` when the caller has it (measured
+            here otherwise).
     """
 
     def __init__(
@@ -80,6 +83,7 @@ class Problem:
         start_feasible: bool,
         motion: MotionTerm | None = None,
         scene: Scene | None = None,
+        start_clearance: Clearance | None = None,
     ) -> None:
         self.am, self.opts, self.goal, self.motion, self.scene = am, opts, goal, motion, scene
         self.n = n = am.n
@@ -107,7 +111,11 @@ class Problem:
         self.ee = EETolerance(goal, opts.ee_tolerance, self.chart) if opts.ee_tolerance is not None else None
         self.motion_rows = MotionRows(motion, GEOMETRIC_MARGIN) if motion is not None else None
         margin = max(opts.limit_margin, 0.0) + CLEARANCE_MARGIN
-        self.clearance_rows = ClearanceRows(am, scene, margin, start) if scene is not None else None
+        if scene is not None:
+            near = start_clearance if start_clearance is not None else clearance(am, start, scene)
+            self.clearance_rows: ClearanceRows | None = ClearanceRows(am, scene, margin, near)
+        else:
+            self.clearance_rows = None
         self._sag: tuple[Point, float] | None = None
         self._sag_grad: tuple[ChartDerivatives, np.ndarray] | None = None
         self.best: tuple[float, np.ndarray] | None = None

@@ -25,7 +25,6 @@ from ..collision.scene import Scene
 from ..config.options import GoalTolerance
 from ..config.schema import LegConfig
 from ..constraints import leg_limit_margins
-from ..kinematics import PlateArrays
 from ..model.assembler import AssemblerModel
 from .charts import LocalChart, TaaChart
 from .options import MotionTerm
@@ -195,17 +194,15 @@ class ClearanceRows:
     #: Pairs within ``BAND + REACH`` of their bound at the start have their own row [m].
     REACH = 0.1
 
-    def __init__(
-        self, am: AssemblerModel, scene: Scene | None, margin: float, start: PlateArrays | None = None
-    ) -> None:
-        """``start``: the run's start plates (their near pairs get their own rows); None: every
-        pair has its own row."""
+    def __init__(self, am: AssemblerModel, scene: Scene | None, margin: float, start: Clearance | None = None) -> None:
+        """``start``: the clearance of the run's start in ``scene`` (its near pairs get their
+        own rows); None: every pair has its own row."""
         self.am, self.scene, self.margin = am, scene, float(margin)
         self._last: tuple[Point, Clearance] | None = None
         self.own: np.ndarray | None = None  # the pairs with their own row (None: all)
         self.rest: np.ndarray = np.zeros(0, dtype=int)  # the pairs guarded by the last row
         if start is not None:
-            c = clearance(am, start, scene)
+            c = start
             near = c.distances - (c.limit + self.margin) < self.BAND + self.REACH
             self.own, self.rest = np.flatnonzero(near), np.flatnonzero(~near)
 
