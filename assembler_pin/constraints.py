@@ -156,16 +156,18 @@ def evaluate_constraints(
     out: list[Violation] = []
     L, defl = legs.lengths, legs.deflection
     m = leg_limit_margins(leg, L, np.cos(defl), legs.rise)
-    out += _per_leg("min_length", m[0] < 0, L, leg.min_length)
-    out += _per_leg("max_length", m[1] < 0, L, leg.max_length)
-    out += _per_leg("deflection_bottom", m[2] < 0, defl[..., 0], leg.max_deflection)
-    out += _per_leg("deflection_top", m[3] < 0, defl[..., 1], leg.max_deflection)
-    out += _per_leg("continuous_translation", m[4] <= 0, legs.rise, 0.0)  # strictly above
+    if not (m[:4].min() >= 0 and m[4].min() > 0):  # the lists only where a leg is out (NaN: out)
+        out += _per_leg("min_length", m[0] < 0, L, leg.min_length)
+        out += _per_leg("max_length", m[1] < 0, L, leg.max_length)
+        out += _per_leg("deflection_bottom", m[2] < 0, defl[..., 0], leg.max_deflection)
+        out += _per_leg("deflection_top", m[3] < 0, defl[..., 1], leg.max_deflection)
+        out += _per_leg("continuous_translation", m[4] <= 0, legs.rise, 0.0)  # strictly above
     if statics is not None:
         F = statics.forces
-        out += _per_leg("non_finite_force", ~np.isfinite(F), F, float("inf"))
-        out += _per_leg("tension", F > leg.max_tension, F, leg.max_tension)
-        out += _per_leg("compression", F < -leg.max_compression, F, -leg.max_compression)
+        if not (F.max() <= leg.max_tension and F.min() >= -leg.max_compression):  # NaN: not within
+            out += _per_leg("non_finite_force", ~np.isfinite(F), F, float("inf"))
+            out += _per_leg("tension", F > leg.max_tension, F, leg.max_tension)
+            out += _per_leg("compression", F < -leg.max_compression, F, -leg.max_compression)
         for j in np.nonzero(~(statics.condition <= CONDITION_LIMIT))[0]:
             out.append(Violation("singular", int(j), None, float(statics.condition[j]), CONDITION_LIMIT))
     if goal is not None:

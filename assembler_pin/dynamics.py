@@ -9,7 +9,7 @@ where ``v`` and ``a`` are the joint velocities and accelerations of the motion w
 closed (each shaft tip moves with its top-plate anchor), so gravity, the payload and the
 inertia of every plate, motor and shaft are included. The closure Jacobian is the statics'
 one, so the system keeps its block structure: one 24×24 block per platform (its 6 actuator
-forces and 18 ball forces), solved the same way (:func:`~assembler_pin.statics.pinocchio_statics.solve_statics`).
+forces and 18 ball forces), solved the same way (:func:`~assembler_pin.statics.engine.solve_statics`).
 At zero twist and acceleration it is the statics.
 
 Motions are given per plate (world frame, plate k in 0..n):
@@ -204,7 +204,7 @@ def _joint_motion(am: AssemblerModel, pose: _Pose, V: np.ndarray, A: np.ndarray)
 def _block_solve(am: AssemblerModel, pose: _Pose, tau: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Actuator forces (tension positive), ball forces and base wrench balancing the tree's
     generalized forces ``tau`` (nv), block by block (as
-    :func:`~assembler_pin.statics.pinocchio_statics.solve_statics`)."""
+    :func:`~assembler_pin.statics.engine.solve_statics`)."""
     own = np.linalg.solve(pose.jac_t, tau[am.leg_idx_v][..., None])[..., 0]
     local = np.matmul(np.stack([pose.axis, own], axis=2), pose.pa.R[1:, None])
     lines = np.matmul(local, am.top_line_map)

@@ -21,7 +21,7 @@ from .constraints import Violation, evaluate_constraints
 from .exceptions import OptionsError
 from .kinematics import LegState, PlateArrays, checked_goal, leg_state, plate_arrays
 from .model.assembler import AssemblerModel, checked_model
-from .statics.pinocchio_statics import solve_statics
+from .statics.engine import solve_statics
 from .statics.result import StaticsResult
 
 __all__ = ["StackState", "evaluate_state"]
@@ -123,7 +123,7 @@ def evaluate_state(
         goal: optional EE goal to check plate n against.
         tolerance: EE goal tolerance.
         data: a whole-stack Pinocchio ``Data`` the caller owns, for the statics
-            (:func:`~assembler_pin.statics.pinocchio_statics.solve_statics`); default one model per platform.
+            (:func:`~assembler_pin.statics.engine.solve_statics`); default one model per platform.
         scene: obstacles and floor (:class:`~assembler_pin.collision.scene.Scene` or a scene file),
             None for the stack's own bodies only.
     """

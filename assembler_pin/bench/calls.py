@@ -22,7 +22,7 @@ from ..model.assembler import AssemblerModel
 from ..optimize import OptimizeOptions, optimize_internal_poses
 from ..scenarios import SCENARIOS
 from ..solver.pipeline import solve
-from ..statics.pinocchio_statics import solve_statics, solve_statics_batch
+from ..statics.engine import solve_statics, solve_statics_batch
 from .collision import benchmark_clearance, benchmark_solve_scene
 from .speed import benchmark_startup
 from .timing import LEVEL_GRID, median_time_us, random_reachable_plates

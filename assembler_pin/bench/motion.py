@@ -16,7 +16,7 @@ from ..motion.toppra_law import OptimalLaw
 from ..scenarios import SCENARIOS, scenario
 from ..simulate import MujocoStack, hold_pose, mujoco_statics
 from ..solver.pipeline import solve
-from ..statics.pinocchio_statics import solve_statics
+from ..statics.engine import solve_statics
 from .timing import random_reachable_plates
 
 __all__ = ["COMPARE_PATHS", "benchmark_mujoco", "benchmark_time_laws", "format_mujoco", "format_time_laws"]

@@ -16,7 +16,7 @@ from ..kinematics import stack_forward_kinematics
 from ..maps import parse_grid, run_map
 from ..model.assembler import AssemblerModel
 from ..optimize import optimize_internal_poses
-from ..statics.pinocchio_statics import solve_statics
+from ..statics.engine import solve_statics
 from .timing import median_time_us, random_reachable_plates
 
 __all__ = [

@@ -25,8 +25,8 @@ from ..model.assembler import AssemblerModel
 from ..optimize import OptimizeOptions, optimize_internal_poses
 from ..solver.capacity import PayloadModels, payload_capacity
 from ..solver.pipeline import solve
-from ..statics.kernel import closed_form_forces, kernel_available, kernel_result
-from ..statics.pinocchio_statics import solve_statics
+from ..statics.kernel import closed_form_forces, kernel_available, kernel_result, reference_forces
+from ..statics.pinocchio_statics import solve_statics_pinocchio
 from ..supports.choice import chosen_distribution
 from ..supports.two_point import two_point_statics
 from .timing import LEVEL_GRID, median_time_us, random_reachable_plates
@@ -139,32 +139,31 @@ def benchmark_solve_starts(
 def benchmark_statics_kernel(
     am: AssemblerModel, batch_sizes: tuple[int, ...] = (1_000, 10_000, 100_000), repeat: int = 200, seed: int = 0
 ) -> dict:
-    """The closed-form statics on both backends: the kernel's first call in this process
-    (numba import + compile or cache load) [s], one stack from arrays [µs] and stacks per
-    second at each batch size (one thread) and the peak of the memory allocated per stack
+    """The closed-form statics, compiled (``numba_...``) and its numpy reference
+    (``numpy_...``): the kernel's first call in this process (numba import + compile or
+    cache load) [s], one stack from arrays [µs] and stacks per second at each batch size
+    (one thread) and the peak of the memory allocated per stack
     [KB] (tracemalloc, a second call); and Pinocchio's single statics [µs] for comparison."""
     rng = np.random.default_rng(seed)
     samples = [random_reachable_plates(am, rng)[1] for _ in range(20)]
     R1, p1 = samples[0].R[None], samples[0].p[None]
     out: dict[str, Any] = {}
     t0 = time.perf_counter()
-    has_kernel = kernel_available()
-    if has_kernel:
-        closed_form_forces(am, R1, p1, "numba")
-    out["kernel_first_call_s"] = time.perf_counter() - t0 if has_kernel else float("nan")
-    out["pinocchio_single_us"] = median_time_us(lambda: solve_statics(am, samples[0]), repeat)
+    closed_form_forces(am, R1, p1)
+    out["kernel_first_call_s"] = time.perf_counter() - t0
+    out["pinocchio_single_us"] = median_time_us(lambda: solve_statics_pinocchio(am, samples[0]), repeat)
     R = np.array([s.R for s in samples])
     p = np.array([s.p for s in samples])
-    for backend in ("numpy", "numba") if has_kernel else ("numpy",):
-        out[f"{backend}_single_us"] = median_time_us(functools.partial(closed_form_forces, am, R1, p1, backend), repeat)
+    for backend, forces in (("numpy", reference_forces), ("numba", closed_form_forces)):
+        out[f"{backend}_single_us"] = median_time_us(functools.partial(forces, am, R1, p1), repeat)
         for size in batch_sizes:
             reps = max(1, size // len(samples))
             Rb, pb = np.tile(R, (reps, 1, 1, 1)), np.tile(p, (reps, 1, 1))
             t1 = time.perf_counter()
-            closed_form_forces(am, Rb, pb, backend)
+            forces(am, Rb, pb)
             out[f"{backend}_{size}_stacks_per_s"] = len(Rb) / (time.perf_counter() - t1)
             tracemalloc.start()
-            closed_form_forces(am, Rb, pb, backend)
+            forces(am, Rb, pb)
             out[f"{backend}_{size}_peak_kb_per_stack"] = tracemalloc.get_traced_memory()[1] / 1024 / len(Rb)
             tracemalloc.stop()
     return out
@@ -173,7 +172,7 @@ def benchmark_statics_kernel(
 def _statics_calls(am: AssemblerModel, poses: list, has_kernel: bool) -> dict[str, Any]:
     """The calls timed by :func:`benchmark_single_statics`, cycling through ``poses``."""
     counter = iter(range(10**9))
-    calls = {"pinocchio": lambda: solve_statics(am, poses[next(counter) % len(poses)])}
+    calls = {"pinocchio": lambda: solve_statics_pinocchio(am, poses[next(counter) % len(poses)])}
     if has_kernel:
         calls["kernel"] = lambda: kernel_result(am, poses[next(counter) % len(poses)])
     return calls
@@ -183,7 +182,7 @@ def benchmark_single_statics(
     platforms: tuple[int, ...] = (4, 8, 16), repeat: int = 300, rounds: int = 3, seed: int = 0
 ) -> dict[str, float]:
     """One stack's whole statics per call [µs] at each stack size: Pinocchio's
-    :func:`~assembler_pin.statics.pinocchio_statics.solve_statics` and the compiled kernel's
+    :func:`~assembler_pin.statics.engine.solve_statics` and the compiled kernel's
     :func:`~assembler_pin.statics.kernel.kernel_result` (the same result), from plate arrays
     and from 4×4 matrices (``..._4x4_us``: their validation included). Medians of ``repeat``
     calls cycling through 20 random reachable poses, the best of ``rounds`` interleaved

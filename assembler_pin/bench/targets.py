@@ -14,14 +14,10 @@ call much less).
 
 from __future__ import annotations
 
-import contextlib
-import importlib.util
 import math
-import os
 import threading
 import time
 import zlib
-from collections.abc import Iterator
 from dataclasses import dataclass
 from typing import Any
 
@@ -34,7 +30,6 @@ from ..helper_arm.initial import even_screw_pose
 from ..maps import parse_grid, run_map
 from ..model.assembler import AssemblerModel
 from ..optimize import optimize_internal_poses
-from ..statics.kernel import ENV_VAR
 from .collision import benchmark_clearance, benchmark_solve_scene
 from .speed import (
     THREAD_GOALS,
@@ -233,9 +228,6 @@ def benchmark_targets(am: AssemblerModel, map_cells: int = MAP_MEMORY_CELLS, qui
     with threadpool_limits(limits=1):
         goals = random_goals(am, 4 if quick else RANDOM_GOALS)
         doc["random_solves"] = benchmark_solve_starts(am, tuple(goals))
-        if importlib.util.find_spec("numba") is not None:
-            with _compiled_optimizer():
-                doc["random_solves_numba"] = benchmark_solve_starts(am, tuple(goals), modes=("first",))
         if not quick:
             doc["grid_solves"] = benchmark_solve_starts(am, LEVEL_GRID)
             doc["grid_search"] = benchmark_wide_search(am, doc["grid_solves"]["first_unsolved"])
@@ -255,21 +247,6 @@ def benchmark_targets(am: AssemblerModel, map_cells: int = MAP_MEMORY_CELLS, qui
         except ImportError:  # Dask (the ``maps`` extra) missing
             doc["map_memory"] = {}
     return doc
-
-
-@contextlib.contextmanager
-def _compiled_optimizer() -> Iterator[None]:
-    """The optimizer on its compiled pass (``ASSEMBLER_PIN_STATICS=numba``, opt-in) for the
-    duration; the variable's former value is restored."""
-    before = os.environ.get(ENV_VAR)
-    os.environ[ENV_VAR] = "numba"
-    try:
-        yield
-    finally:
-        if before is None:
-            os.environ.pop(ENV_VAR, None)
-        else:
-            os.environ[ENV_VAR] = before
 
 
 @dataclass(frozen=True)
@@ -320,15 +297,6 @@ TARGET_SPECS: tuple[tuple[str, str, str, float, float, str], ...] = (
     ("solve, random goals, p50 [ms]", "random_solves", "first_p50_s", 1e3, 40, "<="),
     ("solve, random goals, p95 [ms]", "random_solves", "first_p95_s", 1e3, 100, "<="),
     ("random goals with a worse optimum than every start", "random_solves", "first_goals_worse", 1, 0, "=="),
-    ("solve, random goals, compiled pass (opt-in), p50 [ms]", "random_solves_numba", "first_p50_s", 1e3, 40, "<="),
-    (
-        "solve, random goals, compiled pass (opt-in), p95 [ms]",
-        "random_solves_numba",
-        "first_p95_s",
-        1e3,
-        100,
-        "<=",
-    ),
     ("solve, 120-goal grid, p95 [s]", "grid_solves", "first_p95_s", 1, 0.3, "<="),
     (f"grid goals unsolved that a {SEARCH_STARTS}-start search solves", "grid_search", "solved_by_search", 1, 0, "=="),
     ("one optimization, n = 32, IPOPT [s]", "long_stacks", "n32_ipopt_s", 1, 2.0, "<="),

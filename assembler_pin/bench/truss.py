@@ -9,7 +9,7 @@ from ..compliance.loaded import compensated_lengths, loaded_pose, sag_and_gradie
 from ..kinematics import plate_arrays
 from ..model.assembler import AssemblerModel
 from ..statics.derivatives import pose_derivatives
-from ..statics.pinocchio_statics import solve_statics
+from ..statics.engine import solve_statics
 from .timing import median_time_us
 
 __all__ = ["benchmark_stiffness"]

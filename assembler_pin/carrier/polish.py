@@ -19,7 +19,7 @@ from ..kinematics import PlateArrays, leg_state, plate_deviation
 from ..model.assembler import AssemblerModel
 from ..optimize import SINGULAR_FORCE
 from ..optimize.objective import omega
-from ..statics.pinocchio_statics import solve_statics
+from ..statics.engine import solve_statics
 from .robot import Carrier
 from .statics import CarrierStatics, carrier_statics, carrier_torques
 

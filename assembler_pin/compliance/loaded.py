@@ -29,7 +29,7 @@ from ..kinematics import PlateArrays, leg_vectors, plate_arrays, stack_forward_k
 from ..model.assembler import AssemblerModel
 from ..statics.closed_form import CONDITION_LIMIT
 from ..statics.derivatives import PoseDerivatives, pose_derivatives
-from ..statics.pinocchio_statics import solve_statics
+from ..statics.engine import solve_statics
 from .elastic import line_conditions, solve_equilibrium
 
 __all__ = [
@@ -233,7 +233,7 @@ def compensated_lengths(
     am: AssemblerModel, plates: PlateArrays | Sequence | np.ndarray, tolerance: float = 1e-9
 ) -> CompensatedLengths:
     """The commanded lengths ``L - F / k`` whose loaded equilibrium is ``plates`` (to ``tolerance``
-    [m]), ``F`` the statics forces (:func:`~assembler_pin.statics.pinocchio_statics.solve_statics`, tension
+    [m]), ``F`` the statics forces (:func:`~assembler_pin.statics.engine.solve_statics`, tension
     positive) and ``L`` the pose's lengths; confirmed by :func:`loaded_pose`. A leg in
     compression is commanded longer than it ends up, one in tension shorter; ``success`` also
     needs every commanded length within the stroke (a servo cannot be commanded beyond it).

@@ -17,6 +17,7 @@ import numpy as np
 from ..exceptions import PoseError
 from ..model.assembler import AssemblerModel
 from ..model.geometry import LegGeometry
+from .legs_kernel import compiled_leg_arrays
 from .poses import PlateArrays, plate_arrays
 
 __all__ = [
@@ -28,6 +29,7 @@ __all__ = [
     "leg_rise",
     "leg_state",
     "leg_vectors",
+    "reference_leg_state",
     "relative_leg_directions",
     "relative_leg_measures",
 ]
@@ -164,7 +166,17 @@ def leg_vectors(am: AssemblerModel, pa: PlateArrays) -> tuple[np.ndarray, ...]:
 
 
 def leg_state(am: AssemblerModel, plates: PlateArrays | Sequence | np.ndarray) -> LegState:
-    """Leg lengths, directions, deflections and rise of every leg for given plate poses."""
+    """Leg lengths, directions, deflections and rise of every leg for given plate poses, in
+    one compiled call (:mod:`~assembler_pin.kinematics.legs_kernel`).
+
+    Raises:
+        PoseError: malformed poses, or two joint centres of a leg coincide.
+    """
+    return LegState(*compiled_leg_arrays(am, plate_arrays(am, plates)))
+
+
+def reference_leg_state(am: AssemblerModel, plates: PlateArrays | Sequence | np.ndarray) -> LegState:
+    """:func:`leg_state` composed of this module's numpy functions: the tests' reference."""
     pa = plate_arrays(am, plates)
     bottom, top, vec, lengths = leg_vectors(am, pa)
     directions = vec / lengths[..., None]

@@ -270,7 +270,7 @@ class AssemblerModel:
     # ------------------------------------------------------------------ helpers
     def create_data(self) -> pin.Data:
         """A new Pinocchio ``Data`` of the whole-stack model, owned by the caller (pass it to
-        :func:`~assembler_pin.statics.pinocchio_statics.solve_statics` as ``data``, or use it to inspect the
+        :func:`~assembler_pin.statics.engine.solve_statics` as ``data``, or use it to inspect the
         model). Refused above :data:`WHOLE_DATA_MAX_PLATFORMS` platforms, where it takes
         gigabytes.
 

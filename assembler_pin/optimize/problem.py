@@ -28,7 +28,7 @@ from ..exceptions import SingularConfigurationError, _SingularIterateError
 from ..kinematics import PlateArrays
 from ..model.assembler import AssemblerModel
 from ..statics.derivatives import PoseDerivatives, PoseValues, pose_derivatives, pose_values
-from ..statics.pose_kernel import CompiledPass, use_pose_kernel
+from ..statics.pose_kernel import CompiledPass
 from .charts import LocalChart, TaaChart
 from .objective import SagObjective, motion_cost, omega, sag_reference
 from .options import MotionTerm
@@ -101,7 +101,7 @@ class Problem:
         # the sag and IPOPT's moment-variable form read the numpy pass's intermediates: a
         # problem that reads them keeps that pass
         numpy_pass = self.reads_sag or opts.method == "ipopt"
-        self._compiled = CompiledPass(am) if not numpy_pass and use_pose_kernel() else None
+        self._compiled = None if numpy_pass else CompiledPass(am)
         start_values = self._compiled.values(start) if self._compiled is not None else pose_values(am, start)
         self.start_max_force = Point(np.zeros(0), start_values).max_abs_force
         force_objective = opts.objective == "force"

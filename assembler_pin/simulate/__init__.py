@@ -1,7 +1,7 @@
 """The stack in MuJoCo: the exported MJCF (:mod:`assembler_pin.model.mjcf`) set to our poses, its
 statics from MuJoCo's own gravity and constraint Jacobian, and a held pose simulated.
 
-Two independent checks of :func:`~assembler_pin.statics.pinocchio_statics.solve_statics` come from here:
+Two independent checks of :func:`~assembler_pin.statics.engine.solve_statics` come from here:
 
 * :func:`mujoco_statics` — MuJoCo's generalized gravity ``qfrc_bias`` (zero velocity) is
   balanced by the actuator forces on the slides and the ball-joint forces through MuJoCo's

@@ -43,7 +43,7 @@ from ..model.geometry import DIMENSIONS
 from ..model.platform import PlatformModel, StackPlan
 from ..optimize import optimize_internal_poses
 from ..state import evaluate_state
-from ..statics.pinocchio_statics import solve_statics
+from ..statics.engine import solve_statics
 from .pipeline import optimizer_starts, solve
 
 __all__ = [

@@ -13,7 +13,7 @@ The equilibrium (module docstring of :mod:`assembler_pin.statics.derivatives`):
 This module is the one owner of that equilibrium (:func:`equilibrium`, vectorized over
 batches of stacks and the platforms) and of the condition number every statics path
 reports and judges (:func:`line_conditions`, :data:`CONDITION_LIMIT`,
-:func:`is_singular`): :func:`~assembler_pin.statics.pinocchio_statics.solve_statics`, the numpy path of
+:func:`is_singular`): :func:`~assembler_pin.statics.pinocchio_statics.solve_statics_pinocchio`, the numpy path of
 :mod:`~assembler_pin.statics.kernel` and the elastic truss of :mod:`~assembler_pin.compliance.elastic`
 call them. (The compiled kernel of :mod:`~assembler_pin.statics.loops` computes the same
 number by its own Gauss–Jordan elimination; the tests hold the two together.)

@@ -19,7 +19,7 @@ vectorized lines, so this module uses it:
 
 The values come from the closed form and from the one set of leg measures
 (:mod:`assembler_pin.kinematics.legs`); only their derivatives are written here. The tests
-hold these forces to :func:`~assembler_pin.statics.pinocchio_statics.solve_statics` (Pinocchio) and every
+hold these forces to :func:`~assembler_pin.statics.pinocchio_statics.solve_statics_pinocchio` (Pinocchio) and every
 derivative to finite differences of the Pinocchio statics.
 
 Derivatives are taken with respect to a **world twist** ``η_k = (v, ω)`` of each plate

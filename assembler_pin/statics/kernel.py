@@ -7,7 +7,7 @@ over the stacks, platforms and legs in :mod:`~assembler_pin.statics.loops` and c
 here by numba (``cache=True``: compiled once per install and Python version, then loaded
 from numba's cache). Per platform it solves the 6×6 system in the top plate's own frame
 (moments about its origin) by Gauss–Jordan elimination with partial pivoting; the same
-inverse gives the 1-norm condition number of :func:`~assembler_pin.statics.pinocchio_statics.solve_statics`.
+inverse gives the 1-norm condition number of :func:`~assembler_pin.statics.engine.solve_statics`.
 The loops' callees are inlined into the compiled kernel. numba checks a cached kernel against
 the timestamp of this file only: in a working copy, a change to
 :mod:`~assembler_pin.statics.loops` alone is seen once this file is touched too (or its
@@ -20,29 +20,27 @@ number; poses it does not pass go through :func:`~assembler_pin.kinematics.plate
 which refuses them with its message or checks (and projects) them. The model's arrays the
 kernel reads are built once per model.
 
-The numpy path (:func:`~assembler_pin.statics.closed_form.equilibrium`) stays the reference and the
-fallback: it is used when numba is not installed, when ``ASSEMBLER_PIN_STATICS=numpy`` is
-set in the environment, or with ``backend="numpy"``. The tests hold both, and
-:func:`kernel_result`, to Pinocchio's statics (:func:`~assembler_pin.statics.pinocchio_statics.solve_statics`)
-to 1e-10 N.
+This kernel is the package's one statics engine (numba is a dependency): the numpy
+closed form (:func:`reference_forces`, from :func:`~assembler_pin.statics.closed_form.equilibrium`)
+and Pinocchio's statics (:func:`~assembler_pin.statics.pinocchio_statics.pinocchio_statics`)
+stay as the tests' independent references, which hold the kernel and :func:`kernel_result`
+to both to 1e-10 N.
 
 Frames: world poses of plates 0..n; forces [N], tension positive.
 """
 
 from __future__ import annotations
 
-import importlib.util
 import logging
 import math
-import os
 import types
 import weakref
+from collections.abc import Sequence
 from typing import Any
 
 import numpy as np
 
 from ..common.linalg import cross
-from ..exceptions import OptionsError
 from ..kinematics.poses import ORTHONORMAL_TOL, PlateArrays, plate_arrays
 from ..model.assembler import AssemblerModel
 from . import loops
@@ -50,30 +48,17 @@ from .closed_form import CONDITION_LIMIT, equilibrium, line_conditions, raise_si
 from .result import StaticsResult
 
 __all__ = [
-    "BACKENDS",
-    "ENV_VAR",
-    "KERNEL_MIN_STACKS",
     "closed_form_forces",
     "kernel_available",
     "kernel_loaded",
     "kernel_result",
     "kernel_statics",
-    "resolve_backend",
+    "reference_forces",
 ]
 
 logger = logging.getLogger(__name__)
 
-#: The backends of :func:`closed_form_forces`.
-BACKENDS = ("auto", "numba", "numpy")
-
-#: Environment variable forcing a backend (``numpy`` or ``numba``; unset: ``auto``).
-ENV_VAR = "ASSEMBLER_PIN_STATICS"
-
-#: ``auto`` loads the kernel for a call of at least this many stacks (importing numba and
-#: loading the cached kernel take ~0.5–1 s; the numpy path does ~60k stacks/s).
-KERNEL_MIN_STACKS = 5000
-
-_kernel: Any = None  # the compiled function, once built (None: not yet; False: unavailable)
+_kernel: Any = None  # the compiled function, once built (None: not yet)
 _arrays_stack: Any = None  # the compiled single-stack calls, built with the kernel
 _matrix_stack: Any = None
 _stack, _extras = loops._stack_py, loops._extras_py  # interpreted here; the kernels call compiled copies
@@ -204,14 +189,12 @@ _one_stack, _det3, _rotations_ok, _exact_poses = _one_stack_py, _det3_py, _rotat
 
 
 def _build_kernel() -> Any:
-    """Compile (or load from numba's cache) the kernel; False when numba is missing.
+    """Compile (or load from numba's cache) the kernel.
 
     The loops of :mod:`~assembler_pin.statics.loops` are compiled as copies whose globals
     name the compiled callees, so the interpreted originals keep calling each other."""
-    try:
-        import numba
-    except ImportError:
-        return False
+    import numba  # delayed: numba's import and the cached kernel's load only when a statics runs
+
     jit, inlined = numba.njit(cache=True, nogil=True), numba.njit(cache=True, nogil=True, inline="always")
     scope: dict[str, Any] = {"math": math, "np": np, "__name__": __name__, "NOT_PASSED": NOT_PASSED}
     parts = (
@@ -237,40 +220,12 @@ def _build_kernel() -> Any:
 
 
 def kernel_available() -> bool:
-    """Whether the compiled kernel can be used (numba importable); compiles it on first call
-    (or loads it from numba's cache)."""
+    """Load the compiled kernel in this process (from numba's cache, or compiled on the first
+    use after an install); True once loaded."""
     global _kernel
     if _kernel is None:
         _kernel = _build_kernel()
-        if _kernel is False:
-            logger.info("numba is not installed: the statics use the numpy path")
-    return _kernel is not False
-
-
-def resolve_backend(backend: str | None = None, stacks: int = 1) -> str:
-    """``numba`` or ``numpy`` for a call on ``stacks`` stacks.
-
-    ``backend`` (default: the :data:`ENV_VAR` setting, else ``auto``): ``numpy``, ``numba``
-    (refused without numba), or ``auto``: numba when it is installed and either the kernel
-    is loaded in this process already or the call has at least :data:`KERNEL_MIN_STACKS`
-    stacks (a one-off small call does not pay numba's import and the kernel's load).
-
-    Raises:
-        OptionsError: an unknown backend, or ``numba`` without numba.
-    """
-    choice = backend if backend is not None else os.environ.get(ENV_VAR, "") or "auto"
-    if choice not in BACKENDS:
-        raise OptionsError(f"statics backend must be one of {', '.join(BACKENDS)}, got {choice!r}")
-    if choice == "numpy":
-        return "numpy"
-    if choice == "auto":
-        if _kernel is False or importlib.util.find_spec("numba") is None:
-            return "numpy"
-        if _kernel is None and stacks < KERNEL_MIN_STACKS:
-            return "numpy"
-    if kernel_available():
-        return "numba"
-    raise OptionsError("the numba statics backend needs numba: pip install numba")
+    return True
 
 
 class _ModelArrays:
@@ -319,9 +274,10 @@ def _kernel_ready(a: object, shape: tuple[int, ...]) -> bool:
     return flags.c_contiguous and flags.writeable
 
 
-def _numpy_forces(am: AssemblerModel, R: np.ndarray, p: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """The reference path: :func:`~assembler_pin.statics.closed_form.equilibrium` and the condition
-    number of the legs' lines in each top plate's frame (:func:`~assembler_pin.statics.closed_form.line_conditions`)."""
+def reference_forces(am: AssemblerModel, R: np.ndarray, p: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The tests' numpy reference of :func:`closed_form_forces`:
+    :func:`~assembler_pin.statics.closed_form.equilibrium` and the condition number of the legs'
+    lines in each top plate's frame (:func:`~assembler_pin.statics.closed_form.line_conditions`)."""
 
     eq, _ = equilibrium(am, R, p)
     u_local = np.einsum("bjka,bjik->bjia", R[:, 1:], eq.u)
@@ -329,22 +285,18 @@ def _numpy_forces(am: AssemblerModel, R: np.ndarray, p: np.ndarray) -> tuple[np.
     return eq.forces, line_conditions(lines_t)[1]
 
 
-def closed_form_forces(
-    am: AssemblerModel, R: np.ndarray, p: np.ndarray, backend: str | None = None
-) -> tuple[np.ndarray, np.ndarray]:
-    """Actuator forces and condition numbers of B stacks by the closed-form statics.
+def closed_form_forces(am: AssemblerModel, R: np.ndarray, p: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Actuator forces and condition numbers of B stacks by the closed-form statics, compiled.
 
     Args:
         R: (B, n+1, 3, 3) plate rotations; p: (B, n+1, 3) plate positions, world [m]
             (checked by the caller).
-        backend: ``auto``, ``numba`` or ``numpy`` (see :func:`resolve_backend`).
 
     Returns:
         (forces (B, n, 6) [N, tension positive], condition (B, n): 1-norm condition number
         of each platform's 6×6 system; NaN for both where the system is exactly singular).
     """
-    if resolve_backend(backend, R.shape[0]) == "numpy":
-        return _numpy_forces(am, R, p)
+    kernel_available()
     R, p = _as_kernel_input(R), _as_kernel_input(p)
     B, n = R.shape[0], am.n
     forces, condition = np.empty((B, n, 6)), np.empty((B, n))
@@ -360,7 +312,7 @@ def _as_kernel_input(a: np.ndarray) -> np.ndarray:
 
 def kernel_loaded() -> bool:
     """Whether the compiled kernel is loaded in this process already (no compile, no import)."""
-    return _kernel not in (None, False)
+    return _kernel is not None
 
 
 def kernel_statics(am: AssemblerModel, R: np.ndarray, p: np.ndarray) -> tuple[np.ndarray, ...]:
@@ -376,11 +328,8 @@ def kernel_statics(am: AssemblerModel, R: np.ndarray, p: np.ndarray) -> tuple[np
         to plate 0, moment about its origin, world axes [N, N·m], condition (B, n)); NaN
         forces where a platform's system is exactly singular.
 
-    Raises:
-        OptionsError: numba is not installed.
     """
-    if not kernel_available():
-        raise OptionsError("the numba statics backend needs numba: pip install numba")
+    kernel_available()
     R, p = _as_kernel_input(R), _as_kernel_input(p)
     B, n = R.shape[0], am.n
     forces, condition = np.empty((B, n, 6)), np.empty((B, n))
@@ -391,9 +340,9 @@ def kernel_statics(am: AssemblerModel, R: np.ndarray, p: np.ndarray) -> tuple[np
 
 
 def kernel_result(
-    am: AssemblerModel, plates: PlateArrays | np.ndarray, raise_on_singular: bool = False
+    am: AssemblerModel, plates: PlateArrays | Sequence | np.ndarray, raise_on_singular: bool = False
 ) -> StaticsResult:
-    """:func:`~assembler_pin.statics.pinocchio_statics.solve_statics` on the compiled kernel: the same
+    """:func:`~assembler_pin.statics.engine.solve_statics` on the compiled kernel: the same
     :class:`~assembler_pin.statics.result.StaticsResult` (forces, ball forces, base wrench, condition
     numbers, the singular flag and error of :data:`~assembler_pin.statics.closed_form.CONDITION_LIMIT`),
     which the tests hold to Pinocchio's.
@@ -412,8 +361,7 @@ def kernel_result(
         SingularConfigurationError: with ``raise_on_singular``, a platform's condition number
             exceeds the limit.
     """
-    if not kernel_available():
-        raise OptionsError("the numba statics backend needs numba: pip install numba")
+    kernel_available()
     arrays, n = _model_arrays(am), am.n
     out = (np.empty((n, 6)), np.empty(n), np.empty((n, 6, 3)), np.empty(6))
     worst = _checked_call(plates, n + 1, arrays, out)

@@ -25,16 +25,13 @@ from __future__ import annotations
 from collections.abc import Sequence
 
 import numpy as np
-import numpy.typing as npt
 import pinocchio as pin
 
 from ..common.linalg import skew
-from ..common.validation import as_float_array
-from ..exceptions import ArgumentError, PoseError, SingularConfigurationError
+from ..exceptions import ArgumentError, SingularConfigurationError
 from ..kinematics import (
     LegState,
     PlateArrays,
-    checked_rotations,
     leg_vectors,
     plate_arrays,
     platform_configurations,
@@ -42,8 +39,7 @@ from ..kinematics import (
 )
 from ..model.assembler import AssemblerModel, checked_model
 from ..model.platform import PlatformStatics, stack_gravity_terms
-from .closed_form import CONDITION_LIMIT, is_singular, line_conditions
-from .kernel import closed_form_forces
+from .closed_form import is_singular, line_conditions
 from .result import StaticsResult
 
 __all__ = [
@@ -51,8 +47,7 @@ __all__ = [
     "checked_data",
     "closure_jacobian_blocks",
     "gravity_terms",
-    "solve_statics",
-    "solve_statics_batch",
+    "solve_statics_pinocchio",
 ]
 
 
@@ -162,7 +157,7 @@ def _checked_inputs(
     data: object,
 ) -> tuple[PlateArrays, np.ndarray, np.ndarray, np.ndarray, pin.Data | None]:
     """The validated plates, top joint centres (n, 6, 3), leg vectors (n, 6, 3) and lengths
-    (n, 6) [m], and the caller's ``Data`` of :func:`solve_statics` (ArgumentError, PoseError)."""
+    (n, 6) [m], and the caller's ``Data`` of :func:`solve_statics_pinocchio` (ArgumentError, PoseError)."""
     checked_model(am)
     if not isinstance(raise_on_singular, bool):
         raise ArgumentError(f"raise_on_singular must be True or False, got {type(raise_on_singular).__name__}")
@@ -199,14 +194,17 @@ def _own_ball_forces(terms: PlatformStatics, top: np.ndarray) -> np.ndarray:
         ) from None
 
 
-def solve_statics(
+def solve_statics_pinocchio(
     am: AssemblerModel,
     plates: PlateArrays | Sequence | np.ndarray,
     raise_on_singular: bool = False,
     legs: LegState | None = None,
     data: pin.Data | None = None,
 ) -> StaticsResult:
-    """Actuator and ball-joint forces holding the stack still at the given plate poses.
+    """Actuator and ball-joint forces holding the stack still at the given plate poses, from
+    Pinocchio's generalized gravity and closure Jacobians: the reference of the compiled
+    engine :func:`~assembler_pin.statics.engine.solve_statics` (the tests hold the two to 1e-10 N),
+    and its path when the caller passes a ``Data``.
 
     Each platform's 24×24 block is solved by eliminating every leg's own 3×3 closure
     block (invertible away from universal-joint gimbal lock): with ``w = J_legᵀ⁻¹ e_z``
@@ -244,34 +242,3 @@ def solve_statics(
     ball = own - tau[..., None] * axis
     base = (terms.base_wrench_local.reshape(2, 3) @ pa.R[0].T).ravel()  # root free-flyer wrench, world axes
     return StaticsResult(-tau, ball, base, condition, singular)
-
-
-def solve_statics_batch(am: AssemblerModel, plates: npt.ArrayLike, backend: str | None = None) -> np.ndarray:
-    """Actuator forces of B stacks at once, for maps and sweeps.
-
-    Vectorized over the stacks and platforms with the closed-form equilibrium of
-    :func:`~assembler_pin.statics.closed_form.equilibrium` (each leg balances its own weight; each top
-    plate the weight above it and the six ball forces), which the tests hold to the
-    Pinocchio statics of :func:`solve_statics` to 1e-9 N, singular stacks included.
-
-    Args:
-        plates: (B, n+1, 4, 4) world poses of the plates of each stack (validated all at once).
-        backend: ``auto`` (default), ``numba`` (the compiled kernel) or ``numpy`` (the
-            reference path); see :func:`~assembler_pin.statics.kernel.resolve_backend`.
-
-    Returns:
-        (B, n, 6) forces [N], tension positive; NaN rows for a stack whose statics are
-        singular (see :func:`solve_statics`).
-
-    Raises:
-        PoseError: the array is not B stacks of n+1 poses.
-    """
-    matrices = as_float_array(plates, "plate poses of B stacks (B, n+1, 4, 4)")
-    if matrices.ndim != 4 or matrices.shape[1:] != (am.n + 1, 4, 4):
-        raise PoseError(f"plate poses of B stacks must have shape (B, {am.n + 1}, 4, 4), got {matrices.shape}")
-    B = matrices.shape[0]
-    R, p = checked_rotations(matrices.reshape(-1, 4, 4), "pose")
-    R, p = R.reshape(B, am.n + 1, 3, 3), p.reshape(B, am.n + 1, 3)
-    forces, condition = closed_form_forces(am, R, p, backend)
-    singular = ~(condition.max(axis=1) <= CONDITION_LIMIT)  # NaN counts as singular
-    return np.where(singular[:, None, None], np.nan, forces)

@@ -5,47 +5,40 @@ deflection cosines, rise and plate angles of the stack and, where it asks for th
 derivatives with respect to the world twists of plates 1..n. :mod:`assembler_pin.statics.derivatives`
 computes them with numpy (~60 small array calls per point); the loops of
 :mod:`~assembler_pin.statics.pose_loops` compute the same numbers in one call, compiled here by numba
-(``cache=True``: compiled once per install and Python version, ~15 s, then loaded from
-numba's cache on the first call in a process, ~1 s).
+(``cache=True``: compiled once per install and Python version, then loaded from numba's
+cache on the first call in a process).
 
-The numpy path (:func:`~assembler_pin.statics.derivatives.pose_values`,
-:func:`~assembler_pin.statics.derivatives.pose_derivatives`) stays the reference and the default: the
-optimizer runs on the compiled pass only when ``ASSEMBLER_PIN_STATICS=numba`` is set in the
-environment (:data:`~assembler_pin.statics.kernel.ENV_VAR`, the switch of the compiled
-statics too). Its rounding differs from numpy's, and SLSQP can turn a difference in the last
-digits into another local optimum (8 of the bench's 120 grid goals, better or worse by up to
-10 %): as the default, an answer would depend on whether numba is installed. The tests hold
-the two to 1e-10 N on stacks of 1..16 platforms and the compiled derivatives to finite
-differences.
+The compiled pass is the optimizer's engine (numba is a dependency, so every install runs
+the same arithmetic). The numpy path (:func:`~assembler_pin.statics.derivatives.pose_values`,
+:func:`~assembler_pin.statics.derivatives.pose_derivatives`) is the tests' reference, and the
+pass of the problems that read its intermediates (the sag objective and rows, IPOPT's moment
+variables). The tests hold the two to 1e-10 N on stacks of 1..16 platforms and the compiled
+derivatives to finite differences.
 
 Frames: world poses of plates 0..n; forces [N], tension positive; lengths [m]; angles [rad].
 """
 
 from __future__ import annotations
 
-import importlib.util
 import logging
 import math
-import os
 import types
 from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
-from ..exceptions import OptionsError
 from ..kinematics import PlateArrays
 from ..model.assembler import AssemblerModel
 from . import pose_loops as loops
 from .derivatives import PoseDerivatives
-from .kernel import BACKENDS, ENV_VAR
 from .loops import constants
 
-__all__ = ["CompiledPass", "PoseMeasures", "pose_kernel_available", "use_pose_kernel"]
+__all__ = ["CompiledPass", "PoseMeasures", "pose_kernel_available"]
 
 logger = logging.getLogger(__name__)
 
-_kernel: Any = None  # the compiled pass, once built (None: not yet; False: numba missing)
+_kernel: Any = None  # the compiled pass, once built (None: not yet)
 
 #: Placeholders for the derivative arrays of a values-only call (the kernel does not read them).
 _NO_D3, _NO_D4, _NO_D2 = np.zeros((1, 1, 1)), np.zeros((1, 1, 1, 1)), np.zeros((1, 1))
@@ -73,14 +66,12 @@ class PoseMeasures:
 
 
 def _build_kernel() -> Any:
-    """Compile (or load from numba's cache) the pass; False when numba is missing.
+    """Compile (or load from numba's cache) the pass.
 
     Each loop of :data:`~assembler_pin.statics.pose_loops.PARTS` is compiled as a copy whose globals
     name the compiled callees, so the interpreted originals keep calling each other."""
-    try:
-        import numba
-    except ImportError:
-        return False
+    import numba  # delayed: numba's import and the cached pass's load only when an optimizer runs
+
     jit = numba.njit(cache=True, nogil=True, error_model="numpy")
     scope: dict[str, Any] = {"math": math, "np": np, "__name__": __name__}
     for name, func in loops.PARTS:  # callees first: the callers see them compiled
@@ -89,46 +80,21 @@ def _build_kernel() -> Any:
 
 
 def pose_kernel_available() -> bool:
-    """Whether the compiled pass can be used (numba importable); compiles it on first call
-    (or loads it from numba's cache)."""
+    """Load the compiled pass in this process (from numba's cache, or compiled on the first use
+    after an install); True once loaded."""
     global _kernel
     if _kernel is None:
         logger.info("loading the optimizer's compiled pass (compiled on the first use after an install)")
         _kernel = _build_kernel()
-        if _kernel is False:
-            logger.info("numba is not installed: the optimizer evaluates its points with numpy")
-    return _kernel is not False
-
-
-def use_pose_kernel() -> bool:
-    """Whether the optimizer evaluates its points on the compiled pass: only when
-    :data:`~assembler_pin.statics.kernel.ENV_VAR` is ``numba`` (see the module docstring).
-
-    Raises:
-        OptionsError: the variable is not one of the statics backends, or ``numba`` is asked
-            for and numba is not installed.
-    """
-    choice = os.environ.get(ENV_VAR, "") or "auto"
-    if choice not in BACKENDS:
-        raise OptionsError(f"{ENV_VAR} must be one of {', '.join(BACKENDS)}, got {choice!r}")
-    if choice != "numba":
-        return False
-    if _kernel is False or (_kernel is None and importlib.util.find_spec("numba") is None):
-        raise OptionsError(f"{ENV_VAR}=numba needs numba: pip install numba")
-    return pose_kernel_available()
+    return True
 
 
 class CompiledPass:
     """The compiled pass for one stack model: its anchors, home and rest directions and
-    constants arranged once, then :meth:`values` and :meth:`derivatives` per pose.
-
-    Raises:
-        OptionsError: numba is not installed.
-    """
+    constants arranged once, then :meth:`values` and :meth:`derivatives` per pose."""
 
     def __init__(self, am: AssemblerModel) -> None:
-        if not pose_kernel_available():
-            raise OptionsError("the compiled pass needs numba: pip install numba")
+        pose_kernel_available()
         geo = am.geometry
         rest = am.plate_placement_p
         self.n = am.n

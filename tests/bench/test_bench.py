@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import json
-import os
 
 import numpy as np
 import pytest
@@ -74,7 +73,6 @@ def test_target_rows_say_met_only_when_the_measured_value_meets_its_target():
     doc = {
         "threads": {"threads_identical": True},
         "random_solves": {"first_p50_s": 0.039, "first_p95_s": 0.101, "first_goals_worse": 0},
-        "random_solves_numba": {"first_p50_s": 0.041, "first_p95_s": 0.099},
         "grid_solves": {"first_p95_s": 0.2, "first_solved": 110, "all_solved": 111},
         "grid_search": {"solved_by_search": 2},
         "statics_kernel": {"numba_100000_stacks_per_s": 260_000.0, "numba_100000_peak_kb_per_stack": float("nan")},
@@ -85,8 +83,6 @@ def test_target_rows_say_met_only_when_the_measured_value_meets_its_target():
     assert met["solve, random goals, p50 [ms]"] and rows["solve, random goals, p50 [ms]"].value == 39.0
     assert not met["solve, random goals, p95 [ms]"]  # 101 ms > 100 ms
     assert met["random goals with a worse optimum than every start"]
-    assert not met["solve, random goals, compiled pass (opt-in), p50 [ms]"]  # 41 ms > 40 ms
-    assert met["solve, random goals, compiled pass (opt-in), p95 [ms]"]
     assert met["solve, 120-goal grid, p95 [s]"]
     assert not met["grid goals solved (target: as many as every start)"]  # 110 < 111
     assert not met["grid goals unsolved that a 300-start search solves"]  # 2 > 0
@@ -97,23 +93,6 @@ def test_target_rows_say_met_only_when_the_measured_value_meets_its_target():
     table = format_targets(list(rows.values()))
     assert table.splitlines()[-1] == f"{sum(met.values())} of {len(rows)} targets met"
     assert max(len(line) for line in table.splitlines()) <= 100
-
-
-def test_the_compiled_optimizer_is_asked_for_only_inside_its_bench_row(monkeypatch):
-    """The opt-in row sets ASSEMBLER_PIN_STATICS=numba for its solves only, and gives the
-    variable back as it was (unset, or the user's value)."""
-    from assembler_pin.bench import targets as bench_targets
-    from assembler_pin.statics import pose_kernel
-
-    for before in (None, "numpy"):
-        if before is None:
-            monkeypatch.delenv("ASSEMBLER_PIN_STATICS", raising=False)
-        else:
-            monkeypatch.setenv("ASSEMBLER_PIN_STATICS", before)
-        with bench_targets._compiled_optimizer():
-            assert os.environ["ASSEMBLER_PIN_STATICS"] == "numba"
-        assert os.environ.get("ASSEMBLER_PIN_STATICS") == before
-        assert not pose_kernel.use_pose_kernel()
 
 
 def test_random_goals_are_reachable_poses_the_solver_finds(am):

@@ -22,9 +22,7 @@ from assembler_pin.motion import EEPath
 from assembler_pin.solver import solve
 from assembler_pin.solver.capacity import KEPT_PAYLOAD_MODELS, PayloadModels, payload_capacity, with_payload
 from assembler_pin.statics import kernel as statics_kernel
-from assembler_pin.statics import solve_statics, solve_statics_batch
-
-HAS_NUMBA = importlib.util.find_spec("numba") is not None
+from assembler_pin.statics import solve_statics, solve_statics_batch, solve_statics_pinocchio
 
 #: Goals of the bench's grid where, before the lazy portfolio, a start other than the helper
 #: arm's gave a > 1 % better optimum (the screw start, each time).
@@ -281,7 +279,7 @@ def test_payload_variant_statics_equal_a_model_built_with_that_payload(am):
                 m * pin.exp6(np.concatenate([rng.uniform(-0.01, 0.01, 3), rng.uniform(-0.05, 0.05, 3)]))
                 for m in am.home
             ]
-            mine, ref = solve_statics(variant, plates), solve_statics(built, plates)
+            mine, ref = solve_statics_pinocchio(variant, plates), solve_statics_pinocchio(built, plates)
             np.testing.assert_allclose(mine.forces, ref.forces, atol=1e-10, rtol=0)
             np.testing.assert_allclose(mine.base_wrench, ref.base_wrench, atol=1e-10, rtol=0)
 
@@ -306,7 +304,7 @@ def test_capacity_with_variants_is_held_by_its_pose(am):
     built = AssemblerModel.from_config(
         dataclasses.replace(am.config, payload=dataclasses.replace(am.config.payload, mass=result.capacity_kg))
     )
-    forces = solve_statics(built, result.plates).forces
+    forces = solve_statics_pinocchio(built, result.plates).forces
     assert forces.max() <= leg.max_tension + 1e-6 and forces.min() >= -leg.max_compression - 1e-6
     assert max(forces.max() - leg.max_tension, -leg.max_compression - forces.min()) > -1e-3 * leg.max_tension
 
@@ -324,24 +322,25 @@ def _random_stacks(am: AssemblerModel, count: int, seed: int) -> np.ndarray:
 
 
 @pytest.mark.parametrize("n", [1, 2, 5, 9, pytest.param(64, marks=pytest.mark.slow)])
-@pytest.mark.parametrize(
-    "backend", ["numpy", pytest.param("numba", marks=pytest.mark.skipif(not HAS_NUMBA, reason="no numba"))]
-)
-def test_statics_kernel_equals_pinocchio(n, backend):
-    """Both paths of the closed-form statics against Pinocchio's statics, to 1e-10 N, on
-    random stacks; the condition numbers too (relative 1e-9)."""
+def test_statics_kernel_equals_pinocchio(n):
+    """The compiled batch statics and its numpy reference against Pinocchio's statics, to
+    1e-10 N, on random stacks; the condition numbers too (relative 1e-9); the one-stack
+    engine gives the batch's forces."""
     am = AssemblerModel.from_config({"platforms": n})
     stacks = _random_stacks(am, 4, seed=n)
-    forces = solve_statics_batch(am, stacks, backend=backend)
+    forces = solve_statics_batch(am, stacks)
     R, p = stacks[:, :, :3, :3], stacks[:, :, :3, 3]
-    _, condition = statics_kernel.closed_form_forces(am, R, p, backend)
+    _, condition = statics_kernel.closed_form_forces(am, R, p)
+    numpy_forces, numpy_condition = statics_kernel.reference_forces(am, R, p)
     for b in range(len(stacks)):
-        ref = solve_statics(am, stacks[b])
+        ref = solve_statics_pinocchio(am, stacks[b])
         np.testing.assert_allclose(forces[b], ref.forces, atol=1e-10, rtol=0)
+        np.testing.assert_allclose(numpy_forces[b], ref.forces, atol=1e-10, rtol=0)
         np.testing.assert_allclose(condition[b], ref.condition, rtol=1e-9)
+        np.testing.assert_allclose(numpy_condition[b], ref.condition, rtol=1e-9)
+        np.testing.assert_allclose(solve_statics(am, stacks[b]).forces, ref.forces, atol=1e-10, rtol=0)
 
 
-@pytest.mark.skipif(not HAS_NUMBA, reason="no numba")
 @pytest.mark.parametrize("n", [1, 4, 8, 16])
 def test_kernel_result_is_pinocchios_solve_statics(n):
     """The whole result of the compiled kernel (forces, ball forces, base wrench, condition
@@ -354,14 +353,13 @@ def test_kernel_result_is_pinocchios_solve_statics(n):
     for stack in _random_stacks(am, 3, seed=10 + n):
         base = pin.SE3(pin.exp3(rng.uniform(-0.3, 0.3, 3)), rng.uniform(-0.5, 0.5, 3))
         pa = plate_arrays(am, np.array([base.homogeneous @ m for m in stack]))
-        mine, ref = statics_kernel.kernel_result(am, pa), solve_statics(am, pa)
+        mine, ref = statics_kernel.kernel_result(am, pa), solve_statics_pinocchio(am, pa)
         for field in ("forces", "ball_forces", "base_wrench"):
             np.testing.assert_allclose(getattr(mine, field), getattr(ref, field), atol=1e-10, rtol=0, err_msg=field)
         np.testing.assert_allclose(mine.condition, ref.condition, rtol=1e-9)
         assert mine.singular is ref.singular is False
 
 
-@pytest.mark.skipif(not HAS_NUMBA, reason="no numba")
 def test_kernel_result_refuses_a_singular_stack_as_pinocchios():
     from assembler_pin.exceptions import SingularConfigurationError
     from assembler_pin.kinematics import plate_arrays
@@ -369,13 +367,12 @@ def test_kernel_result_refuses_a_singular_stack_as_pinocchios():
     am = AssemblerModel.from_config({"platforms": 2})
     turn = pin.SE3(pin.exp3(np.array([0, 0, np.pi / 2])), np.array([0, 0, am.config.home_height]))
     pa = plate_arrays(am, [am.home[0], turn, turn * turn])
-    assert statics_kernel.kernel_result(am, pa).singular and solve_statics(am, pa).singular
+    assert statics_kernel.kernel_result(am, pa).singular and solve_statics_pinocchio(am, pa).singular
     for fn in (statics_kernel.kernel_result, solve_statics):
         with pytest.raises(SingularConfigurationError, match="is near a singular configuration"):
             fn(am, pa, raise_on_singular=True)
 
 
-@pytest.mark.skipif(not HAS_NUMBA, reason="no numba")
 def test_statics_kernel_flags_a_singular_stack_as_the_numpy_path():
     """The octahedral singularity (a 3-3 platform turned 90° about its axis) gives NaN rows
     on both paths, the other stacks their forces."""
@@ -384,31 +381,14 @@ def test_statics_kernel_flags_a_singular_stack_as_the_numpy_path():
     turn = pin.SE3(pin.exp3(np.array([0, 0, np.pi / 2])), np.array([0, 0, am.config.home_height]))
     stacks[1, 1] = turn.homogeneous
     stacks[1, 2] = (turn * turn).homogeneous
-    assert solve_statics(am, stacks[1]).singular
-    for backend in ("numpy", "numba"):
-        forces = solve_statics_batch(am, stacks, backend=backend)
-        assert np.isnan(forces[1]).all() and np.isfinite(forces[[0, 2]]).all()
+    assert solve_statics_pinocchio(am, stacks[1]).singular
+    forces = solve_statics_batch(am, stacks)
+    assert np.isnan(forces[1]).all() and np.isfinite(forces[[0, 2]]).all()
+    R, p = stacks[:, :, :3, :3], stacks[:, :, :3, 3]
+    _, condition = statics_kernel.reference_forces(am, R, p)
+    assert not (condition[1] <= 1e12).all() and (condition[[0, 2]] < 1e6).all()
 
 
-def test_statics_backend_choice(monkeypatch):
-    """auto keeps small one-off calls on numpy; the variable forces numpy; a missing numba
-    falls back to numpy and refuses an explicit numba."""
-    monkeypatch.setattr(statics_kernel, "_kernel", None)
-    assert statics_kernel.resolve_backend("auto", 1) == "numpy"
-    assert statics_kernel._kernel is None  # not even imported
-    monkeypatch.setenv(statics_kernel.ENV_VAR, "numpy")
-    assert statics_kernel.resolve_backend(None, 10**6) == "numpy"
-    monkeypatch.setenv(statics_kernel.ENV_VAR, "fast")
-    with pytest.raises(OptionsError, match="statics backend must be one of"):
-        statics_kernel.resolve_backend(None, 1)
-    monkeypatch.delenv(statics_kernel.ENV_VAR)
-    monkeypatch.setattr(statics_kernel, "_kernel", False)  # numba absent
-    assert statics_kernel.resolve_backend("auto", 10**6) == "numpy"
-    with pytest.raises(OptionsError, match="needs numba"):
-        statics_kernel.resolve_backend("numba", 1)
-
-
-@pytest.mark.skipif(not HAS_NUMBA, reason="no numba")
 def test_kernel_result_from_matrices_is_the_checked_arrays_result():
     """From 4×4 matrices the kernel gives the result of the checked plate arrays: exact
     rotations pass the compiled check, a rotation slightly off is projected as
@@ -422,7 +402,7 @@ def test_kernel_result_from_matrices_is_the_checked_arrays_result():
     off = stack.copy()
     off[2, :3, :3] *= 1 + 1e-11  # within the tolerance: projected onto SO(3)
     for matrices in (stack, off):
-        mine, ref = statics_kernel.kernel_result(am, matrices), solve_statics(am, plate_arrays(am, matrices))
+        mine, ref = statics_kernel.kernel_result(am, matrices), solve_statics_pinocchio(am, plate_arrays(am, matrices))
         np.testing.assert_allclose(mine.forces, ref.forces, atol=1e-10, rtol=0)
     hostile = {"nan": (1, 0, 3, np.nan), "bottom row": (2, 3, 0, 1e-9), "inf": (0, 1, 1, np.inf)}
     for what, (k, i, j, value) in hostile.items():

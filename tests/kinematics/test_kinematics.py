@@ -212,3 +212,30 @@ def test_the_leg_measures_batched_and_relative_equal_the_design(am, random_poses
                 np.testing.assert_allclose(got_L[b, j], L, rtol=0, atol=1e-14)
                 np.testing.assert_allclose(got_cos[b, j], expected_cos, rtol=0, atol=1e-13)
                 np.testing.assert_allclose(got_rise[b, j], h, rtol=0, atol=1e-14)
+
+
+def test_the_compiled_leg_state_is_the_numpy_composition(am, random_poses):
+    """Every field of the compiled leg state against the numpy functions composed
+    (:func:`~assembler_pin.kinematics.legs.reference_leg_state`): 1e-12 m and 1e-12 on unit
+    vectors; the deflections 1e-12 rad away from θ = 0, where arccos amplifies rounding (its
+    cosine agrees to 1e-15 there); coincident joint centres refused by both in one message."""
+    import dataclasses
+
+    from assembler_pin.kinematics.legs import reference_leg_state
+
+    rng = np.random.default_rng(7)
+    for _, plates in random_poses:
+        moved = PlateArrays(*_rigid(plates, random_se3(rng, 0.5)))
+        ours, ref = leg_state(am, moved), reference_leg_state(am, moved)
+        for field in dataclasses.fields(ours):
+            tol = 1e-12 if field.name != "deflection" else 1e-7
+            np.testing.assert_allclose(getattr(ours, field.name), getattr(ref, field.name), atol=tol, rtol=0)
+        np.testing.assert_allclose(np.cos(ours.deflection), np.cos(ref.deflection), atol=1e-15, rtol=0)
+        away = ref.deflection > 1e-3
+        np.testing.assert_allclose(ours.deflection[away], ref.deflection[away], atol=1e-12, rtol=0)
+    p = am.config.home_height * np.arange(am.n + 1.0)[:, None] * np.array([0.0, 0.0, 1.0])
+    p[1] = am.geometry.bottom_in_plate[0, 0] - am.geometry.top_in_plate[0, 0]  # leg 0's two joints meet
+    collapsed = PlateArrays(np.repeat(np.eye(3)[None], am.n + 1, axis=0), p)
+    for fn in (leg_state, reference_leg_state):
+        with pytest.raises(PoseError, match="joint centres on top of each other"):
+            fn(am, collapsed)

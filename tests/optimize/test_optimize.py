@@ -106,57 +106,15 @@ def test_bad_options():
         OptimizeOptions(w1=0, w2=0)
 
 
-def test_iterates_take_one_closed_form_pass(am, start, monkeypatch):
-    """On the numpy path each point takes one closed-form pass for the values and the
-    derivatives extend that same pass (never computed again); the Pinocchio statics only
-    re-check returned states."""
+def test_iterates_take_one_compiled_call_per_point(am, start, monkeypatch):
+    """Each point takes one compiled call for its values and one for its derivatives (and the
+    start one, for its max|F|: the force cap); the numpy pass never runs, and the statics of
+    :func:`~assembler_pin.state.evaluate_state` only re-check returned states."""
     import assembler_pin.optimize.problem as problem
     import assembler_pin.state as state_module
-
-    monkeypatch.setenv("ASSEMBLER_PIN_STATICS", "numpy")
-    calls = {"values": 0, "derivatives": 0, "from_scratch": 0, "pinocchio": 0}
-    real_values, real_derivatives, real_statics = (
-        problem.pose_values,
-        problem.pose_derivatives,
-        state_module.solve_statics,
-    )
-
-    def values(*args, **kwargs):
-        calls["values"] += 1
-        return real_values(*args, **kwargs)
-
-    def derivatives(am_, plates, values=None):
-        calls["derivatives"] += 1
-        calls["from_scratch"] += values is None
-        return real_derivatives(am_, plates, values)
-
-    def statics(*args, **kwargs):
-        calls["pinocchio"] += 1
-        return real_statics(*args, **kwargs)
-
-    monkeypatch.setattr(problem, "pose_values", values)
-    monkeypatch.setattr(problem, "pose_derivatives", derivatives)
-    monkeypatch.setattr(state_module, "solve_statics", statics)
-    result = optimize_internal_poses(am, start)
-    assert result.success
-    # + the start's max|F| (the force cap), + 2 and 1 for the optimality check (its problem's
-    # start and its one point, where it takes the derivatives)
-    assert calls["values"] == result.evaluations + 1 + 2
-    assert calls["derivatives"] == result.gradient_evaluations + 1 > 1 and calls["from_scratch"] == 0
-    # the start, the answer, the best point met and at most four pull-back trials
-    assert 2 <= calls["pinocchio"] <= 7 < result.evaluations
-    _assert_feasible_independently(am, result.optimized, goal=start.se3(am.n))
-
-
-@pytest.mark.skipif(not HAS_NUMBA, reason="no numba")
-def test_compiled_iterates_take_one_call_per_point(am, start, monkeypatch):
-    """With ``ASSEMBLER_PIN_STATICS=numba`` each point takes one compiled call for its values
-    and one for its derivatives (and the start one, for its max|F|: the force cap); the numpy
-    pass never runs, and the optimum equals the numpy path's."""
-    import assembler_pin.optimize.problem as problem
     from assembler_pin.statics.pose_kernel import CompiledPass
 
-    calls = {"values": 0, "derivatives": 0, "numpy": 0}
+    calls = {"values": 0, "derivatives": 0, "numpy": 0, "statics": 0}
     real_values, real_derivatives, real_numpy = CompiledPass.values, CompiledPass.derivatives, problem.pose_values
 
     def counted(key, real):
@@ -169,15 +127,13 @@ def test_compiled_iterates_take_one_call_per_point(am, start, monkeypatch):
     monkeypatch.setattr(CompiledPass, "values", counted("values", real_values))
     monkeypatch.setattr(CompiledPass, "derivatives", counted("derivatives", real_derivatives))
     monkeypatch.setattr(problem, "pose_values", counted("numpy", real_numpy))
-    monkeypatch.setenv("ASSEMBLER_PIN_STATICS", "numba")
+    monkeypatch.setattr(state_module, "solve_statics", counted("statics", state_module.solve_statics))
     result = optimize_internal_poses(am, start)
     assert result.success
     assert calls["values"] == result.evaluations + 1 + 2 and calls["numpy"] == 0  # + the optimality check's
     assert calls["derivatives"] == result.gradient_evaluations + 1 > 1
-    monkeypatch.undo()
-    monkeypatch.setenv("ASSEMBLER_PIN_STATICS", "numpy")
-    reference = optimize_internal_poses(am, start)
-    assert result.objective_optimized == pytest.approx(reference.objective_optimized, rel=1e-9)
+    # the start, the answer, the best point met and at most four pull-back trials
+    assert 2 <= calls["statics"] <= 7 < result.evaluations
     _assert_feasible_independently(am, result.optimized, goal=start.se3(am.n))
 
 

@@ -11,7 +11,6 @@ import pinocchio as pin
 import pytest
 from checks import assert_feasible
 
-import assembler_pin.optimize.problem as problem_module
 from assembler_pin import AssemblerModel, solve_statics
 from assembler_pin.cli import main
 from assembler_pin.kinematics import taa_to_se3
@@ -90,27 +89,14 @@ def test_one_platform_from_the_cli(tmp_path, capsys):
         assert json.loads(capsys.readouterr().out)["success"] is True
 
 
-#: The optimizer's two evaluation paths: the numpy pass and, with numba, the compiled one.
-BACKENDS = [
-    "numpy",
-    pytest.param("compiled", marks=pytest.mark.skipif(not HAS_NUMBA, reason="no numba")),
-]
+def _patch_values(monkeypatch, wrap) -> None:
+    """Route the optimizer's values (its compiled pass) through ``wrap(real)(*args)``."""
+    from assembler_pin.statics.pose_kernel import CompiledPass
+
+    monkeypatch.setattr(CompiledPass, "values", wrap(CompiledPass.values))
 
 
-def _patch_values(monkeypatch, backend: str, wrap) -> None:
-    """Route the optimizer's values through ``wrap(real)(*args)`` on the given path."""
-    if backend == "numpy":
-        monkeypatch.setenv("ASSEMBLER_PIN_STATICS", "numpy")
-        monkeypatch.setattr(problem_module, "pose_values", wrap(problem_module.pose_values))
-    else:
-        monkeypatch.setenv("ASSEMBLER_PIN_STATICS", "numba")
-        from assembler_pin.statics.pose_kernel import CompiledPass
-
-        monkeypatch.setattr(CompiledPass, "values", wrap(CompiledPass.values))
-
-
-@pytest.mark.parametrize("backend", BACKENDS)
-def test_a_singular_trial_point_is_an_infeasible_step(am, monkeypatch, backend):
+def test_a_singular_trial_point_is_an_infeasible_step(am, monkeypatch):
     goal = taa_to_se3([0.3, 0.0, 0.8, 0.0, 0.6, 0.0])
     init = solve(am, goal, optimize=False).initial
     calls = {"n": 0}
@@ -125,29 +111,23 @@ def test_a_singular_trial_point_is_an_infeasible_step(am, monkeypatch, backend):
 
         return values_at
 
-    _patch_values(monkeypatch, backend, sometimes_singular)
+    _patch_values(monkeypatch, sometimes_singular)
     result = optimize_internal_poses(am, init, goal)  # no exception escapes
     assert calls["n"] >= 3
     assert result.optimized.feasible
     assert_feasible(am, result.optimized, goal)
 
 
-@pytest.mark.parametrize("backend", BACKENDS)
-def test_singular_derivatives_end_the_solve_with_the_reason(am, monkeypatch, backend):
+def test_singular_derivatives_end_the_solve_with_the_reason(am, monkeypatch):
     goal = taa_to_se3([0.3, 0.0, 0.8, 0.0, 0.6, 0.0])
     init = solve(am, goal, optimize=False).initial
 
     def singular(*args, **kwargs):
         raise np.linalg.LinAlgError("Singular matrix")
 
-    if backend == "numpy":
-        monkeypatch.setenv("ASSEMBLER_PIN_STATICS", "numpy")
-        monkeypatch.setattr(problem_module, "pose_derivatives", singular)
-    else:
-        monkeypatch.setenv("ASSEMBLER_PIN_STATICS", "numba")
-        from assembler_pin.statics.pose_kernel import CompiledPass
+    from assembler_pin.statics.pose_kernel import CompiledPass
 
-        monkeypatch.setattr(CompiledPass, "derivatives", singular)
+    monkeypatch.setattr(CompiledPass, "derivatives", singular)
     result = optimize_internal_poses(am, init, goal)
     # the valid start is kept: a valid answer, not proven optimal, and why
     assert result.success and not result.optimal and "singular" in result.message

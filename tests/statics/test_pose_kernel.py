@@ -11,13 +11,11 @@ import pinocchio as pin
 import pytest
 from checks import design_plate_deviation, twist_moved
 
-from assembler_pin import solve_statics
 from assembler_pin.bench.timing import random_reachable_plates
 from assembler_pin.config import load_config
-from assembler_pin.exceptions import OptionsError
 from assembler_pin.kinematics import PlateArrays, leg_state
 from assembler_pin.model import AssemblerModel
-from assembler_pin.statics import pose_kernel, pose_loops
+from assembler_pin.statics import pose_kernel, pose_loops, solve_statics_pinocchio
 from assembler_pin.statics.derivatives import pose_derivatives, pose_values
 
 pytestmark = pytest.mark.skipif(importlib.util.find_spec("numba") is None, reason="no numba")
@@ -73,7 +71,7 @@ def _independent_values(am: AssemblerModel, pa: PlateArrays) -> dict[str, np.nda
     """Forces by Pinocchio's statics, legs by the plain kinematics, λ² written out."""
     legs = leg_state(am, pa)
     return {
-        "forces": solve_statics(am, pa).forces,
+        "forces": solve_statics_pinocchio(am, pa).forces,
         "lengths": legs.lengths,
         "cos_deflection": np.cos(legs.deflection),
         "rise": legs.rise,
@@ -132,21 +130,17 @@ def test_a_singular_platform_gives_nan_forces_and_no_derivatives():
         compiled.derivatives(bad)
 
 
-def test_the_numpy_path_is_the_default(monkeypatch):
-    """The optimizer runs on numpy unless ``ASSEMBLER_PIN_STATICS=numba`` (its answers must
-    not depend on whether numba is installed); asked for without numba, the compiled pass is
-    refused in one line."""
-    monkeypatch.delenv("ASSEMBLER_PIN_STATICS", raising=False)
-    assert not pose_kernel.use_pose_kernel()
-    monkeypatch.setenv("ASSEMBLER_PIN_STATICS", "numpy")
-    assert not pose_kernel.use_pose_kernel()
-    monkeypatch.setenv("ASSEMBLER_PIN_STATICS", "fast")
-    with pytest.raises(OptionsError, match="must be one of auto, numba, numpy, got 'fast'"):
-        pose_kernel.use_pose_kernel()
-    monkeypatch.setenv("ASSEMBLER_PIN_STATICS", "numba")
-    assert pose_kernel.use_pose_kernel()
-    monkeypatch.setattr(pose_kernel, "_kernel", False)  # numba absent
-    with pytest.raises(OptionsError, match="needs numba"):
-        pose_kernel.use_pose_kernel()
-    with pytest.raises(OptionsError, match="needs numba"):
-        pose_kernel.CompiledPass(_model(1))
+def test_the_optimizer_runs_on_the_compiled_pass(monkeypatch):
+    """The optimizer of a force objective evaluates its points on the compiled pass: with the
+    numpy pass made to fail, a solve still succeeds."""
+    import assembler_pin.optimize.problem as problem
+    from assembler_pin import solve
+    from assembler_pin.kinematics import taa_to_se3
+
+    def refused(*args, **kwargs):
+        raise AssertionError("the numpy pass ran")
+
+    monkeypatch.setattr(problem, "pose_values", refused)
+    monkeypatch.setattr(problem, "pose_derivatives", refused)
+    result = solve(_model(4), taa_to_se3([0.05, 0.0, 0.95, 0.0, 0.1, 0.0]))
+    assert result.success and result.optimized.feasible

@@ -1,6 +1,6 @@
 """The compiled single-stack calls of the statics kernel: their pose checks refuse exactly
 what :func:`~assembler_pin.kinematics.plate_arrays` refuses, with its message, and every
-answer they give is Pinocchio's statics (:func:`~assembler_pin.statics.pinocchio_statics.solve_statics`).
+answer they give is Pinocchio's statics (:func:`~assembler_pin.statics.pinocchio_statics.solve_statics_pinocchio`).
 
 The interpreted loops (the numpy-free path of ``statics --home``) are held to Pinocchio on
 moved and turned stacks too, since the compiled kernel is compiled from the same source.
@@ -20,7 +20,7 @@ from assembler_pin.exceptions import PoseError
 from assembler_pin.kinematics import ORTHONORMAL_TOL, PlateArrays, plate_arrays
 from assembler_pin.model import AssemblerModel
 from assembler_pin.statics import kernel as statics_kernel
-from assembler_pin.statics import solve_statics
+from assembler_pin.statics import solve_statics_pinocchio
 from assembler_pin.statics.loops import Grid, closed_form_pure, constants
 
 pytestmark = pytest.mark.skipif(importlib.util.find_spec("numba") is None, reason="no numba")
@@ -55,7 +55,7 @@ def _fresh(R: np.ndarray, p: np.ndarray) -> PlateArrays:
 
 def _assert_is_pinocchios(am: AssemblerModel, got, plates, atol: float = 1e-10) -> None:
     """``got`` against Pinocchio's statics of ``plates``, to ``atol`` [N, N·m]."""
-    ref = solve_statics(am, plates)
+    ref = solve_statics_pinocchio(am, plates)
     for field in FIELDS:
         np.testing.assert_allclose(getattr(got, field), getattr(ref, field), atol=atol, rtol=0, err_msg=field)
     np.testing.assert_allclose(got.condition, ref.condition, rtol=max(1e-9, atol))
@@ -156,7 +156,7 @@ def test_odd_arrays_are_copied_not_compiled_for(am4):
     pa = _stack(am4, 5)
     statics_kernel.kernel_result(am4, pa)
     statics_kernel.kernel_result(am4, pa.as_matrices())
-    statics_kernel.closed_form_forces(am4, pa.R[None], pa.p[None], "numba")
+    statics_kernel.closed_form_forces(am4, pa.R[None], pa.p[None])
     calls = (statics_kernel._arrays_stack, statics_kernel._matrix_stack, statics_kernel._kernel)
     compiled = [len(call.signatures) for call in calls]
     readonly_R, readonly_p = pa.R.copy(), pa.p.copy()
@@ -175,8 +175,8 @@ def test_odd_arrays_are_copied_not_compiled_for(am4):
             np.testing.assert_allclose(getattr(got, field), getattr(ref, field), atol=1e-12, rtol=0, err_msg=what)
     p32 = PlateArrays(pa.R, pa.p.astype(np.float32))
     _assert_is_pinocchios(am4, statics_kernel.kernel_result(am4, p32), plate_arrays(am4, p32))
-    forces, _ = statics_kernel.closed_form_forces(am4, readonly_R[None], readonly_p[None], "numba")
-    np.testing.assert_allclose(forces[0], solve_statics(am4, pa).forces, atol=1e-10, rtol=0)
+    forces, _ = statics_kernel.closed_form_forces(am4, readonly_R[None], readonly_p[None])
+    np.testing.assert_allclose(forces[0], solve_statics_pinocchio(am4, pa).forces, atol=1e-10, rtol=0)
     assert [len(call.signatures) for call in calls] == compiled
 
 
@@ -206,7 +206,7 @@ def test_a_singular_stack_is_flagged_from_every_input(am4):
     poses[3] = poses[3] * turn
     poses[4] = poses[4] * turn
     pa = plate_arrays(am4, poses)
-    assert solve_statics(am4, pa).singular
+    assert solve_statics_pinocchio(am4, pa).singular
     for plates in (_fresh(pa.R, pa.p), pa.as_matrices()):
         assert statics_kernel.kernel_result(am4, plates).singular
 
@@ -223,7 +223,7 @@ def test_interpreted_loops_are_pinocchios_statics(n):
         bottom = Grid((n, 6, 3), geo.bottom_in_plate.ravel().tolist())
         top = Grid((n, 6, 3), geo.top_in_plate.ravel().tolist())
         forces, condition, ball, base = closed_form_pure(R, p, bottom, top, constants(am.config))
-        ref = solve_statics(am, pa)
+        ref = solve_statics_pinocchio(am, pa)
         got = {"forces": forces.nested()[0], "ball_forces": ball.nested()[0], "base_wrench": base.data}
         for field in FIELDS:
             np.testing.assert_allclose(got[field], getattr(ref, field), atol=1e-10, rtol=0, err_msg=field)
