@@ -291,3 +291,17 @@ def test_page_command_runs(line, tmp_path, monkeypatch):
         (tmp_path / name).symlink_to(ROOT / name)
     monkeypatch.chdir(tmp_path)
     _run_line(line, tmp_path)
+
+
+def test_ratios_table_is_generated_from_the_bench():
+    """The ratios table of docs/benchmarks.md is the bench's own rendering of the figures it
+    stored (docs/ratios.json, written by ``python docs/gen_ratios.py``), with every row."""
+    import json
+
+    gen = _generator("gen_ratios")
+    page = gen.PAGE.read_text(encoding="utf-8")
+    doc = json.loads(gen.FIGURES.read_text(encoding="utf-8"))
+    assert gen.render(page, doc) == page, "docs/benchmarks.md is stale: run python docs/gen_ratios.py"
+    from assembler_pin.bench.ratios import RATIO_TARGETS
+
+    assert all(what in page for _, what, *_ in RATIO_TARGETS)

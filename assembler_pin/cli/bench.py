@@ -61,6 +61,12 @@ def add_parser(add) -> None:
         "obstacles, a map's memory (~20 min)",
     )
     p.add_argument(
+        "--ratios",
+        action="store_true",
+        help="only the user's path against bare Pinocchio, in one process: evaluate_state and "
+        "solve_statics ÷ Pinocchio's gravity and Jacobians, solve's p50 and p95 on 40 random goals (~10 s)",
+    )
+    p.add_argument(
         "--map-cells",
         type=int,
         default=None,
@@ -112,6 +118,12 @@ def run(args: argparse.Namespace) -> int:
     am = AssemblerModel.from_config(config_from_args(args))
     if args.targets:
         return _targets(args, am)
+    if args.ratios:
+        from ..bench.ratios import benchmark_ratios, format_ratios
+
+        doc = benchmark_ratios(am, repeat=args.repeat, goals=4 if args.quick else 40)
+        print(dumps(doc) if args.json else format_ratios(doc))
+        return 0
     if args.truss or args.speed:
         return _extra_figures(args, am)
     if args.time_laws:

@@ -175,3 +175,17 @@ def test_collision_rows_time_real_calls_and_are_held_to_their_targets(am):
     rows = {r.what: r for r in target_rows({"collision": {"clearance_us": 45.0, "solve_scene_ratio": 2.5}})}
     assert rows["self-collision clearance, one stack, compiled kernel [µs]"].met
     assert not rows["solve with ten obstacles against without [×]"].met
+
+
+def test_ratios_are_the_times_divided_and_the_table_says_which_targets_are_met(am):
+    """``bench --ratios``: each ratio is its time over bare Pinocchio's; the table holds each
+    measured figure beside its target and leaves out what was not measured (no goals)."""
+    from assembler_pin.bench.ratios import benchmark_ratios, format_ratios
+
+    doc = benchmark_ratios(am, repeat=3, goals=0)
+    for key in ("evaluate_state", "solve_statics"):
+        assert doc[f"{key}_ratio"] == pytest.approx(doc[f"{key}_us"] / doc["bare_pinocchio_us"], rel=1e-12)
+    table = format_ratios({**doc, "evaluate_state_ratio": 11.0, "solve_statics_ratio": 1.5})
+    assert "| `evaluate_state` (self clearance included) ÷ bare Pinocchio | 11 × | <= 10 × | no |" in table
+    assert "| `solve_statics` ÷ bare Pinocchio | 1.5 × | <= 2 × | yes |" in table
+    assert "solve`, random" not in table
