@@ -45,7 +45,7 @@ from .exceptions import ArgumentError, SingularConfigurationError
 from .kinematics import PlateArrays, leg_vectors, plate_arrays, q_from_arrays
 from .model.assembler import WHOLE_DATA_MAX_PLATFORMS, AssemblerModel, checked_model
 from .statics.closed_form import CONDITION_LIMIT
-from .statics.pinocchio_statics import _leg_jacobians_t, checked_data
+from .statics.pinocchio_statics import checked_data, leg_jacobians_t
 from .statics.result import StaticsResult
 
 __all__ = [
@@ -128,7 +128,7 @@ def _pose(am: AssemblerModel, plates: PlateArrays | Sequence | np.ndarray, data:
     J = pin.computeJointJacobians(am.model, data, q)
     leg_columns = J.T[am.leg_idx_v]  # (n, 6, 3, 6)
     try:
-        jac_t = _leg_jacobians_t(leg_columns, top)
+        jac_t = leg_jacobians_t(leg_columns, top)
         np.linalg.inv(jac_t)
     except np.linalg.LinAlgError:
         raise SingularConfigurationError(

@@ -116,9 +116,10 @@ class SceneError(AssemblerError, ValueError):
     """A scene of obstacles (:func:`assembler_pin.collision.read_scene`) that is malformed or out of range."""
 
 
-class _SingularIterateError(AssemblerError, RuntimeError):
+class SingularIterateError(AssemblerError, RuntimeError):
     """The optimizer's solver accepted an iterate whose statics (or their derivatives) are
-    singular (raised and caught inside :mod:`assembler_pin.optimize`)."""
+    singular: raised by the problem's evaluations and caught by the optimizer, which ends the
+    run with the reason (it never reaches a caller of :mod:`assembler_pin.optimize`)."""
 
 
 class SupportError(AssemblerError, ValueError):
@@ -131,8 +132,3 @@ class WalkError(AssemblerError, ValueError):
 
 class MapError(AssemblerError, ValueError):
     """A capability map that cannot be run, resumed or read (arguments, directory, parts, cluster)."""
-
-
-class _SkipSubcommandError(AssemblerError):
-    """Raised while building the parser to stop building the arguments of a subcommand this
-    run does not use (internal to :func:`assembler_pin.cli.app.build_parser`)."""

@@ -224,3 +224,28 @@ def test_no_import_cycle():
     cycles = set(_cycles(graph))
     assert cycles <= KNOWN_CYCLES, f"import cycles: {sorted(cycles - KNOWN_CYCLES)}"
     assert KNOWN_CYCLES <= cycles, f"remove from KNOWN_CYCLES: {sorted(KNOWN_CYCLES - cycles)}"
+
+
+#: The package's reads of the environment that pick no code path: (module, why).
+ENVIRONMENT_READS = {
+    "assembler_pin/viz/server.py": "copies the environment for the viewer's server process",
+    # the collision engine's variable, until the compiled clearance is its one engine
+    "assembler_pin/collision/kernel.py": "the clearance engine's variable",
+}
+
+
+def test_no_environment_variable_picks_a_code_path():
+    """Nothing in the package reads ``os.environ`` / ``os.getenv`` to choose what to compute:
+    every read is listed above with its reason (one engine per concern; a choice a user needs
+    is one documented argument or configuration key)."""
+    import ast
+    from pathlib import Path
+
+    root = Path(__file__).resolve().parent.parent
+    readers = set()
+    for path in sorted((root / "assembler_pin").rglob("*.py")):
+        for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+            name = node.attr if isinstance(node, ast.Attribute) else None
+            if name in ("environ", "getenv") and isinstance(node.value, ast.Name) and node.value.id == "os":
+                readers.add(path.relative_to(root).as_posix())
+    assert readers <= set(ENVIRONMENT_READS), sorted(readers - set(ENVIRONMENT_READS))

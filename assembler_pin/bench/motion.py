@@ -11,7 +11,7 @@ import numpy as np
 from ..kinematics import PlateArrays
 from ..model.assembler import AssemblerModel
 from ..motion import EEPath, plan_path
-from ..motion.timing import _law_duration, _problem
+from ..motion.timing import law_duration, timing_problem
 from ..motion.toppra_law import OptimalLaw
 from ..scenarios import SCENARIOS, scenario
 from ..simulate import MujocoStack, hold_pose, mujoco_statics
@@ -92,11 +92,11 @@ def benchmark_time_laws(am: AssemblerModel, names: tuple[str, ...] = COMPARE_PAT
     leg = am.config.leg
     for name in names:
         plan = plan_path(am, EEPath((am.home[-1], scenario(name).goal)), am.home)
-        quintic = _law_duration(am, plan, "quintic")
-        optimal = _law_duration(am, plan, "optimal")
+        quintic = law_duration(am, plan, "quintic")
+        optimal = law_duration(am, plan, "optimal")
         L = plan.lengths.reshape(len(plan.states), -1)
         spline = PchipInterpolator(np.arange(len(L), dtype=float), L, axis=0)
-        problem = _problem(am, plan, spline, 0.95 * leg.max_speed, 0.95 * leg.max_acceleration, 16, "optimal")
+        problem = timing_problem(am, plan, spline, 0.95 * leg.max_speed, 0.95 * leg.max_acceleration, 16, "optimal")
         problem = dataclasses.replace(problem, forces=_cached_forces(problem.forces))
         law = OptimalLaw(grid_per_sample=max(1, -(-1000 // (len(L) - 1))), max_grid=1000)
         grid = law.grid(problem)

@@ -15,9 +15,9 @@ import sys
 import traceback
 import warnings
 from collections.abc import Sequence
-from typing import NoReturn
+from typing import Any, NoReturn
 
-from ..exceptions import AssemblerError, CLIError, _SkipSubcommandError
+from ..exceptions import AssemblerError, CLIError
 from . import bench, export, map, plan, reproduce, simulate, solve, statics, stiffness, support, view, walk
 
 logger = logging.getLogger("assembler_pin")
@@ -58,16 +58,28 @@ def build_parser(only: str | None = None) -> argparse.ArgumentParser:
     def add(name: str, help_: str) -> argparse.ArgumentParser:
         p = sub.add_parser(name, help=help_, description=help_)
         if only is not None and name != only:
-            raise _SkipSubcommandError
+            return _UNBUILT  # listed by name and help; its arguments are not built
         p.add_argument("--config", metavar="FILE", help="YAML configuration (default: built-in)")
         return p
 
     for module in SUBCOMMANDS:
-        try:
-            module.add_parser(add)
-        except _SkipSubcommandError:
-            pass
+        module.add_parser(add)
     return parser
+
+
+class _Unbuilt:
+    """What ``add`` gives for a subcommand this run does not use: every parser method a
+    subcommand's ``add_parser`` calls (``add_argument``, ``add_argument_group``,
+    ``set_defaults``, ...) does nothing and returns it again."""
+
+    def __getattr__(self, name: str) -> Any:
+        return self._nothing
+
+    def _nothing(self, *args: object, **kwargs: object) -> _Unbuilt:
+        return self
+
+
+_UNBUILT: Any = _Unbuilt()
 
 
 def _command_of(argv: Sequence[str]) -> str:

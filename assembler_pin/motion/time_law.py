@@ -112,7 +112,7 @@ def _quintic(tau: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     )
 
 
-def _row_counts(durations: list[float], rate: float) -> list[int]:
+def row_counts(durations: list[float], rate: float) -> list[int]:
     """Output intervals of each piece, after checking the duration and row bounds."""
     total = sum(durations)
     limit = BOUNDS["plan.duration"].high
@@ -166,7 +166,7 @@ class QuinticLaw:
     def schedule(self, problem: TimingProblem, rate: float) -> Schedule:
         t0 = time.perf_counter()
         durations = self._durations(problem)
-        counts = _row_counts(durations, rate)
+        counts = row_counts(durations, rate)
         times, s, sd, sdd = [np.zeros(1)], [np.zeros(1)], [np.zeros(1)], [np.zeros(1)]
         start = 0.0
         for (i0, i1, _), d, c in zip(problem.pieces, durations, counts, strict=True):

@@ -108,7 +108,7 @@ def _force_terms(am: AssemblerModel, plan: PlanResult, spline):
     return forces
 
 
-def _problem(
+def timing_problem(
     am: AssemblerModel, plan: PlanResult, spline, v_max: float, a_max: float, grid_per_sample: int, law: str
 ) -> TimingProblem:
     leg = am.config.leg
@@ -204,7 +204,7 @@ def _timed(
         raise TrajectoryError("a trajectory needs a plan with at least 2 samples")
     L = plan.lengths.reshape(len(plan.states), -1)
     spline = PchipInterpolator(np.arange(len(L), dtype=float), L, axis=0)
-    problem = _problem(am, plan, spline, safety * v_max, safety * a_max, grid_per_sample, law)
+    problem = timing_problem(am, plan, spline, safety * v_max, safety * a_max, grid_per_sample, law)
     schedule = time_law(law).schedule(problem, rate)
     check_row_work(len(schedule.times), am.n, rate, schedule.duration)
     times, s, sd, sdd = schedule.times, schedule.s, schedule.s_dot[:, None], schedule.s_ddot[:, None]
@@ -368,7 +368,7 @@ def _best_timed(
     order = []
     for law in laws:
         try:
-            durations[law] = _law_duration(am, plan, law)
+            durations[law] = law_duration(am, plan, law)
             order.append(law)
         except TrajectoryError as exc:
             reasons[law] = str(exc)
@@ -391,14 +391,14 @@ def _best_timed(
     return best
 
 
-def _law_duration(am: AssemblerModel, plan: PlanResult, law: str, safety: float = 0.95) -> float:
+def law_duration(am: AssemblerModel, plan: PlanResult, law: str, safety: float = 0.95) -> float:
     """The duration of ``law`` on the plan [s], without evaluating rows."""
     from scipy.interpolate import PchipInterpolator
 
     leg = am.config.leg
     L = plan.lengths.reshape(len(plan.states), -1)
     spline = PchipInterpolator(np.arange(len(L), dtype=float), L, axis=0)
-    problem = _problem(am, plan, spline, safety * leg.max_speed, safety * leg.max_acceleration, 16, law)
+    problem = timing_problem(am, plan, spline, safety * leg.max_speed, safety * leg.max_acceleration, 16, law)
     return time_law(law).duration(problem)
 
 

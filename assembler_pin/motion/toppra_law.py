@@ -24,7 +24,7 @@ import time
 import numpy as np
 
 from ..exceptions import TrajectoryError
-from .time_law import Schedule, TimingProblem, _row_counts
+from .time_law import Schedule, TimingProblem, row_counts
 
 __all__ = ["OptimalLaw"]
 
@@ -170,7 +170,7 @@ class OptimalLaw:
         grid, sd = self.profile(problem)
         dt = _interval_times(grid, sd)
         total = float(dt.sum())
-        count = _row_counts([total], rate)[0]
+        count = row_counts([total], rate)[0]
         starts = np.concatenate([[0.0], np.cumsum(dt)])
         u = (sd[1:] ** 2 - sd[:-1] ** 2) / (2 * np.diff(grid))  # s̈ of each interval, consistent with ṡ²
         times = total * np.arange(count + 1) / count

@@ -28,7 +28,7 @@ import pinocchio as pin
 
 from ..collision.scene import Scene
 from ..config.options import OptimizeOptions
-from ..exceptions import _SingularIterateError
+from ..exceptions import SingularIterateError
 from ..model.assembler import AssemblerModel
 from ..state import StackState
 from .objective import deviation_term, deviation_term_gradient
@@ -104,7 +104,7 @@ def optimality(
     try:
         gradient, rows, jacobian = form.grad(x), form.cons(x), form.cons_jac(x)
         gradient[:-1] -= _kink_part(problem, x[:-1], form.fun(x))
-    except _SingularIterateError as exc:
+    except SingularIterateError as exc:
         return Optimality(False, np.inf, 0, np.zeros(0), problem, f"no derivative at the state: {exc}")
     return _kkt(problem, gradient, rows, jacobian)
 

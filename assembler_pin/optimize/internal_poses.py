@@ -19,7 +19,7 @@ from ..collision.scene import Scene, read_scene
 from ..common.messages import one_line
 from ..common.threads import one_blas_thread
 from ..config.options import SMOOTH_METHODS, GoalTolerance, OptimizeOptions, checked_options, resolved_method
-from ..exceptions import OptionsError, _SingularIterateError
+from ..exceptions import OptionsError, SingularIterateError
 from ..kinematics import PlateArrays, checked_goal, plate_arrays
 from ..model.assembler import AssemblerModel, checked_model
 from ..state import StackState, evaluate_state
@@ -375,7 +375,7 @@ def _run_solver(problem: Problem, initial_state: StackState) -> tuple[SolverResu
             options={"maxiter": opts.max_iterations, "ftol": opts.ftol},
         )
         singular = ""
-    except _SingularIterateError as exc:
+    except SingularIterateError as exc:
         singular = f"stopped at a singular iterate: {exc}"
         res = StoppedEarly(x0, singular)
     x_final = res.x[:-1] if isinstance(form, SmoothForm) else res.x

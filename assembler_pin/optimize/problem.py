@@ -24,7 +24,7 @@ import pinocchio as pin
 from ..collision.check import Clearance, clearance
 from ..collision.scene import Scene
 from ..config.options import GEOMETRIC_MARGIN, SMOOTH_METHODS, OptimizeOptions
-from ..exceptions import SingularConfigurationError, _SingularIterateError
+from ..exceptions import SingularConfigurationError, SingularIterateError
 from ..kinematics import PlateArrays
 from ..model.assembler import AssemblerModel
 from ..statics.derivatives import PoseDerivatives, PoseValues, pose_derivatives, pose_values
@@ -151,7 +151,7 @@ class Problem:
         """Derivatives at the pose part of x, extending the point's closed-form pass.
 
         Raises:
-            _SingularIterateError: the statics are singular there (no derivative exists).
+            SingularIterateError: the statics are singular there (no derivative exists).
         """
         key = np.asarray(x_pose, dtype=float).tobytes()
         if self._derivs is not None and self._derivs[0] == key:
@@ -160,11 +160,11 @@ class Problem:
         if not isinstance(self.chart, LocalChart):
             raise TypeError("derivatives are taken in the local chart only (the paper's method has none)")
         if p.singular:
-            raise _SingularIterateError("the statics are singular at the iterate")
+            raise SingularIterateError("the statics are singular at the iterate")
         try:
             pose = self._pose_derivatives(p)
         except (np.linalg.LinAlgError, SingularConfigurationError) as exc:
-            raise _SingularIterateError(str(exc)) from None
+            raise SingularIterateError(str(exc)) from None
         # the block product for IPOPT (SLSQP keeps the dense one, its answers bit for bit)
         blocks = np.asarray(self.chart.movable) - 1 if self.opts.method == "ipopt" else None
         d = ChartDerivatives(pose, self.chart.twist_jacobian(p.x, p.plates), blocks)
@@ -198,7 +198,7 @@ class Problem:
         gradient per world twist times the chart's ``B``, from the point's derivatives.
 
         Raises:
-            _SingularIterateError: the pose is singular there.
+            SingularIterateError: the pose is singular there.
         """
         from ..compliance.loaded import sag_and_gradient  # delays scipy
 
@@ -207,7 +207,7 @@ class Problem:
             try:
                 world = sag_and_gradient(self.am, p.plates, chart="world", derivatives=d.pose).gradient
             except (np.linalg.LinAlgError, SingularConfigurationError) as exc:
-                raise _SingularIterateError(str(exc)) from None
+                raise SingularIterateError(str(exc)) from None
             self._sag_grad = (d, world @ d.B)
         return self._sag_grad[1]
 

@@ -35,14 +35,14 @@ from typing import cast
 import numpy as np
 
 from ..common.linalg import inverse_or_nan, skew
-from ..exceptions import _SingularIterateError
+from ..exceptions import SingularIterateError
 from ..model.assembler import AssemblerModel
 from ..statics.derivatives import (
     PoseValues,
-    _axial_force_derivatives,
-    _plate_angle_sq_derivatives,
-    _rest_directions,
-    _transverse_force_derivatives,
+    axial_force_derivatives,
+    plate_angle_sq_derivatives,
+    rest_directions,
+    transverse_force_derivatives,
 )
 from .charts import LocalChart
 from .objective import deviation_term_gradient, motion_cost_gradient
@@ -120,11 +120,11 @@ def banded_derivatives(am: AssemblerModel, v: PoseValues, m: np.ndarray) -> Band
     dL = np.einsum("jik,jikc->jic", u, dd)
     du = (dd - u[..., None] * dL[:, :, None, :]) / L[..., None, None]
     # the closed form's own derivative steps, on the platform's 12 columns with m_j held
-    dgu, df_perp = _transverse_force_derivatives(am, eq, dL, du)
-    da = _axial_force_derivatives(eq, dt, du, df_perp, np.zeros((n, 3, 12)), a)
+    dgu, df_perp = transverse_force_derivatives(am, eq, dL, du)
+    da = axial_force_derivatives(eq, dt, du, df_perp, np.zeros((n, 3, 12)), a)
     d_forces = da + leg.shaft_mass * dgu
     # leg rows (gradients._deflection_and_rise_derivatives, on 12 columns)
-    h_bottom, h_top = _rest_directions(am.geometry.home_direction, R)
+    h_bottom, h_top = rest_directions(am.geometry.home_direction, R)
     d_cos_b = np.einsum("jik,jikc->jic", h_bottom, du)
     d_cos_t = np.einsum("jik,jikc->jic", h_top, du)
     d_cos_b[..., 3:6] += np.cross(h_bottom, u)
@@ -324,7 +324,7 @@ class WrenchForm:
         x_pose, m, _ = self.split(x)
         p = pr.point(x_pose)
         if p.singular:
-            raise _SingularIterateError("the statics are singular at the iterate")
+            raise SingularIterateError("the statics are singular at the iterate")
         v = self._values(x_pose)
         bd = banded_derivatives(pr.am, v, m)
         B = self._chart_blocks(x_pose, v)
@@ -363,7 +363,7 @@ class WrenchForm:
         """The objective's gradient (nx,): on the poses and ``s`` (none on the moments)."""
         pr, n = self.problem, self.n
         movable = np.asarray(self.chart.movable)
-        d_ang = _plate_angle_sq_derivatives(v.deviation, v.plates.p)  # (n, 6n) world twists
+        d_ang = plate_angle_sq_derivatives(v.deviation, v.plates.p)  # (n, 6n) world twists
         d_omega = pr.opts.w2 * deviation_term_gradient(p.plate_angles, block_chart(d_ang, B[movable], movable - 1))
         d_sag = pr.sag_gradient(x_pose) if pr.objective.needs_sag else None
         grad = pr.objective.gradient(np.append(d_omega, pr.opts.w1), None if d_sag is None else np.append(d_sag, 0.0))
@@ -391,7 +391,7 @@ class WrenchForm:
             return self._last[1], self._last[2]
         try:
             grad, nz = self._entries(x)
-        except (_SingularIterateError, np.linalg.LinAlgError) as exc:
+        except (SingularIterateError, np.linalg.LinAlgError) as exc:
             self.singular = f"stopped at a singular iterate: {exc}"
             grad, nz = np.full(x.size, np.nan), np.full(self.rows.size, np.nan)
         self._last = (key, grad, nz)

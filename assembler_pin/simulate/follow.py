@@ -16,7 +16,7 @@ from ..config.bounds import check_bound
 from ..exceptions import SimulationError
 from ..model.assembler import AssemblerModel
 from ..motion.timing import trajectory_states
-from .hold import HOLD_DRIFT_TOLERANCE, _pose_errors, _saturated
+from .hold import HOLD_DRIFT_TOLERANCE, pose_errors, saturated_actuators
 from .stack import MujocoStack
 
 __all__ = ["FollowResult", "follow_trajectory"]
@@ -88,11 +88,11 @@ def _follow_series(
             t = d.time + dt
             d.ctrl[:] = [np.interp(t, traj.times, lengths[:, a]) for a in range(lengths.shape[1])]
             stack.mujoco.mj_step(m, d)
-        e, r = _pose_errors(stack.plates().se3(n), target)
+        e, r = pose_errors(stack.plates().se3(n), target)
         err.append(e)
         rot.append(r)
         peak.append(float(np.abs(d.actuator_force).max()))
-        sat.append(int(_saturated(stack).sum()))
+        sat.append(int(saturated_actuators(stack).sum()))
     return np.array(err), np.array(rot), np.array(peak), np.array(sat)
 
 

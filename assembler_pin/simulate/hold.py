@@ -97,14 +97,14 @@ class HoldResult:
         }
 
 
-def _saturated(stack: MujocoStack) -> np.ndarray:
+def saturated_actuators(stack: MujocoStack) -> np.ndarray:
     """(nu,) True where an actuator sits at its force limit now."""
     m, f = stack.model, stack.data.actuator_force
     lo, hi = m.actuator_forcerange[:, 0], m.actuator_forcerange[:, 1]
     return (f <= lo + 1e-9) | (f >= hi - 1e-9)
 
 
-def _pose_errors(now: pin.SE3, target: pin.SE3) -> tuple[float, float]:
+def pose_errors(now: pin.SE3, target: pin.SE3) -> tuple[float, float]:
     """Distance [m] and angle [rad] of ``now`` from ``target``."""
     return (
         float(np.linalg.norm(now.translation - target.translation)),
@@ -122,12 +122,12 @@ def _hold_series(stack: MujocoStack, ee: pin.SE3, sample_steps: np.ndarray) -> d
             stack.mujoco.mj_step(m, d)
             step += 1
         pa = stack.plates()
-        drift, rot = _pose_errors(pa.se3(n), ee)
+        drift, rot = pose_errors(pa.se3(n), ee)
         out["times"].append(d.time)
         out["drift"].append(drift)
         out["rot"].append(rot)
         out["forces"].append(-d.actuator_force.reshape(n, 6).copy())
-        out["sat"].append(_saturated(stack).reshape(n, 6))
+        out["sat"].append(saturated_actuators(stack).reshape(n, 6))
         out["stops"].append(stack.end_stop_forces())
         out["closure"].append(stack.closure_residual())
         out["poses"].append(pa)

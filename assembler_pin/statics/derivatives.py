@@ -122,7 +122,7 @@ def _leg_jacobians(
     return db, dt, dd, dL, du
 
 
-def _rest_directions(home: np.ndarray, R: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def rest_directions(home: np.ndarray, R: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Each leg's rest direction ``home`` (6, 3) in the world as seen by its bottom and its
     top plate: (n, 6, 3) each."""
     return np.matmul(home, R[:-1].transpose(0, 2, 1)), np.matmul(home, R[1:].transpose(0, 2, 1))
@@ -176,7 +176,7 @@ def leg_derivatives(am: AssemblerModel, pa: PlateArrays) -> LegDerivatives:
     L = legs.leg_lengths(d)
     u = d / L[..., None]
     _, _, dd, dL, du = _leg_jacobians(b, t, L, u)
-    h_bottom, h_top = _rest_directions(geo.home_direction, R)
+    h_bottom, h_top = rest_directions(geo.home_direction, R)
     cos, rise = _deflection_and_rise(am, R, u, L)
     d_cos, d_rise = _deflection_and_rise_derivatives(R, d, u, h_bottom, h_top, dd, du)
     return LegDerivatives(L, dL, cos, d_cos, rise, d_rise)
@@ -232,7 +232,7 @@ def pose_values(am: AssemblerModel, pa: PlateArrays) -> PoseValues:
     return PoseValues(pa, eq, cos, rise, plate_deviation(am, pa))
 
 
-def _transverse_force_derivatives(
+def transverse_force_derivatives(
     am: AssemblerModel, eq: Equilibrium, dL: np.ndarray, du: np.ndarray
 ) -> tuple[np.ndarray, np.ndarray]:
     """d(gravity along each leg) (n, 6, C) [m/s²] and d(transverse ball force) (n, 6, 3, C) [N],
@@ -264,7 +264,7 @@ def _up_moment_derivatives(
     return np.cumsum(level_dmoment[::-1], axis=0)[::-1][1:]
 
 
-def _axial_force_derivatives(
+def axial_force_derivatives(
     eq: Equilibrium,
     dt: np.ndarray,
     du: np.ndarray,
@@ -285,7 +285,7 @@ def _axial_force_derivatives(
     return np.linalg.solve(eq.K, d_rhs - dK_a)
 
 
-def _plate_angle_sq_derivatives(dev: PlateDeviation, p: np.ndarray) -> np.ndarray:
+def plate_angle_sq_derivatives(dev: PlateDeviation, p: np.ndarray) -> np.ndarray:
     """d(λ_k²) (n, 6n): ``dλ = -(c - cosλ â)·dâ / sinλ - (â - cosλ c)·dc / sinλ``, with
     â the unit step ``p_k - p_{k-1}`` and c the rest direction (λ/sinλ → 1 at λ = 0)."""
     n = p.shape[0] - 1
@@ -327,10 +327,10 @@ def pose_derivatives(am: AssemblerModel, pa: PlateArrays, values: PoseValues | N
     v = pose_values(am, pa) if values is None else values
     eq = v.eq
     db, dt, dd, dL, du = _leg_jacobians(eq.b, eq.t, eq.L, eq.u)
-    dgu, df_perp = _transverse_force_derivatives(am, eq, dL, du)
+    dgu, df_perp = transverse_force_derivatives(am, eq, dL, du)
     up_dmoment = _up_moment_derivatives(am, eq, pa.p, db, dt, du)
-    da = _axial_force_derivatives(eq, dt, du, df_perp, up_dmoment)
-    h_bottom, h_top = _rest_directions(am.geometry.home_direction, pa.R)
+    da = axial_force_derivatives(eq, dt, du, df_perp, up_dmoment)
+    h_bottom, h_top = rest_directions(am.geometry.home_direction, pa.R)
     d_cos, d_rise = _deflection_and_rise_derivatives(pa.R, eq.d, eq.u, h_bottom, h_top, dd, du)
     return PoseDerivatives(
         forces=eq.forces,
@@ -342,5 +342,5 @@ def pose_derivatives(am: AssemblerModel, pa: PlateArrays, values: PoseValues | N
         rise=v.rise,
         d_rise=d_rise,
         plate_angles=v.plate_angles,
-        d_plate_angles_sq=_plate_angle_sq_derivatives(v.deviation, pa.p),
+        d_plate_angles_sq=plate_angle_sq_derivatives(v.deviation, pa.p),
     )

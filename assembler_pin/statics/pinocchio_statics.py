@@ -51,7 +51,7 @@ __all__ = [
 ]
 
 
-def _leg_jacobians_t(columns: np.ndarray, top_points: np.ndarray) -> np.ndarray:
+def leg_jacobians_t(columns: np.ndarray, top_points: np.ndarray) -> np.ndarray:
     """Transposed closure Jacobian blocks of the legs' own joints.
 
     ``columns`` (n, 6, 3, 6) are the world-frame Jacobian columns ``[v, ω]`` of each leg's
@@ -68,7 +68,7 @@ def _leg_jacobians_t(columns: np.ndarray, top_points: np.ndarray) -> np.ndarray:
 
 
 def _plate_jacobians(top_columns: np.ndarray, top_points: np.ndarray) -> np.ndarray:
-    """Closure Jacobian blocks of the top plates' free-flyers (see :func:`_leg_jacobians_t`;
+    """Closure Jacobian blocks of the top plates' free-flyers (see :func:`leg_jacobians_t`;
     the anchor moves by ``v + ω × t`` and enters the closure with a minus sign).
 
     Args:
@@ -90,7 +90,7 @@ def closure_jacobian_blocks(am: AssemblerModel, plates: PlateArrays | Sequence |
     pa = plate_arrays(am, plates)
     _, top, vec, lengths = leg_vectors(am, pa)
     terms = gravity_terms(am, pa, vec, lengths)
-    leg = _leg_jacobians_t(terms.leg_columns, top).swapaxes(2, 3)
+    leg = leg_jacobians_t(terms.leg_columns, top).swapaxes(2, 3)
     plate = _plate_jacobians(terms.top_columns, top)
     n = am.n
     out = np.zeros((n, 6, 3, 24))
@@ -184,7 +184,7 @@ def _own_ball_forces(terms: PlatformStatics, top: np.ndarray) -> np.ndarray:
         SingularConfigurationError: a universal joint at gimbal lock.
     """
     try:
-        jac_t = _leg_jacobians_t(terms.leg_columns, top)
+        jac_t = leg_jacobians_t(terms.leg_columns, top)
         return np.linalg.solve(jac_t, terms.g_legs[..., None])[..., 0]
     except np.linalg.LinAlgError:
         raise SingularConfigurationError(

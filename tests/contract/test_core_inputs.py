@@ -617,5 +617,5 @@ def _exception_classes_outside(package) -> list[str]:
 
 def test_every_exception_class_lives_in_exceptions_py():
     assert _exception_classes_outside(ap) == []
-    assert issubclass(exceptions._SingularIterateError, AssemblerError)
+    assert issubclass(exceptions.SingularIterateError, AssemblerError)
     assert issubclass(exceptions.ArgumentError, AssemblerError)
