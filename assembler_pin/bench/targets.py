@@ -30,7 +30,7 @@ import numpy as np
 from ..config.options import casadi_missing
 from ..config.schema import load_config
 from ..helper_arm import perturbed_plates, repair_stack
-from ..helper_arm.initial import even_screw_pose
+from ..kinematics import even_screw_pose
 from ..maps import parse_grid, run_map
 from ..model.assembler import AssemblerModel
 from ..optimize import optimize_internal_poses

@@ -140,10 +140,11 @@ def test_cli_defaults_come_from_the_options_dataclasses():
 
 
 def test_solve_starts_option_reaches_the_solver(capsys):
-    """``--starts all`` runs every start of the solver; the default is ``first`` (the home
-    start only when the helper arm's run fails); a wrong value is one line, exit 2."""
+    """``--starts all`` runs every start of the solver; the default is ``first`` (here the
+    helper arm's and the screw start agree, so the home start does not run); a wrong value is
+    one line, exit 2."""
     from assembler_pin.config.choices import SOLVE_STARTS
-    from assembler_pin.solver.pipeline import START_MODES, STARTS
+    from assembler_pin.solver.starts import START_MODES, STARTS
 
     assert SOLVE_STARTS == START_MODES and SOLVE_STARTS[0] == "first"
     goal = ["0.1", "0.0", "0.8", "0", "0", "0"]
