@@ -118,8 +118,13 @@ def test_bench_json_keys():
         "optimize_slsqp_median_s",
         "optimize_paper_median_s",
         "optimize_speedup_median",
+        "solve_p50_ms",
+        "solve_p95_ms",
+        "solve_all_p50_ms",
+        "solve_time_over_all",
     ):
         assert doc[key] > 0, key
+    assert doc["solve_p95_over_p50"] == pytest.approx(doc["solve_p95_ms"] / doc["solve_p50_ms"])
     assert 0 <= doc["initial_success_rate"] <= 1
     scn = doc["optimize_scenarios"]["orientation_transition"]
     assert scn["speedup"] == pytest.approx(scn["paper_s"] / scn["slsqp_s"])
