@@ -65,8 +65,8 @@ def _add_starts_argument(p: argparse.ArgumentParser) -> None:
         "--starts",
         choices=SOLVE_STARTS,
         help=f"the optimizer's starts: {SOLVE_STARTS[0]} (default): the starts in order (helper arm, screw, "
-        "home) until the answer is settled: the helper arm's optimum held by no leg limit, or two starts "
-        "at one optimum; all: every start, the best optimum kept (not with --carrier)",
+        "home), stopping at the second when both reach one optimum; all: every start; the best optimum is "
+        "kept (not with --carrier)",
     )
 
 
