@@ -25,6 +25,7 @@ from ..solver.pipeline import solve
 from ..statics.engine import solve_statics, solve_statics_batch
 from .collision import benchmark_clearance, benchmark_solve_scene
 from .speed import benchmark_startup
+from .starts import STARTS_GOALS, benchmark_default_starts
 from .timing import LEVEL_GRID, median_time_us, random_reachable_plates
 
 __all__ = [
@@ -54,10 +55,13 @@ def run_benchmarks(
     against without (:func:`~assembler_pin.bench.collision.benchmark_solve_scene`:
     ``solve_free_ms``, ``solve_scene_ms``, ``solve_scene_ratio``), then the
     helper-arm initial condition (:func:`benchmark_initial_condition`: ``initial_scenarios_ms``,
-    ``initial_random_ms`` [ms], ``initial_success_rate``), the CLI start-up in fresh processes
-    beside its targets (``cli_help_s``, ``cli_statics_home_json_s``, ``bare_python_s`` [s],
-    medians of 5: :func:`~assembler_pin.bench.speed.benchmark_startup`), then the
-    optimization of each scenario by both methods (:func:`benchmark_optimization`).
+    ``initial_random_ms`` [ms], ``initial_success_rate``), ``solve`` by default against every
+    start on random goals over the stroke (:func:`~assembler_pin.bench.starts.benchmark_default_starts`:
+    ``solve_p50_ms``, ``solve_p95_ms``, ``solve_p95_over_p50``, ``solve_time_over_all``, ...),
+    the CLI start-up in fresh processes beside its targets (``cli_help_s``,
+    ``cli_statics_home_json_s``, ``bare_python_s`` [s], medians of 5:
+    :func:`~assembler_pin.bench.speed.benchmark_startup`), then the optimization of each
+    scenario by both methods (:func:`benchmark_optimization`).
 
     Each per-call figure is the median over ``repeat`` calls (bound ``bench.repeat``),
     cycling through 20 random poses. ``quick`` cuts the goal sets to a minimum (for smoke
@@ -85,6 +89,7 @@ def run_benchmarks(
             len(batch) / (1e-6 * median_time_us(lambda: solve_statics_batch(am, batch), 5))
         ),
         "initial_condition": lambda: benchmark_initial_condition(am, n_random=3 if quick else 20, seed=seed),
+        "solve_starts": lambda: benchmark_default_starts(am, count=3 if quick else STARTS_GOALS, seed=seed),
     }
     figures["startup"] = lambda: _startup(repeat=3 if quick else 5)
     if optimize:

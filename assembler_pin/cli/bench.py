@@ -57,8 +57,8 @@ def add_parser(add) -> None:
         "--targets",
         action="store_true",
         help="only the speed targets, each figure beside its target: BLAS threads, solve on 60 random and "
-        "120 grid goals, IPOPT on long stacks, statics, batched statics, the clearance, solve among ten "
-        "obstacles, a map's memory (~20 min)",
+        "120 grid goals, the default starts against every start on 40 goals, IPOPT on long stacks, "
+        "statics, batched statics, the clearance, solve among ten obstacles, a map's memory (~20 min)",
     )
     p.add_argument(
         "--ratios",

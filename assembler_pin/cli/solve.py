@@ -64,9 +64,9 @@ def _add_starts_argument(p: argparse.ArgumentParser) -> None:
     p.add_argument(
         "--starts",
         choices=SOLVE_STARTS,
-        help=f"the optimizer's starts: {SOLVE_STARTS[0]} (default): the helper arm's; the screw start too "
-        "when its optimum needs it, every start when its run fails; all: every start (helper arm, home, "
-        "screw), the best optimum kept (slower; not with --carrier)",
+        help=f"the optimizer's starts: {SOLVE_STARTS[0]} (default): the starts in order (helper arm, screw, "
+        "home), stopping at the second when both reach one optimum; all: every start; the best optimum is "
+        "kept (not with --carrier)",
     )
 
 
@@ -121,30 +121,6 @@ def sag_options(args: argparse.Namespace, options):
         raise CLIError(str(exc)) from None
 
 
-def _sag_block(am: AssemblerModel, result, options) -> dict:
-    """The ``sag`` block of the JSON answer: the objective, the limit and the EE's linear sag
-    [m] of the returned pose (world axes), and of the helper arm's pose."""
-    from ..compliance.loaded import sag_and_gradient
-    from ..exceptions import SingularConfigurationError
-
-    def of(state) -> dict | None:
-        if state is None:
-            return None
-        try:
-            s = sag_and_gradient(am, state.plates)
-        except SingularConfigurationError as exc:
-            return {"sag_m": None, "translation_m": None, "message": str(exc)}
-        return {"sag_m": s.sag, "translation_m": s.translation.tolist()}
-
-    return {
-        "objective": options.objective if options is not None else None,
-        "max_sag_m": options.max_sag if options is not None else None,
-        "stiffness_n_per_m": float(am.config.leg.stiffness),
-        "initial": of(result.initial),
-        "answer": of(result.best),
-    }
-
-
 def run(args: argparse.Namespace) -> int:
     """Internal poses for an EE goal: helper-arm initial condition, then (by default) the
     force optimization. Exit 0 when solved; an unreachable goal is an answer too (printed,
@@ -188,7 +164,6 @@ def run(args: argparse.Namespace) -> int:
     written = _write_plates(args.out, result) if args.out else None
     if args.json:
         doc = result.to_dict()
-        doc["sag"] = _sag_block(am, result, options)
         if capacity is not None:
             doc["capacity"] = capacity.to_dict()
         if args.out:
@@ -196,7 +171,8 @@ def run(args: argparse.Namespace) -> int:
         print(dumps(doc))
     else:
         _print_result(args, result, capacity)
-        _print_sag(_sag_block(am, result, options))
+        if result.sag is not None:
+            _print_sag(result.sag.to_dict())
         if args.out:
             print(f"wrote {written}" if written else f"no pose to write to {args.out}: the goal was not solved")
     return 0 if result.success and (capacity is None or capacity.success) else 1

@@ -31,9 +31,9 @@ CARRIER_NAMES = ("ur3", "ur5", "ur10", "panda")
 #: ``limit`` (the force limits), ``max`` (max|F| of the shown pose).
 FORCE_SCALES = ("auto", "limit", "max")
 
-#: The start portfolios of ``solve --starts`` (:data:`assembler_pin.solver.START_MODES`,
-#: the default first): ``first`` runs the helper arm's start, the others only when its run
-#: fails or its optimum needs them; ``all`` runs every start and keeps the best optimum.
+#: The start portfolios of ``solve --starts`` (:data:`assembler_pin.solver.starts.START_MODES`,
+#: the default first): ``first`` runs the starts in order until the answer is settled;
+#: ``all`` runs every start and keeps the best optimum.
 SOLVE_STARTS = ("first", "all")
 
 #: The optimizer's objectives (:mod:`assembler_pin.objective`, the default first): ``force``

@@ -18,7 +18,7 @@ from ..common.messages import binding, describe, number
 from ..common.threads import one_blas_thread
 from ..config.options import GoalTolerance, HelperArmOptions, checked_options
 from ..constraints import evaluate_constraints
-from ..kinematics import PlateArrays, leg_state, to_se3
+from ..kinematics import PlateArrays, even_screw_pose, leg_state, to_se3
 from ..model.assembler import AssemblerModel
 from ..model.geometry import reach_bound
 from ..state import StackState, evaluate_state
@@ -28,12 +28,7 @@ from .link_lengths import link_length_scan
 from .outcome import Candidate, InitialConditionResult, Scan, failure_result, success_result, why_not
 from .repair import perturbed_plates, repair_stack
 
-__all__ = [
-    "KINEMATIC_VIOLATIONS",
-    "even_screw_pose",
-    "initial_condition",
-    "lean_poses",
-]
+__all__ = ["KINEMATIC_VIOLATIONS", "initial_condition"]
 
 logger = logging.getLogger(__name__)
 
@@ -189,54 +184,6 @@ def _repair_starts(
     starts.append(Candidate(math.inf, screw))
     starts += [Candidate(math.inf, plates) for plates in perturbed_plates(screw, opts.perturbed_starts)]
     return starts
-
-
-def even_screw_pose(am: AssemblerModel, goal: pin.SE3) -> list[pin.SE3]:
-    """The even screw pose: plate k at ``base·exp6(k/n · log6(base⁻¹·goal))`` (every platform
-    the same relative transform), plate n at the goal; the one definition (the helper arm's
-    last repair start and the solver's ``screw`` start)."""
-    base, n = am.home[0], am.n
-    screw = pin.log6(base.actInv(goal))
-    return [base * pin.exp6(screw * (k / n)) for k in range(n)] + [goal.copy()]
-
-
-#: The lean poses of :func:`lean_poses`: tilts of the lower plates [rad] and the shear of the
-#: middle platforms in units of a level platform's smallest height, measured on the default
-#: stack's valid poses for the low goals (±0.2, 0.2, 0.5) m that no other start reaches.
-LEAN_TILTS = (0.65, 0.5)
-LEAN_SHEARS = (1.06, 0.8)
-
-#: Lean directions tried per goal: the goal's own horizontal direction and its neighbours
-#: 45° to either side.
-LEAN_DIRECTIONS = (0.0, np.pi / 4, -np.pi / 4)
-
-
-def lean_poses(am: AssemblerModel, goal: pin.SE3) -> Iterator[list[pin.SE3]]:
-    """Stack poses that lean out past a low goal and back (n ≥ 4; none for shorter stacks):
-    platform 0 tilts its top plate by α toward a horizontal direction ê, platforms
-    1..n-3 shear their top plates along ê at near their smallest height h, platform n-2
-    tilts back to level, and plate n is the goal. A stack too tall for a low goal can stand
-    there only so. Tried for ê along the goal's horizontal offset from the base first
-    (:data:`LEAN_DIRECTIONS`), each α of :data:`LEAN_TILTS` and shear of :data:`LEAN_SHEARS`;
-    the poses are starts for the repair, not valid poses."""
-    n = am.n
-    if n < 4:
-        return
-    base = am.home[0]
-    h = height_range(am.config)[0]
-    offset = base.actInv(goal).translation
-    heading = math.atan2(offset[1], offset[0]) if math.hypot(offset[0], offset[1]) > 1e-9 else 0.0
-    for turn in LEAN_DIRECTIONS:
-        phi = heading + turn
-        toward = np.array([math.cos(phi), math.sin(phi), 0.0])
-        for alpha in LEAN_TILTS:
-            tilt = pin.exp3(alpha * np.array([-toward[1], toward[0], 0.0]))
-            for shear in LEAN_SHEARS:
-                plates = [base, base * pin.SE3(tilt, np.array([0.0, 0.0, h]))]
-                for _ in range(n - 3):
-                    plates.append(plates[-1] * pin.SE3(np.eye(3), shear * h * toward + np.array([0.0, 0.0, 0.86 * h])))
-                plates.append(plates[-1] * pin.SE3(tilt.T, np.array([0.0, 0.0, 1.06 * h])))
-                yield [*plates, goal.copy()]
 
 
 def _start_key(cand: Candidate) -> tuple:

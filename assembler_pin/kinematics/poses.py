@@ -27,6 +27,7 @@ __all__ = [
     "PlateArrays",
     "checked_goal",
     "checked_rotations",
+    "even_screw_pose",
     "nearest_rotations",
     "plate_arrays",
     "se3_to_taa",
@@ -329,3 +330,12 @@ def checked_rotations(matrices: np.ndarray, what: str = "plate") -> tuple[np.nda
     if inexact.any():
         R[inexact] = nearest_rotations(R[inexact])
     return R, matrices[:, :3, 3].copy()
+
+
+def even_screw_pose(am: AssemblerModel, goal: pin.SE3) -> list[pin.SE3]:
+    """The even screw pose: plate k at ``base·exp6(k/n · log6(base⁻¹·goal))`` (every platform
+    the same relative transform), plate n at the goal; world poses. The one definition (the
+    helper arm's repair start and the solver's ``screw`` start)."""
+    base, n = am.home[0], am.n
+    screw = pin.log6(base.actInv(goal))
+    return [base * pin.exp6(screw * (k / n)) for k in range(n)] + [goal.copy()]

@@ -3,15 +3,14 @@ and the evaluation of a chart point.
 
 Every iterate is evaluated by ONE closed-form pass: forces, lengths, deflection cosines, rise
 and plate angles. Where the solver asks for derivatives at that point, a second pass gives
-them. By default the passes are the numpy reference
-(:func:`~assembler_pin.statics.derivatives.pose_values`, whose pass
-:func:`~assembler_pin.statics.derivatives.pose_derivatives` extends); with ``ASSEMBLER_PIN_STATICS=numba``
-they run compiled (:class:`~assembler_pin.statics.pose_kernel.CompiledPass`, values and derivatives in
-one call each), except in a problem that reads the sag or runs IPOPT. The sag objectives and the sag limit
-read the EE's linear sag of that pass (:func:`.sag.linear_sag`) and, with the
-derivatives, its adjoint gradient (:func:`~assembler_pin.compliance.loaded.sag_and_gradient`).
-The Pinocchio statics are not used here: they re-check the returned state
-(:func:`~assembler_pin.state.evaluate_state` in :mod:`.internal_poses`), an independent path.
+them. The passes run compiled (:class:`~assembler_pin.statics.pose_kernel.CompiledPass`, values
+and derivatives in one call each), except in a problem that reads the sag or runs IPOPT, which
+reads the intermediates of the numpy pass (:func:`~assembler_pin.statics.derivatives.pose_values`,
+whose pass :func:`~assembler_pin.statics.derivatives.pose_derivatives` extends). The sag
+objectives and the sag limit read the EE's linear sag of that pass (:func:`.sag.linear_sag`)
+and, with the derivatives, its adjoint gradient
+(:func:`~assembler_pin.compliance.loaded.sag_and_gradient`). The returned state is re-checked
+by :func:`~assembler_pin.state.evaluate_state` in :mod:`.internal_poses`.
 """
 
 from __future__ import annotations

@@ -2,6 +2,8 @@
 capacity of a goal.
 
 - :mod:`.pipeline`: :func:`solve`, the helper arm's start then the optimizer from each start.
+- :mod:`.starts`: the start portfolio: the starts, their order, when to stop, which answer.
+- :mod:`.sag`: the EE's sag of a solve's answer.
 - :mod:`.capacity`: :func:`payload_capacity`, the largest payload a goal can hold.
 """
 

@@ -44,7 +44,8 @@ from ..model.platform import PlatformModel, StackPlan
 from ..optimize import optimize_internal_poses
 from ..state import evaluate_state
 from ..statics.engine import solve_statics
-from .pipeline import optimizer_starts, solve
+from .pipeline import solve
+from .starts import optimizer_starts
 
 __all__ = [
     "GLOBAL_PROBE",

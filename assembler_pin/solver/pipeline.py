@@ -8,10 +8,7 @@ reason), not an exception.
 
 from __future__ import annotations
 
-import math
 import time
-import zlib
-from collections.abc import Iterable, Iterator
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
@@ -22,43 +19,19 @@ from ..collision.scene import Scene, read_scene
 from ..common.messages import binding, describe, one_line
 from ..common.threads import one_blas_thread
 from ..config.options import checked_options
-from ..constraints import leg_limit_margins
 from ..exceptions import ArgumentError, OptionsError
-from ..helper_arm import HelperArmOptions, initial_condition, perturbed_plates, repair_stack
-from ..helper_arm.initial import even_screw_pose, lean_poses
-from ..kinematics import PlateArrays, se3_to_taa, to_se3
+from ..helper_arm import HelperArmOptions, initial_condition
+from ..kinematics import se3_to_taa, to_se3
 from ..model.assembler import AssemblerModel, checked_model
-from ..optimize import OptimizeOptions, OptimizeResult, optimize_internal_poses
+from ..optimize import OptimizeOptions, OptimizeResult
 from ..state import StackState, evaluate_state
+from .sag import SagReport, sag_report
+from .starts import START_MODES, agreeing, best_run, run_starts
 
 if TYPE_CHECKING:
     from ..helper_arm import InitialConditionResult
 
-__all__ = [
-    "AT_LIMIT",
-    "COMPRESSED_SHARE",
-    "STARTS",
-    "START_MODES",
-    "SolveResult",
-    "needs_other_starts",
-    "optimizer_starts",
-    "solve",
-]
-
-#: The starts the optimizer runs from, in order: the helper arm's valid initial condition,
-#: the home pose's internal plates, and the even screw pose (every platform the same
-#: relative transform). Each converges in a few tens of ms; the best feasible optimum wins.
-STARTS = ("helper_arm", "home", "screw")
-
-#: The values of ``solve(starts=...)``: ``first`` runs the helper arm's start, then the
-#: screw start only when the helper arm's optimum needs it (:func:`needs_other_starts`) and
-#: every start when the helper arm's run failed; ``all`` runs every start.
-START_MODES = ("first", "all")
-
-#: Extra starts tried only when every start in :data:`STARTS` failed: the helper arm's pose
-#: (or the screw pose) with its internal plates perturbed and repaired onto the leg limits
-#: (seeded, so the answer is reproducible).
-FALLBACK_STARTS = 4
+__all__ = ["SolveResult", "solve"]
 
 
 @dataclass
@@ -69,16 +42,19 @@ class SolveResult:
         goal: the EE goal pose.
         success: a valid pose is returned: it meets every constraint, re-checked with the
             Pinocchio statics (the optimized pose when optimizing, else the helper arm's).
-            Whether it is also the optimum is :attr:`optimal`.
+            Whether it is also a local optimum is :attr:`optimal`.
         message: what happened, or why not: one line naming the binding cause
             (:mod:`~assembler_pin.common.messages`); the long form in ``details``.
         initial_result: the helper-arm result (arm configuration, d used, attempts).
         optimization: the optimizer's result from the winning start (None with
             ``optimize=False`` or when no start gave a feasible state).
         timing_s: wall times ``initial`` and ``optimize`` (all starts) [s].
-        start: name of the start the returned optimum came from (see :data:`STARTS`;
-            ``perturbed_k`` for a fallback start), None without one.
-        runs: every start tried → its optimization result.
+        start: name of the start the returned optimum came from (see
+            :data:`~assembler_pin.solver.starts.STARTS`; ``perturbed_k`` for a fallback start,
+            ``lean_k`` for a lean start), None without one.
+        runs: every start tried, in the order tried → its optimization result.
+        sag: the EE's linear sag under its own load of the helper arm's pose and of the
+            returned pose (:func:`~assembler_pin.solver.sag.sag_report`).
     """
 
     goal: pin.SE3
@@ -91,12 +67,29 @@ class SolveResult:
     runs: dict[str, OptimizeResult] = field(default_factory=dict)
     details: str = ""
     """What every step met: the helper arm's scan, each start's result (may be long)."""
+    sag: SagReport | None = None
 
     @property
     def optimal(self) -> bool:
-        """The returned pose is an optimum: the first-order conditions hold at it
-        (:func:`~assembler_pin.optimize.certificate.optimality`); False without optimization."""
+        """The returned pose is a local optimum: it is valid and the first-order (KKT)
+        conditions hold at it, the objective's gradient opposed by the active constraints'
+        within :data:`~assembler_pin.optimize.certificate.KKT_TOLERANCE` (the residual is
+        ``optimization.optimality.residual``; :func:`~assembler_pin.optimize.certificate.optimality`).
+        A certificate of the pose itself, not a global claim: another start may reach a lower
+        optimum (:attr:`starts_tried`, :attr:`starts_agreeing`). False without optimization."""
         return self.success and self.optimization is not None and self.optimization.optimal
+
+    @property
+    def starts_tried(self) -> tuple[str, ...]:
+        """The starts the optimizer ran from, in the order tried (empty without optimization)."""
+        return tuple(self.runs)
+
+    @property
+    def starts_agreeing(self) -> int:
+        """How many of :attr:`starts_tried` reached the returned optimum (a proven optimum
+        whose Ω is the answer's within :data:`~assembler_pin.solver.starts.SAME_OPTIMUM`);
+        0 when the answer is not a proven optimum."""
+        return agreeing(self.runs, self.optimization) if self.success else 0
 
     @property
     def initial(self) -> StackState | None:
@@ -153,6 +146,8 @@ class SolveResult:
                 }
                 out["optimality"] = opt.optimality.to_dict() if opt.optimality is not None else None
             out["start"] = self.start
+            out["starts_tried"] = list(self.starts_tried)
+            out["starts_agreeing"] = self.starts_agreeing
             out["starts"] = {
                 name: {
                     "success": r.success,
@@ -164,8 +159,12 @@ class SolveResult:
             }
         else:
             out["timing_s"] = dict(self.timing_s)
-        out["optimal"] = self.optimal  # the returned pose is a certified optimum (docs/contract.md)
+        # the returned pose is a local optimum: valid, and the KKT conditions hold at it within
+        # the tolerance of optimality.kkt_residual; not a global claim (docs/contract.md)
+        out["optimal"] = self.optimal
         out["details"] = self.details  # the long form of message: every step met (may be long)
+        if self.sag is not None:
+            out["sag"] = self.sag.to_dict()  # the EE's sag of the helper arm's pose and of the answer
         return out
 
 
@@ -181,18 +180,21 @@ def solve(
 ) -> SolveResult:
     """Internal poses of the stack for an EE goal pose.
 
-    The helper arm gives a valid initial condition; the optimizer then runs from it and,
-    with ``starts="all"`` or when that run needs them (:func:`needs_other_starts`), from the
-    cheap starts of :data:`STARTS` (and, when every one fails, from perturbed screw starts);
-    the best feasible optimum is returned with the name of its start. A goal the helper arm
-    cannot reach may still be solved from another start.
+    The helper arm gives a valid initial condition; the optimizer then runs from the starts of
+    :data:`~assembler_pin.solver.starts.STARTS` in order (the helper arm's, the even screw
+    pose, the home pose; then fallback and lean starts when none reached an optimum or a valid
+    pose), all of them with ``starts="all"``, the first ones until the answer is settled
+    (:func:`~assembler_pin.solver.starts.settled`) by default. The best optimum is returned
+    with the name of its start (:func:`~assembler_pin.solver.starts.best_run`), the starts
+    tried and how many agreed on it. A goal the helper arm cannot reach may still be solved
+    from another start.
 
     Args:
         goal: EE pose in the base (world) frame, ``pin.SE3`` or 4×4.
         optimize: run the force optimization after the initial condition.
         options: optimizer settings; helper_options: helper-arm settings.
-        starts: ``"first"`` (default): the helper arm's start alone when its optimum is
-            final by :func:`needs_other_starts`, else every start; ``"all"``: every start.
+        starts: ``"first"`` (default): the starts in order until the answer is settled;
+            ``"all"``: every start.
         scene: obstacles and floor (:class:`~assembler_pin.collision.scene.Scene`, a scene
             file or None): every run keeps every checked pair of bodies at least the
             configuration's ``clearance`` apart (the optimizer's clearance rows), and a goal
@@ -201,10 +203,24 @@ def solve(
 
     Raises:
         PoseError: the goal is not a valid SE(3) pose.
-        OptionsError: ``starts`` is not one of :data:`START_MODES`.
+        OptionsError: ``starts`` is not one of :data:`~assembler_pin.solver.starts.START_MODES`.
     """
     goal, options, helper_options = _checked_inputs(am, goal, optimize, options, helper_options, starts)
-    scene = read_scene(scene)
+    result = _solved(am, goal, optimize, options, helper_options, starts, read_scene(scene))
+    result.sag = sag_report(am, result.initial, result.best, options if optimize else None)
+    return result
+
+
+def _solved(
+    am: AssemblerModel,
+    goal: pin.SE3,
+    optimize: bool,
+    options: OptimizeOptions,
+    helper_options: HelperArmOptions,
+    starts: str,
+    scene: Scene | None,
+) -> SolveResult:
+    """:func:`solve` on checked inputs, without the sag."""
     t0 = time.perf_counter()
     init = initial_condition(am, goal, helper_options)
     timing = {"initial": time.perf_counter() - t0}
@@ -220,7 +236,7 @@ def solve(
         timing["optimize"] = 0.0
         return SolveResult(goal, False, init.message, init, None, timing, details=helper)
     t1 = time.perf_counter()
-    runs = _run_starts(am, goal, init, options, starts, scene)
+    runs = run_starts(am, goal, init, options, starts, scene)
     timing["optimize"] = time.perf_counter() - t1
     return _answer(goal, init, runs, timing)
 
@@ -248,9 +264,9 @@ def _checked_inputs(
 def _answer(
     goal: pin.SE3, init: InitialConditionResult, runs: dict[str, OptimizeResult], timing: dict[str, float]
 ) -> SolveResult:
-    """The :class:`SolveResult` of the optimizer's runs: the best run (:func:`_best_run`) or
-    why none reached a feasible pose."""
-    name, best = _best_run(runs)
+    """The :class:`SolveResult` of the optimizer's runs: the best run
+    (:func:`~assembler_pin.solver.starts.best_run`) or why none reached a feasible pose."""
+    name, best = best_run(runs)
     helper = f"helper arm: {init.details or init.message}"
     details = "; ".join([helper, *(f"{k} start: {r.message}" for k, r in runs.items())])
     if best is None:
@@ -273,136 +289,3 @@ def _no_start_message(init: InitialConditionResult, runs: dict[str, OptimizeResu
     worst = None if closest is None else binding(closest.optimized.violations)
     why = describe(worst) if worst is not None else "no feasible pose"
     return one_line(f"{why} (closest of {len(runs)} optimizer starts)")
-
-
-def _run_starts(
-    am: AssemblerModel,
-    goal: pin.SE3,
-    init: InitialConditionResult,
-    opts: OptimizeOptions,
-    starts: str,
-    scene: Scene | None = None,
-) -> dict[str, OptimizeResult]:
-    """The optimizer's runs, lazily with ``starts="first"``: the helper arm's start; when it
-    succeeds, the screw start too only when :func:`needs_other_starts` says so; when it
-    fails, every start of :data:`STARTS`. With ``"all"`` every start. Then the fallback
-    starts when no run reached an optimum, and the lean starts when no run met every
-    constraint (until one does) or the helper arm's optimum is compressed (all of them)."""
-    helper_plates = init.plates_if_valid()
-    runs: dict[str, OptimizeResult] = {}
-    cheap = optimizer_starts(am, goal, None)
-    order = list(cheap)
-    if helper_plates is not None:
-        runs["helper_arm"] = optimize_internal_poses(am, helper_plates, goal, opts, scene=scene)
-        if starts == "first" and runs["helper_arm"].optimal:
-            order = ["screw"] if needs_other_starts(am, runs["helper_arm"], opts) else []
-    for name in order:
-        runs[name] = optimize_internal_poses(am, cheap[name], goal, opts, scene=scene)
-    if not any(r.optimal for r in runs.values()):
-        around = init.state.plates if init.success else cheap["screw"]
-        for name, start in _fallback_starts(am, goal, around):
-            runs[name] = optimize_internal_poses(am, start, goal, opts, scene=scene)
-            if runs[name].optimal:
-                break
-    # the lean starts: every one when the helper arm's optimum is compressed (it asked for the
-    # screw start: several local optima lie around it, and which start reaches the best one
-    # must not depend on a run that SLSQP finishes on some BLAS kernels and not on others);
-    # else until one meets every constraint, when no run has
-    compressed = order == ["screw"] and "helper_arm" in runs
-    if compressed or not any(r.optimized.feasible for r in runs.values()):
-        for name, start in _lean_starts(am, goal):
-            runs[name] = optimize_internal_poses(am, start, goal, opts, scene=scene)
-            if not compressed and runs[name].optimized.feasible:
-                break
-    return runs
-
-
-#: A leg within this much [m or cos] of the optimizer's own margin counts as at its limit: a
-#: tenth of a millimetre, so that a leg SLSQP left 1e-6 off its limit on one BLAS kernel and
-#: on it on another is counted alike.
-AT_LIMIT = 1e-4
-
-#: The share of the legs at their minimum stroke from which the helper arm's optimum calls
-#: for the screw start (:func:`needs_other_starts`): 5 of the 24 legs of the default stack.
-COMPRESSED_SHARE = 0.2
-
-
-def needs_other_starts(am: AssemblerModel, run: OptimizeResult, opts: OptimizeOptions) -> bool:
-    """Whether the helper arm's optimum calls for the screw start: it failed, or at least
-    :data:`COMPRESSED_SHARE` of the legs are at their minimum stroke.
-
-    A stack that many legs hold at their shortest is compressed against its stroke: the valid
-    poses around the optimum are a thin set cut by many active limits, and starts on both
-    sides of it end in different local optima. Measured with every start (``starts="all"``)
-    on the default stack: each goal where the screw start gave a better optimum had 7-16 legs
-    at the minimum stroke (8 of the bench's 120 grid goals, 3 of 90 goals of a shifted grid),
-    and no random goal did (0 of 140, at most 4 legs at the minimum stroke). An optimum with
-    fewer legs at their minimum is kept alone; ``starts="all"`` runs every start."""
-    if not run.optimal:
-        return True
-    legs = run.optimized.legs  # the state's own leg state (evaluate_state: leg_state of its plates)
-    margins = leg_limit_margins(am.config.leg, legs.lengths, np.cos(legs.deflection), legs.rise, opts.limit_margin)
-    at_min_stroke = int(np.count_nonzero(margins[0] <= AT_LIMIT))
-    return at_min_stroke >= math.ceil(COMPRESSED_SHARE * margins[0].size)
-
-
-def optimizer_starts(am: AssemblerModel, goal: pin.SE3, helper_plates: PlateArrays | None) -> dict[str, PlateArrays]:
-    """The optimizer's starts (:data:`STARTS`): plate 0 at home, plate n at the goal."""
-    home = list(am.home)
-    home[am.n] = goal
-    starts = {"home": PlateArrays.from_se3(home), "screw": PlateArrays.from_se3(even_screw_pose(am, goal))}
-    if helper_plates is not None:
-        starts = {"helper_arm": helper_plates, **starts}
-    return starts
-
-
-def _fallback_starts(am: AssemblerModel, goal: pin.SE3, around: PlateArrays) -> Iterator[tuple[str, PlateArrays]]:
-    """Valid starts near ``around`` (the helper arm's pose, else the screw pose): its internal
-    plates moved by seeded random twists, then repaired onto the leg limits (:func:`_repaired`)."""
-    copies = perturbed_plates(around.as_se3(), FALLBACK_STARTS, seed=_seed_of(goal))
-    return _repaired(am, "perturbed", copies)
-
-
-def _lean_starts(am: AssemblerModel, goal: pin.SE3) -> Iterator[tuple[str, PlateArrays]]:
-    """The last starts, when no run met every constraint: the lean poses
-    (:func:`~assembler_pin.helper_arm.initial.lean_poses`) repaired onto the leg limits
-    (:func:`_repaired`). On the default stack they solve the low goals (±0.2, 0.2, 0.5) m,
-    which every other start leaves unsolved; on a goal without a valid pose they cost ~0.5 s
-    (12 repairs)."""
-    return _repaired(am, "lean", lean_poses(am, goal))
-
-
-def _repaired(am: AssemblerModel, name: str, poses: Iterable[list[pin.SE3]]) -> Iterator[tuple[str, PlateArrays]]:
-    """``(name_k, pose k repaired onto the leg limits)`` for each of ``poses`` whose repair
-    holds (the others are skipped), lazily: a caller that stops early repairs no more."""
-    for k, plates in enumerate(poses):
-        repaired, violation = repair_stack(am, plates)
-        if violation <= 0.0:
-            yield f"{name}_{k}", repaired
-
-
-def _seed_of(goal: pin.SE3) -> int:
-    """A seed of the goal alone, read to 1e-9 (the same goal gives the same fallback starts
-    on every machine, whatever the rounding of the poses computed on the way)."""
-    rounded = np.round(goal.homogeneous, 9) + 0.0  # + 0.0: -0.0 and 0.0 alike
-    return zlib.crc32(rounded.tobytes())
-
-
-def _best_run(runs: dict[str, OptimizeResult]) -> tuple[str | None, OptimizeResult | None]:
-    """The run to answer with: of the proven optima (else of the valid runs) the one with the
-    smallest Ω (each run's ``objective_optimized``, :func:`assembler_pin.optimize.objective.objective_value`
-    of its Pinocchio-checked state). Optima within :data:`SAME_OPTIMUM` of the smallest count as
-    the same, and the first run in the order tried is named.
-
-    A proven optimum wins over a lower valid state where a run stalled: where a run stalls
-    depends on the machine's rounding, an optimum does not."""
-    valid = [(name, r) for name, r in runs.items() if r.success]
-    pool = [(name, r) for name, r in valid if r.optimal] or valid
-    if not pool:
-        return None, None
-    lowest = min(r.objective_optimized for _, r in pool)
-    return next((name, r) for name, r in pool if r.objective_optimized <= lowest + SAME_OPTIMUM * max(1.0, abs(lowest)))
-
-
-#: Two runs whose objectives differ by less than this (relative) reach the same optimum.
-SAME_OPTIMUM = 1e-6

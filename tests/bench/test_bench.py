@@ -73,6 +73,12 @@ def test_target_rows_say_met_only_when_the_measured_value_meets_its_target():
     doc = {
         "threads": {"threads_identical": True},
         "random_solves": {"first_p50_s": 0.039, "first_p95_s": 0.101, "first_goals_worse": 0},
+        "default_starts": {
+            "solve_p95_over_p50": 3.2,
+            "solve_time_over_all": 0.7,
+            "solve_slowest_goal_over_all": 1.4,
+            "solve_goals_worse_than_all": 1,
+        },
         "grid_solves": {"first_p95_s": 0.2, "first_solved": 110, "all_solved": 111},
         "grid_search": {"solved_by_search": 2},
         "statics_kernel": {"numba_100000_stacks_per_s": 260_000.0, "numba_100000_peak_kb_per_stack": float("nan")},
@@ -82,7 +88,11 @@ def test_target_rows_say_met_only_when_the_measured_value_meets_its_target():
     assert met["answers identical under 1 and 2 BLAS threads (1 = yes)"]
     assert met["solve, random goals, p50 [ms]"] and rows["solve, random goals, p50 [ms]"].value == 39.0
     assert not met["solve, random goals, p95 [ms]"]  # 101 ms > 100 ms
-    assert met["random goals with a worse optimum than every start"]
+    assert met["random goals with an optimum 0.1 % worse than every start's"]
+    assert not met["solve, goals over the stroke, p95 ÷ p50"]  # 3.2 > 3
+    assert met["solve, goals over the stroke, time ÷ every start's"]
+    assert met["solve, slowest goal's time ÷ every start's"]
+    assert not met["goals over the stroke with an optimum 0.1 % worse than every start's"]  # 1 goal
     assert met["solve, 120-goal grid, p95 [s]"]
     assert not met["grid goals solved (target: as many as every start)"]  # 110 < 111
     assert not met["grid goals unsolved that a 300-start search solves"]  # 2 > 0
@@ -93,6 +103,40 @@ def test_target_rows_say_met_only_when_the_measured_value_meets_its_target():
     table = format_targets(list(rows.values()))
     assert table.splitlines()[-1] == f"{sum(met.values())} of {len(rows)} targets met"
     assert max(len(line) for line in table.splitlines()) <= 100
+
+
+def test_default_starts_row_reads_its_ratios_from_the_solves(am, monkeypatch):
+    """The default-against-every-start row: its goals are reachable (the stack FK of legs within
+    the stroke), and its ratios are those of the interleaved solves' own figures."""
+    from assembler_pin.bench import starts as bench_starts
+    from assembler_pin.bench.speed import benchmark_solve_starts
+
+    goals = bench_starts.stroke_goals(am, 2, seed=3)
+    assert len(goals) == 2 and all(np.linalg.norm(g.translation) > 0 for g in goals)
+    figures = {
+        "first_p50_s": 0.05,
+        "first_p95_s": 0.09,
+        "all_p50_s": 0.1,
+        "all_p95_s": 0.2,
+        "first_time_over_all": 0.6,
+        "first_slowest_goal_over_all": 1.1,
+        "first_goals_worse": 0,
+    }
+    seen = []
+
+    def fake(model, goal_set):
+        seen.append(goal_set)
+        return figures
+
+    monkeypatch.setattr(bench_starts, "benchmark_solve_starts", fake)
+    row = bench_starts.benchmark_default_starts(am, count=2, seed=3)
+    monkeypatch.undo()
+    assert len(seen[0]) == 2 and all(a == b for a, b in zip(seen[0], goals, strict=True))
+    assert row["solve_p95_over_p50"] == pytest.approx(1.8) and row["solve_p50_ms"] == pytest.approx(50.0)
+    assert row["solve_time_over_all"] == 0.6 and row["solve_goals_worse_than_all"] == 0
+    out = benchmark_solve_starts(am, goals[:1])
+    assert out["first_time_over_all"] == pytest.approx(out["first_total_s"] / out["all_total_s"])
+    assert out["first_slowest_goal_over_all"] == pytest.approx(out["first_time_over_all"])  # one goal
 
 
 def test_random_goals_are_reachable_poses_the_solver_finds(am):

@@ -118,8 +118,13 @@ def test_bench_json_keys():
         "optimize_slsqp_median_s",
         "optimize_paper_median_s",
         "optimize_speedup_median",
+        "solve_p50_ms",
+        "solve_p95_ms",
+        "solve_all_p50_ms",
+        "solve_time_over_all",
     ):
         assert doc[key] > 0, key
+    assert doc["solve_p95_over_p50"] == pytest.approx(doc["solve_p95_ms"] / doc["solve_p50_ms"])
     assert 0 <= doc["initial_success_rate"] <= 1
     scn = doc["optimize_scenarios"]["orientation_transition"]
     assert scn["speedup"] == pytest.approx(scn["paper_s"] / scn["slsqp_s"])
@@ -140,10 +145,11 @@ def test_cli_defaults_come_from_the_options_dataclasses():
 
 
 def test_solve_starts_option_reaches_the_solver(capsys):
-    """``--starts all`` runs every start of the solver; the default is ``first`` (the home
-    start only when the helper arm's run fails); a wrong value is one line, exit 2."""
+    """``--starts all`` runs every start of the solver; the default is ``first`` (here the
+    helper arm's and the screw start agree, so the home start does not run); a wrong value is
+    one line, exit 2."""
     from assembler_pin.config.choices import SOLVE_STARTS
-    from assembler_pin.solver.pipeline import START_MODES, STARTS
+    from assembler_pin.solver.starts import START_MODES, STARTS
 
     assert SOLVE_STARTS == START_MODES and SOLVE_STARTS[0] == "first"
     goal = ["0.1", "0.0", "0.8", "0", "0", "0"]

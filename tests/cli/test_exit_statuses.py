@@ -509,9 +509,9 @@ def test_bench_reports_progress_per_figure(am, monkeypatch):
     calls = []
     results = run_benchmarks(am, repeat=2, optimize=False, quick=True, progress=lambda *c: (calls.append(c), prog(*c)))
     prog.close()
-    assert [c[0] for c in calls] == list(range(1, 11)) and {c[1] for c in calls} == {10}
+    assert [c[0] for c in calls] == list(range(1, 12)) and {c[1] for c in calls} == {11}
     assert calls[0][2] == "statics_us" and "statics_us" in results and "initial_success_rate" in results
-    assert "bench: 10/10 startup" in stream.getvalue() and stream.getvalue().endswith("\r")
+    assert "bench: 11/11 startup" in stream.getvalue() and stream.getvalue().endswith("\r")
 
 
 class _Terminal(io.StringIO):

@@ -488,22 +488,3 @@ def test_an_arm_cache_stays_bounded_and_a_rebuilt_arm_gives_the_same_answer(am, 
     again = initial_condition(am, goal, arms=arms)
     assert again.state.plates.p.tobytes() == first.state.plates.p.tobytes()
     assert again.state.plates.R.tobytes() == first.state.plates.R.tobytes()
-
-
-def test_lean_poses_start_at_the_base_end_at_the_goal_and_need_four_platforms(am):
-    """The lean starts: plate 0 at the base, plate n at the goal, 12 per goal, the first
-    leaning toward the goal's horizontal offset; none for a stack of fewer than 4 platforms."""
-    from assembler_pin.helper_arm.initial import lean_poses
-
-    goal = pin.SE3(np.eye(3), np.array([0.2, 0.2, 0.5]))
-    poses = list(lean_poses(am, goal))
-    assert len(poses) == 12
-    for plates in poses:
-        assert len(plates) == am.n + 1
-        assert np.allclose(plates[0].homogeneous, am.home[0].homogeneous)
-        assert np.allclose(plates[-1].homogeneous, goal.homogeneous)
-    tilted_normal = poses[0][1].rotation[:, 2]  # plate 1 leans toward +x +y
-    assert tilted_normal[0] > 0.3 and tilted_normal[1] > 0.3
-    from assembler_pin import AssemblerModel
-
-    assert list(lean_poses(AssemblerModel.from_config({"platforms": 3}), goal)) == []

@@ -16,7 +16,7 @@ from assembler_pin.cli import main
 from assembler_pin.kinematics import taa_to_se3
 from assembler_pin.optimize import OptimizeOptions, optimize_internal_poses
 from assembler_pin.solver import solve
-from assembler_pin.solver.pipeline import STARTS
+from assembler_pin.solver.starts import STARTS
 
 HAS_NUMBA = importlib.util.find_spec("numba") is not None
 

@@ -106,8 +106,8 @@ def test_the_screw_start_gives_every_platform_the_same_transform(am):
     """The solver's ``screw`` start (the helper arm's last repair start too): plate 0 at home,
     plate n at the goal, and one relative transform T_{k-1}⁻¹·T_k for every platform, whose
     n-th power is base⁻¹·goal."""
-    from assembler_pin.helper_arm.initial import even_screw_pose
-    from assembler_pin.solver.pipeline import optimizer_starts
+    from assembler_pin.kinematics import even_screw_pose
+    from assembler_pin.solver.starts import optimizer_starts
 
     goal = SCENARIOS["ninety_degrees"].goal
     screw = optimizer_starts(am, goal, None)["screw"]
