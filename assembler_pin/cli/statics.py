@@ -53,9 +53,11 @@ def _fast_home(args: argparse.Namespace) -> bool:
     given = {k: v for k, v in vars(args).items() if k not in _FAST_HOME_ARGS and v and v != _FAST_HOME_DEFAULTS.get(k)}
     if not (args.home and args.json) or given:
         return False
-    from ..statics.home import home_state_document
+    from ..collision.home import home_clearance
+    from ..statics.home import home_anchors, home_state_document
 
-    doc = home_state_document(config_from_args(args))
+    cfg = config_from_args(args)
+    doc = home_state_document(cfg, home_clearance(cfg, *home_anchors(cfg)))
     if doc is not None:
         print(dumps(doc))
     return doc is not None

@@ -19,7 +19,6 @@ from __future__ import annotations
 
 import math
 
-from ..collision.home import home_clearance
 from ..config.schema import AssemblerConfig
 from .loops import Grid, closed_form_pure, constants
 
@@ -122,9 +121,14 @@ def _clearly_feasible(cfg: AssemblerConfig, legs: dict, forces: list, condition:
     return True
 
 
-def home_state_document(cfg: AssemblerConfig) -> dict | None:
+def home_state_document(cfg: AssemblerConfig, clearance: dict | None) -> dict | None:
     """The document of ``evaluate_state(am, am.home).to_dict()`` for the model of ``cfg``, or
     None when the home pose is not strictly inside every limit (take the full path then).
+
+    Args:
+        clearance: the home pose's clearance document
+            (:func:`~assembler_pin.collision.home.home_clearance` of :func:`home_anchors`), or
+            None when it could not be decided on plain floats.
 
     Keys: plates (n+1 4×4), leg_lengths (n, 6) [m], forces (n, 6) [N], bottom_points,
     top_points (n, 6, 3) world [m], max_abs_force, mean_abs_force [N], feasible, violations
@@ -139,7 +143,7 @@ def home_state_document(cfg: AssemblerConfig) -> dict | None:
     forces, condition, base = _statics(cfg, heights)
     if not _clearly_feasible(cfg, legs, forces, condition):
         return None
-    near = home_clearance(cfg, *home_anchors(cfg))
+    near = clearance
     if near is None or not near["min_distance_m"] > cfg.clearance * (1.0 + _MARGIN):
         return None
     plates = [[[1.0, 0.0, 0.0, 0.0], [0.0, 1.0, 0.0, 0.0], [0.0, 0.0, 1.0, z], [0.0, 0.0, 0.0, 1.0]] for z in heights]

@@ -21,6 +21,7 @@ import yaml
 
 from assembler_pin.cli.app import main
 from assembler_pin.cli.statics import _fast_home
+from assembler_pin.collision.home import home_clearance
 from assembler_pin.config import PayloadConfig, PlateConfig, load_config
 from assembler_pin.model import AssemblerModel
 from assembler_pin.model.geometry import leg_geometry
@@ -69,7 +70,7 @@ def test_home_document_equals_the_pinocchio_path(name):
     constraint check) of the home pose, for several configurations."""
     cfg = _config(CONFIGS[name])
     am = AssemblerModel.from_config(cfg)
-    fast = home_state_document(cfg)
+    fast = home_state_document(cfg, home_clearance(cfg, *home_anchors(cfg)))
     assert fast is not None
     _assert_same_document(fast, evaluate_state(am, am.home).to_dict())
 
@@ -100,7 +101,7 @@ def test_home_outside_a_limit_takes_the_full_path(tmp_path):
     """A payload the home pose cannot hold: no fast document; the command still lists the
     violations of the full path (exit 0: the statics are an answer)."""
     cfg = _config({"payload": PayloadConfig(mass=400.0, offset=0.2)})
-    assert home_state_document(cfg) is None
+    assert home_state_document(cfg, home_clearance(cfg, *home_anchors(cfg))) is None
     path = tmp_path / "heavy.yaml"
     path.write_text(yaml.safe_dump(cfg.to_dict()))
     status, doc = _cli_json(["statics", "--home", "--json", "--config", str(path)])
