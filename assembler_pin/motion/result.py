@@ -62,7 +62,7 @@ class MotionResult:
         problems: what the trajectory check found (empty when nothing).
         time_s: wall time of planning, timing and checking [s].
         law_durations: the duration [s] each time law tried reached on the plan
-            (:mod:`~assembler_pin.motion.time_law`).
+            (:mod:`~assembler_pin.motion.laws`).
         replans: how many times the whole path was planned again with half steps because
             an output sample failed its check (0: the first plan held).
     """

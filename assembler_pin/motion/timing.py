@@ -37,20 +37,20 @@ from ..config.options import checked_options
 from ..dynamics import path_force_coefficients
 from ..exceptions import PathError, TrajectoryError
 from ..model.assembler import AssemblerModel
+from .laws import TIME_LAWS, QuinticLaw, TimeLaw, TimingProblem
 from .paths import EEPath
 from .planner import PlanOptions, PlanResult, plan_path
 from .result import MotionResult, first_bad_row, plan_prefix, rows_prefix, verify_trajectory
 from .rows import evaluate_rows, trajectory_states
-from .time_law import TIME_LAWS, QuinticLaw, TimeLaw, TimingProblem
 from .toppra_law import OptimalLaw
 from .trajfile import Trajectory, read_trajectory
 
 logger = logging.getLogger(__name__)
 
 __all__ = [
+    "law_by_name",
     "plan_trajectory",
     "read_trajectory",
-    "time_law",
     "time_parametrize",
     "trajectory_states",
 ]
@@ -82,7 +82,7 @@ FORCE_MARGIN = 1.0
 
 
 def _force_terms(am: AssemblerModel, plan: PlanResult, spline):
-    """``forces(grid)`` of :class:`~.time_law.TimingProblem`: the coefficients ``a, b, c`` of
+    """``forces(grid)`` of :class:`~.laws.TimingProblem`: the coefficients ``a, b, c`` of
     every leg's force at the planned samples (their poses known), linear in between; at a
     sample the two one-sided ``L''`` of the PCHIP give two rows of ``b`` (a and c repeated)."""
     m = len(plan.states)
@@ -148,7 +148,7 @@ def time_parametrize(
         strict: raise when stack FK fails at an output sample; otherwise mark that sample
             infeasible (its pose and margins NaN) — for comparing plans that may be invalid.
         progress: called as ``(rows done, rows, note)`` while the rows are checked.
-        time_law: ``quintic`` or ``optimal`` (:mod:`.time_law`).
+        time_law: ``quintic`` or ``optimal`` (:mod:`.laws`).
 
     Raises:
         TrajectoryError: fewer than 2 samples, settings out of their bounds, a motion that
@@ -205,7 +205,7 @@ def _timed(
     L = plan.lengths.reshape(len(plan.states), -1)
     spline = PchipInterpolator(np.arange(len(L), dtype=float), L, axis=0)
     problem = timing_problem(am, plan, spline, safety * v_max, safety * a_max, grid_per_sample, law)
-    schedule = time_law(law).schedule(problem, rate)
+    schedule = law_by_name(law).schedule(problem, rate)
     check_row_work(len(schedule.times), am.n, rate, schedule.duration)
     times, s, sd, sdd = schedule.times, schedule.s, schedule.s_dot[:, None], schedule.s_ddot[:, None]
     lengths = spline(s).reshape(len(times), am.n, 6)
@@ -278,7 +278,7 @@ def plan_trajectory(
         rate: output samples per second [Hz] (bounds key ``plan.rate``).
         refinements: how many times the whole path may be planned again with half steps.
         progress: called as ``(done, total, note)`` while planning and checking.
-        time_law: ``quintic``, ``optimal`` (:mod:`.time_law`) or ``auto`` (default): the
+        time_law: ``quintic``, ``optimal`` (:mod:`.laws`) or ``auto`` (default): the
             shorter of the two whose every row holds (the optimal law tries
             :data:`OPTIMAL_SAFETIES` of the limits in turn; with waypoint times only the
             quintic law applies).
@@ -399,7 +399,7 @@ def law_duration(am: AssemblerModel, plan: PlanResult, law: str, safety: float =
     L = plan.lengths.reshape(len(plan.states), -1)
     spline = PchipInterpolator(np.arange(len(L), dtype=float), L, axis=0)
     problem = timing_problem(am, plan, spline, safety * leg.max_speed, safety * leg.max_acceleration, 16, law)
-    return time_law(law).duration(problem)
+    return law_by_name(law).duration(problem)
 
 
 def _answer(
@@ -426,7 +426,7 @@ def _answer(
     return MotionResult(success, reason, plan, final, problems, time.perf_counter() - t0)
 
 
-def time_law(name: str) -> TimeLaw:
+def law_by_name(name: str) -> TimeLaw:
     """The law called ``name`` (:data:`TIME_LAWS`)."""
     if name == "quintic":
         return QuinticLaw()

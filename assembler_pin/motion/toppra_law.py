@@ -1,5 +1,5 @@
 """The time-optimal law, by TOPP-RA (``toppra``): one implementation of
-:class:`~assembler_pin.motion.time_law.TimeLaw` (see :mod:`.time_law`).
+:class:`~assembler_pin.motion.laws.TimeLaw` (see :mod:`.laws`).
 
 On a grid of the path (``grid_per_sample`` points per planned step) TOPP-RA finds the largest
 ``ṡ²`` profile, piecewise linear in ``s`` (so ``s̈`` constant between grid points), with
@@ -24,7 +24,7 @@ import time
 import numpy as np
 
 from ..exceptions import TrajectoryError
-from .time_law import Schedule, TimingProblem, row_counts
+from .laws import Schedule, TimingProblem, row_counts
 
 __all__ = ["OptimalLaw"]
 

@@ -13,7 +13,7 @@ row-major), ``complete`` (false: the plan did not reach the end of the path and 
 holds the valid prefix), ``reason``, ``rate_hz``, ``max_speed`` [m/s], ``max_acceleration``
 [m/s²], ``path_kind``, ``base`` (world pose of plate 0, 4×4) and ``waypoint_times`` [s]
 (null unless the path's waypoint times were honoured) and ``time_law`` (``quintic`` or
-``optimal``, :mod:`.time_law`). Columns: ``t`` [s], the 6n leg lengths ``L_sp{j}_leg{i}`` [m],
+``optimal``, :mod:`.laws`). Columns: ``t`` [s], the 6n leg lengths ``L_sp{j}_leg{i}`` [m],
 the EE pose as TAA ``ee_x … ee_rz`` [m, rad], ``max_abs_force`` [N] (statics), the 6n leg
 forces with the motion's own part ``F_sp{j}_leg{i}`` [N, tension positive], the smallest
 margin of each constraint kind ``margin_*`` (``force`` of the statics, ``force_dynamic`` with

@@ -13,8 +13,8 @@ from assembler_pin.dynamics import inverse_dynamics_from_lengths
 from assembler_pin.exceptions import ConfigError, TrajectoryError
 from assembler_pin.kinematics import stack_forward_kinematics
 from assembler_pin.motion import EEPath, PlanOptions, plan_path
-from assembler_pin.motion.time_law import QuinticLaw, TimingProblem
-from assembler_pin.motion.timing import plan_trajectory, time_law, time_parametrize, trajectory_states
+from assembler_pin.motion.laws import QuinticLaw, TimingProblem
+from assembler_pin.motion.timing import law_by_name, plan_trajectory, time_parametrize, trajectory_states
 from assembler_pin.motion.trajfile import read_trajectory
 
 
@@ -88,10 +88,10 @@ def test_forces_beyond_the_limit_at_rest_make_the_path_impossible(am, plan):
 def test_optimal_law_refuses_waypoint_times(plan):
     problem = TimingProblem(lambda s, o=0: np.zeros((len(np.atleast_1d(s)), 6)), 3, [(0, 2, 5.0)], 0.05, 0.2)
     with pytest.raises(TrajectoryError, match="waypoint times"):
-        time_law("optimal").duration(problem)
+        law_by_name("optimal").duration(problem)
     with pytest.raises(TrajectoryError, match="time law must be"):
-        time_law("fastest")
-    assert isinstance(time_law("quintic"), QuinticLaw)
+        law_by_name("fastest")
+    assert isinstance(law_by_name("quintic"), QuinticLaw)
 
 
 @pytest.mark.parametrize("value", [0.0, float("nan"), float("inf"), -1.0, 1e9])
