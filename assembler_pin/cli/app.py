@@ -18,12 +18,13 @@ from collections.abc import Sequence
 from typing import Any, NoReturn
 
 from ..exceptions import AssemblerError, CLIError
-from . import bench, export, map, plan, reproduce, simulate, solve, statics, stiffness, support, view, walk
+from . import bench, export, plan, reproduce, simulate, solve, statics, stiffness, support, view, walk
+from . import map as map_command  # the module of `assembler-pin map`; the builtin map stays map
 
 logger = logging.getLogger("assembler_pin")
 
 #: The subcommands in the order ``--help`` lists them.
-SUBCOMMANDS = (export, statics, stiffness, support, solve, reproduce, bench, plan, walk, map, simulate, view)
+SUBCOMMANDS = (export, statics, stiffness, support, solve, reproduce, bench, plan, walk, map_command, simulate, view)
 
 
 class _Parser(argparse.ArgumentParser):
