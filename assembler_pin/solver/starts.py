@@ -3,7 +3,8 @@
 The one home of the policy and of the poses it starts from. The starts run in the fixed order
 of :data:`STARTS` (the helper arm's valid pose, the even screw pose, the home pose), then,
 when no run reached an optimum, the perturbed fallback starts, and, when no run met every
-constraint, the lean starts. ``starts="all"`` runs every start of :data:`STARTS`;
+constraint or no second run confirmed a compressed optimum, the lean starts
+(:func:`lean_runs`). ``starts="all"`` runs every start of :data:`STARTS`;
 ``starts="first"`` (the default) runs the first ones of the same order and stops as soon as
 the runs so far settle the answer (:func:`settled`), so it never runs a start that ``all``
 does not. Which run answers is decided by a tolerance and a fixed rule (:func:`best_run`),
