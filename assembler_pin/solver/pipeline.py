@@ -8,6 +8,7 @@ reason), not an exception.
 
 from __future__ import annotations
 
+import functools
 import time
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
@@ -53,8 +54,6 @@ class SolveResult:
             :data:`~assembler_pin.solver.starts.STARTS`; ``perturbed_k`` for a fallback start,
             ``lean_k`` for a lean start), None without one.
         runs: every start tried, in the order tried → its optimization result.
-        sag: the EE's linear sag under its own load of the helper arm's pose and of the
-            returned pose (:func:`~assembler_pin.solver.sag.sag_report`).
     """
 
     goal: pin.SE3
@@ -67,7 +66,19 @@ class SolveResult:
     runs: dict[str, OptimizeResult] = field(default_factory=dict)
     details: str = ""
     """What every step met: the helper arm's scan, each start's result (may be long)."""
-    sag: SagReport | None = None
+    model: AssemblerModel | None = field(default=None, repr=False, compare=False)
+    """The stack solved (for :attr:`sag`)."""
+    options: OptimizeOptions | None = field(default=None, repr=False, compare=False)
+    """The optimizer's options (None without optimization)."""
+
+    @functools.cached_property
+    def sag(self) -> SagReport | None:
+        """The EE's linear sag under its own load of the helper arm's pose and of the returned
+        pose (:func:`~assembler_pin.solver.sag.sag_report`), computed on first access (a few
+        ms); None without :attr:`model`."""
+        if self.model is None:
+            return None
+        return sag_report(self.model, self.initial, self.best, self.options)
 
     @property
     def optimal(self) -> bool:
@@ -207,7 +218,7 @@ def solve(
     """
     goal, options, helper_options = _checked_inputs(am, goal, optimize, options, helper_options, starts)
     result = _solved(am, goal, optimize, options, helper_options, starts, read_scene(scene))
-    result.sag = sag_report(am, result.initial, result.best, options if optimize else None)
+    result.model, result.options = am, options if optimize else None
     return result
 
 
@@ -220,7 +231,7 @@ def _solved(
     starts: str,
     scene: Scene | None,
 ) -> SolveResult:
-    """:func:`solve` on checked inputs, without the sag."""
+    """:func:`solve` on checked inputs (the result without its model and options)."""
     t0 = time.perf_counter()
     init = initial_condition(am, goal, helper_options)
     timing = {"initial": time.perf_counter() - t0}

@@ -504,6 +504,7 @@ def test_bench_reports_progress_per_figure(am, monkeypatch):
     monkeypatch.setattr(bench, "BATCH_STACKS", 40)  # the figures' values are not the point here
     monkeypatch.setattr(bench, "benchmark_initial_condition", lambda am, **kw: {"initial_success_rate": 1.0})
     monkeypatch.setattr(bench, "_startup", lambda repeat: {"cli_help_s": 0.0})
+    monkeypatch.setattr(bench, "benchmark_default_starts", lambda am, **kw: {"solve_p50_ms": 1.0})
     stream = io.StringIO()
     prog = TerminalProgress("bench", enabled=True, stream=stream, min_interval=0.0)
     calls = []
@@ -511,7 +512,8 @@ def test_bench_reports_progress_per_figure(am, monkeypatch):
     prog.close()
     assert [c[0] for c in calls] == list(range(1, 12)) and {c[1] for c in calls} == {11}
     assert calls[0][2] == "statics_us" and "statics_us" in results and "initial_success_rate" in results
-    assert "bench: 11/11 startup" in stream.getvalue() and stream.getvalue().endswith("\r")
+    assert "solve_p50_ms" in results and "bench: 11/11 startup" in stream.getvalue()
+    assert stream.getvalue().endswith("\r")
 
 
 class _Terminal(io.StringIO):

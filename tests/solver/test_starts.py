@@ -77,6 +77,42 @@ def test_the_default_stops_at_two_agreeing_optima_only():
     assert settled({"helper_arm": _run(50.0, optimal=False), "screw": _run(49.0), "home": _run(49.0)})
 
 
+def _lean_stage(monkeypatch, runs, lean_objectives, is_compressed):
+    """``lean_runs`` on ``runs`` with lean starts whose runs end at ``lean_objectives`` (None:
+    a run that meets no constraint); the names of the lean runs made."""
+    from assembler_pin.solver import starts
+
+    results = iter(lean_objectives)
+
+    def fake_run(am, start, goal, opts, scene=None):
+        value = next(results)
+        run = _run(value if value is not None else 1e3, optimal=value is not None, success=value is not None)
+        run.optimized = SimpleNamespace(feasible=value is not None)
+        return run
+
+    monkeypatch.setattr(starts, "lean_starts", lambda am, goal: ((f"lean_{k}", None) for k in range(12)))
+    monkeypatch.setattr(starts, "optimize_internal_poses", fake_run)
+    monkeypatch.setattr(starts, "compressed", lambda am, run, opts: is_compressed)
+    for r in runs.values():
+        r.optimized = SimpleNamespace(feasible=r.success)
+    starts.lean_runs(None, None, runs, None, None)
+    return [name for name in runs if name.startswith("lean_")]
+
+
+def test_the_lean_starts_run_until_a_valid_pose_or_a_second_run_at_a_compressed_optimum(monkeypatch):
+    """No valid run: lean starts until one is valid. A compressed optimum that no second run
+    reached: lean starts until one reaches the answer's optimum (a lower one found on the way
+    becomes the answer). Otherwise, none."""
+    failed = {"helper_arm": _run(90.0, optimal=False, success=False)}
+    assert _lean_stage(monkeypatch, failed, [None, None, 80.0, 70.0], True) == ["lean_0", "lean_1", "lean_2"]
+    alone = {"helper_arm": _run(80.0), "screw": _run(90.0, optimal=False, success=False)}
+    assert _lean_stage(monkeypatch, dict(alone), [85.0, 74.0, 74.0, 60.0], True) == ["lean_0", "lean_1", "lean_2"]
+    assert _lean_stage(monkeypatch, dict(alone), [85.0, 80.0], True) == ["lean_0", "lean_1"]
+    assert _lean_stage(monkeypatch, dict(alone), [85.0], False) == []
+    agreed = {"helper_arm": _run(80.0), "screw": _run(80.0)}
+    assert _lean_stage(monkeypatch, agreed, [70.0], True) == []
+
+
 def test_the_default_runs_the_first_starts_of_every_start(am):
     """The default's starts are the first ones of ``all``'s, in the same order, and it stops
     after two exactly when they agree; the result reports what ran and what agreed, in the
