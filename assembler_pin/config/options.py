@@ -16,6 +16,7 @@ from typing import TypeVar
 from ..exceptions import OptionsError, short_repr
 from .bounds import check_bound
 from .choices import OBJECTIVES, OPTIMIZE_METHODS
+from .numbers import is_number
 
 logger = logging.getLogger(__name__)
 
@@ -33,11 +34,6 @@ __all__ = [
     "is_number",
     "resolved_method",
 ]
-
-
-def is_number(value: object) -> bool:
-    """A real number (Python or numpy, not a boolean: numpy's bool is not a ``numbers.Real``)."""
-    return isinstance(value, numbers.Real) and not isinstance(value, bool)
 
 
 @dataclass(frozen=True)
