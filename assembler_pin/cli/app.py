@@ -19,6 +19,7 @@ from typing import NoReturn
 
 from ..exceptions import AssemblerError, CLIError, _SkipSubcommandError
 from . import bench, export, map, plan, reproduce, simulate, solve, statics, stiffness, support, view, walk
+from .common import path_argument
 
 logger = logging.getLogger("assembler_pin")
 
@@ -59,7 +60,7 @@ def build_parser(only: str | None = None) -> argparse.ArgumentParser:
         p = sub.add_parser(name, help=help_, description=help_)
         if only is not None and name != only:
             raise _SkipSubcommandError
-        p.add_argument("--config", metavar="FILE", help="YAML configuration (default: built-in)")
+        p.add_argument("--config", type=path_argument, metavar="FILE", help="YAML configuration (default: built-in)")
         return p
 
     for module in SUBCOMMANDS:

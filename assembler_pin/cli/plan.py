@@ -14,6 +14,7 @@ from .common import (
     add_scene_argument,
     config_from_args,
     dumps,
+    path_argument,
     progress_for,
     radians_checked,
     scene_from_args,
@@ -35,6 +36,7 @@ def add_parser(add) -> None:
     )
     src.add_argument(
         "--waypoints",
+        type=path_argument,
         metavar="FILE",
         help="JSON or CSV waypoints (TAA rows, optional times); from the home pose unless --from, as --to",
     )
@@ -62,8 +64,15 @@ def add_parser(add) -> None:
     )
     p.add_argument("--rate", type=float, default=50.0, help="output samples per second, 1..1000 (default 50)")
     p.add_argument("--w3", type=float, default=100.0, help="weight of the motion term Σ ΔL² [1/m²] (default 100)")
-    p.add_argument("--out", metavar="FILE", help="write the trajectory (.csv, or JSON for any other suffix)")
-    p.add_argument("--plot", metavar="PNG", help="write the lengths, speeds and forces over time with their limits")
+    p.add_argument(
+        "--out", type=path_argument, metavar="FILE", help="write the trajectory (.csv, or JSON for any other suffix)"
+    )
+    p.add_argument(
+        "--plot",
+        type=path_argument,
+        metavar="PNG",
+        help="write the lengths, speeds and forces over time with their limits",
+    )
     p.add_argument(
         "--compare",
         action="store_true",

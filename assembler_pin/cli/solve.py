@@ -24,6 +24,7 @@ from .common import (
     given_flags,
     goal_from_args,
     optimize_options,
+    path_argument,
     progress_for,
     scene_from_args,
     wrapped,
@@ -49,6 +50,7 @@ def add_parser(add) -> None:
     )
     p.add_argument(
         "--out",
+        type=path_argument,
         metavar="FILE",
         help='write the pose found as a plate file {"plates": [...]} for statics, view, simulate, stiffness',
     )

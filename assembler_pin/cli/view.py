@@ -20,6 +20,7 @@ from .common import (
     carrier_from_args,
     config_from_args,
     goal_from_args,
+    path_argument,
     plates_from_args,
     scene_from_args,
     writable_parent,
@@ -31,7 +32,9 @@ def add_parser(add) -> None:
     p = add("view", "show a pose in Meshcat (live server until Ctrl-C, or a standalone HTML page)")
     src = p.add_mutually_exclusive_group(required=True)
     add_goal_arguments(src, " (shows the initial and optimized poses)")
-    src.add_argument("--plates", metavar="FILE", help='JSON {"plates": [n+1 4x4]} file, or - for stdin')
+    src.add_argument(
+        "--plates", type=path_argument, metavar="FILE", help='JSON {"plates": [n+1 4x4]} file, or - for stdin'
+    )
     src.add_argument("--home", action="store_true", help="show the home pose")
     from ..config.choices import FORCE_SCALES, SCENARIO_NAMES
 
@@ -39,7 +42,10 @@ def add_parser(add) -> None:
         "--scenario", choices=SCENARIO_NAMES, help="solve a scenario's goal and show its initial and optimized poses"
     )
     src.add_argument(
-        "--trajectory", metavar="FILE", help="animate a trajectory written by 'plan --out' (legs colored by force)"
+        "--trajectory",
+        type=path_argument,
+        metavar="FILE",
+        help="animate a trajectory written by 'plan --out' (legs colored by force)",
     )
     add_carrier_arguments(p, " (--home/--plates relative to its base plate, --goal in the world)")
     p.add_argument(
@@ -49,7 +55,7 @@ def add_parser(add) -> None:
         help="where leg colors saturate: auto (default: max|F|, at least 10%% of the limit), limit, max",
     )
     p.add_argument("--frames", type=int, default=150, help="with --trajectory: frames of the animation (default 150)")
-    p.add_argument("--html", metavar="FILE", help="write a standalone HTML page instead of serving")
+    p.add_argument("--html", type=path_argument, metavar="FILE", help="write a standalone HTML page instead of serving")
     p.add_argument("--open", action="store_true", help="open the page / viewer URL in a web browser")
     p.add_argument(
         "--animate",

@@ -38,10 +38,10 @@ def _kind(mode: int) -> str:
 
 
 def _name(path: object) -> str:
-    """A path as a message shows it: printable, at most 60 characters."""
+    """A path as a message shows it: printable, at most 160 characters."""
     text = os.fspath(path) if isinstance(path, (str, os.PathLike)) else str(path)
     text = text if isinstance(text, str) and text.isprintable() else repr(text)[1:-1]
-    return text if len(text) <= 60 else text[:59] + "…"
+    return text if len(text) <= 160 else text[:159] + "…"
 
 
 def _refuse_kind(mode: int, what: str, shown: str, error: type[Exception]) -> None:
@@ -74,6 +74,7 @@ def read_input_bytes(
     max_bytes: int,
     shown: str | None = None,
     allow_empty: bool = True,
+    bound: str = "",
 ) -> bytes:
     """The bytes of the input file ``path``, through :func:`checked_input_path` first.
 
@@ -82,6 +83,7 @@ def read_input_bytes(
         max_bytes: the largest file read (its documented bound) [bytes].
         shown: how the message names the file (default: the path as given).
         allow_empty: whether an empty file is an answer (an empty configuration is the default).
+        bound: the row of the limits table that sets ``max_bytes``, named in the message.
 
     Raises:
         ``error``: one line: see :func:`checked_input_path`; larger than ``max_bytes``; empty
@@ -89,6 +91,7 @@ def read_input_bytes(
     """
     target = checked_input_path(path, what, error, shown)
     name = shown if shown is not None else _name(path)
+    larger = f"{what} '{name}' is larger than {max_bytes} bytes" + (f" ({bound})" if bound else "")
     try:
         fd = os.open(target, _OPEN_FLAGS)
     except OSError as exc:
@@ -97,7 +100,7 @@ def read_input_bytes(
         info = os.fstat(fd)
         _refuse_kind(info.st_mode, what, name, error)  # swapped for a pipe since the check
         if info.st_size > max_bytes:
-            raise error(f"{what} '{name}' is larger than {max_bytes} bytes")
+            raise error(larger)
         with os.fdopen(fd, "rb", closefd=False) as fh:
             data = fh.read(max_bytes + 1)
     except OSError as exc:
@@ -105,7 +108,7 @@ def read_input_bytes(
     finally:
         os.close(fd)
     if len(data) > max_bytes:
-        raise error(f"{what} '{name}' is larger than {max_bytes} bytes")
+        raise error(larger)
     if not data and not allow_empty:
         raise error(f"{what} '{name}' is empty")
     return data
@@ -118,10 +121,11 @@ def read_input_text(
     max_bytes: int,
     shown: str | None = None,
     allow_empty: bool = True,
+    bound: str = "",
 ) -> str:
     """The UTF-8 text of the input file ``path`` (:func:`read_input_bytes`); ``error`` also when
     it is not UTF-8 text."""
-    data = read_input_bytes(path, what, error, max_bytes, shown, allow_empty)
+    data = read_input_bytes(path, what, error, max_bytes, shown, allow_empty, bound)
     try:
         return data.decode("utf-8")
     except UnicodeDecodeError:
