@@ -18,8 +18,8 @@ def add_parser(add) -> None:
 def run(args: argparse.Namespace) -> int:
     from ..export import export_model_files
 
-    cfg = config_from_args(args)
     writable_directory(args.out, "--out directory")
+    cfg = config_from_args(args)
     paths = export_model_files(cfg, args.out, mjcf=args.mjcf)
     for role, path in paths.items():
         print(f"wrote {role}: {path}")

@@ -172,10 +172,14 @@ DEFAULT_ELLIPSOID_FORCE = 100.0
 
 
 def _check_options(args: argparse.Namespace) -> None:
-    """Refuse, before anything is computed, counts and factors out of their bounds and
-    options given without the one they qualify (CLIError: one line, exit 2)."""
+    """Refuse, before anything is computed, counts and factors out of their bounds,
+    options given without the one they qualify and a trajectory that is not a regular file
+    (CLIError: one line, exit 2)."""
     from ..config.bounds import check_bound
+    from ..config.inputs import checked_input_path
 
+    if args.trajectory:  # read after the viewer starts: its path checked now
+        checked_input_path(args.trajectory, "trajectory", CLIError)
     check_bound("view.animate", args.animate, "--animate", CLIError)
     check_bound("view.frames", args.frames, "--frames", CLIError)
     if args.exaggerate is not None:

@@ -108,14 +108,16 @@ def run(args: argparse.Namespace) -> int:
     from ..model.assembler import AssemblerModel
     from ..walk import WalkOptions, plan_walk
 
-    am = AssemblerModel.from_config(walking_config(config_from_args(args), args.payload))
-    feet, floor_z = _footholds(args)
-    options = WalkOptions(clearance=args.clearance, floor_z=floor_z)
     out = Path(args.out) if args.out else None
-    if out is not None:
+    if out is not None:  # every output checked before any work
         writable_directory(args.out, "--out directory")
     if args.html:
         writable_parent(args.html, "--html file")
+    if args.plot:
+        writable_parent(args.plot, "--plot file")
+    am = AssemblerModel.from_config(walking_config(config_from_args(args), args.payload))
+    feet, floor_z = _footholds(args)
+    options = WalkOptions(clearance=args.clearance, floor_z=floor_z)
     if args.fps is not None:
         if not args.html:
             raise CLIError("--fps needs --html (it sets the page's samples per second)")

@@ -29,6 +29,7 @@ from typing import Any
 import numpy as np
 import pinocchio as pin
 
+from ..config.bounds import BOUNDS
 from ..config.checks import shorten, unknown_key
 from ..config.numbers import finite_float
 from ..config.schema import load_yaml, read_text_file
@@ -36,13 +37,13 @@ from ..exceptions import ConfigError, SceneError, short_repr
 
 __all__ = ["MAX_OBSTACLES", "MAX_SCENE_BYTES", "MAX_SIZE", "Obstacle", "Scene", "read_scene", "scene_from_dict"]
 
-#: Most obstacles a scene may hold.
-MAX_OBSTACLES = 256
+#: Most obstacles a scene may hold (the ``scene.obstacles`` row of the limits table).
+MAX_OBSTACLES = int(BOUNDS["scene.obstacles"].high)
 #: Largest size, radius, length or coordinate magnitude accepted [m].
 MAX_SIZE = 1e3
-#: Largest scene file read [bytes]: 1 KiB an obstacle (an entry is under 300 bytes), so that
-#: the largest file is refused or read in well under a second.
-MAX_SCENE_BYTES = MAX_OBSTACLES << 10
+#: Largest scene file read [bytes] (the ``scene.bytes`` row of the limits table): 1 KiB an
+#: obstacle (an entry is under 300 bytes), so that the largest file is read in well under 1 s.
+MAX_SCENE_BYTES = int(BOUNDS["scene.bytes"].high)
 #: Longest obstacle name [characters].
 MAX_NAME = 40
 
@@ -221,7 +222,7 @@ def read_scene(path: str | Path | Mapping[str, Any] | Scene | None) -> Scene | N
     if not str(path):
         raise SceneError("a scene file path must not be empty")
     shown = shorten(Path(path).name, 40)
-    text = read_text_file(Path(path), shown, "scene file", MAX_SCENE_BYTES, SceneError)
+    text = read_text_file(Path(path), shown, "scene file", MAX_SCENE_BYTES, SceneError, "scene.bytes")
     try:  # a list longer than the obstacle bound stops the read at its next item
         data = load_yaml(
             text, f"scene file '{shown}'", MAX_OBSTACLES, f" (a scene holds at most {MAX_OBSTACLES} obstacles)"

@@ -93,6 +93,11 @@ BOUNDS: dict[str, Bound] = {
     "leg.max_acceleration": Bound(1e-4, 1000.0, "m/s^2", False, "config leg.max_acceleration"),
     "leg.stiffness": Bound(1e3, 1e10, "N/m", False, "config leg.stiffness: a leg's axial stiffness"),
     "config.platforms": Bound(1, 64, "", True, "config platforms: Stewart platforms in the stack"),
+    "config.bytes": Bound(0, 1 << 16, "bytes", True, "size of a configuration file read (a real one is under 2 kB)"),
+    "scene.obstacles": Bound(0, 256, "", True, "obstacles of one scene file (the read stops at the next one)"),
+    "scene.bytes": Bound(
+        0, 256 << 10, "bytes", True, "size of a scene file read (1 KiB an obstacle: read or refused in well under 1 s)"
+    ),
     "carrier.ik_iterations": Bound(1, 100_000, "", True, "Carrier.ik(max_iterations=...): IK steps"),
     "capacity.max_iterations": Bound(1, 1000, "", True, "payload_capacity(max_iterations=...): optimizations"),
     "fk.max_iterations": Bound(1, 10_000, "", True, "stack_forward_kinematics(max_iterations=...): Newton steps"),

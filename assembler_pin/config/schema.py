@@ -52,6 +52,7 @@ from typing import Any, ClassVar
 import yaml
 
 from ..exceptions import ConfigError, short_repr
+from .bounds import BOUNDS
 from .checks import MAX_MESSAGE, check, shorten, unknown_key, validate
 from .inputs import read_input_text
 from .numbers import finite_float, is_number
@@ -219,8 +220,8 @@ def _number(key: str, value: Any) -> float:
     return x
 
 
-#: Longest configuration file read [bytes] (a real one is under 2 kB).
-MAX_CONFIG_BYTES = 1 << 16
+#: Longest configuration file read [bytes] (the ``config.bytes`` row of the limits table).
+MAX_CONFIG_BYTES = int(BOUNDS["config.bytes"].high)
 #: Most items of one YAML list read (a closure sidecar of 64 platforms lists 384 motors; a
 #: reader may ask for fewer, as a scene for its obstacles).
 MAX_LIST_ITEMS = 10_000
@@ -366,18 +367,21 @@ def config_from_dict(data: Mapping[str, Any] | None) -> AssemblerConfig:
     return AssemblerConfig(**kwargs)
 
 
-def read_text_file(path: Path, shown: str, what: str, max_bytes: int, error: type[Exception]) -> str:
+def read_text_file(path: Path, shown: str, what: str, max_bytes: int, error: type[Exception], bound: str = "") -> str:
     """The UTF-8 text of the file at ``path``, at most ``max_bytes`` bytes (a configuration, a
     scene or a model file), read through the one checked door of input files
     (:func:`~assembler_pin.config.inputs.read_input_text`: a FIFO, a directory or a device is
     refused before it is opened).
+
+    Args:
+        bound: the row of the limits table that sets ``max_bytes``, named in its message.
 
     Raises:
         error: one line naming ``what`` and ``shown`` (the path as the user gave it): the file
             cannot be read, is not a regular file, is larger than ``max_bytes`` or is not UTF-8.
     """
     try:
-        return read_input_text(path, what, error, max_bytes, shown=shown)
+        return read_input_text(path, what, error, max_bytes, shown=shown, bound=bound)
     except error as exc:
         raise error(shorten(str(exc))) from None
 
@@ -406,7 +410,7 @@ def load_config(source: str | Path | Mapping[str, Any] | AssemblerConfig | None 
         raise ConfigError("a config file path must not be empty")
     path = Path(source)
     short_path = shorten(path.name, 40)
-    text = read_text_file(path, short_path, "config file", MAX_CONFIG_BYTES, ConfigError)
+    text = read_text_file(path, short_path, "config file", MAX_CONFIG_BYTES, ConfigError, "config.bytes")
     data = load_yaml(text, f"config file '{short_path}'")
     try:
         return config_from_dict(data)
