@@ -28,6 +28,7 @@ import pinocchio as pin
 from ..common.files import read_text_bounded, strict_json
 from ..config.bounds import BOUNDS, check_bound
 from ..config.choices import PATH_KINDS
+from ..config.numbers import finite_float
 from ..exceptions import AssemblerError, PathError
 from ..kinematics import taa_to_se3, to_se3
 
@@ -136,7 +137,10 @@ def read_waypoints(path: str | Path, kind: str = "screw") -> EEPath:
 
 
 def _numbers(row: object, width: int) -> bool:
-    return type(row) is list and len(row) == width and all(type(x) in (int, float) for x in row)
+    """``row`` is a list of ``width`` JSON numbers a float holds finitely."""
+    if type(row) is not list or len(row) != width:
+        return False
+    return all(type(x) in (int, float) and finite_float(x) is not None for x in row)
 
 
 def _json_waypoints(text: str) -> tuple[list, tuple[float, ...] | None, bool]:
@@ -155,9 +159,9 @@ def _json_waypoints(text: str) -> tuple[list, tuple[float, ...] | None, bool]:
     check_bound("waypoints.count", len(rows), "the number of waypoints", PathError)
     for i, r in enumerate(rows):
         if not _numbers(r, 6):
-            raise PathError(f"waypoint {i} must be a list of 6 numbers x, y, z, rx, ry, rz")
+            raise PathError(f"waypoint {i} must be a list of 6 finite numbers x, y, z, rx, ry, rz")
     if times is not None and not _numbers(times, len(rows)):
-        raise PathError(f'"times" must be a list of {len(rows)} numbers [s], one per waypoint')
+        raise PathError(f'"times" must be a list of {len(rows)} finite numbers [s], one per waypoint')
     return rows, None if times is None else tuple(float(t) for t in times), degrees
 
 
