@@ -15,7 +15,7 @@ from typing import TypeVar
 from ..exceptions import OptionsError, short_repr
 from .bounds import check_bound
 from .choices import OBJECTIVES, OPTIMIZE_METHODS
-from .numbers import finite_float, is_number
+from .numbers import finite_float
 
 logger = logging.getLogger(__name__)
 
@@ -30,7 +30,6 @@ __all__ = [
     "OptimizeOptions",
     "casadi_missing",
     "checked_options",
-    "is_number",
     "resolved_method",
 ]
 

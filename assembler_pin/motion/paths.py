@@ -137,10 +137,11 @@ def read_waypoints(path: str | Path, kind: str = "screw") -> EEPath:
 
 
 def _numbers(row: object, width: int) -> bool:
-    """``row`` is a list of ``width`` JSON numbers a float holds finitely."""
+    """``row`` is a list of ``width`` JSON numbers, no integer too large for a float (an
+    infinite float is refused with its name where the pose is read)."""
     if type(row) is not list or len(row) != width:
         return False
-    return all(type(x) in (int, float) and finite_float(x) is not None for x in row)
+    return all(type(x) is float or (type(x) is int and finite_float(x) is not None) for x in row)
 
 
 def _json_waypoints(text: str) -> tuple[list, tuple[float, ...] | None, bool]:
@@ -159,9 +160,9 @@ def _json_waypoints(text: str) -> tuple[list, tuple[float, ...] | None, bool]:
     check_bound("waypoints.count", len(rows), "the number of waypoints", PathError)
     for i, r in enumerate(rows):
         if not _numbers(r, 6):
-            raise PathError(f"waypoint {i} must be a list of 6 finite numbers x, y, z, rx, ry, rz")
+            raise PathError(f"waypoint {i} must be a list of 6 numbers x, y, z, rx, ry, rz")
     if times is not None and not _numbers(times, len(rows)):
-        raise PathError(f'"times" must be a list of {len(rows)} finite numbers [s], one per waypoint')
+        raise PathError(f'"times" must be a list of {len(rows)} numbers [s], one per waypoint')
     return rows, None if times is None else tuple(float(t) for t in times), degrees
 
 
