@@ -19,7 +19,7 @@ from typing import NoReturn
 
 from ..exceptions import AssemblerError, CLIError, _SkipSubcommandError
 from . import bench, export, map, plan, reproduce, simulate, solve, statics, stiffness, support, view, walk
-from .common import path_argument
+from .paths import check_paths_first, path_argument
 
 logger = logging.getLogger("assembler_pin")
 
@@ -134,6 +134,7 @@ def main(argv: Sequence[str] | None = None) -> int:
 def _run(args: argparse.Namespace, command: str) -> int:
     """``args.func(args)`` with every error but an interrupt turned into one line and a status."""
     try:
+        check_paths_first(args)  # before the subcommand's heavy imports and any work
         status = int(args.func(args))
         sys.stdout.flush()  # a closed pipe shows here, not at the interpreter's exit
         return status

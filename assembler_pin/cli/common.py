@@ -9,13 +9,11 @@ import argparse
 import dataclasses
 import json
 import math
-import os
-import tempfile
 from collections.abc import Sequence
-from pathlib import Path
 from typing import TYPE_CHECKING
 
 from ..exceptions import CLIError
+from .paths import path_argument
 from .plate_file import plates_from_file
 
 if TYPE_CHECKING:
@@ -39,71 +37,6 @@ def dumps(doc: object) -> str:
         return x
 
     return json.dumps(clean(doc), allow_nan=False)
-
-
-def path_argument(text: str) -> str:
-    """The ``type`` of every option that takes a path: an empty path is a usage error (it
-    names no file; without this check an empty ``--scene ""`` would read as no scene)."""
-    if not text:
-        raise argparse.ArgumentTypeError("an empty path names no file; give a file name")
-    return text
-
-
-def _probe_directory(directory: Path, shown: str, what: str) -> None:
-    """Create and remove an empty file in ``directory``: the one sure test that the output can
-    be written there (``os.access`` says yes to root in ``/proc``). A CLIError naming the
-    option's path as typed when it cannot."""
-    try:
-        fd, name = tempfile.mkstemp(prefix=".assembler-pin-probe.", suffix=".tmp", dir=directory)
-    except OSError as exc:
-        raise CLIError(f"{what} '{shown}': cannot write in directory '{directory}': {exc.strerror or exc}") from None
-    os.close(fd)
-    os.unlink(name)
-
-
-def _existing_ancestor(path: Path) -> Path:
-    """``path`` itself when it exists, else its nearest ancestor that does ('.' at worst)."""
-    for candidate in (path, *path.parents):
-        if os.path.lexists(candidate):
-            return candidate
-    return Path(".")
-
-
-def writable_parent(path: str, what: str) -> Path:
-    """``path`` of an output file, checked before any work: its directory exists, is a
-    directory and can be written in (probed), and ``path`` is not a directory; else a
-    CLIError naming ``path`` as typed and what is wrong with it."""
-    target = Path(path)
-    parent = target.parent
-    if target.is_dir() and what.endswith("file"):
-        raise CLIError(f"{what} '{path}' is a directory")
-    found = _existing_ancestor(parent)
-    if not found.is_dir():
-        raise CLIError(f"{what} '{path}': '{found}' is not a directory")
-    if found != parent:
-        raise CLIError(f"{what} '{path}': directory '{parent}' does not exist")
-    _probe_directory(parent, path, what)
-    return target
-
-
-def writable_directory(path: str, what: str) -> Path:
-    """``path`` of an output directory, checked before any work: an existing directory that
-    can be written in, or a new one whose parent is such a directory (a mistyped parent is
-    not made); else a CLIError naming ``path`` as typed and what is wrong with it."""
-    target = Path(path)
-    if os.path.lexists(target):
-        if not target.is_dir():
-            raise CLIError(f"{what} '{path}' is not a directory")
-        _probe_directory(target, path, what)
-        return target
-    parent = target.parent
-    found = _existing_ancestor(parent)
-    if not found.is_dir():
-        raise CLIError(f"{what} '{path}': '{found}' is not a directory")
-    if found != parent:
-        raise CLIError(f"{what} '{path}': directory '{parent}' does not exist")
-    _probe_directory(parent, path, what)
-    return target
 
 
 def config_from_args(args: argparse.Namespace) -> AssemblerConfig:

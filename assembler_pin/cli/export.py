@@ -4,7 +4,8 @@ from __future__ import annotations
 
 import argparse
 
-from .common import config_from_args, path_argument, writable_directory
+from .common import config_from_args
+from .paths import path_argument, writable_directory
 
 
 def add_parser(add) -> None:

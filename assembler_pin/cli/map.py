@@ -7,18 +7,8 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from ..exceptions import CLIError
-from .common import (
-    add_scene_argument,
-    config_from_args,
-    dumps,
-    finite_range,
-    path_argument,
-    progress_for,
-    scene_from_args,
-    wrapped,
-    writable_directory,
-    writable_parent,
-)
+from .common import add_scene_argument, config_from_args, dumps, finite_range, progress_for, scene_from_args, wrapped
+from .paths import path_argument, writable_directory, writable_parent
 
 if TYPE_CHECKING:
     from ..config.schema import AssemblerConfig

@@ -10,17 +10,8 @@ from ..exceptions import CLIError
 
 if TYPE_CHECKING:
     from ..model.assembler import AssemblerModel
-from .common import (
-    add_scene_argument,
-    config_from_args,
-    dumps,
-    path_argument,
-    progress_for,
-    radians_checked,
-    scene_from_args,
-    wrapped,
-    writable_parent,
-)
+from .common import add_scene_argument, config_from_args, dumps, progress_for, radians_checked, scene_from_args, wrapped
+from .paths import path_argument, writable_parent
 
 
 def add_parser(add) -> None:

@@ -12,14 +12,8 @@ if TYPE_CHECKING:
 
     from ..model import AssemblerModel
     from ..reproduce import ScenarioOutcome
-from .common import (
-    add_optimize_arguments,
-    config_from_args,
-    optimize_options,
-    path_argument,
-    progress_for,
-    writable_directory,
-)
+from .common import add_optimize_arguments, config_from_args, optimize_options, progress_for
+from .paths import path_argument, writable_directory
 
 
 def add_parser(add) -> None:

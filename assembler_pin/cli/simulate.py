@@ -10,14 +10,8 @@ from ..exceptions import CLIError
 
 if TYPE_CHECKING:
     from ..model.assembler import AssemblerModel
-from .common import (
-    add_pose_source,
-    config_from_args,
-    dumps,
-    path_argument,
-    plates_from_args,
-    writable_parent,
-)
+from .common import add_pose_source, config_from_args, dumps, plates_from_args
+from .paths import path_argument, writable_parent
 
 
 def add_parser(add) -> None:

@@ -24,12 +24,11 @@ from .common import (
     given_flags,
     goal_from_args,
     optimize_options,
-    path_argument,
     progress_for,
     scene_from_args,
     wrapped,
-    writable_parent,
 )
+from .paths import path_argument, writable_parent
 
 
 def add_parser(add) -> None:

@@ -5,15 +5,8 @@ from __future__ import annotations
 import argparse
 from typing import TYPE_CHECKING
 
-from .common import (
-    add_goal_arguments,
-    add_pose_source,
-    config_from_args,
-    dumps,
-    goal_from_args,
-    path_argument,
-    plates_from_args,
-)
+from .common import add_goal_arguments, add_pose_source, config_from_args, dumps, goal_from_args, plates_from_args
+from .paths import path_argument
 
 if TYPE_CHECKING:
     from ..compliance.ee_stiffness import StiffnessResult
@@ -98,7 +91,7 @@ def _run_scaling(args: argparse.Namespace) -> int:
     if args.out is not None and not str(args.out).lower().endswith(".png"):
         raise CLIError(f"--out must name a .png file, got {args.out!r}")
     if args.out is not None:
-        from .common import writable_parent
+        from .paths import writable_parent
 
         writable_parent(args.out, "--out file")
     cfg = config_from_args(args)

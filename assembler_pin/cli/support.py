@@ -5,7 +5,8 @@ from __future__ import annotations
 
 import argparse
 
-from .common import config_from_args, dumps, path_argument, plates_from_args
+from .common import config_from_args, dumps, plates_from_args
+from .paths import path_argument
 
 
 def add_parser(add) -> None:

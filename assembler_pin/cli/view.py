@@ -20,11 +20,10 @@ from .common import (
     carrier_from_args,
     config_from_args,
     goal_from_args,
-    path_argument,
     plates_from_args,
     scene_from_args,
-    writable_parent,
 )
+from .paths import path_argument, writable_parent
 
 
 def add_parser(add) -> None:

@@ -6,16 +6,8 @@ import argparse
 from pathlib import Path
 
 from ..exceptions import CLIError
-from .common import (
-    add_scene_argument,
-    config_from_args,
-    dumps,
-    path_argument,
-    progress_for,
-    scene_from_args,
-    writable_directory,
-    writable_parent,
-)
+from .common import add_scene_argument, config_from_args, dumps, progress_for, scene_from_args
+from .paths import path_argument, writable_directory, writable_parent
 
 DEFAULT_FPS = 10.0
 """``walk --html``: samples of the walk shown per second, by default."""

@@ -18,7 +18,7 @@ import pytest
 
 import assembler_pin as ap
 from assembler_pin.cli.app import build_parser
-from assembler_pin.cli.common import path_argument
+from assembler_pin.cli.paths import path_argument
 from assembler_pin.collision.scene import read_scene
 
 from .harness import judge_cli, run_cli, watchdog
