@@ -141,10 +141,10 @@ def run(args: argparse.Namespace) -> int:
         raise CLIError(str(exc)) from None
     if args.compare and args.scene:
         raise CLIError("--compare plans without obstacles: give it without --scene")
+    scene = scene_from_args(args)  # read before the model is built: a bad scene is refused at once
     am = AssemblerModel.from_config(config_from_args(args))
     if args.compare:
         return _plan_compare(args, am, options)
-    scene = scene_from_args(args)
     path, start = _plan_path(args, am)
     prog = progress_for(args, "plan")
     try:

@@ -107,6 +107,7 @@ def run(args: argparse.Namespace) -> int:
         writable_parent(args.html, "--html file")
     if args.plot:
         writable_parent(args.plot, "--plot file")
+    scene = scene_from_args(args)  # read before the model is built: a bad scene is refused at once
     am = AssemblerModel.from_config(walking_config(config_from_args(args), args.payload))
     feet, floor_z = _footholds(args)
     options = WalkOptions(clearance=args.clearance, floor_z=floor_z)
@@ -114,7 +115,6 @@ def run(args: argparse.Namespace) -> int:
         if not args.html:
             raise CLIError("--fps needs --html (it sets the page's samples per second)")
         check_bound("walk.fps", args.fps, "--fps", CLIError)
-    scene = scene_from_args(args)
     prog = progress_for(args, "walk")
     try:
         walk = plan_walk(am, feet, options=options, progress=prog, scene=scene)
