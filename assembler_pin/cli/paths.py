@@ -17,7 +17,7 @@ from ..exceptions import CLIError
 
 def path_argument(text: str) -> str:
     """The ``type`` of every option that takes a path: an empty path is a usage error (it
-    names no file; without this check an empty ``--scene ""`` would read as no scene)."""
+    names no file: ``--scene ""`` is refused, never read as "no scene")."""
     if not text:
         raise argparse.ArgumentTypeError("an empty path names no file; give a file name")
     return text

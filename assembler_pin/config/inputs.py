@@ -56,7 +56,9 @@ def checked_input_path(path: object, what: str, error: type[Exception], shown: s
     if isinstance(path, bytes) or not isinstance(path, (str, os.PathLike)):
         raise error(f"a {what} path must be a str or path, got {short_repr(path, 40)}")
     text = os.fspath(path)
-    if not isinstance(text, str) or not text:
+    if not isinstance(text, str):  # a path-like object of bytes
+        raise error(f"a {what} path must be a str or path, got {type(path).__name__} of bytes")
+    if not text:
         raise error(f"a {what} path must not be empty")
     name = shown if shown is not None else _name(text)
     try:
