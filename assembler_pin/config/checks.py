@@ -55,9 +55,9 @@ def unknown_key(key: object, allowed: Sequence[str], what: str = "config key", p
     (``did you mean 'motor_radius'?``, by :func:`difflib.get_close_matches`), else the allowed
     keys when they fit in :data:`MAX_MESSAGE` characters, else their count and ``doc``, the
     page listing them. ``prefix`` is the section's dotted name (``"leg."``)."""
-    name = shorten(str(key), 30)
-    head = f"unknown {what} '{prefix}{name}'"
-    close = difflib.get_close_matches(str(key)[:100], list(allowed), n=1, cutoff=0.6)
+    text = key if isinstance(key, str) else short_repr(key, 30)  # str() of a huge int fails
+    head = f"unknown {what} '{prefix}{shorten(text, 30)}'"
+    close = difflib.get_close_matches(text[:100], list(allowed), n=1, cutoff=0.6)
     if close:
         return f"{head}: did you mean '{prefix}{close[0]}'?"
     listed = f"{head}; allowed: {', '.join(allowed)}"

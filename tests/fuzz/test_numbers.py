@@ -227,6 +227,17 @@ def test_an_unknown_config_key_names_the_closest_allowed_one(doc, hint):
     assert hint in str(info.value) and len(str(info.value)) <= MAX_MESSAGE
 
 
+@pytest.mark.parametrize("key", [HUGER, 5, None, ("a",), "x" * 10_000], ids=["1e5000", "5", "None", "tuple", "long"])
+def test_an_unknown_key_of_any_kind_is_named_in_one_short_line(key):
+    for doc in ({key: 1}, {"leg": {key: 1}}):
+        with pytest.raises(ConfigError) as info:
+            ap.load_config(doc)
+        assert len(str(info.value)) <= MAX_MESSAGE and "unknown config key" in str(info.value)
+    with pytest.raises(SceneError, match="unknown scene key") as info:
+        scene_from_dict({"floor": {key: 1}})
+    assert len(str(info.value)) <= MAX_MESSAGE
+
+
 def test_an_unknown_key_without_a_close_one_lists_them_or_names_the_page():
     with pytest.raises(ConfigError) as info:
         ap.load_config({"colour": "red"})
