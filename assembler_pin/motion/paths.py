@@ -29,7 +29,7 @@ from ..common.files import read_text_bounded, strict_json
 from ..config.bounds import BOUNDS, check_bound
 from ..config.choices import PATH_KINDS
 from ..config.numbers import finite_float
-from ..exceptions import AssemblerError, PathError
+from ..exceptions import AssemblerError, PathError, short_repr
 from ..kinematics import taa_to_se3, to_se3
 
 __all__ = ["EEPath", "interpolate_pose", "read_waypoints"]
@@ -42,7 +42,7 @@ def interpolate_pose(a: pin.SE3, b: pin.SE3, t: float, kind: str = "screw") -> p
     if kind == "linear":
         rotation = a.rotation @ pin.exp3(t * pin.log3(a.rotation.T @ b.rotation))
         return pin.SE3(rotation, (1.0 - t) * a.translation + t * b.translation)
-    raise PathError(f"path kind must be one of {', '.join(PATH_KINDS)}, got {kind!r}")
+    raise PathError(f"path kind must be one of {', '.join(PATH_KINDS)}, got {short_repr(kind, 40)}")
 
 
 @dataclass(frozen=True)
@@ -62,7 +62,7 @@ class EEPath:
 
     def __post_init__(self) -> None:
         if self.kind not in PATH_KINDS:
-            raise PathError(f"path kind must be one of {', '.join(PATH_KINDS)}, got {self.kind!r}")
+            raise PathError(f"path kind must be one of {', '.join(PATH_KINDS)}, got {short_repr(self.kind, 40)}")
         if len(self.waypoints) < 2:
             raise PathError(f"a path needs at least 2 waypoints, got {len(self.waypoints)}")
         for k, w in enumerate(self.waypoints):

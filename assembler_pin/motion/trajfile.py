@@ -249,7 +249,7 @@ def _parse_json(text: str) -> tuple[dict, list, list]:
 def _parse_csv(text: str) -> tuple[dict, list, list]:
     lines = text.splitlines()
     if lines and lines[0].startswith(f"# {FORMAT} v") and lines[0] != f"# {FORMAT} v{VERSION}":
-        raise TrajectoryError(f"format {lines[0][2:]!r} is not v{VERSION}: {_REPLAN}")
+        raise TrajectoryError(f"format {short_repr(lines[0][2:], 60)} is not v{VERSION}: {_REPLAN}")
     if lines and lines[0].startswith("t,L_sp"):
         raise TrajectoryError(f"written by an older version (no row count or checksum): {_REPLAN}")
     if not lines or lines[0] != f"# {FORMAT} v{VERSION}":
@@ -260,7 +260,7 @@ def _parse_csv(text: str) -> tuple[dict, list, list]:
     if not lines[-1].startswith("# end: "):
         raise TrajectoryError("truncated: the last line is not '# end: N rows'")
     if lines[-1] != f"# end: {meta['rows']} rows":
-        raise TrajectoryError(f"the end line {lines[-1]!r} does not match the meta's {meta['rows']} rows")
+        raise TrajectoryError(f"the end line {short_repr(lines[-1], 60)} does not match the meta's {meta['rows']} rows")
     body = lines[3:-1]
     _check_count(len(body), meta)
     columns = lines[2].split(",")

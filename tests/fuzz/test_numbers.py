@@ -15,6 +15,7 @@ from __future__ import annotations
 import dataclasses
 import json
 
+import pinocchio as pin
 import pytest
 
 import assembler_pin as ap
@@ -199,6 +200,7 @@ def test_a_trajectory_file_with_a_huge_integer_is_refused(tmp_path, trajectory_j
         lambda: ap.maps.Grid(x=(HUGE,), y=(0.0,), z=(0.5,)),
         lambda: ap.config.bounds.check_bound("plan.rate", HUGER),
         lambda: ap.AssemblerConfig(gravity=HUGE),
+        lambda: ap.EEPath((pin.SE3.Identity(), pin.SE3.Random()), kind=HUGER),
     ],
 )
 def test_every_option_refuses_an_integer_too_large_for_a_float(make):
