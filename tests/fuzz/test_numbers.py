@@ -289,3 +289,15 @@ def test_a_scene_file_longer_than_its_bound_is_refused_before_it_is_parsed(tmp_p
     outcome = run_cli(["statics", "--home", "--json", "--scene", str(path)])
     judge_cli(outcome, "refuse", "statics --scene of 10,000 obstacles")
     assert f"is larger than {MAX_SCENE_BYTES} bytes (scene.bytes)" in outcome.err, outcome.err
+
+
+def test_a_config_file_longer_than_its_bound_is_refused_unread(tmp_path):
+    from assembler_pin.config.schema import MAX_CONFIG_BYTES
+
+    path = tmp_path / "c.yaml"
+    path.write_text("# a comment line of a configuration file\n" * (MAX_CONFIG_BYTES // 40))
+    assert path.stat().st_size > MAX_CONFIG_BYTES == 1 << 16
+    with pytest.raises(ConfigError, match=r"larger than 65536 bytes \(config.bytes\)"):
+        ap.load_config(path)
+    path.write_text("# a comment line of a configuration file\n" * (MAX_CONFIG_BYTES // 50))
+    assert ap.load_config(path) == ap.load_config()
