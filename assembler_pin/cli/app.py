@@ -20,6 +20,7 @@ from typing import Any, NoReturn
 from ..exceptions import AssemblerError, CLIError
 from . import bench, export, plan, reproduce, simulate, solve, statics, stiffness, support, view, walk
 from . import map as map_command  # the module of `assembler-pin map`; the builtin map stays map
+from .paths import check_paths_first, path_argument
 
 logger = logging.getLogger("assembler_pin")
 
@@ -60,7 +61,7 @@ def build_parser(only: str | None = None) -> argparse.ArgumentParser:
         p = sub.add_parser(name, help=help_, description=help_)
         if only is not None and name != only:
             return _UNBUILT  # listed by name and help; its arguments are not built
-        p.add_argument("--config", metavar="FILE", help="YAML configuration (default: built-in)")
+        p.add_argument("--config", type=path_argument, metavar="FILE", help="YAML configuration (default: built-in)")
         return p
 
     for module in SUBCOMMANDS:
@@ -146,6 +147,7 @@ def main(argv: Sequence[str] | None = None) -> int:
 def _run(args: argparse.Namespace, command: str) -> int:
     """``args.func(args)`` with every error but an interrupt turned into one line and a status."""
     try:
+        check_paths_first(args)  # before the subcommand's heavy imports and any work
         status = int(args.func(args))
         sys.stdout.flush()  # a closed pipe shows here, not at the interpreter's exit
         return status

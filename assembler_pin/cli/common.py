@@ -9,12 +9,11 @@ import argparse
 import dataclasses
 import json
 import math
-import os
 from collections.abc import Sequence
-from pathlib import Path
 from typing import TYPE_CHECKING
 
 from ..exceptions import CLIError
+from .paths import path_argument
 from .plate_file import plates_from_file
 
 if TYPE_CHECKING:
@@ -40,19 +39,6 @@ def dumps(doc: object) -> str:
     return json.dumps(clean(doc), allow_nan=False)
 
 
-def writable_parent(path: str, what: str) -> Path:
-    """``path`` whose directory exists and is writable, else a CLIError naming it."""
-    target = Path(path)
-    parent = target.parent if target.parent != Path("") else Path(".")
-    if not parent.is_dir():
-        raise CLIError(f"{what} '{path}': directory '{parent}' does not exist")
-    if not os.access(parent, os.W_OK):
-        raise CLIError(f"{what} '{path}': directory '{parent}' is not writable")
-    if target.is_dir() and what.endswith("file"):
-        raise CLIError(f"{what} '{path}' is a directory")
-    return target
-
-
 def config_from_args(args: argparse.Namespace) -> AssemblerConfig:
     from ..config.schema import load_config
 
@@ -63,6 +49,7 @@ def add_scene_argument(p: argparse.ArgumentParser, what: str) -> None:
     """``--scene FILE``: obstacles and a floor (read by :func:`scene_from_args`)."""
     p.add_argument(
         "--scene",
+        type=path_argument,
         metavar="FILE",
         help=f"YAML scene of obstacles and a floor (docs/guides/collisions.md): {what}",
     )
@@ -83,7 +70,9 @@ def add_pose_source(
     """The pose's source, ``--plates FILE`` or ``--home`` (read by :func:`plates_from_args`), as
     a mutually exclusive group the caller may add further sources to."""
     src = p.add_mutually_exclusive_group(required=required)
-    src.add_argument("--plates", metavar="FILE", help='JSON {"plates": [n+1 4x4]} file, or - for stdin')
+    src.add_argument(
+        "--plates", type=path_argument, metavar="FILE", help='JSON {"plates": [n+1 4x4]} file, or - for stdin'
+    )
     src.add_argument("--home", action="store_true", help=home_help)
     return src
 

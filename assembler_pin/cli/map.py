@@ -7,16 +7,8 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from ..exceptions import CLIError
-from .common import (
-    add_scene_argument,
-    config_from_args,
-    dumps,
-    finite_range,
-    progress_for,
-    scene_from_args,
-    wrapped,
-    writable_parent,
-)
+from .common import add_scene_argument, config_from_args, dumps, finite_range, progress_for, scene_from_args, wrapped
+from .paths import path_argument, writable_directory, writable_parent
 
 if TYPE_CHECKING:
     from ..config.schema import AssemblerConfig
@@ -36,11 +28,18 @@ def add_parser(add) -> None:
     )
     p.add_argument(
         "--sweep",
+        type=path_argument,
         nargs="+",
         metavar="FILE",
         help="design sweep: the map of each configuration file (config column: its name)",
     )
-    p.add_argument("--out", required=True, metavar="DIR", help="map directory (Parquet parts; a rerun extends it)")
+    p.add_argument(
+        "--out",
+        type=path_argument,
+        required=True,
+        metavar="DIR",
+        help="map directory (Parquet parts; a rerun extends it)",
+    )
     p.add_argument(
         "--workers",
         type=int,
@@ -51,9 +50,17 @@ def add_parser(add) -> None:
     p.add_argument("--batch-size", type=int, default=None, metavar="N", help="cells per task (default automatic)")
     add_scene_argument(p, "every cell's pose keeps its clearance from it (part of the map: a rerun needs the same)")
     p.add_argument(
-        "--png", metavar="FILE", help="heatmaps of one slice: clearance [mm], max|F|, capacity, sag [mm], stiffness"
+        "--png",
+        type=path_argument,
+        metavar="FILE",
+        help="heatmaps of one slice: clearance [mm], max|F|, capacity, sag [mm], stiffness",
     )
-    p.add_argument("--html", metavar="FILE", help="the cells as a point cloud colored by capacity, in the viewer")
+    p.add_argument(
+        "--html",
+        type=path_argument,
+        metavar="FILE",
+        help="the cells as a point cloud colored by capacity, in the viewer",
+    )
     p.add_argument("--no-progress", action="store_true", help="no progress line (as the global --quiet)")
     p.add_argument("--json", action="store_true", help="print one JSON object")
     p.set_defaults(func=run)
@@ -66,6 +73,7 @@ def _check_options(args: argparse.Namespace):
     from ..maps import parse_grid
     from ..maps.cluster import check_scheduler
 
+    writable_directory(args.out, "--out directory")
     for option, value in (("--png file", args.png), ("--html file", args.html)):
         if value:
             writable_parent(value, option)

@@ -10,16 +10,8 @@ from ..exceptions import CLIError
 
 if TYPE_CHECKING:
     from ..model.assembler import AssemblerModel
-from .common import (
-    add_scene_argument,
-    config_from_args,
-    dumps,
-    progress_for,
-    radians_checked,
-    scene_from_args,
-    wrapped,
-    writable_parent,
-)
+from .common import add_scene_argument, config_from_args, dumps, progress_for, radians_checked, scene_from_args, wrapped
+from .paths import path_argument, writable_parent
 
 
 def add_parser(add) -> None:
@@ -35,6 +27,7 @@ def add_parser(add) -> None:
     )
     src.add_argument(
         "--waypoints",
+        type=path_argument,
         metavar="FILE",
         help="JSON or CSV waypoints (TAA rows, optional times); from the home pose unless --from, as --to",
     )
@@ -62,8 +55,15 @@ def add_parser(add) -> None:
     )
     p.add_argument("--rate", type=float, default=50.0, help="output samples per second, 1..1000 (default 50)")
     p.add_argument("--w3", type=float, default=100.0, help="weight of the motion term Σ ΔL² [1/m²] (default 100)")
-    p.add_argument("--out", metavar="FILE", help="write the trajectory (.csv, or JSON for any other suffix)")
-    p.add_argument("--plot", metavar="PNG", help="write the lengths, speeds and forces over time with their limits")
+    p.add_argument(
+        "--out", type=path_argument, metavar="FILE", help="write the trajectory (.csv, or JSON for any other suffix)"
+    )
+    p.add_argument(
+        "--plot",
+        type=path_argument,
+        metavar="PNG",
+        help="write the lengths, speeds and forces over time with their limits",
+    )
     p.add_argument(
         "--compare",
         action="store_true",
@@ -141,10 +141,10 @@ def run(args: argparse.Namespace) -> int:
         raise CLIError(str(exc)) from None
     if args.compare and args.scene:
         raise CLIError("--compare plans without obstacles: give it without --scene")
+    scene = scene_from_args(args)  # read before the model is built: a bad scene is refused at once
     am = AssemblerModel.from_config(config_from_args(args))
     if args.compare:
         return _plan_compare(args, am, options)
-    scene = scene_from_args(args)
     path, start = _plan_path(args, am)
     prog = progress_for(args, "plan")
     try:

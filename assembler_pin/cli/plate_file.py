@@ -10,9 +10,10 @@ from __future__ import annotations
 import json
 import math
 import sys
-from pathlib import Path
 
-from ..exceptions import CLIError
+from ..config.inputs import read_input_bytes
+from ..config.numbers import finite_float
+from ..exceptions import CLIError, short_repr
 
 __all__ = ["MAX_JSON_BYTES", "plates_from_file", "read_json"]
 
@@ -51,9 +52,8 @@ def read_json(source: str) -> object:
     try:
         if source == "-":
             raw = sys.stdin.buffer.read(MAX_JSON_BYTES + 1) if hasattr(sys.stdin, "buffer") else sys.stdin.read()
-        else:
-            with Path(source).open("rb") as f:
-                raw = f.read(MAX_JSON_BYTES + 1)
+        else:  # the one door of input files: a FIFO or a device is refused before it is opened
+            raw = read_input_bytes(source, "plate file", CLIError, MAX_JSON_BYTES)
         text = raw.decode("utf-8") if isinstance(raw, bytes) else raw
     except OSError as exc:
         raise CLIError(f"cannot read '{source}': {exc.strerror or exc}") from None
@@ -85,8 +85,8 @@ def _plate_matrix(k: int, plate: object) -> list[list[float]]:
             if isinstance(x, bool) or not isinstance(x, (int, float)):
                 shown = json.dumps(x)[:30]
                 raise CLIError(f"{where}: {shown} is not a number (write numbers, not strings or true/false)")
-            if not (isinstance(x, float) or abs(x) < 2**1023) or not math.isfinite(x):
-                raise CLIError(f"{where}: {str(x)[:30]} is not a finite number")
+            if finite_float(x) is None:  # an integer too large for a float, as 1e999
+                raise CLIError(f"{where}: {short_repr(x, 30)} is not a finite number")
     return [[float(x) for x in row] for row in plate]
 
 

@@ -12,19 +12,14 @@ if TYPE_CHECKING:
 
     from ..model import AssemblerModel
     from ..reproduce import ScenarioOutcome
-from .common import (
-    add_optimize_arguments,
-    config_from_args,
-    optimize_options,
-    progress_for,
-    writable_parent,
-)
+from .common import add_optimize_arguments, config_from_args, optimize_options, progress_for
+from .paths import path_argument, writable_directory
 
 
 def add_parser(add) -> None:
     """Register the ``reproduce`` subcommand (``add`` makes a subparser with ``--config``)."""
     p = add("reproduce", "the paper's scenarios: initial vs optimized forces, tables, report with figures")
-    p.add_argument("--out", metavar="DIR", help="write report.md and PNG figures into DIR")
+    p.add_argument("--out", type=path_argument, metavar="DIR", help="write report.md and PNG figures into DIR")
     p.add_argument("--scenario", action="append", metavar="NAME", help="only this scenario (repeatable)")
     p.add_argument(
         "--no-sag",
@@ -61,7 +56,7 @@ def run(args: argparse.Namespace) -> int:
     if args.markdown and args.out:
         raise CLIError("--markdown prints the docs' tables, --out writes the report: use one of them")
     if args.out:
-        writable_parent(args.out, "--out directory")
+        writable_directory(args.out, "--out directory")
     options = optimize_options(args)
     am = AssemblerModel.from_config(config_from_args(args))
     with progress_for(args, "reproduce") as prog:

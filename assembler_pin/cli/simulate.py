@@ -10,20 +10,20 @@ from ..exceptions import CLIError
 
 if TYPE_CHECKING:
     from ..model.assembler import AssemblerModel
-from .common import (
-    add_pose_source,
-    config_from_args,
-    dumps,
-    plates_from_args,
-    writable_parent,
-)
+from .common import add_pose_source, config_from_args, dumps, plates_from_args
+from .paths import path_argument, writable_parent
 
 
 def add_parser(add) -> None:
     """Register the ``simulate`` subcommand (``add`` makes a subparser with ``--config``)."""
     p = add("simulate", "hold a pose in MuJoCo with force-limited position actuators: EE drift, forces over time")
     src = add_pose_source(p, "hold the home pose", required=True)
-    src.add_argument("--trajectory", metavar="FILE", help="run a trajectory written by 'plan --out' on the servos")
+    src.add_argument(
+        "--trajectory",
+        type=path_argument,
+        metavar="FILE",
+        help="run a trajectory written by 'plan --out' on the servos",
+    )
     p.add_argument("--seconds", type=float, default=2.0, help="simulated time [s] (default 2)")
     p.add_argument("--samples", type=int, default=50, help="stored samples (default 50)")
     p.add_argument(
@@ -34,7 +34,9 @@ def add_parser(add) -> None:
         help="largest EE displacement of a held pose [mm] (default 5)",
     )
     p.add_argument("--json", action="store_true", help="print one JSON object")
-    p.add_argument("--html", metavar="FILE", help="also write the simulated motion as a standalone viewer page")
+    p.add_argument(
+        "--html", type=path_argument, metavar="FILE", help="also write the simulated motion as a standalone viewer page"
+    )
     p.set_defaults(func=run)
 
 

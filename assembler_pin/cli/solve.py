@@ -27,8 +27,8 @@ from .common import (
     progress_for,
     scene_from_args,
     wrapped,
-    writable_parent,
 )
+from .paths import path_argument, writable_parent
 
 
 def add_parser(add) -> None:
@@ -49,6 +49,7 @@ def add_parser(add) -> None:
     )
     p.add_argument(
         "--out",
+        type=path_argument,
         metavar="FILE",
         help='write the pose found as a plate file {"plates": [...]} for statics, view, simulate, stiffness',
     )
@@ -139,13 +140,13 @@ def run(args: argparse.Namespace) -> int:
         check_bound("optimize.max_iterations", args.max_iterations, "--max-iterations", CLIError)
     helper = helper_options(args)
     options = None if args.no_optimize else sag_options(args, optimize_options(args))
+    scene = scene_from_args(args)  # read before the model is built: a bad scene is refused at once
     am = AssemblerModel.from_config(config_from_args(args))
     _check_scan_length(am, helper)
     carrier, q = carrier_from_args(args)
     if carrier is not None:
         return _solve_on_carrier(args, am, carrier, q, goal, helper)
     starts = args.starts or SOLVE_STARTS[0]
-    scene = scene_from_args(args)
     result = solve(
         am,
         goal,

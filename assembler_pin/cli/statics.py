@@ -73,8 +73,8 @@ def run(args: argparse.Namespace) -> int:
         raise CLIError("--support ee or both holds the stack at its own plates: give it without --carrier")
     if args.scene and (args.carrier is not None or args.support != "base"):
         raise CLIError("--scene is checked on a fixed base: give it without --carrier or --support ee|both")
+    scene = scene_from_args(args)  # read before the model is built: a bad scene is refused at once
     am = AssemblerModel.from_config(config_from_args(args))
-    scene = scene_from_args(args)
     carrier, q = carrier_from_args(args)
     plates = plates_from_args(args, am, "give --plates FILE (or - for stdin) or --home")
     if (carrier is not None or args.support != "base") and args.stiffness:

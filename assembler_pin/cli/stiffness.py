@@ -6,6 +6,7 @@ import argparse
 from typing import TYPE_CHECKING
 
 from .common import add_goal_arguments, add_pose_source, config_from_args, dumps, goal_from_args, plates_from_args
+from .paths import path_argument
 
 if TYPE_CHECKING:
     from ..compliance.ee_stiffness import StiffnessResult
@@ -23,7 +24,9 @@ def add_parser(add) -> None:
         help="stiffness and sag of the home pose against the number of platforms, n = 1..--max-platforms",
     )
     p.add_argument("--max-platforms", type=int, metavar="N", help="with --scaling: the largest n (64)")
-    p.add_argument("--out", metavar="FILE.png", help="with --scaling: write the log-log figure there")
+    p.add_argument(
+        "--out", type=path_argument, metavar="FILE.png", help="with --scaling: write the log-log figure there"
+    )
     p.add_argument(
         "--compensated",
         action="store_true",
@@ -87,6 +90,10 @@ def _run_scaling(args: argparse.Namespace) -> int:
     top = int(check_bound("config.platforms", top, "--max-platforms", CLIError))
     if args.out is not None and not str(args.out).lower().endswith(".png"):
         raise CLIError(f"--out must name a .png file, got {args.out!r}")
+    if args.out is not None:
+        from .paths import writable_parent
+
+        writable_parent(args.out, "--out file")
     cfg = config_from_args(args)
     prog = progress_for(args, "scaling")
     table = stiffness_scaling(cfg, top, progress=prog)

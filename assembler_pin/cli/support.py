@@ -6,13 +6,16 @@ from __future__ import annotations
 import argparse
 
 from .common import config_from_args, dumps, plates_from_args
+from .paths import path_argument
 
 
 def add_parser(add) -> None:
     """Register the ``support`` subcommand (``add`` makes a subparser with ``--config``)."""
     p = add("support", "leg forces with both ends held: the elastic distribution and the chosen (min max|F|) one")
     src = p.add_mutually_exclusive_group()
-    src.add_argument("--plates", metavar="FILE", help='JSON {"plates": [n+1 4x4]} file, or - for stdin')
+    src.add_argument(
+        "--plates", type=path_argument, metavar="FILE", help='JSON {"plates": [n+1 4x4]} file, or - for stdin'
+    )
     src.add_argument("--home", action="store_true", help="use the home pose")
     p.add_argument("--json", action="store_true", help="print one JSON object")
     p.set_defaults(func=run)

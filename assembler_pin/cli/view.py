@@ -22,8 +22,8 @@ from .common import (
     goal_from_args,
     plates_from_args,
     scene_from_args,
-    writable_parent,
 )
+from .paths import path_argument, writable_parent
 
 
 def add_parser(add) -> None:
@@ -31,7 +31,9 @@ def add_parser(add) -> None:
     p = add("view", "show a pose in Meshcat (live server until Ctrl-C, or a standalone HTML page)")
     src = p.add_mutually_exclusive_group(required=True)
     add_goal_arguments(src, " (shows the initial and optimized poses)")
-    src.add_argument("--plates", metavar="FILE", help='JSON {"plates": [n+1 4x4]} file, or - for stdin')
+    src.add_argument(
+        "--plates", type=path_argument, metavar="FILE", help='JSON {"plates": [n+1 4x4]} file, or - for stdin'
+    )
     src.add_argument("--home", action="store_true", help="show the home pose")
     from ..config.choices import FORCE_SCALES, SCENARIO_NAMES
 
@@ -39,7 +41,10 @@ def add_parser(add) -> None:
         "--scenario", choices=SCENARIO_NAMES, help="solve a scenario's goal and show its initial and optimized poses"
     )
     src.add_argument(
-        "--trajectory", metavar="FILE", help="animate a trajectory written by 'plan --out' (legs colored by force)"
+        "--trajectory",
+        type=path_argument,
+        metavar="FILE",
+        help="animate a trajectory written by 'plan --out' (legs colored by force)",
     )
     add_carrier_arguments(p, " (--home/--plates relative to its base plate, --goal in the world)")
     p.add_argument(
@@ -49,7 +54,7 @@ def add_parser(add) -> None:
         help="where leg colors saturate: auto (default: max|F|, at least 10%% of the limit), limit, max",
     )
     p.add_argument("--frames", type=int, default=150, help="with --trajectory: frames of the animation (default 150)")
-    p.add_argument("--html", metavar="FILE", help="write a standalone HTML page instead of serving")
+    p.add_argument("--html", type=path_argument, metavar="FILE", help="write a standalone HTML page instead of serving")
     p.add_argument("--open", action="store_true", help="open the page / viewer URL in a web browser")
     p.add_argument(
         "--animate",
@@ -166,10 +171,14 @@ DEFAULT_ELLIPSOID_FORCE = 100.0
 
 
 def _check_options(args: argparse.Namespace) -> None:
-    """Refuse, before anything is computed, counts and factors out of their bounds and
-    options given without the one they qualify (CLIError: one line, exit 2)."""
+    """Refuse, before anything is computed, counts and factors out of their bounds,
+    options given without the one they qualify and a trajectory that is not a regular file
+    (CLIError: one line, exit 2)."""
     from ..config.bounds import check_bound
+    from ..config.inputs import checked_input_path
 
+    if args.trajectory:  # read after the viewer starts: its path checked now
+        checked_input_path(args.trajectory, "trajectory", CLIError)
     check_bound("view.animate", args.animate, "--animate", CLIError)
     check_bound("view.frames", args.frames, "--frames", CLIError)
     if args.exaggerate is not None:

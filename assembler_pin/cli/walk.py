@@ -6,7 +6,8 @@ import argparse
 from pathlib import Path
 
 from ..exceptions import CLIError
-from .common import add_scene_argument, config_from_args, dumps, progress_for, scene_from_args, writable_parent
+from .common import add_scene_argument, config_from_args, dumps, progress_for, scene_from_args
+from .paths import path_argument, writable_directory, writable_parent
 
 DEFAULT_FPS = 10.0
 """``walk --html``: samples of the walk shown per second, by default."""
@@ -16,7 +17,12 @@ def add_parser(add) -> None:
     """Register the ``walk`` subcommand (``add`` makes a subparser with ``--config``)."""
     p = add("walk", "the inchworm walk: the feet (plate 0, the EE plate) land on footholds in turn")
     src = p.add_mutually_exclusive_group()
-    src.add_argument("--footholds", metavar="FILE", help='JSON {"footholds": [[x, y, z, rx, ry, rz] or 4x4, ...]}')
+    src.add_argument(
+        "--footholds",
+        type=path_argument,
+        metavar="FILE",
+        help='JSON {"footholds": [[x, y, z, rx, ry, rz] or 4x4, ...]}',
+    )
     src.add_argument(
         "--floor",
         nargs=2,
@@ -32,10 +38,15 @@ def add_parser(add) -> None:
         help="a tool of this mass on the EE plate, at the config's payload.offset (default 0: a walking "
         "stack carries no tool; the config's payload.mass is not used)",
     )
-    p.add_argument("--out", metavar="DIR", help="write walk.json and walk.csv (one row per sample) into DIR")
-    p.add_argument("--plot", metavar="PNG", help="write max|F| over the walk with its phases marked")
+    p.add_argument(
+        "--out", type=path_argument, metavar="DIR", help="write walk.json and walk.csv (one row per sample) into DIR"
+    )
+    p.add_argument(
+        "--plot", type=path_argument, metavar="PNG", help="write max|F| over the walk with its phases marked"
+    )
     p.add_argument(
         "--html",
+        type=path_argument,
         metavar="PAGE",
         help="write a standalone page animating every sample (legs by force, held feet, footholds)",
     )
@@ -89,19 +100,21 @@ def run(args: argparse.Namespace) -> int:
     from ..model.assembler import AssemblerModel
     from ..walk import WalkOptions, plan_walk
 
+    out = Path(args.out) if args.out else None
+    if out is not None:  # every output checked before any work
+        writable_directory(args.out, "--out directory")
+    if args.html:
+        writable_parent(args.html, "--html file")
+    if args.plot:
+        writable_parent(args.plot, "--plot file")
+    scene = scene_from_args(args)  # read before the model is built: a bad scene is refused at once
     am = AssemblerModel.from_config(walking_config(config_from_args(args), args.payload))
     feet, floor_z = _footholds(args)
     options = WalkOptions(clearance=args.clearance, floor_z=floor_z)
-    out = Path(args.out) if args.out else None
-    if out is not None and out.exists() and not out.is_dir():
-        raise CLIError(f"--out '{out}' exists and is not a directory")
-    if args.html:
-        writable_parent(args.html, "--html file")
     if args.fps is not None:
         if not args.html:
             raise CLIError("--fps needs --html (it sets the page's samples per second)")
         check_bound("walk.fps", args.fps, "--fps", CLIError)
-    scene = scene_from_args(args)
     prog = progress_for(args, "walk")
     try:
         walk = plan_walk(am, feet, options=options, progress=prog, scene=scene)

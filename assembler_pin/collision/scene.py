@@ -29,19 +29,21 @@ from typing import Any
 import numpy as np
 import pinocchio as pin
 
-from ..config.checks import shorten
-from ..config.options import is_number
+from ..config.bounds import BOUNDS
+from ..config.checks import shorten, unknown_key
+from ..config.numbers import finite_float
 from ..config.schema import load_yaml, read_text_file
 from ..exceptions import ConfigError, SceneError, short_repr
 
 __all__ = ["MAX_OBSTACLES", "MAX_SCENE_BYTES", "MAX_SIZE", "Obstacle", "Scene", "read_scene", "scene_from_dict"]
 
-#: Most obstacles a scene may hold.
-MAX_OBSTACLES = 256
+#: Most obstacles a scene may hold (the ``scene.obstacles`` row of the limits table).
+MAX_OBSTACLES = int(BOUNDS["scene.obstacles"].high)
 #: Largest size, radius, length or coordinate magnitude accepted [m].
 MAX_SIZE = 1e3
-#: Largest scene file read [bytes].
-MAX_SCENE_BYTES = 1 << 20
+#: Largest scene file read [bytes] (the ``scene.bytes`` row of the limits table): 1 KiB an
+#: obstacle (an entry is under 300 bytes), so that the largest file is read in well under 1 s.
+MAX_SCENE_BYTES = int(BOUNDS["scene.bytes"].high)
 #: Longest obstacle name [characters].
 MAX_NAME = 40
 
@@ -105,9 +107,9 @@ class Scene:
 
 
 def _number(value: Any, where: str, low: float = -MAX_SIZE, high: float = MAX_SIZE, positive: bool = False) -> float:
-    if not is_number(value) or not math.isfinite(float(value)):
+    x = finite_float(value)  # None for an integer too large for a float, as for NaN
+    if x is None:
         raise SceneError(shorten(f"scene {where} = {short_repr(value)} is invalid: must be a finite number"))
-    x = float(value)
     if not low <= x <= high or (positive and x <= 0):
         bound = f"in (0, {high:g}]" if positive else f"in [{low:g}, {high:g}]"
         raise SceneError(shorten(f"scene {where} = {short_repr(value)} is invalid: must be {bound} [m]"))
@@ -126,9 +128,7 @@ def _keys(data: Any, where: str, required: tuple[str, ...], optional: tuple[str,
     allowed = required + optional
     for key in data:
         if key not in allowed:
-            raise SceneError(
-                shorten(f"unknown scene key '{where}.{shorten(str(key), 20)}'; allowed: {', '.join(allowed)}")
-            )
+            raise SceneError(unknown_key(key, allowed, "scene key", f"{where}.", "docs/guides/collisions.md"))
     for key in required:
         if key not in data:
             raise SceneError(f"scene {where} needs '{key}'")
@@ -219,10 +219,14 @@ def read_scene(path: str | Path | Mapping[str, Any] | Scene | None) -> Scene | N
         return scene_from_dict(path)
     if not isinstance(path, (str, Path)):
         raise SceneError(f"a scene must be a YAML path, a mapping, a Scene or None, got {short_repr(path)}")
+    if not str(path):
+        raise SceneError("a scene file path must not be empty")
     shown = shorten(Path(path).name, 40)
-    text = read_text_file(Path(path), shown, "scene file", MAX_SCENE_BYTES, SceneError)
-    try:
-        data = load_yaml(text, f"scene file '{shown}'")
+    text = read_text_file(Path(path), shown, "scene file", MAX_SCENE_BYTES, SceneError, "scene.bytes")
+    try:  # a list longer than the obstacle bound stops the read at its next item
+        data = load_yaml(
+            text, f"scene file '{shown}'", MAX_OBSTACLES, f" (a scene holds at most {MAX_OBSTACLES} obstacles)"
+        )
     except ConfigError as exc:
         raise SceneError(str(exc)) from None
     try:

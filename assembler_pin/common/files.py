@@ -10,12 +10,12 @@ from __future__ import annotations
 import contextlib
 import json
 import os
-import stat
 import tempfile
 from collections.abc import Iterator
 from pathlib import Path
 
-from ..config.bounds import check_bound
+from ..config.bounds import BOUNDS
+from ..config.inputs import read_input_text
 from ..exceptions import AssemblerError, TrajectoryError
 
 __all__ = ["atomic_path", "read_text_bounded", "strict_json", "write_atomic"]
@@ -27,19 +27,25 @@ def atomic_path(path: str | os.PathLike[str]) -> Iterator[Path]:
 
     For writers that take a file name (``savefig``, ``pyarrow.parquet.write_table``): write to
     the yielded path; on any exception (``KeyboardInterrupt`` included) the temporary file is
-    removed and ``path`` is left as it was.
+    removed and ``path`` is left as it was. An ``OSError`` about the temporary file names
+    ``path`` instead.
     """
     target = Path(path)
-    fd, tmp_name = tempfile.mkstemp(prefix=f".{target.name}.", suffix=".tmp", dir=target.parent)
+    try:
+        fd, tmp_name = tempfile.mkstemp(prefix=f".{target.name}.", suffix=".tmp", dir=target.parent)
+    except OSError as exc:  # named as the caller gave it, never as the temporary file
+        raise OSError(exc.errno, exc.strerror, str(target)) from None
     os.close(fd)
     tmp = Path(tmp_name)
     try:
         yield tmp
         os.chmod(tmp, 0o644)
         os.replace(tmp, target)
-    except BaseException:
+    except BaseException as exc:
         with contextlib.suppress(OSError):
             tmp.unlink()
+        if isinstance(exc, OSError) and exc.filename in (tmp_name, tmp):
+            raise OSError(exc.errno, exc.strerror, str(target)) from None
         raise
 
 
@@ -56,28 +62,13 @@ def write_atomic(path: str | os.PathLike[str], data: str | bytes, encoding: str 
 
 
 def read_text_bounded(path: object, bound_key: str, what: str, error: type[Exception]) -> str:
-    """The UTF-8 text of the input file ``path``, refused in one line (``error``) when ``path``
-    is not a str or path, the file is missing or unreadable, not a regular file (a pipe or a
-    device is never read), empty, larger than its row ``bound_key`` of the limits table, or not
+    """The UTF-8 text of the input file ``path``, read through the one checked door of input
+    files (:func:`~assembler_pin.config.inputs.read_input_text`): refused in one line
+    (``error``) when ``path`` is not a non-empty str or path, the file is missing or
+    unreadable, not a regular file (a FIFO, a directory or a device is refused before it is
+    opened), empty, larger than its row ``bound_key`` of the limits table [bytes], or not
     UTF-8. ``what`` names the file in the message (``"trajectory"``, ``"waypoint file"``)."""
-    if isinstance(path, bytes) or not isinstance(path, (str, os.PathLike)) or not str(path):
-        raise error(f"a {what} path must be a non-empty str or path, got {type(path).__name__}")
-    path = Path(path)
-    try:
-        info = path.stat()
-        if not stat.S_ISREG(info.st_mode):
-            raise error(f"{what} '{path}' is not a regular file")
-        if info.st_size == 0:
-            raise error(f"{what} '{path}' is empty")
-        check_bound(bound_key, info.st_size, f"the size of '{path}'", error)
-        with open(path, "rb") as fh:
-            data = fh.read(info.st_size + 1)
-        check_bound(bound_key, len(data), f"the size of '{path}'", error)
-        return data.decode("utf-8")
-    except OSError as exc:
-        raise error(f"cannot read {what} '{path}': {exc.strerror or exc}") from None
-    except UnicodeDecodeError:
-        raise error(f"{what} '{path}' is not UTF-8 text") from None
+    return read_input_text(path, what, error, int(BOUNDS[bound_key].high), allow_empty=False, bound=bound_key)
 
 
 def strict_json(text: str, error: type[AssemblerError] = TrajectoryError) -> object:

@@ -11,7 +11,7 @@ from typing import Any
 
 import numpy as np
 
-from ..config.options import is_number
+from ..config.numbers import is_number
 from ..exceptions import PoseError, short_repr
 
 __all__ = ["MAX_NESTING", "as_float_array"]

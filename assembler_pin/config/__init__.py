@@ -7,6 +7,8 @@ light layer).
   :class:`GoalTolerance`), the one source of their defaults.
 - :mod:`.choices`: the named choices of the command line and the API.
 - :mod:`.bounds`: the documented limits on counts, rates and durations.
+- :mod:`.numbers`: the one reader of a number (finite, within a float) in a file or an argument.
+- :mod:`.inputs`: the one door of input files (a regular file, bounded, checked before it is opened).
 """
 
 from __future__ import annotations

@@ -8,17 +8,18 @@ Units: lengths [m], masses [kg], forces [N], angles in degrees where the key say
 from __future__ import annotations
 
 import dataclasses
-import math
+import difflib
+from collections.abc import Sequence
 from typing import TYPE_CHECKING, Any
 
 from ..exceptions import ConfigError, short_repr
 from .bounds import check_bound
-from .options import is_number
+from .numbers import finite_float
 
 if TYPE_CHECKING:
     from .schema import AssemblerConfig
 
-__all__ = ["LIMITS", "MAX_MESSAGE", "check", "shorten", "validate"]
+__all__ = ["LIMITS", "MAX_MESSAGE", "check", "shorten", "unknown_key", "validate"]
 
 #: Longest message of a :class:`ConfigError` [characters].
 MAX_MESSAGE = 200
@@ -47,6 +48,23 @@ def shorten(message: str, limit: int = MAX_MESSAGE) -> str:
     """``message`` on one line of at most ``limit`` characters."""
     line = " ".join(message.split())
     return line if len(line) <= limit else line[: limit - 1] + "…"
+
+
+def unknown_key(key: object, allowed: Sequence[str], what: str = "config key", prefix: str = "", doc: str = "") -> str:
+    """The one-line message of an unknown key: the closest allowed key when one is close
+    (``did you mean 'motor_radius'?``, by :func:`difflib.get_close_matches`), else the allowed
+    keys when they fit in :data:`MAX_MESSAGE` characters, else their count and ``doc``, the
+    page listing them. ``prefix`` is the section's dotted name (``"leg."``)."""
+    text = key if isinstance(key, str) else short_repr(key, 30)  # str() of a huge int fails
+    head = f"unknown {what} '{prefix}{shorten(text, 30)}'"
+    close = difflib.get_close_matches(text[:100], list(allowed), n=1, cutoff=0.6)
+    if close:
+        return f"{head}: did you mean '{prefix}{close[0]}'?"
+    listed = f"{head}; allowed: {', '.join(allowed)}"
+    if len(listed) <= MAX_MESSAGE:
+        return listed
+    where = f", listed in {doc}" if doc else ""
+    return shorten(f"{head}; {prefix.rstrip('.') or 'it'} takes {len(allowed)} keys{where}")
 
 
 def check(condition: bool, key: str, value: Any, allowed: str) -> None:
@@ -78,11 +96,12 @@ def _check_magnitudes(cfg: AssemblerConfig) -> None:
     numbers |= {f"leg.{f.name}": getattr(leg, f.name) for f in dataclasses.fields(leg)}
     numbers |= {f"payload.{f.name}": getattr(pl, f.name) for f in dataclasses.fields(pl)}
     for key, value in numbers.items():
-        check(is_number(value) and math.isfinite(value), key, value, "must be a finite number")
+        x = finite_float(value)  # None for an integer too large for a float, as for NaN
+        check(x is not None, key, value, "must be a finite number")
         name = key.rsplit(".", 1)[-1]
         kind = _UNIT_OF.get(name, None if name.endswith("_deg") else "length")
-        if kind is not None:
-            check(abs(value) <= LIMITS[kind], key, value, f"must be at most {LIMITS[kind]:g} in magnitude")
+        if kind is not None and x is not None:
+            check(abs(x) <= LIMITS[kind], key, value, f"must be at most {LIMITS[kind]:g} in magnitude")
 
 
 def _check_plate_and_payload(cfg: AssemblerConfig) -> None:

@@ -8,7 +8,6 @@ command line can show their defaults without loading Pinocchio.
 from __future__ import annotations
 
 import logging
-import math
 import numbers
 from dataclasses import dataclass, field
 from typing import TypeVar
@@ -16,6 +15,7 @@ from typing import TypeVar
 from ..exceptions import OptionsError, short_repr
 from .bounds import check_bound
 from .choices import OBJECTIVES, OPTIMIZE_METHODS
+from .numbers import finite_float
 
 logger = logging.getLogger(__name__)
 
@@ -30,14 +30,8 @@ __all__ = [
     "OptimizeOptions",
     "casadi_missing",
     "checked_options",
-    "is_number",
     "resolved_method",
 ]
-
-
-def is_number(value: object) -> bool:
-    """A real number (Python or numpy, not a boolean: numpy's bool is not a ``numbers.Real``)."""
-    return isinstance(value, numbers.Real) and not isinstance(value, bool)
 
 
 @dataclass(frozen=True)
@@ -152,7 +146,8 @@ class OptimizeOptions:
             ("limit_margin", True),
         ):
             value = getattr(self, name)
-            if not (is_number(value) and math.isfinite(value) and (value > 0 if positive else value >= 0)):
+            x = finite_float(value)  # None for an integer too large for a float, as for NaN
+            if x is None or not (x > 0 if positive else x >= 0):
                 sign = ">" if positive else ">="
                 raise OptionsError(f"{name} must be a finite number {sign} 0, got {short_repr(value)}")
         if self.w1 + self.w2 == 0:
@@ -169,7 +164,7 @@ class OptimizeOptions:
             if tol is None and name == "ee_tolerance":
                 continue
             if not isinstance(tol, GoalTolerance) or not all(
-                is_number(v) and 0 < v < math.inf for v in (tol.position, tol.rotation)
+                (finite_float(v) or 0.0) > 0 for v in (tol.position, tol.rotation)
             ):
                 shown = short_repr(tol)
                 raise OptionsError(f"{name} must be a GoalTolerance of two finite numbers > 0 (m, rad), got {shown}")
@@ -270,7 +265,8 @@ class HelperArmOptions:
     def __post_init__(self) -> None:
         for name in ("d_step", "regularization", "constraint_weight", "arm_tolerance"):
             value = getattr(self, name)
-            if not (is_number(value) and math.isfinite(value) and value >= 0):
+            x = finite_float(value)
+            if x is None or not x >= 0:
                 raise OptionsError(f"{name} must be a finite number >= 0, got {short_repr(value)}")
         if not self.d_step > 0:
             raise OptionsError(f"d_step must be a positive number of metres, got {short_repr(self.d_step)}")

@@ -52,8 +52,10 @@ from typing import Any, ClassVar
 import yaml
 
 from ..exceptions import ConfigError, short_repr
-from .checks import MAX_MESSAGE, check, shorten, validate
-from .options import is_number
+from .bounds import BOUNDS
+from .checks import MAX_MESSAGE, check, shorten, unknown_key, validate
+from .inputs import read_input_text
+from .numbers import finite_float, is_number
 
 __all__ = [
     "AssemblerConfig",
@@ -205,17 +207,24 @@ def _section_from_mapping(name: str, cls: type, data: Any) -> Any:
     allowed = [f.name for f in dataclasses.fields(cls)]
     for key in data:
         if key not in allowed:
-            raise ConfigError(
-                shorten(f"unknown config key '{name}.{shorten(str(key), 12)}'; allowed: {','.join(allowed)}")
-            )
-    for key, value in data.items():
-        if not is_number(value):
-            raise ConfigError(f"config key '{name}.{key}' = {short_repr(value)} is invalid: must be a number")
-    return cls(**{k: float(v) for k, v in data.items()})
+            raise ConfigError(unknown_key(key, allowed, prefix=f"{name}.", doc="docs/configuration.md"))
+    return cls(**{k: _number(f"{name}.{k}", v) for k, v in data.items()})
 
 
-#: Longest configuration file read [bytes] (a real one is under 2 kB).
-MAX_CONFIG_BYTES = 1 << 20
+def _number(key: str, value: Any) -> float:
+    """The value of config key ``key`` as a finite float (:func:`~.numbers.finite_float`)."""
+    x = finite_float(value)
+    if x is None:
+        reason = "must be a finite number" if is_number(value) else "must be a number"
+        raise ConfigError(shorten(f"config key '{key}' = {short_repr(value)} is invalid: {reason}"))
+    return x
+
+
+#: Longest configuration file read [bytes] (the ``config.bytes`` row of the limits table).
+MAX_CONFIG_BYTES = int(BOUNDS["config.bytes"].high)
+#: Most items of one YAML list read (a closure sidecar of 64 platforms lists 384 motors; a
+#: reader may ask for fewer, as a scene for its obstacles).
+MAX_LIST_ITEMS = 10_000
 
 _YAML12_INT = re.compile(r"^(?:[-+]?[0-9]+|0o[0-7]+|0x[0-9a-fA-F]+)$")
 _YAML12_FLOAT = re.compile(
@@ -238,12 +247,20 @@ class StrictLoader(yaml.SafeLoader):
     """
 
     yaml_implicit_resolvers: ClassVar[dict] = {}
+    #: Most items of one list: reading stops at the next one (:func:`load_yaml`).
+    max_items: int = MAX_LIST_ITEMS
+    #: What the message adds to the list bound (:func:`load_yaml`).
+    items_note: str = ""
 
     def compose_node(self, parent: yaml.Node | None, index: object) -> yaml.Node:
         event = self.peek_event()
         if isinstance(event, yaml.AliasEvent) or getattr(event, "anchor", None) is not None:
             raise ConfigError(
                 f"line {event.start_mark.line + 1}: YAML anchors and aliases (&name, *name) are not accepted"
+            )
+        if isinstance(parent, yaml.SequenceNode) and isinstance(index, int) and index >= self.max_items:
+            raise ConfigError(
+                f"line {event.start_mark.line + 1}: a list holds more than {self.max_items} items{self.items_note}"
             )
         return super().compose_node(parent, index)
 
@@ -284,17 +301,22 @@ StrictLoader.add_constructor("tag:yaml.org,2002:int", StrictLoader.construct_yam
 StrictLoader.add_constructor("tag:yaml.org,2002:float", StrictLoader.construct_yaml12_float)
 
 
-def load_yaml(text: str, what: str) -> Any:
+def load_yaml(text: str, what: str, max_items: int = MAX_LIST_ITEMS, items_note: str = "") -> Any:
     """Parse YAML text with :class:`StrictLoader`.
 
     Args:
         what: the source, for the message (e.g. "config file 'c.yaml'").
+        max_items: the most items of one list; the read stops at the next one, before the
+            rest of the text is parsed; ``items_note`` is added to that message.
 
     Raises:
         ConfigError: one line of at most :data:`MAX_MESSAGE` characters naming ``what``.
     """
+    loader = None
     try:
-        return yaml.load(text, Loader=StrictLoader)
+        loader = StrictLoader(text)  # reads the text's first characters: may raise already
+        loader.max_items, loader.items_note = max_items, items_note
+        return loader.get_single_data()
     except ConfigError as exc:
         raise ConfigError(shorten(f"{what}: {exc}")) from None
     except yaml.YAMLError as exc:
@@ -304,6 +326,9 @@ def load_yaml(text: str, what: str) -> Any:
         raise ConfigError(shorten(f"{what} is not valid YAML{where}: {first}")) from None
     except (RecursionError, ValueError, OverflowError):
         raise ConfigError(f"{what} is not a readable configuration (nested too deeply or a malformed number)") from None
+    finally:
+        if loader is not None:
+            loader.dispose()
 
 
 def config_from_dict(data: Mapping[str, Any] | None) -> AssemblerConfig:
@@ -319,11 +344,12 @@ def config_from_dict(data: Mapping[str, Any] | None) -> AssemblerConfig:
     allowed = list(_TOP_SCALARS) + list(_SECTIONS)
     for key in data:
         if key not in allowed:
-            raise ConfigError(f"unknown config key '{shorten(str(key), 30)}'; allowed keys: {', '.join(allowed)}")
+            raise ConfigError(unknown_key(key, allowed))
     kwargs: dict[str, Any] = {}
     if "platforms" in data:
         value = data["platforms"]
-        if is_number(value) and float(value).is_integer() and abs(value) < 2**31:
+        whole = finite_float(value)
+        if whole is not None and whole.is_integer() and abs(whole) < 2**31:
             value = int(value)  # 3.0 and numpy integers are the integer 3
         check(
             isinstance(value, int) and not isinstance(value, bool),
@@ -334,34 +360,30 @@ def config_from_dict(data: Mapping[str, Any] | None) -> AssemblerConfig:
         kwargs["platforms"] = value
     for key in ("gravity", "clearance"):
         if key in data:
-            check(is_number(data[key]), key, data[key], "must be a number")
-            kwargs[key] = float(data[key])
+            kwargs[key] = _number(key, data[key])
     for name, cls in _SECTIONS.items():
         if name in data:
             kwargs[name] = _section_from_mapping(name, cls, data[name])
     return AssemblerConfig(**kwargs)
 
 
-def read_text_file(path: Path, shown: str, what: str, max_bytes: int, error: type[Exception]) -> str:
-    """The UTF-8 text of the file at ``path``, at most ``max_bytes`` bytes (a configuration or a
-    model file).
+def read_text_file(path: Path, shown: str, what: str, max_bytes: int, error: type[Exception], bound: str = "") -> str:
+    """The UTF-8 text of the file at ``path``, at most ``max_bytes`` bytes (a configuration, a
+    scene or a model file), read through the one checked door of input files
+    (:func:`~assembler_pin.config.inputs.read_input_text`: a FIFO, a directory or a device is
+    refused before it is opened).
+
+    Args:
+        bound: the row of the limits table that sets ``max_bytes``, named in its message.
 
     Raises:
         error: one line naming ``what`` and ``shown`` (the path as the user gave it): the file
-            cannot be read, is larger than ``max_bytes`` or is not UTF-8 text.
+            cannot be read, is not a regular file, is larger than ``max_bytes`` or is not UTF-8.
     """
     try:
-        with path.open("rb") as f:
-            raw = f.read(max_bytes + 1)
-    except (OSError, ValueError) as exc:  # ValueError: a NUL in the path
-        why = getattr(exc, "strerror", None) or exc
-        raise error(shorten(f"cannot read {what} '{shown}': {why}")) from None
-    if len(raw) > max_bytes:
-        raise error(f"{what} '{shown}' is larger than {max_bytes} bytes")
-    try:
-        return raw.decode("utf-8")
-    except UnicodeDecodeError:
-        raise error(f"{what} '{shown}' is not UTF-8 text") from None
+        return read_input_text(path, what, error, max_bytes, shown=shown, bound=bound)
+    except error as exc:
+        raise error(shorten(str(exc))) from None
 
 
 def load_config(source: str | Path | Mapping[str, Any] | AssemblerConfig | None = None) -> AssemblerConfig:
@@ -384,9 +406,11 @@ def load_config(source: str | Path | Mapping[str, Any] | AssemblerConfig | None 
         raise ConfigError(
             f"a configuration must be a YAML path, a mapping, an AssemblerConfig or None, got {short_repr(source)}"
         )
+    if not str(source):
+        raise ConfigError("a config file path must not be empty")
     path = Path(source)
     short_path = shorten(path.name, 40)
-    text = read_text_file(path, short_path, "config file", MAX_CONFIG_BYTES, ConfigError)
+    text = read_text_file(path, short_path, "config file", MAX_CONFIG_BYTES, ConfigError, "config.bytes")
     data = load_yaml(text, f"config file '{short_path}'")
     try:
         return config_from_dict(data)

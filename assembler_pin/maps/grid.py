@@ -23,7 +23,8 @@ import numpy as np
 import pinocchio as pin
 
 from ..config.bounds import BOUNDS, check_bound
-from ..exceptions import GridError
+from ..config.numbers import finite_float
+from ..exceptions import GridError, short_repr
 
 __all__ = ["Cell", "Grid", "parse_grid", "parse_orientations"]
 
@@ -122,9 +123,10 @@ def _float_tuple(values: object, what: str, size: int | None = None) -> tuple[fl
     for v in values:
         if isinstance(v, (bool, np.bool_)) or not isinstance(v, (int, float, np.integer, np.floating)):
             raise GridError(f"{what} must hold numbers, got {type(v).__name__}")
-        if not math.isfinite(float(v)):
-            raise GridError(f"{what} must hold finite numbers, got {float(v)}")
-        out.append(float(v))
+        x = finite_float(v)  # None for an integer too large for a float, as for NaN
+        if x is None:
+            raise GridError(f"{what} must hold finite numbers, got {short_repr(v, 40)}")
+        out.append(x)
     if not out:
         raise GridError(f"{what} is empty")
     return tuple(out)

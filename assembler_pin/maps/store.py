@@ -23,11 +23,11 @@ import hashlib
 import json
 import math
 import os
-import stat
 from pathlib import Path
 
 from ..common.files import atomic_path, write_atomic
 from ..config.bounds import BOUNDS
+from ..config.inputs import read_input_bytes
 from ..exceptions import AssemblerError, MapError
 from .cells import COLUMNS
 from .grid import Grid
@@ -105,23 +105,13 @@ def _read_manifest(path: Path) -> dict:
         MapError: not a regular file, too large, not JSON, or not a map manifest.
     """
     limit = int(BOUNDS["map.manifest_bytes"].high)
+    try:  # the one door of input files: a FIFO or a device is refused before it is opened
+        data = read_input_bytes(path, "the map manifest", MapError, limit, str(path), bound="map.manifest_bytes")
+    except MapError as exc:
+        raise MapError(f"{exc}: {_HOW}") from None
     try:
-        info = os.stat(path)
-    except OSError as exc:
-        raise MapError(f"the map manifest {path} cannot be read: {exc.strerror or exc}: {_HOW}") from None
-    if not stat.S_ISREG(info.st_mode):
-        raise MapError(f"the map manifest {path} is not a regular file: {_HOW}")
-    if info.st_size > limit:
-        raise MapError(
-            f"the map manifest {path} holds {info.st_size:,} bytes, over {limit:,} (map.manifest_bytes): {_HOW}"
-        )
-    try:
-        with open(path, "rb") as fh:
-            data = fh.read(limit + 1)
-        if len(data) > limit:
-            raise ValueError("grew while read")
         doc = json.loads(data.decode("utf-8"))
-    except (OSError, UnicodeDecodeError, ValueError, RecursionError):
+    except (UnicodeDecodeError, ValueError, RecursionError):
         raise MapError(f"the map manifest {path} cannot be read as JSON: {_HOW}") from None
     keys = {"format", "version", "shape", "grid", "configs", "solver", "scene"}
     if not isinstance(doc, dict) or doc.get("format") != FORMAT:

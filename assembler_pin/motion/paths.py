@@ -28,7 +28,8 @@ import pinocchio as pin
 from ..common.files import read_text_bounded, strict_json
 from ..config.bounds import BOUNDS, check_bound
 from ..config.choices import PATH_KINDS
-from ..exceptions import AssemblerError, PathError
+from ..config.numbers import finite_float
+from ..exceptions import AssemblerError, PathError, short_repr
 from ..kinematics import taa_to_se3, to_se3
 
 __all__ = ["EEPath", "interpolate_pose", "read_waypoints"]
@@ -41,7 +42,7 @@ def interpolate_pose(a: pin.SE3, b: pin.SE3, t: float, kind: str = "screw") -> p
     if kind == "linear":
         rotation = a.rotation @ pin.exp3(t * pin.log3(a.rotation.T @ b.rotation))
         return pin.SE3(rotation, (1.0 - t) * a.translation + t * b.translation)
-    raise PathError(f"path kind must be one of {', '.join(PATH_KINDS)}, got {kind!r}")
+    raise PathError(f"path kind must be one of {', '.join(PATH_KINDS)}, got {short_repr(kind, 40)}")
 
 
 @dataclass(frozen=True)
@@ -61,7 +62,7 @@ class EEPath:
 
     def __post_init__(self) -> None:
         if self.kind not in PATH_KINDS:
-            raise PathError(f"path kind must be one of {', '.join(PATH_KINDS)}, got {self.kind!r}")
+            raise PathError(f"path kind must be one of {', '.join(PATH_KINDS)}, got {short_repr(self.kind, 40)}")
         if len(self.waypoints) < 2:
             raise PathError(f"a path needs at least 2 waypoints, got {len(self.waypoints)}")
         for k, w in enumerate(self.waypoints):
@@ -136,7 +137,11 @@ def read_waypoints(path: str | Path, kind: str = "screw") -> EEPath:
 
 
 def _numbers(row: object, width: int) -> bool:
-    return type(row) is list and len(row) == width and all(type(x) in (int, float) for x in row)
+    """``row`` is a list of ``width`` JSON numbers, no integer too large for a float (an
+    infinite float is refused with its name where the pose is read)."""
+    if type(row) is not list or len(row) != width:
+        return False
+    return all(type(x) is float or (type(x) is int and finite_float(x) is not None) for x in row)
 
 
 def _json_waypoints(text: str) -> tuple[list, tuple[float, ...] | None, bool]:

@@ -39,9 +39,10 @@ from ..collision.sweep import body_moves, swept_bound
 from ..common.messages import binding, describe, one_line
 from ..common.progress import ProgressCallback, checked_progress
 from ..config.bounds import BOUNDS
-from ..config.options import GEOMETRIC_MARGIN, SMOOTH_METHODS, GoalTolerance, checked_options, is_number
+from ..config.numbers import finite_float
+from ..config.options import GEOMETRIC_MARGIN, SMOOTH_METHODS, GoalTolerance, checked_options
 from ..constraints import leg_limit_margins
-from ..exceptions import OptionsError, PathError
+from ..exceptions import OptionsError, PathError, short_repr
 from ..kinematics import PlateArrays, plate_arrays, stack_forward_kinematics
 from ..model.assembler import AssemblerModel
 from ..optimize import MotionTerm, OptimizeOptions, OptimizeResult, optimize_internal_poses
@@ -89,14 +90,14 @@ class PlanOptions:
     def __post_init__(self) -> None:
         for name in ("position_step", "rotation_step", "max_leg_step", "limit_margin"):
             value = getattr(self, name)
-            if not (is_number(value) and 0 < value < math.inf):
-                raise OptionsError(f"{name} must be a finite number > 0, got {value!r}")
-        if not (is_number(self.w3) and 0 <= self.w3 < math.inf):
-            raise OptionsError(f"w3 must be a finite number >= 0 [1/m^2], got {self.w3!r}")
+            if not ((finite_float(value) or 0.0) > 0):
+                raise OptionsError(f"{name} must be a finite number > 0, got {short_repr(value, 40)}")
+        if not (finite_float(self.w3) is not None and self.w3 >= 0):
+            raise OptionsError(f"w3 must be a finite number >= 0 [1/m^2], got {short_repr(self.w3, 40)}")
         for name in ("max_refinements", "checks_between"):
             value = getattr(self, name)
             if not (isinstance(value, int) and 0 <= value <= 20):
-                raise OptionsError(f"{name} must be an integer in [0, 20], got {value!r}")
+                raise OptionsError(f"{name} must be an integer in [0, 20], got {short_repr(value, 40)}")
         if self.optimize.method not in SMOOTH_METHODS:
             raise OptionsError(f"motion planning needs a smooth optimizer method ({', '.join(SMOOTH_METHODS)})")
         object.__setattr__(self, "optimize", dataclasses.replace(self.optimize, limit_margin=self.limit_margin))

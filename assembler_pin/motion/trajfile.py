@@ -41,7 +41,8 @@ from ..common.files import read_text_bounded, strict_json, write_atomic
 from ..common.naming import names
 from ..config.bounds import check_bound
 from ..config.choices import PATH_KINDS
-from ..exceptions import AssemblerError, TrajectoryError
+from ..config.numbers import finite_float
+from ..exceptions import AssemblerError, TrajectoryError, short_repr
 from ..kinematics import checked_rotations
 
 __all__ = [
@@ -234,7 +235,7 @@ def _parse_json(text: str) -> tuple[dict, list, list]:
     if set(doc) != {"format", "version", "meta", "columns", "rows"}:
         raise TrajectoryError("expected exactly the keys format, version, meta, columns, rows")
     if type(doc["version"]) is not int or doc["version"] != VERSION:  # 3.0 is not the integer 3
-        raise TrajectoryError(f"format version {doc['version']!r} is not {VERSION}: {_REPLAN}")
+        raise TrajectoryError(f"format version {short_repr(doc['version'], 30)} is not {VERSION}: {_REPLAN}")
     meta = _check_meta(doc["meta"])
     rows = doc["rows"]
     if not isinstance(rows, list):
@@ -248,7 +249,7 @@ def _parse_json(text: str) -> tuple[dict, list, list]:
 def _parse_csv(text: str) -> tuple[dict, list, list]:
     lines = text.splitlines()
     if lines and lines[0].startswith(f"# {FORMAT} v") and lines[0] != f"# {FORMAT} v{VERSION}":
-        raise TrajectoryError(f"format {lines[0][2:]!r} is not v{VERSION}: {_REPLAN}")
+        raise TrajectoryError(f"format {short_repr(lines[0][2:], 60)} is not v{VERSION}: {_REPLAN}")
     if lines and lines[0].startswith("t,L_sp"):
         raise TrajectoryError(f"written by an older version (no row count or checksum): {_REPLAN}")
     if not lines or lines[0] != f"# {FORMAT} v{VERSION}":
@@ -259,7 +260,7 @@ def _parse_csv(text: str) -> tuple[dict, list, list]:
     if not lines[-1].startswith("# end: "):
         raise TrajectoryError("truncated: the last line is not '# end: N rows'")
     if lines[-1] != f"# end: {meta['rows']} rows":
-        raise TrajectoryError(f"the end line {lines[-1]!r} does not match the meta's {meta['rows']} rows")
+        raise TrajectoryError(f"the end line {short_repr(lines[-1], 60)} does not match the meta's {meta['rows']} rows")
     body = lines[3:-1]
     _check_count(len(body), meta)
     columns = lines[2].split(",")
@@ -276,7 +277,8 @@ def _check_count(count: int, meta: dict) -> None:
 
 
 def _is_num(x: object) -> bool:
-    return type(x) in (int, float)
+    """A JSON number a float holds finitely (an integer of 400 digits is not)."""
+    return type(x) in (int, float) and finite_float(x) is not None
 
 
 def _check_meta(meta: object) -> dict:
@@ -307,7 +309,7 @@ def _check_meta(meta: object) -> dict:
         and len(base) == 4
         and all(isinstance(r, list) and len(r) == 4 and all(map(_is_num, r)) for r in base)
     ):
-        raise TrajectoryError("meta.base must be a 4x4 matrix of numbers (the world pose of plate 0)")
+        raise TrajectoryError("meta.base must be a 4x4 matrix of finite numbers (the world pose of plate 0)")
     checked_rotations(np.array([base], dtype=float), "meta.base")
     wt = meta["waypoint_times"]
     if wt is not None and not (isinstance(wt, list) and all(map(_is_num, wt)) and np.isfinite(wt).all()):

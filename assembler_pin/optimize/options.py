@@ -3,13 +3,12 @@
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 
 import numpy as np
 
-from ..config.options import is_number
-from ..exceptions import OptionsError
+from ..config.numbers import finite_float
+from ..exceptions import OptionsError, short_repr
 
 __all__ = ["MotionTerm"]
 
@@ -31,10 +30,10 @@ class MotionTerm:
     w3: float = 0.0
 
     def __post_init__(self) -> None:
-        if not (is_number(self.max_step) and 0 < self.max_step < math.inf):
-            raise OptionsError(f"max_step must be a finite number > 0 [m], got {self.max_step!r}")
-        if not (is_number(self.w3) and 0 <= self.w3 < math.inf):
-            raise OptionsError(f"w3 must be a finite number >= 0 [1/m^2], got {self.w3!r}")
+        if not ((finite_float(self.max_step) or 0.0) > 0):
+            raise OptionsError(f"max_step must be a finite number > 0 [m], got {short_repr(self.max_step, 40)}")
+        if not (finite_float(self.w3) is not None and self.w3 >= 0):
+            raise OptionsError(f"w3 must be a finite number >= 0 [1/m^2], got {short_repr(self.w3, 40)}")
         prev = np.asarray(self.previous_lengths, dtype=float)
         if prev.ndim != 2 or prev.shape[1] != 6 or not np.all(np.isfinite(prev)):
             raise OptionsError(f"previous_lengths must be a finite (n, 6) array [m], got shape {prev.shape}")

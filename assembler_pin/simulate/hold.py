@@ -15,7 +15,7 @@ import numpy as np
 import pinocchio as pin
 
 from ..config.bounds import check_bound
-from ..config.options import is_number
+from ..config.numbers import is_number
 from ..exceptions import SimulationError
 from ..kinematics import PlateArrays
 from ..model.assembler import AssemblerModel

@@ -34,7 +34,7 @@ from ..common.labels import leg_label
 from ..common.messages import binding, describe, one_line
 from ..common.threads import one_blas_thread
 from ..config.bounds import check_bound
-from ..config.options import is_number
+from ..config.numbers import is_number
 from ..exceptions import ArgumentError, OptionsError, PoseError, short_repr
 from ..helper_arm import initial_condition
 from ..kinematics import PlateArrays, plate_arrays, to_se3

@@ -26,6 +26,7 @@ import pinocchio as pin
 
 from ..common.files import read_text_bounded, strict_json
 from ..config.bounds import check_bound
+from ..config.numbers import finite_float
 from ..exceptions import AssemblerError, WalkError
 from ..kinematics import taa_to_se3, to_se3
 from ..model.assembler import AssemblerModel
@@ -97,7 +98,8 @@ def floor_footholds(step: float, count: int, floor_z: float = 0.0) -> tuple[pin.
 
 
 def _is_number(x: object) -> bool:
-    return isinstance(x, (int, float)) and not isinstance(x, bool)
+    """A JSON number a float holds finitely (:func:`~assembler_pin.config.numbers.finite_float`)."""
+    return isinstance(x, (int, float)) and finite_float(x) is not None
 
 
 def _foothold(k: int, row: object, degrees: bool) -> pin.SE3:
@@ -113,7 +115,7 @@ def _foothold(k: int, row: object, degrees: bool) -> pin.SE3:
                 return to_se3(np.array(row, dtype=float), f"foothold {k}")
             except AssemblerError as exc:
                 raise WalkError(str(exc)) from None
-    raise WalkError(f"foothold {k} must be six numbers [x, y, z, rx, ry, rz] or a 4x4 matrix of numbers")
+    raise WalkError(f"foothold {k} must be six finite numbers [x, y, z, rx, ry, rz] or a 4x4 matrix of them")
 
 
 def parse_footholds(text: str) -> FootholdFile:

@@ -52,9 +52,10 @@ from ..collision.check import Clearance, clearance
 from ..collision.scene import Scene, read_scene
 from ..common.progress import ProgressCallback, checked_progress
 from ..config.bounds import check_bound
+from ..config.numbers import finite_float
 from ..config.options import checked_options
 from ..constraints import Violation
-from ..exceptions import WalkError
+from ..exceptions import WalkError, short_repr
 from ..kinematics import PlateArrays, leg_vectors, plate_arrays
 from ..model.assembler import AssemblerModel, checked_model
 from ..motion.paths import EEPath
@@ -96,12 +97,8 @@ class WalkOptions:
     def __post_init__(self) -> None:
         check_bound("walk.clearance", self.clearance, "clearance", error=WalkError)
         check_bound("walk.transfer_samples", self.transfer_samples, "transfer_samples", error=WalkError)
-        if self.floor_z is not None and not (
-            isinstance(self.floor_z, (int, float))
-            and not isinstance(self.floor_z, bool)
-            and math.isfinite(self.floor_z)
-        ):
-            raise WalkError(f"floor_z must be a finite number [m] or None, got {self.floor_z!r}")
+        if self.floor_z is not None and finite_float(self.floor_z) is None:
+            raise WalkError(f"floor_z must be a finite number [m] or None, got {short_repr(self.floor_z, 40)}")
         if not isinstance(self.plan, PlanOptions):
             raise WalkError(f"plan must be a PlanOptions, got {type(self.plan).__name__}")
 

@@ -162,8 +162,8 @@ def test_unreadable_model_files(files):
     with pytest.raises(ModelFileError, match="cannot read"):
         ap.AssemblerModel.from_files(directory / "missing.urdf")
     (directory / "assembler.urdf").write_text(urdf)
-    with pytest.raises(ModelFileError, match="cannot read"):
-        ap.AssemblerModel.from_files(directory, sidecar_path=directory)  # a directory
+    with pytest.raises(ModelFileError, match="is a directory, not a regular file"):
+        ap.AssemblerModel.from_files(directory, sidecar_path=directory)  # refused before it is opened
 
 
 # ---------------------------------------------------------------------- item 6: FK assembly mode
@@ -411,8 +411,9 @@ def _config(tmp_path: Path, text: str) -> ap.AssemblerConfig:
         ("a: &g 9.81\ngravity: *g\n", "aliases"),
         ("base: &b {mass: 1}\npayload:\n  <<: *b\n", "aliases"),
         ("payload: {<<: {mass: 1}}\n", "unknown config key 'payload.<<'"),
-        ("colour: red\n", "allowed keys: platforms, gravity, clearance, plate, leg, payload"),
-        ("leg: {stroke: 1}\n", "allowed: min_length,max_length"),
+        ("colour: red\n", "allowed: platforms, gravity, clearance, plate, leg, payload"),
+        ("leg: {stroke: 1}\n", "keys, listed in docs/configuration.md"),
+        ("leg: {motor_radious: 0.02}\n", "unknown config key 'leg.motor_radious': did you mean 'leg.motor_radius'?"),
         ("plate: [1, 2]\n", "mapping"),
     ],
 )

@@ -17,6 +17,7 @@ import csv
 import importlib
 import io
 import json
+import os
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -101,8 +102,16 @@ def _statics_config_cases() -> list[CliCase]:
         "cfg_node_zone_long.yaml",
         "cfg_plate_thick.yaml",
         "cfg_plate_radius_zero.yaml",
+        "cfg_bigint_motor_radius.yaml",
+        "cfg_bigint_clearance.yaml",
+        "cfg_typo_key.yaml",
+        "fifo.yaml",
+        "/dev/zero",
     ]
-    cases = [_case(f"config.{Path(n).stem}", ["statics", "--home", "--json", "--config", f"{{d}}/{n}"]) for n in refuse]
+    cases = [
+        _case(f"config.{Path(n).stem}", ["statics", "--home", "--json", "--config", n if n[0] == "/" else f"{{d}}/{n}"])
+        for n in refuse
+    ]
     cases += [
         _case("config.empty", "statics --home --json --config {d}/cfg_empty.yaml", "any", check="state"),
         _case("config.comment_only", "statics --home --json --config {d}/cfg_comment.yaml", "any", check="state"),
@@ -162,6 +171,13 @@ SCENE_FILES: dict[str, bytes] = {
     ),
     "scene_long_name.yaml": b"obstacles:\n  - {name: " + b"n" * 500 + b", sphere: {radius: 0.1, center: [5, 0, 1]}}\n",
     "scene_list.yaml": b"- 1\n- 2\n",
+    # an integer of 400 digits (read exactly by YAML) where a number belongs
+    "scene_bigint_box.yaml": b"obstacles:\n  - box: {size: [1" + b"0" * 400 + b", 1, 1], pose: [5, 0, 0, 0, 0, 0]}\n",
+    "scene_bigint_pose.yaml": b"obstacles:\n  - box: {size: [1, 1, 1], pose: [1" + b"0" * 400 + b", 0, 0, 0, 0, 0]}\n",
+    "scene_bigint_floor.yaml": b"floor: {z: 1" + b"0" * 400 + b"}\n",
+    "scene_bigint_center.yaml": b"obstacles:\n  - sphere: {radius: 0.1, center: [5, 1" + b"0" * 400 + b", 1]}\n",
+    "scene_typo_key.yaml": b"floor: {zz: 0.0}\n",
+    "scene_long.yaml": b"obstacles:\n" + b"  - box: {size: [0.1, 0.1, 0.1], pose: [5, 0, 0.25, 0, 0, 0]}\n" * 10_000,
     "scene_ok.yaml": b"floor: {z: 0.0}\nobstacles:\n  - sphere: {radius: 0.05, center: [0.0, 0.0, 0.956]}\n",
 }
 
@@ -190,6 +206,13 @@ def _scene_cases() -> list[CliCase]:
         _case("scene.view_carrier", "view --home --carrier ur5 --html {d}/view.html --scene {d}/scene_ok.yaml"),
         _case("scene.missing", "statics --home --json --scene {d}/no_such_scene.yaml"),
         _case("scene.directory", "statics --home --json --scene {d}"),
+        _case("scene.fifo", "statics --home --json --scene {d}/fifo.yaml"),
+        _case("scene.dev_zero", "statics --home --json --scene /dev/zero"),
+        _case("scene.statics_empty_path", ["statics", "--home", "--json", "--scene", ""]),
+        _case("scene.solve_empty_path", [*f"solve --json --goal {REACHABLE}".split(), "--scene", ""]),
+        _case("scene.plan_empty_path", [*f"plan --json --to {NEAR_HOME}".split(), "--scene", ""]),
+        _case("statics.plates_fifo", "statics --json --plates {d}/fifo.yaml"),
+        _case("solve.out_in_proc", f"solve --json --goal {REACHABLE} --out /proc/out.json"),
         # a sphere around the home EE plate: an answer, infeasible with a collision
         _case("scene.statics_collision", "statics --home --json --scene {d}/scene_ok.yaml", "answer", check="state"),
         _case("scene.solve_collision", f"solve --json --goal {NEAR_HOME} --scene {{d}}/scene_ok.yaml", "any"),
@@ -900,6 +923,9 @@ def _alias_bomb(levels: int, width: int) -> str:
 
 
 CONFIG_FILES: dict[str, bytes] = {
+    "cfg_bigint_motor_radius.yaml": b"leg: {motor_radius: 1" + b"0" * 400 + b"}\n",
+    "cfg_bigint_clearance.yaml": b"clearance: -1" + b"0" * 400 + b"\n",
+    "cfg_typo_key.yaml": b"leg: {motor_radious: 0.02}\n",
     "cfg_empty.yaml": b"",
     "cfg_comment.yaml": b"# defaults\n",
     "cfg_other.yaml": b"payload:\n  mass: 2.0\n",
@@ -1017,6 +1043,8 @@ def build_workspace(root: Path, am, plan: Callable[[], tuple[str, str]]) -> Work
     (root / "adir").mkdir(exist_ok=True)
     (root / "sub").mkdir(exist_ok=True)
     (root / "afile").write_text("a regular file\n")
+    if not (root / "fifo.yaml").exists():
+        os.mkfifo(root / "fifo.yaml")  # a FIFO nobody writes: reading it would block forever
     home = am.home_matrices if hasattr(am, "home_matrices") else np.array([m.homogeneous for m in am.home])
     files: dict[str, bytes] = {}
     files |= plate_files(home)

@@ -53,9 +53,12 @@ def context(am, ws) -> ApiContext:
     return ApiContext(am, ws)
 
 
-def _params():
-    for case in API_CASES:
-        yield pytest.param(case, id=case.id, marks=[pytest.mark.slow] if case.slow or case.isolate else [])
+def _params() -> list:
+    """The cases as a list (pytest will refuse a generator in ``parametrize``)."""
+    return [
+        pytest.param(case, id=case.id, marks=[pytest.mark.slow] if case.slow or case.isolate else [])
+        for case in API_CASES
+    ]
 
 
 @pytest.mark.parametrize("case", _params())

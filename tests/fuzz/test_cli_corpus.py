@@ -94,10 +94,12 @@ def check_answer(case: CliCase, argv: list[str], code: int, out: str, what: str)
         _finite_numbers(doc, what)
 
 
-def _params():
-    for case in CLI_CASES:
-        marks = [pytest.mark.slow] if case.slow or case.isolate else []
-        yield pytest.param(case, id=case.id, marks=marks)
+def _params() -> list:
+    """The cases as a list (pytest will refuse a generator in ``parametrize``)."""
+    return [
+        pytest.param(case, id=case.id, marks=[pytest.mark.slow] if case.slow or case.isolate else [])
+        for case in CLI_CASES
+    ]
 
 
 @pytest.mark.parametrize("case", _params())

@@ -113,5 +113,5 @@ def test_a_4x4_foothold_file_reads_back_and_an_oversized_file_is_refused(tmp_pat
     got = read_footholds(path)
     assert np.allclose(got.footholds[1].homogeneous, pose.homogeneous, atol=1e-15) and got.floor_z == 0.0
     path.write_text(" " * (1 << 20) + json.dumps({"footholds": GOOD}))
-    with pytest.raises(ap.exceptions.WalkError, match="size"):
+    with pytest.raises(ap.exceptions.WalkError, match=r"larger than 1048576 bytes \(walk.file_bytes\)"):
         read_footholds(path)
