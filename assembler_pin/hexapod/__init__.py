@@ -1,0 +1,15 @@
+"""A hexapod of stacks: k stacks (the legs) whose EE plates hold one rigid body, standing on
+their base plates (the feet), welded or resting on a floor.
+
+- :mod:`.machine`: the stacks on a ring, the readers of the arguments, the machine's centre of mass.
+- :mod:`.structure`: the whole structure's potential and Newton's method on it.
+- :mod:`.feet`: a resting foot's admissible wrench and the static stability margin.
+- :mod:`.stand`: the equilibrium for commanded lengths (:func:`stand`).
+"""
+
+from __future__ import annotations
+
+from .machine import MAX_STACKS, machine_com, ring_stacks
+from .stand import FEET, HexapodStand, stand
+
+__all__ = ["FEET", "MAX_STACKS", "HexapodStand", "machine_com", "ring_stacks", "stand"]
