@@ -18,12 +18,12 @@ from collections.abc import Sequence
 from typing import NoReturn
 
 from ..exceptions import AssemblerError, CLIError, _SkipSubcommandError
-from . import bench, export, map, plan, reproduce, simulate, solve, statics, stiffness, support, view, walk
+from . import bench, export, hexapod, map, plan, reproduce, simulate, solve, statics, stiffness, support, view, walk
 
 logger = logging.getLogger("assembler_pin")
 
 #: The subcommands in the order ``--help`` lists them.
-SUBCOMMANDS = (export, statics, stiffness, support, solve, reproduce, bench, plan, walk, map, simulate, view)
+SUBCOMMANDS = (export, statics, stiffness, support, solve, reproduce, bench, plan, walk, hexapod, map, simulate, view)
 
 
 class _Parser(argparse.ArgumentParser):

@@ -5,11 +5,23 @@ their base plates (the feet), welded or resting on a floor.
 - :mod:`.structure`: the whole structure's potential and Newton's method on it.
 - :mod:`.feet`: a resting foot's admissible wrench and the static stability margin.
 - :mod:`.stand`: the equilibrium for commanded lengths (:func:`stand`).
+- :mod:`.clearance`: the machine's clearance (stacks, body, scene).
 """
 
 from __future__ import annotations
 
-from .machine import MAX_STACKS, machine_com, ring_stacks
+from .clearance import HexapodClearance, hexapod_clearance
+from .machine import MAX_STACKS, configured_hexapod, machine_com, ring_stacks
 from .stand import FEET, HexapodStand, stand
 
-__all__ = ["FEET", "MAX_STACKS", "HexapodStand", "machine_com", "ring_stacks", "stand"]
+__all__ = [
+    "FEET",
+    "MAX_STACKS",
+    "HexapodClearance",
+    "HexapodStand",
+    "configured_hexapod",
+    "hexapod_clearance",
+    "machine_com",
+    "ring_stacks",
+    "stand",
+]

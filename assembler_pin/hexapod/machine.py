@@ -25,7 +25,7 @@ from ..exceptions import HexapodError
 from ..kinematics import PlateArrays, leg_vectors, plate_arrays
 from ..model.assembler import AssemblerModel, checked_model
 
-__all__ = ["MAX_STACKS", "checked_body", "checked_stacks", "machine_com", "ring_stacks"]
+__all__ = ["MAX_STACKS", "checked_body", "checked_stacks", "configured_hexapod", "machine_com", "ring_stacks"]
 
 #: Most stacks under one body.
 MAX_STACKS = 16
@@ -47,6 +47,16 @@ def ring_stacks(am: AssemblerModel, count: int, radius: float) -> list[PlateArra
         foot = pin.SE3(pin.exp3(np.array([0.0, 0.0, a])), np.array([radius * np.cos(a), radius * np.sin(a), 0.0]))
         out.append(PlateArrays.from_se3([foot * m for m in am.home]))
     return out
+
+
+def configured_hexapod(am: AssemblerModel) -> tuple[list[PlateArrays], float, np.ndarray]:
+    """The stacks, body mass [kg] and body centre of mass (world, [m]) of the model's
+    configuration's ``hexapod`` section: :func:`ring_stacks` of ``stacks`` at ``radius``, the
+    body's centre of mass ``body_com`` from the centre of the EE plates' circle."""
+    hc = am.config.hexapod
+    stacks = ring_stacks(am, hc.stacks, hc.radius)
+    centre = np.mean([s.p[-1] for s in stacks], axis=0)
+    return stacks, hc.body_mass, centre + np.asarray(hc.body_com, float)
 
 
 def checked_stacks(am: AssemblerModel, stacks: Sequence) -> list[PlateArrays]:

@@ -20,7 +20,7 @@ deflected beyond ``leg.max_deflection_deg``, an equilibrium that is unstable or 
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 import numpy.typing as npt
@@ -63,6 +63,7 @@ class HexapodStand:
         feasible: no violation; violations: what is broken, one line each.
         converged, stable: the equilibrium was found, and its tangent stiffness is positive
             definite.
+        feet: ``"welded"`` or ``"resting"``.
     """
 
     forces: np.ndarray
@@ -78,6 +79,11 @@ class HexapodStand:
     violations: tuple[str, ...]
     converged: bool
     stable: bool
+    feet: str
+
+    def with_violation(self, violation: str) -> HexapodStand:
+        """This answer with one more violation (infeasible)."""
+        return replace(self, feasible=False, violations=(*self.violations, violation))
 
     @property
     def max_abs_force(self) -> float:
@@ -212,4 +218,5 @@ def stand(
         violations=tuple(violations),
         converged=eq.message is None,
         stable=eq.stable,
+        feet=feet,
     )

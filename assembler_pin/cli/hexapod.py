@@ -1,0 +1,120 @@
+"""``assembler-pin hexapod stand``: k stacks under one body, the structure's equilibrium."""
+
+from __future__ import annotations
+
+import argparse
+
+from .common import add_scene_argument, config_from_args, dumps, scene_from_args
+
+#: The hexapod's actions.
+ACTIONS = ("stand",)
+
+
+def add_parser(add) -> None:
+    """Register the ``hexapod`` subcommand (``add`` makes a subparser with ``--config``)."""
+    p = add(
+        "hexapod",
+        "stacks under one rigid body (the config's hexapod section): the whole structure's equilibrium",
+    )
+    p.add_argument("action", choices=ACTIONS, help="stand: the equilibrium with each pose's own leg lengths")
+    p.add_argument("--stacks", type=int, metavar="K", help="stacks under the body (default: hexapod.stacks)")
+    p.add_argument(
+        "--radius", type=float, metavar="R", help="radius of the feet's circle [m] (default: hexapod.radius)"
+    )
+    p.add_argument("--body-mass", type=float, metavar="M", help="the body's mass [kg] (default: hexapod.body_mass)")
+    p.add_argument(
+        "--feet",
+        choices=("welded", "resting"),
+        default="welded",
+        help="welded: the feet are held; resting: they stand on the floor (friction, lift-off, tipping)",
+    )
+    add_scene_argument(p, "the clearance of every stack and of the body to its obstacles and floor")
+    p.add_argument("--json", action="store_true", help="print one JSON object")
+    p.set_defaults(func=run)
+
+
+def _config(args: argparse.Namespace):
+    """The configuration with the options given on the command line in its ``hexapod`` section
+    (checked by the section's own reader) and no tool payload on the stacks (the body is the
+    load)."""
+    import dataclasses
+
+    from ..config.schema import PayloadConfig
+    from ..exceptions import CLIError, ConfigError
+
+    cfg = config_from_args(args)
+    changes = {"stacks": args.stacks, "radius": args.radius, "body_mass": args.body_mass}
+    flags = {"stacks": "--stacks", "radius": "--radius", "body_mass": "--body-mass"}
+    section = cfg.hexapod
+    for key, value in changes.items():
+        if value is None:
+            continue
+        try:
+            section = dataclasses.replace(section, **{key: value})
+        except ConfigError as exc:
+            raise CLIError(f"{flags[key]}: {str(exc).split(' is invalid: ')[-1]}") from None
+    return cfg.replace(hexapod=section, payload=PayloadConfig(mass=0.0))
+
+
+def stand_document(am, result, clearance) -> dict:
+    """The JSON answer of ``hexapod stand`` (``docs/guides/hexapod.md``)."""
+    import math
+
+    margin = result.stability_margin_m
+    return {
+        "feasible": result.feasible,
+        "violations": list(result.violations),
+        "feet": result.feet,
+        "stacks": int(result.forces.shape[0]),
+        "forces": result.forces.tolist(),
+        "max_abs_force": result.max_abs_force,
+        "foot_wrenches": result.foot_wrenches.tolist(),
+        "lifted": result.lifted.tolist(),
+        "body_displacement": result.body_displacement.tolist(),
+        "stability_margin_m": None if math.isnan(margin) else margin,
+        "com": result.com.tolist(),
+        "mass": result.mass,
+        "converged": result.converged,
+        "stable": result.stable,
+        "clearance": clearance.to_dict(),
+    }
+
+
+def run(args: argparse.Namespace) -> int:
+    """Exit 0 when the machine stands within every limit, 1 when not (the answer is still
+    printed), 2 for refused input."""
+    from ..hexapod import configured_hexapod, hexapod_clearance, stand
+    from ..model.assembler import AssemblerModel
+
+    am = AssemblerModel.from_config(_config(args))
+    scene = scene_from_args(args)
+    hc = am.config.hexapod
+    stacks, body_mass, body_com = configured_hexapod(am)
+    result = stand(am, stacks, body_mass, body_com, feet=args.feet, friction=hc.friction, min_margin=hc.min_margin)
+    clearance = hexapod_clearance(am, result, scene)
+    if not clearance.clear:
+        result = result.with_violation(clearance.message)
+    doc = stand_document(am, result, clearance)
+    print(dumps(doc) if args.json else format_stand(doc))
+    return 0 if result.feasible else 1
+
+
+def format_stand(doc: dict) -> str:
+    """A compact text report (lines ≤ 100 characters)."""
+    import numpy as np
+
+    margin = doc["stability_margin_m"]
+    verdict = "feasible" if doc["feasible"] else f"{len(doc['violations'])} violations"
+    lines = [
+        f"hexapod of {doc['stacks']} stacks, feet {doc['feet']}: {verdict}; max|F| {doc['max_abs_force']:.3f} N",
+        f"  body moved {np.round(1e6 * np.array(doc['body_displacement'][:3]), 2).tolist()} µm, "
+        f"turned {np.round(1e6 * np.array(doc['body_displacement'][3:]), 2).tolist()} µrad",
+        f"  machine {doc['mass']:.3f} kg, centre of mass {np.round(doc['com'], 4).tolist()} m"
+        + ("" if margin is None else f", stability margin {margin:.4f} m"),
+        f"  clearance {doc['clearance']['min_distance']:.4g} m ({' / '.join(doc['clearance']['between'])})"[:100],
+    ]
+    lines += [f"  violation: {v}"[:100] for v in doc["violations"]]
+    for i, (w, lifted) in enumerate(zip(doc["foot_wrenches"], doc["lifted"], strict=True)):
+        state = "lifted" if lifted else f"force {np.round(w[:3], 3).tolist()} N"
+        lines.append(f"  foot {i}: {state}"[:100])
+    return "\n".join(lines)

@@ -1,0 +1,71 @@
+"""``assembler-pin hexapod stand``: its JSON answer, its exit statuses and its refusals."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+from assembler_pin.cli import main
+
+KEYS = {"feasible", "forces", "foot_wrenches", "body_displacement", "stability_margin_m", "max_abs_force", "clearance"}
+
+
+def _run(capsys, argv):
+    code = main(argv)
+    out, err = capsys.readouterr()
+    return code, out, err.splitlines()
+
+
+@pytest.mark.parametrize("feet", ["welded", "resting"])
+def test_stand_json_carries_the_machine(capsys, feet):
+    code, out, err = _run(capsys, ["hexapod", "stand", "--stacks", "3", "--radius", "0.4", "--feet", feet, "--json"])
+    doc = json.loads(out)
+    assert code == 0 and not err and KEYS <= set(doc) and doc["feasible"]
+    forces, wrenches = np.array(doc["forces"]), np.array(doc["foot_wrenches"])
+    assert forces.shape == (3, 4, 6) and wrenches.shape == (3, 6)
+    assert doc["max_abs_force"] == np.abs(forces).max()
+    # the feet carry the whole machine: the default body (20 kg) and three stacks without a tool
+    assert wrenches[:, 2].sum() == pytest.approx(doc["mass"] * 9.81, rel=1e-12)
+    assert doc["mass"] == pytest.approx(20.0 + 3 * (5 * 0.2 + 24 * 0.14), rel=1e-12)
+    assert (doc["stability_margin_m"] is None) == (feet == "welded")
+    assert doc["clearance"]["min_distance"] >= doc["clearance"]["limit"]
+
+
+def test_a_body_off_its_feet_tips_and_exits_1(capsys, tmp_path):
+    cfg = tmp_path / "c.yaml"
+    cfg.write_text("hexapod:\n  stacks: 3\n  radius: 0.4\n  body_com: [-0.9, 0.0, 0.1]\n  body_mass: 40\n")
+    code, out, _ = _run(capsys, ["hexapod", "stand", "--feet", "resting", "--config", str(cfg), "--json"])
+    doc = json.loads(out)
+    assert code == 1 and not doc["feasible"] and doc["stability_margin_m"] < 0
+    assert any("tips" in v for v in doc["violations"])
+    code, out, _ = _run(capsys, ["hexapod", "stand", "--feet", "resting", "--config", str(cfg)])
+    assert code == 1 and "violation" in out and max(len(line) for line in out.splitlines()) <= 100
+
+
+@pytest.mark.parametrize(
+    "args",
+    [
+        ["--stacks", "0"],
+        ["--stacks", "17"],
+        ["--stacks", "two"],
+        ["--radius", "nan"],
+        ["--radius", "0"],
+        ["--body-mass", "-1"],
+        ["--body-mass", "inf"],
+        ["--feet", "glued"],
+        ["--scene", "/nonexistent/scene.yaml"],
+    ],
+)
+def test_bad_input_is_refused_in_one_line(capsys, args):
+    code, out, err = _run(capsys, ["hexapod", "stand", *args])
+    assert code == 2 and not out and len(err) == 1
+
+
+def test_an_unknown_action_and_a_bad_section_are_refused(capsys, tmp_path):
+    assert _run(capsys, ["hexapod", "walk"])[0] == 2
+    cfg = tmp_path / "c.yaml"
+    cfg.write_text("hexapod:\n  stacks: 2.5\n")
+    code, _, err = _run(capsys, ["hexapod", "stand", "--config", str(cfg)])
+    assert code == 2 and len(err) == 1 and "hexapod.stacks" in err[0]
