@@ -5,12 +5,14 @@ their base plates (the feet), welded or resting on a floor.
 - :mod:`.structure`: the whole structure's potential and Newton's method on it.
 - :mod:`.feet`: a resting foot's admissible wrench and the static stability margin.
 - :mod:`.stand`: the equilibrium for commanded lengths (:func:`stand`).
+- :mod:`.commands`: the force-optimal commands and ``∂F/∂L_cmd``.
 - :mod:`.clearance`: the machine's clearance (stacks, body, scene).
 """
 
 from __future__ import annotations
 
 from .clearance import HexapodClearance, hexapod_clearance
+from .commands import HexapodCommands, force_optimal_commands, length_sensitivity
 from .machine import MAX_STACKS, configured_hexapod, machine_com, ring_stacks
 from .stand import FEET, HexapodStand, stand
 
@@ -18,9 +20,12 @@ __all__ = [
     "FEET",
     "MAX_STACKS",
     "HexapodClearance",
+    "HexapodCommands",
     "HexapodStand",
     "configured_hexapod",
+    "force_optimal_commands",
     "hexapod_clearance",
+    "length_sensitivity",
     "machine_com",
     "ring_stacks",
     "stand",

@@ -64,6 +64,7 @@ class HexapodStand:
         converged, stable: the equilibrium was found, and its tangent stiffness is positive
             definite.
         feet: ``"welded"`` or ``"resting"``.
+        body_com: (3,) the body's centre of mass at the equilibrium [m]; body_mass: [kg].
     """
 
     forces: np.ndarray
@@ -80,6 +81,8 @@ class HexapodStand:
     converged: bool
     stable: bool
     feet: str
+    body_com: np.ndarray
+    body_mass: float
 
     def with_violation(self, violation: str) -> HexapodStand:
         """This answer with one more violation (infeasible)."""
@@ -219,4 +222,6 @@ def stand(
         converged=eq.message is None,
         stable=eq.stable,
         feet=feet,
+        body_com=eq.state.com,
+        body_mass=mass,
     )

@@ -29,9 +29,10 @@ from scipy.linalg import cho_factor, cho_solve
 
 from ..common.linalg import skew
 from ..compliance.elastic import MAX_STEP, ElasticTerms, elastic_terms, exp3_batch
+from ..kinematics.legs import leg_points
 from ..model.assembler import AssemblerModel
 
-__all__ = ["StructureEquilibrium", "solve_structure", "structure_terms"]
+__all__ = ["StructureEquilibrium", "StructureState", "leg_jacobian", "solve_structure", "structure_terms"]
 
 #: Step of the central differences of a free foot's rows [m, rad].
 _FD_STEP = 1e-6
@@ -129,6 +130,35 @@ def structure_terms(
             H[np.ix_(plate1, foot)] += M
             H[np.ix_(foot, plate1)] += M.T
     return StructureTerms(g, H, terms)
+
+
+def leg_jacobian(am: AssemblerModel, state: StructureState, free: np.ndarray) -> np.ndarray:
+    """(6nk, m) the derivative of every leg's length (stack by stack, platform by platform)
+    over the unknowns (module doc): a leg's row is ``[u, r_t × u]`` on its top plate and
+    ``−[u, r_b × u]`` on its bottom plate (``r`` its joint from the plate's origin, world
+    axes), the EE plate's reaching the body through ``J``."""
+    k, n = state.R.shape[0], am.n
+    idx = _layout(k, n, free)
+    size = 6 + sum(len(i) for i in idx)
+    bottom, top = leg_points(am.geometry, state.R, state.p)  # (k, n, 6, 3)
+    u = top - bottom
+    u /= np.linalg.norm(u, axis=-1, keepdims=True)
+    out = np.zeros((k, n, 6, size))
+    for i in range(k):
+        cols = {m: idx[i][6 * (m - 1 + int(free[i])) : 6 * (m + int(free[i]))] for m in range(1, n)}
+        if free[i]:
+            cols[0] = idx[i][:6]
+        for j in range(n):
+            for plate, joint, sign in ((j, bottom[i, j], -1.0), (j + 1, top[i, j], 1.0)):
+                rows = sign * np.concatenate([u[i, j], np.cross(joint - state.p[i, plate], u[i, j])], axis=1)
+                if plate == n:
+                    r = state.p[i, n] - state.com
+                    J = np.eye(6)
+                    J[:3, 3:] = -skew(r)
+                    out[i, j, :, :6] += rows @ J
+                elif plate in cols:
+                    out[i, j][:, cols[plate]] += rows
+    return out.reshape(k * n * 6, size)
 
 
 def _moved(am: AssemblerModel, state: StructureState, x: np.ndarray, free: np.ndarray) -> StructureState:

@@ -1,0 +1,49 @@
+"""The force-optimal commands stand the machine with the chosen forces, and ``∂F/∂L_cmd``
+is the finite difference of the stand itself."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import assembler_pin as ap
+from assembler_pin.hexapod import force_optimal_commands, length_sensitivity, ring_stacks, stand
+
+
+def _machine(platforms=3, count=6):
+    am = ap.AssemblerModel.from_config({"platforms": platforms, "payload": {"mass": 0.0}})
+    stacks = ring_stacks(am, count, 0.6)
+    return am, stacks, np.array([0.05, -0.03, stacks[0].p[-1, 2] + 0.1])
+
+
+def test_the_commanded_lengths_stand_with_the_chosen_forces():
+    """The linear program's distribution, commanded: the whole structure's equilibrium (the
+    Newton solve of the stand, not the program) is at the given poses with those forces; the
+    poses' own lengths give another, worse, distribution."""
+    am, stacks, com = _machine()
+    cmd = force_optimal_commands(am, stacks, 30.0, com)
+    assert cmd.success, cmd.message
+    got = stand(am, stacks, 30.0, com, lengths=cmd.lengths)
+    assert got.feasible and np.abs(got.forces - cmd.forces).max() <= 1e-6
+    assert np.abs(got.body_displacement).max() <= 1e-10
+    np.testing.assert_allclose(got.plates[..., :3, 3], [s.p for s in stacks], atol=1e-10)
+    own = stand(am, stacks, 30.0, com)
+    assert own.max_abs_force > cmd.max_abs_force
+
+
+@pytest.mark.parametrize("feet", ["welded", "resting"])
+def test_the_sensitivity_is_the_stands_finite_difference(feet):
+    am, stacks, com = _machine(platforms=2, count=3)
+    base = stand(am, stacks, 10.0, com, feet=feet)
+    S = length_sensitivity(am, base)
+    h = 1e-7
+    for b in (0, 7, 20, 35):
+        L = base.lengths.copy().ravel()
+        L[b] += h
+        up = stand(am, stacks, 10.0, com, lengths=L.reshape(base.lengths.shape), feet=feet)
+        L[b] -= 2 * h
+        down = stand(am, stacks, 10.0, com, lengths=L.reshape(base.lengths.shape), feet=feet)
+        fd = (up.forces - down.forces).ravel() / (2 * h)
+        np.testing.assert_allclose(S[:, b], fd, atol=1e-6 * np.abs(fd).max())
+    # a leg's own command moves its force by less than its spring alone would
+    assert np.all(np.diag(S) < 0) and np.all(np.diag(S) > -am.config.leg.stiffness)
