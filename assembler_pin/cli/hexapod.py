@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import argparse
 
-from .common import add_scene_argument, config_from_args, dumps, scene_from_args
+from .common import add_scene_argument, config_from_args, dumps, scene_from_args, writable_parent
 
 #: The hexapod's actions.
 ACTIONS = ("stand",)
@@ -29,6 +29,7 @@ def add_parser(add) -> None:
         help="welded: the feet are held; resting: they stand on the floor (friction, lift-off, tipping)",
     )
     add_scene_argument(p, "the clearance of every stack and of the body to its obstacles and floor")
+    p.add_argument("--plot", metavar="PNG", help="write the feet from above and the legs by force from the side")
     p.add_argument("--json", action="store_true", help="print one JSON object")
     p.set_defaults(func=run)
 
@@ -87,6 +88,8 @@ def run(args: argparse.Namespace) -> int:
     from ..model.assembler import AssemblerModel
 
     am = AssemblerModel.from_config(_config(args))
+    if args.plot:
+        writable_parent(args.plot, "--plot file")
     scene = scene_from_args(args)
     hc = am.config.hexapod
     stacks, body_mass, body_com = configured_hexapod(am)
@@ -94,6 +97,10 @@ def run(args: argparse.Namespace) -> int:
     clearance = hexapod_clearance(am, result, scene)
     if not clearance.clear:
         result = result.with_violation(clearance.message)
+    if args.plot:
+        from ..hexapod.figure import save_stand_figure
+
+        save_stand_figure(am, result, args.plot)
     doc = stand_document(am, result, clearance)
     print(dumps(doc) if args.json else format_stand(doc))
     return 0 if result.feasible else 1

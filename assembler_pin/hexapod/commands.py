@@ -20,8 +20,9 @@ import numpy as np
 import numpy.typing as npt
 from scipy.linalg import cho_factor, cho_solve
 
+from ..exceptions import HexapodError
 from ..kinematics import leg_state
-from ..model.assembler import AssemblerModel
+from ..model.assembler import AssemblerModel, checked_model
 from ..walk.macro import macro_statics
 from .machine import checked_body, checked_stacks
 from .stand import HexapodStand
@@ -73,7 +74,15 @@ def force_optimal_commands(
 def length_sensitivity(am: AssemblerModel, result: HexapodStand) -> np.ndarray:
     """``∂F/∂L_cmd`` (6nk, 6nk) [N/m] at the equilibrium of ``result`` (module doc): row ``a``,
     column ``b`` is the change of leg ``a``'s force per metre of leg ``b``'s command, legs in
-    the order of ``result.forces.ravel()``. The feet stay as in ``result`` (held, or lifted)."""
+    the order of ``result.forces.ravel()``. The feet stay as in ``result`` (held, or lifted).
+
+    Raises:
+        HexapodError: ``result`` is not a :class:`~assembler_pin.hexapod.stand.HexapodStand`
+            of this model.
+    """
+    checked_model(am)
+    if not isinstance(result, HexapodStand) or result.forces.shape[1] != am.n:
+        raise HexapodError("length_sensitivity needs a HexapodStand of this model (from stand(am, ...))")
     state = StructureState(result.plates[..., :3, :3].copy(), result.plates[..., :3, 3].copy(), result.body_com.copy())
     terms = structure_terms(am, state, result.lengths, result.body_mass, result.lifted)
     A = leg_jacobian(am, state, result.lifted)

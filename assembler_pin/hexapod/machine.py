@@ -63,10 +63,12 @@ def checked_stacks(am: AssemblerModel, stacks: Sequence) -> list[PlateArrays]:
     """Each stack's plate poses validated (:func:`~assembler_pin.kinematics.plate_arrays`).
 
     Raises:
-        HexapodError: not a list of 1..:data:`MAX_STACKS` stacks.
+        HexapodError: not a list of 1..:data:`MAX_STACKS` stacks, or a model of more
+            platforms than ``hexapod.platforms`` allows.
         PoseError: a malformed stack.
     """
     checked_model(am)
+    check_bound("hexapod.platforms", am.n, "a hexapod stack's platforms (the model's)", HexapodError)
     if isinstance(stacks, (str, bytes)) or not hasattr(stacks, "__len__") or not 1 <= len(stacks) <= MAX_STACKS:
         raise HexapodError(f"stacks must be a list of 1..{MAX_STACKS} stacks, each its n+1 world plate poses")
     out = [plate_arrays(am, s) for s in stacks]

@@ -69,3 +69,13 @@ def test_an_unknown_action_and_a_bad_section_are_refused(capsys, tmp_path):
     cfg.write_text("hexapod:\n  stacks: 2.5\n")
     code, _, err = _run(capsys, ["hexapod", "stand", "--config", str(cfg)])
     assert code == 2 and len(err) == 1 and "hexapod.stacks" in err[0]
+
+
+def test_bench_hexapod_figures_name_each_call_its_time_and_target():
+    from assembler_pin.bench.hexapod import HEXAPOD_TARGETS_MS, benchmark_hexapod
+
+    got = benchmark_hexapod(repeat=1)
+    assert HEXAPOD_TARGETS_MS == {"six_stack_welded_stand": 500.0, "six_stack_resting_stand": 500.0}
+    for key, target in HEXAPOD_TARGETS_MS.items():
+        assert got[f"{key}_ok"] and got[f"{key}_target_ms"] == target
+        assert 0.0 < got[f"{key}_ms"] < 1e5 and 0.0 <= got[f"{key}_cpu_ms"] < 1e5
