@@ -676,6 +676,10 @@ def _export_cases() -> list[CliCase]:
         _case("export.out_is_file", "export --out {d}/afile"),
         _case("export.out_under_file", "export --out " + UNDER_FILE),
         _case("export.config_bad", "export --out {d}/export_bad --config {d}/cfg_dup.yaml"),
+        _case("export.hexapod_massless", "export --hexapod --out {d}/export_hx --config {d}/cfg_hexapod_massless.yaml"),
+        _case(
+            "export.hexapod_bad_section", "export --hexapod --out {d}/export_hx --config {d}/cfg_hexapod_unknown.yaml"
+        ),
         _case("export.ok", "export --mjcf --out {d}/export_ok", "answer", check="export"),
     ]
 
@@ -986,6 +990,7 @@ CONFIG_FILES: dict[str, bytes] = {
     "cfg_hexapod_com_nan.yaml": b"hexapod:\n  body_com: [.nan, 0.0, 0.1]\n",
     "cfg_hexapod_unknown.yaml": b"hexapod:\n  legs: 6\n",
     "cfg_hexapod_thick_body.yaml": b"hexapod:\n  body_radius: 0.1\n  body_thickness: 0.5\n",
+    "cfg_hexapod_massless.yaml": b"hexapod:\n  body_mass: 0.0\n",
     "cfg_hexapod_tipping.yaml": b"hexapod:\n  stacks: 3\n  radius: 0.4\n  body_com: [-0.9, 0.0, 0.1]\n",
 }
 
