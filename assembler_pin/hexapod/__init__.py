@@ -6,11 +6,13 @@ their base plates (the feet), welded or resting on a floor.
 - :mod:`.feet`: a resting foot's admissible wrench and the static stability margin.
 - :mod:`.stand`: the equilibrium for commanded lengths (:func:`stand`).
 - :mod:`.commands`: the force-optimal commands and ``∂F/∂L_cmd``.
+- :mod:`.capacity`: the largest body mass within every limit.
 - :mod:`.clearance`: the machine's clearance (stacks, body, scene).
 """
 
 from __future__ import annotations
 
+from .capacity import HexapodCapacity, hexapod_capacity
 from .clearance import HexapodClearance, hexapod_clearance
 from .commands import HexapodCommands, force_optimal_commands, length_sensitivity
 from .machine import MAX_STACKS, configured_hexapod, machine_com, ring_stacks
@@ -19,11 +21,13 @@ from .stand import FEET, HexapodStand, stand
 __all__ = [
     "FEET",
     "MAX_STACKS",
+    "HexapodCapacity",
     "HexapodClearance",
     "HexapodCommands",
     "HexapodStand",
     "configured_hexapod",
     "force_optimal_commands",
+    "hexapod_capacity",
     "hexapod_clearance",
     "length_sensitivity",
     "machine_com",

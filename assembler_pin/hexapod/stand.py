@@ -117,9 +117,9 @@ def _limit_violations(am: AssemblerModel, eq: StructureEquilibrium, rest: np.nda
     leg, out = am.config.leg, []
     F = np.array([t.tension for t in eq.terms.stacks])
     if F.max() > leg.max_tension:
-        out.append(f"a leg's tension {F.max():.4g} N > leg.max_tension {leg.max_tension:g} N")
+        out.append(f"a leg's tension {F.max():.6g} N > leg.max_tension {leg.max_tension:g} N")
     if -F.min() > leg.max_compression:
-        out.append(f"a leg's compression {-F.min():.4g} N > leg.max_compression {leg.max_compression:g} N")
+        out.append(f"a leg's compression {-F.min():.6g} N > leg.max_compression {leg.max_compression:g} N")
     if rest.min() < leg.min_length or rest.max() > leg.max_length:
         out.append(f"a commanded length is outside the stroke [{leg.min_length:g}, {leg.max_length:g}] m")
     states = zip(eq.state.R, eq.state.p, strict=True)

@@ -1809,6 +1809,13 @@ def _hexapod_api_cases() -> list[ApiCase]:
             "api.hexapod_stand.platforms_64",
             lambda c: hx.stand(ap.AssemblerModel.from_config({"platforms": 64}), [c.am.home], 1.0, [0, 0, 1]),
         ),
+        ApiCase(
+            "api.hexapod_capacity.rtol_zero", lambda c: hx.hexapod_capacity(c.am, [c.am.home], [0, 0, 1], rtol=0.0)
+        ),
+        ApiCase(
+            "api.hexapod_capacity.rtol_string", lambda c: hx.hexapod_capacity(c.am, [c.am.home], [0, 0, 1], rtol="1")
+        ),
+        ApiCase("api.hexapod_capacity.com_nan", lambda c: hx.hexapod_capacity(c.am, [c.am.home], [np.nan, 0, 1])),
         ApiCase("api.ring_stacks.count_zero", lambda c: hx.ring_stacks(c.am, 0, 0.5)),
         ApiCase("api.ring_stacks.count_float", lambda c: hx.ring_stacks(c.am, 2.5, 0.5)),
         ApiCase("api.ring_stacks.count_huge", lambda c: hx.ring_stacks(c.am, 10**9, 0.5)),

@@ -47,3 +47,23 @@ def test_the_sensitivity_is_the_stands_finite_difference(feet):
         np.testing.assert_allclose(S[:, b], fd, atol=1e-6 * np.abs(fd).max())
     # a leg's own command moves its force by less than its spring alone would
     assert np.all(np.diag(S) < 0) and np.all(np.diag(S) > -am.config.leg.stiffness)
+
+
+@pytest.mark.parametrize("feet", ["welded", "resting"])
+def test_the_capacity_is_where_a_limit_breaks(feet):
+    """The mass found stands, rtol above it does not; the forces are affine in the mass to
+    first order, so two stands predict the same capacity (the first leg to reach its limit);
+    and no fixed commands carry more than the linear program's best distribution."""
+    from assembler_pin.hexapod import hexapod_capacity
+
+    am, stacks, com = _machine()
+    got = hexapod_capacity(am, stacks, com, feet=feet, rtol=1e-6)
+    assert got.at_capacity.feasible and got.above is not None and not got.above.feasible
+    assert got.above.body_mass - got.mass <= 1e-6 * got.above.body_mass
+    assert "leg.max_compression" in got.limit
+    F0, F1 = (stand(am, stacks, m, com, feet=feet).forces for m in (0.0, 10.0))
+    slope = (F1 - F0) / 10.0
+    limit = np.where(slope < 0, (-am.config.leg.max_compression - F0) / slope, np.inf)
+    limit = np.minimum(limit, np.where(slope > 0, (am.config.leg.max_tension - F0) / slope, np.inf))
+    assert got.mass == pytest.approx(limit.min(), rel=2e-3)
+    assert got.mass <= ap.walk.macro_capacity(am, stacks, com)[0] * (1 + 1e-3)
