@@ -199,6 +199,8 @@ def stand(
         plate, depth = am.config.plate, 0.5 * am.config.plate.thickness
         for i in np.flatnonzero(~lifted):
             violations += foot_violations(int(i), wrenches[i], eq.state.p[i, 0], friction, plate.radius, depth, tol)
+        for i in np.flatnonzero(lifted & (eq.state.p[:, 0, 2] < start.p[0, 0, 2] - LEVEL_TOL)):
+            violations.append(f"foot {i} would both pull on the floor and sink below it: no contact state holds")
         margin = stability_margin(machine[:2], eq.state.p[~lifted, 0, :2], plate.radius)
         if lifted.all():
             violations.append("every foot lifts off: nothing holds the machine")
