@@ -29,6 +29,11 @@ def add_parser(add) -> None:
         help="welded: the feet are held; resting: they stand on the floor (friction, lift-off, tipping)",
     )
     add_scene_argument(p, "the clearance of every stack and of the body to its obstacles and floor")
+    p.add_argument(
+        "--html",
+        metavar="PAGE",
+        help="write a standalone page of the machine: legs by force, the body, the support polygon, the centre of mass",
+    )
     p.add_argument("--plot", metavar="PNG", help="write the feet from above and the legs by force from the side")
     p.add_argument("--json", action="store_true", help="print one JSON object")
     p.set_defaults(func=run)
@@ -90,6 +95,8 @@ def run(args: argparse.Namespace) -> int:
     am = AssemblerModel.from_config(_config(args))
     if args.plot:
         writable_parent(args.plot, "--plot file")
+    if args.html:
+        writable_parent(args.html, "--html file")
     scene = scene_from_args(args)
     hc = am.config.hexapod
     stacks, body_mass, body_com = configured_hexapod(am)
@@ -101,6 +108,10 @@ def run(args: argparse.Namespace) -> int:
         from ..hexapod.figure import save_stand_figure
 
         save_stand_figure(am, result, args.plot)
+    if args.html:
+        from ..viz.hexapod import write_hexapod_page
+
+        write_hexapod_page(am, result, args.html)
     doc = stand_document(am, result, clearance)
     print(dumps(doc) if args.json else format_stand(doc))
     return 0 if result.feasible else 1

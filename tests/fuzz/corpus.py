@@ -507,6 +507,8 @@ def _hexapod_cases() -> list[CliCase]:
             ("config_unknown_key", "--config {d}/cfg_hexapod_unknown.yaml"),
             ("config_thick_body", "--config {d}/cfg_hexapod_thick_body.yaml"),
             ("scene_missing", "--scene {d}/missing.yaml"),
+            ("html_unwritable", "--html " + UNDER_FILE + ".html"),
+            ("plot_unwritable", "--plot " + UNDER_FILE + ".png"),
         )
     ]
     return [
