@@ -67,3 +67,36 @@ def test_the_capacity_is_where_a_limit_breaks(feet):
     limit = np.minimum(limit, np.where(slope > 0, (am.config.leg.max_tension - F0) / slope, np.inf))
     assert got.mass == pytest.approx(limit.min(), rel=2e-3)
     assert got.mass <= ap.walk.macro_capacity(am, stacks, com)[0] * (1 + 1e-3)
+
+
+def test_the_smallest_sum_of_squares_among_the_min_max_distributions():
+    """Same max|F| as the linear program, no larger Σ F², stood exactly; and the KKT conditions
+    of min Σ F² over the EE wrenches u, F = F0 + N u (each stack's held_equilibrium), Σ u = the
+    body's weight, |F| ≤ max|F|: 2 Nᵀ F = Bᵀ λ + Σ μ (∓N rows of the legs at ±max|F|), μ ≥ 0,
+    solved here by bounded least squares to a residual of rounding."""
+    from scipy.optimize import lsq_linear
+
+    from assembler_pin.common.linalg import skew
+    from assembler_pin.supports.choice import held_equilibrium
+
+    am, stacks, com = _machine(platforms=2, count=3)
+    lp = force_optimal_commands(am, stacks, 10.0, com)
+    qp = force_optimal_commands(am, stacks, 10.0, com, smallest=True)
+    assert qp.success and "SLSQP" in qp.message
+    assert qp.max_abs_force == pytest.approx(lp.max_abs_force, rel=1e-8)
+    assert (qp.forces**2).sum() <= (lp.forces**2).sum() + 1e-9
+    got = stand(am, stacks, 10.0, com, lengths=qp.lengths)
+    assert np.abs(got.forces - qp.forces).max() <= 1e-6
+    N = np.zeros((36, 18))
+    B = np.zeros((6, 18))
+    for i, pa in enumerate(stacks):
+        N[12 * i : 12 * i + 12, 6 * i : 6 * i + 6] = held_equilibrium(am, pa, "both").null.reshape(12, 6)
+        B[:, 6 * i : 6 * i + 6] = np.eye(6)
+        B[3:, 6 * i : 6 * i + 3] = skew(pa.p[-1])
+    F = qp.forces.ravel()
+    peak = np.abs(F).max()
+    active = np.flatnonzero(np.abs(F) >= peak * (1 - 1e-7))
+    normals = N[active] * np.sign(F[active])[:, None]  # the outward normal of |F_a| ≤ peak
+    A = np.hstack([B.T, -B.T, -normals.T])  # λ = λ+ − λ−, μ ≥ 0: gradient + Σ μ normals = Bᵀ λ
+    fit = lsq_linear(A, 2.0 * N.T @ F, bounds=(0.0, np.inf), tol=1e-14, lsmr_tol="auto")
+    assert np.abs(A @ fit.x - 2.0 * N.T @ F).max() <= 1e-6 * np.abs(2.0 * N.T @ F).max()
