@@ -155,6 +155,41 @@ def _resting(am: AssemblerModel, start: StructureState, rest: np.ndarray, body_m
     return eq, w, free
 
 
+def _matrices(state: StructureState) -> np.ndarray:
+    """(k, n+1, 4, 4) homogeneous poses of every plate of ``state``."""
+    out = np.zeros((*state.R.shape[:2], 4, 4))
+    out[..., :3, :3], out[..., :3, 3], out[..., 3, 3] = state.R, state.p, 1.0
+    return out
+
+
+def _ground_violations(
+    am: AssemblerModel,
+    eq: StructureEquilibrium,
+    wrenches: np.ndarray,
+    lifted: np.ndarray,
+    machine: np.ndarray,
+    floor: float,
+    friction: float,
+    min_margin: float,
+    tol: float,
+    out: list[str],
+) -> float:
+    """Append to ``out`` what the resting feet break (:mod:`.feet`), a lifted foot below the
+    floor at ``floor`` [m], and tipping; return the stability margin [m] of the machine's
+    centre of mass ``machine``."""
+    plate, depth = am.config.plate, 0.5 * am.config.plate.thickness
+    for i in np.flatnonzero(~lifted):
+        out += foot_violations(int(i), wrenches[i], eq.state.p[i, 0], friction, plate.radius, depth, tol)
+    for i in np.flatnonzero(lifted & (eq.state.p[:, 0, 2] < floor - LEVEL_TOL)):
+        out.append(f"foot {i} would both pull on the floor and sink below it: no contact state holds")
+    margin = stability_margin(machine[:2], eq.state.p[~lifted, 0, :2], plate.radius)
+    if lifted.all():
+        out.append("every foot lifts off: nothing holds the machine")
+    elif not margin >= min_margin:
+        out.append(f"the stability margin {margin:.4g} m < min_margin {min_margin:g} m: the machine tips")
+    return margin
+
+
 def stand(
     am: AssemblerModel,
     stacks: Sequence,
@@ -196,24 +231,14 @@ def stand(
     total, machine = machine_com(am, eq.state.R, eq.state.p, mass, eq.state.com)
     margin = float("nan")
     if feet == "resting":
-        plate, depth = am.config.plate, 0.5 * am.config.plate.thickness
-        for i in np.flatnonzero(~lifted):
-            violations += foot_violations(int(i), wrenches[i], eq.state.p[i, 0], friction, plate.radius, depth, tol)
-        for i in np.flatnonzero(lifted & (eq.state.p[:, 0, 2] < start.p[0, 0, 2] - LEVEL_TOL)):
-            violations.append(f"foot {i} would both pull on the floor and sink below it: no contact state holds")
-        margin = stability_margin(machine[:2], eq.state.p[~lifted, 0, :2], plate.radius)
-        if lifted.all():
-            violations.append("every foot lifts off: nothing holds the machine")
-        elif not margin >= min_margin:
-            violations.append(f"the stability margin {margin:.4g} m < min_margin {min_margin:g} m: the machine tips")
+        floor = float(start.p[0, 0, 2])
+        margin = _ground_violations(am, eq, wrenches, lifted, machine, floor, friction, min_margin, tol, violations)
     turn = eq.state.R[0, -1] @ start.R[0, -1].T
-    plates = np.zeros((k, am.n + 1, 4, 4))
-    plates[..., :3, :3], plates[..., :3, 3], plates[..., 3, 3] = eq.state.R, eq.state.p, 1.0
     return HexapodStand(
         forces=np.array([t.tension for t in eq.terms.stacks]),
         foot_wrenches=wrenches,
         body_displacement=np.concatenate([eq.state.com - com, pin.log3(turn)]),
-        plates=plates,
+        plates=_matrices(eq.state),
         lengths=rest,
         lifted=lifted,
         com=machine,
