@@ -28,6 +28,13 @@ def add_parser(add) -> None:
         default="welded",
         help="welded: the feet are held; resting: they stand on the floor (friction, lift-off, tipping)",
     )
+    p.add_argument(
+        "--commands",
+        choices=("own", "optimal"),
+        default="own",
+        help="the legs' commanded lengths: own (each pose's own) or optimal (the min max|F| distribution, "
+        "then the smallest sum of squares, realized exactly)",
+    )
     add_scene_argument(p, "the clearance of every stack and of the body to its obstacles and floor")
     p.add_argument(
         "--html",
@@ -62,11 +69,16 @@ def _config(args: argparse.Namespace):
     return cfg.replace(hexapod=section, payload=PayloadConfig(mass=0.0))
 
 
-def stand_document(am, result, clearance) -> dict:
+def stand_document(am, result, clearance, commands: str = "own") -> dict:
     """The JSON answer of ``hexapod stand`` (``docs/guides/hexapod.md``)."""
     import math
 
+    import numpy as np
+
+    from ..hexapod import length_sensitivity
+
     margin = result.stability_margin_m
+    per_micron = 1e-6 * float(np.abs(length_sensitivity(am, result)).sum(axis=1).max()) if result.converged else None
     return {
         "feasible": result.feasible,
         "violations": list(result.violations),
@@ -83,6 +95,9 @@ def stand_document(am, result, clearance) -> dict:
         "converged": result.converged,
         "stable": result.stable,
         "clearance": clearance.to_dict(),
+        "commands": commands,
+        "lengths": result.lengths.tolist(),
+        "force_per_micron": per_micron,
     }
 
 
@@ -100,7 +115,18 @@ def run(args: argparse.Namespace) -> int:
     scene = scene_from_args(args)
     hc = am.config.hexapod
     stacks, body_mass, body_com = configured_hexapod(am)
-    result = stand(am, stacks, body_mass, body_com, feet=args.feet, friction=hc.friction, min_margin=hc.min_margin)
+    lengths, missing, commands = None, None, args.commands
+    if commands == "optimal":
+        from ..hexapod import force_optimal_commands
+
+        chosen = force_optimal_commands(am, stacks, body_mass, body_com, smallest=True)
+        if chosen.success:
+            lengths = chosen.lengths
+        else:  # answered with the poses' own lengths, infeasible, and why
+            missing, commands = f"no force-optimal commands: {chosen.message}", "own"
+    result = stand(am, stacks, body_mass, body_com, lengths, args.feet, hc.friction, hc.min_margin)
+    if missing is not None:
+        result = result.with_violation(missing)
     clearance = hexapod_clearance(am, result, scene)
     if not clearance.clear:
         result = result.with_violation(clearance.message)
@@ -112,7 +138,7 @@ def run(args: argparse.Namespace) -> int:
         from ..viz.hexapod import write_hexapod_page
 
         write_hexapod_page(am, result, args.html)
-    doc = stand_document(am, result, clearance)
+    doc = stand_document(am, result, clearance, commands)
     print(dumps(doc) if args.json else format_stand(doc))
     return 0 if result.feasible else 1
 
@@ -129,6 +155,8 @@ def format_stand(doc: dict) -> str:
         f"turned {np.round(1e6 * np.array(doc['body_displacement'][3:]), 2).tolist()} µrad",
         f"  machine {doc['mass']:.3f} kg, centre of mass {np.round(doc['com'], 4).tolist()} m"
         + ("" if margin is None else f", stability margin {margin:.4f} m"),
+        f"  commands {doc['commands']}: one µm on every leg moves a force by up to "
+        + ("?" if doc["force_per_micron"] is None else f"{doc['force_per_micron']:.3g} N"),
         f"  clearance {doc['clearance']['min_distance']:.4g} m ({' / '.join(doc['clearance']['between'])})"[:100],
     ]
     lines += [f"  violation: {v}"[:100] for v in doc["violations"]]

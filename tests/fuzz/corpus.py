@@ -500,6 +500,7 @@ def _hexapod_cases() -> list[CliCase]:
             ("body_mass_nan", "--body-mass nan"),
             ("body_mass_huge", "--body-mass 1e308"),
             ("feet_unknown", "--feet glued"),
+            ("commands_unknown", "--commands best"),
             ("config_platforms_64", "--config {d}/cfg_platforms_64.yaml"),
             ("config_stacks_float", "--config {d}/cfg_hexapod_stacks_float.yaml"),
             ("config_com_short", "--config {d}/cfg_hexapod_com_short.yaml"),

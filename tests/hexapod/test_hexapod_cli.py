@@ -79,3 +79,23 @@ def test_bench_hexapod_figures_name_each_call_its_time_and_target():
     for key, target in HEXAPOD_TARGETS_MS.items():
         assert got[f"{key}_ok"] and got[f"{key}_target_ms"] == target
         assert 0.0 < got[f"{key}_ms"] < 1e5 and 0.0 <= got[f"{key}_cpu_ms"] < 1e5
+
+
+def test_optimal_commands_stand_the_body_where_it_is_with_smaller_forces(capsys, tmp_path):
+    cfg = tmp_path / "c.yaml"
+    cfg.write_text("platforms: 2\nhexapod:\n  stacks: 3\n  radius: 0.4\n  body_com: [0.08, 0.03, 0.1]\n")
+    base = ["hexapod", "stand", "--config", str(cfg), "--json"]
+    code, out, _ = _run(capsys, base)
+    own = json.loads(out)
+    code_opt, out, _ = _run(capsys, [*base, "--commands", "optimal"])
+    opt = json.loads(out)
+    assert code == code_opt == 0 and opt["commands"] == "optimal" and own["commands"] == "own"
+    assert opt["max_abs_force"] < own["max_abs_force"]
+    assert np.abs(opt["body_displacement"]).max() < 1e-9 < np.abs(own["body_displacement"]).max()
+    # one micrometre on every leg: a stiffness-sized figure (k = 1e6 N/m is 1 N/µm on one leg alone)
+    assert 0.5 < opt["force_per_micron"] < 10.0
+    heavy = tmp_path / "h.yaml"
+    heavy.write_text("hexapod:\n  body_mass: 5000\n")
+    code, out, _ = _run(capsys, ["hexapod", "stand", "--config", str(heavy), "--commands", "optimal", "--json"])
+    doc = json.loads(out)
+    assert code == 1 and doc["commands"] == "own" and any("no force-optimal commands" in v for v in doc["violations"])
