@@ -32,7 +32,7 @@ def benchmark_hexapod(repeat: int = 10) -> dict[str, Any]:
     """Per call [ms]: :func:`~assembler_pin.hexapod.stand` of six default stacks (four
     platforms, no tool) on a 0.6 m circle under a 20 kg body, its legs commanded 0.2 mm off
     their poses' lengths (a fixed pseudo-random pattern: the Newton solve has work to do),
-    welded and resting; wall time (``..._ms``), this process's CPU time (``..._cpu_ms``), the
+    welded and resting, the clearance included; wall time (``..._ms``), this process's CPU time (``..._cpu_ms``), the
     target (``..._target_ms``, :data:`HEXAPOD_TARGETS_MS`) and whether it stood (``..._ok``).
     """
     check_bound("bench.repeat", repeat, "repeat")

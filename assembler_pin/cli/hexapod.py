@@ -69,7 +69,7 @@ def _config(args: argparse.Namespace):
     return cfg.replace(hexapod=section, payload=PayloadConfig(mass=0.0))
 
 
-def stand_document(am, result, clearance, commands: str = "own") -> dict:
+def stand_document(am, result, commands: str = "own") -> dict:
     """The JSON answer of ``hexapod stand`` (``docs/guides/hexapod.md``)."""
     import math
 
@@ -94,7 +94,7 @@ def stand_document(am, result, clearance, commands: str = "own") -> dict:
         "mass": result.mass,
         "converged": result.converged,
         "stable": result.stable,
-        "clearance": clearance.to_dict(),
+        "clearance": result.clearance.to_dict(),
         "commands": commands,
         "lengths": result.lengths.tolist(),
         "force_per_micron": per_micron,
@@ -104,7 +104,7 @@ def stand_document(am, result, clearance, commands: str = "own") -> dict:
 def run(args: argparse.Namespace) -> int:
     """Exit 0 when the machine stands within every limit, 1 when not (the answer is still
     printed), 2 for refused input."""
-    from ..hexapod import configured_hexapod, hexapod_clearance, stand
+    from ..hexapod import configured_hexapod, stand
     from ..model.assembler import AssemblerModel
 
     am = AssemblerModel.from_config(_config(args))
@@ -124,12 +124,9 @@ def run(args: argparse.Namespace) -> int:
             lengths = chosen.lengths
         else:  # answered with the poses' own lengths, infeasible, and why
             missing, commands = f"no force-optimal commands: {chosen.message}", "own"
-    result = stand(am, stacks, body_mass, body_com, lengths, args.feet, hc.friction, hc.min_margin)
+    result = stand(am, stacks, body_mass, body_com, lengths, args.feet, hc.friction, hc.min_margin, scene)
     if missing is not None:
         result = result.with_violation(missing)
-    clearance = hexapod_clearance(am, result, scene)
-    if not clearance.clear:
-        result = result.with_violation(clearance.message)
     if args.plot:
         from ..hexapod.figure import save_stand_figure
 
@@ -138,7 +135,7 @@ def run(args: argparse.Namespace) -> int:
         from ..viz.hexapod import write_hexapod_page
 
         write_hexapod_page(am, result, args.html)
-    doc = stand_document(am, result, clearance, commands)
+    doc = stand_document(am, result, commands)
     print(dumps(doc) if args.json else format_stand(doc))
     return 0 if result.feasible else 1
 

@@ -15,6 +15,7 @@ from dataclasses import dataclass
 
 import numpy.typing as npt
 
+from ..collision import Scene, read_scene
 from ..config.bounds import BOUNDS, check_bound
 from ..exceptions import HexapodError
 from ..model.assembler import AssemblerModel
@@ -49,9 +50,11 @@ def hexapod_capacity(
     friction: float = 0.5,
     min_margin: float = 0.0,
     rtol: float = 1e-4,
+    scene: Scene | str | None = None,
 ) -> HexapodCapacity:
     """The largest body mass (module doc) of the hexapod ``stacks`` with the body centred at
-    ``body_com`` (world [m]) and the legs commanded ``lengths`` (None: each pose's own).
+    ``body_com`` (world [m]) and the legs commanded ``lengths`` (None: each pose's own), its
+    clearance kept among ``scene``'s obstacles and floor (:func:`~assembler_pin.hexapod.stand`).
 
     Raises:
         HexapodError: as :func:`~assembler_pin.hexapod.stand`, or ``rtol`` outside [1e-9, 0.1].
@@ -60,8 +63,9 @@ def hexapod_capacity(
         raise HexapodError(f"rtol must be a number in [1e-9, 0.1], got {rtol!r:.40}")
 
     def at(mass: float) -> HexapodStand:
-        return stand(am, stacks, mass, body_com, lengths, feet, friction, min_margin)
+        return stand(am, stacks, mass, body_com, lengths, feet, friction, min_margin, obstacles)
 
+    obstacles = read_scene(scene)
     empty = at(0.0)
     if not empty.feasible:
         return HexapodCapacity(

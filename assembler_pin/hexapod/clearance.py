@@ -21,13 +21,13 @@ from functools import partial
 import numpy as np
 import pinocchio as pin
 
-from ..collision import Scene, clearance
+from ..collision import Scene, clearance, read_scene
 from ..collision.bodies import MOTOR, SHAFT, leg_segments, stack_bodies
 from ..collision.distance import cylinder_lowest_point, segment_point, segment_segment
 from ..kinematics import PlateArrays
 from ..model.assembler import AssemblerModel
 
-__all__ = ["HexapodClearance", "hexapod_clearance"]
+__all__ = ["HexapodClearance", "hexapod_clearance", "machine_clearance"]
 
 
 @dataclass(frozen=True)
@@ -138,15 +138,23 @@ def _to_solid(disc: _Disc, shape: object, R: np.ndarray, p: np.ndarray) -> float
     return _coal_distance(*disc.solid(), shape, R, p)
 
 
-def _disc_pairs(disc: _Disc, caps: _Capsules, discs: list[_Disc]) -> list[_Pair]:
-    """(lower bound, exact distance, names) of a disc against capsules and discs."""
+def _disc_pairs(disc: _Disc, caps: _Capsules, discs: list[_Disc], best: float) -> list[_Pair]:
+    """(lower bound, exact distance, names) of a disc against capsules and discs, those whose
+    bound is below ``best`` (the others cannot be the closest). A capsule's bound is the larger
+    of the bounding sphere's and the disc's slab's (``|z| ≤ thickness / 2`` in its frame)."""
     out: list[_Pair] = []
     d, _ = segment_point(caps.start, caps.vector, disc.centre)
-    for m, bound in enumerate(d - caps.radius - disc.sphere):
-        out.append((float(bound), partial(_to_capsule, disc, caps, m), (disc.name, caps.names[m])))
+    axis = disc.R[:, 2]
+    z0, z1 = (caps.start - disc.centre) @ axis, (caps.start + caps.vector - disc.centre) @ axis
+    half = 0.5 * disc.thickness
+    slab = np.maximum(0.0, np.maximum(np.minimum(z0, z1) - half, -half - np.maximum(z0, z1)))
+    bounds = np.maximum(d - disc.sphere, slab) - caps.radius
+    for m in np.flatnonzero(bounds < best):
+        out.append((float(bounds[m]), partial(_to_capsule, disc, caps, int(m)), (disc.name, caps.names[m])))
     for other in discs:
         bound = float(np.linalg.norm(disc.centre - other.centre)) - disc.sphere - other.sphere
-        out.append((bound, partial(_to_disc, disc, other), (disc.name, other.name)))
+        if bound < best:
+            out.append((bound, partial(_to_disc, disc, other), (disc.name, other.name)))
     return out
 
 
@@ -174,10 +182,18 @@ def _scene_pairs(body: _Disc, scene: Scene | None) -> list[_Pair]:
     return out
 
 
-def hexapod_clearance(am: AssemblerModel, result, scene: Scene | None = None) -> HexapodClearance:
+def hexapod_clearance(am: AssemblerModel, result, scene: Scene | str | None = None) -> HexapodClearance:
     """The clearance (module doc) of a :class:`~assembler_pin.hexapod.stand.HexapodStand`'s
-    equilibrium among ``scene``'s obstacles and floor (None: the machine's own bodies)."""
-    plates = result.plates
+    equilibrium among ``scene``'s obstacles and floor (a scene, a scene file, or None: the
+    machine's own bodies)."""
+    return machine_clearance(am, result.plates, pin.exp3(result.body_displacement[3:]), read_scene(scene))
+
+
+def machine_clearance(
+    am: AssemblerModel, plates: np.ndarray, turn: np.ndarray, scene: Scene | None
+) -> HexapodClearance:
+    """The clearance (module doc) of the plates ``plates`` (k, n+1, 4, 4), the body turned by
+    ``turn`` (3, 3) from the world axes, among ``scene``'s obstacles and floor."""
     k = plates.shape[0]
     pas = [PlateArrays(plates[i, :, :3, :3], plates[i, :, :3, 3]) for i in range(k)]
     best, between = math.inf, ("", "")
@@ -201,13 +217,13 @@ def hexapod_clearance(am: AssemblerModel, result, scene: Scene | None = None) ->
             if d[a, b] < best:
                 best, between = float(d[a, b]), (caps[i].names[a], caps[j].names[b])
             for disc in discs[i]:
-                pairs += _disc_pairs(disc, caps[j], discs[j])
+                pairs += _disc_pairs(disc, caps[j], discs[j], best)
             for disc in discs[j]:
-                pairs += _disc_pairs(disc, caps[i], [])
-    body = _body_disc(am, plates, pin.exp3(result.body_displacement[3:]))
+                pairs += _disc_pairs(disc, caps[i], [], best)
+    body = _body_disc(am, plates, turn)
     trimmed = [_capsules(am, pa, i, trim_last=True) for i, pa in enumerate(pas)]
     for i in range(k):
-        pairs += _disc_pairs(body, trimmed[i], discs[i][:-1])
+        pairs += _disc_pairs(body, trimmed[i], discs[i][:-1], best)
     pairs += _scene_pairs(body, scene)
     for bound, exact, names in sorted(pairs, key=lambda t: t[0]):
         if bound >= best:

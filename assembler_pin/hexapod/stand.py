@@ -26,11 +26,13 @@ import numpy as np
 import numpy.typing as npt
 import pinocchio as pin
 
+from ..collision import Scene, read_scene
 from ..common.validation import as_float_array
 from ..config.bounds import check_bound
 from ..exceptions import HexapodError
 from ..kinematics import PlateArrays, leg_state
 from ..model.assembler import AssemblerModel
+from .clearance import HexapodClearance, machine_clearance
 from .feet import foot_violations, stability_margin
 from .machine import checked_body, checked_stacks, machine_com
 from .structure import StructureEquilibrium, StructureState, solve_structure
@@ -65,6 +67,7 @@ class HexapodStand:
             definite.
         feet: ``"welded"`` or ``"resting"``.
         body_com: (3,) the body's centre of mass at the equilibrium [m]; body_mass: [kg].
+        clearance: the equilibrium's clearance (:mod:`.clearance`), None when not checked.
     """
 
     forces: np.ndarray
@@ -83,6 +86,7 @@ class HexapodStand:
     feet: str
     body_com: np.ndarray
     body_mass: float
+    clearance: HexapodClearance | None
 
     def with_violation(self, violation: str) -> HexapodStand:
         """This answer with one more violation (infeasible)."""
@@ -199,11 +203,16 @@ def stand(
     feet: str = "welded",
     friction: float = 0.5,
     min_margin: float = 0.0,
+    scene: Scene | str | None = None,
+    check_clearance: bool = True,
 ) -> HexapodStand:
     """The equilibrium of the hexapod (module doc): ``stacks`` (each its n+1 world plate poses,
     the foot first) under a rigid body of ``body_mass`` [kg] centred at ``body_com`` (world, [m])
     fixed to their EE plates, the legs commanded ``lengths`` (k, n, 6) [m] (None: each pose's
     own lengths). The given poses are the start; the body and every plate but the held feet move.
+    With ``check_clearance`` (default) the equilibrium's clearance (:mod:`.clearance`, among
+    ``scene``'s obstacles and floor: a scene, a scene file or None) below the configuration's
+    ``clearance`` is a violation.
 
     Raises:
         HexapodError: malformed stacks, body, lengths, ``feet`` not in :data:`FEET`, resting
@@ -217,6 +226,7 @@ def stand(
     check_bound("hexapod.friction", friction, "friction", HexapodError)
     check_bound("hexapod.min_margin", min_margin, "min_margin", HexapodError)
     rest = _checked_lengths(am, pas, lengths)
+    obstacles = read_scene(scene)
     start = StructureState(np.array([pa.R for pa in pas]), np.array([pa.p for pa in pas]), com)
     k, g = len(pas), am.config.gravity
     total, _ = machine_com(am, start.R, start.p, mass, com)
@@ -234,6 +244,9 @@ def stand(
         floor = float(start.p[0, 0, 2])
         margin = _ground_violations(am, eq, wrenches, lifted, machine, floor, friction, min_margin, tol, violations)
     turn = eq.state.R[0, -1] @ start.R[0, -1].T
+    apart = machine_clearance(am, _matrices(eq.state), turn, obstacles) if check_clearance else None
+    if apart is not None and not apart.clear:
+        violations.append(apart.message)
     return HexapodStand(
         forces=np.array([t.tension for t in eq.terms.stacks]),
         foot_wrenches=wrenches,
@@ -251,4 +264,5 @@ def stand(
         feet=feet,
         body_com=eq.state.com,
         body_mass=mass,
+        clearance=apart,
     )

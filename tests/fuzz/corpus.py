@@ -1796,6 +1796,7 @@ def _hexapod_api_cases() -> list[ApiCase]:
             ("stacks_string", {"stacks": "stacks"}),
             ("stacks_too_many", {"stacks": [np.eye(4)] * 17}),
             ("stacks_short", {"stacks": [[np.eye(4)] * 2]}),
+            ("scene_int", {"scene": 5}),
         )
     ]
     far = np.full(shape, 0.5)  # every leg commanded far beyond its stroke: an answer, infeasible
@@ -1807,6 +1808,7 @@ def _hexapod_api_cases() -> list[ApiCase]:
             "any",
             verdict="feasible",
         ),
+        ApiCase("api.hexapod_stand.scene_missing", lambda c: stand(c, scene=c.ws.root / "missing.yaml")),
         ApiCase("api.hexapod_stand.model_string", lambda c: hx.stand("am", [c.am.home], 1.0, [0, 0, 1])),
         ApiCase(
             "api.hexapod_stand.platforms_64",

@@ -5,6 +5,7 @@ from __future__ import annotations
 import coal
 import numpy as np
 import pytest
+from pinocchio import exp3 as pin_exp3
 
 import assembler_pin as ap
 from assembler_pin.collision.bodies import stack_bodies
@@ -65,3 +66,25 @@ def test_the_smallest_distance_is_coals_over_every_pair(radius):
     to_body = min(_distance(body, s) for group in under for s in group)
     assert got.min_distance == pytest.approx(min(own, across, to_body), abs=1e-9)
     assert got.clear == (got.min_distance >= am.config.clearance)
+
+
+def test_a_stand_too_close_or_under_an_obstacle_is_a_collision():
+    """Feet 0.19 m from the centre: the plates of neighbouring stacks overlap; a box 2 mm above
+    the body: the body and the box are the closest pair, at coal's distance."""
+    am = ap.AssemblerModel.from_config({"platforms": 1, "payload": {"mass": 0.0}})
+    close = stand(am, ring_stacks(am, 3, 0.19), 5.0, [0.0, 0.0, 0.3])
+    assert not close.feasible and close.clearance.min_distance < 0
+    assert any("plate 0" in v and "apart" in v for v in close.violations)
+    stacks = ring_stacks(am, 3, 0.4)
+    top = stacks[0].p[-1, 2] + 0.5 * am.config.plate.thickness + am.config.hexapod.body_thickness
+    box = {"size": [0.2, 0.2, 0.1], "pose": [0.1, 0.0, top + 0.002 + 0.05, 0.0, 0.0, 0.0]}
+    scene = ap.collision.scene_from_dict({"obstacles": [{"box": box, "name": "beam"}]})
+    got = stand(am, stacks, 5.0, [0.0, 0.0, top], scene=scene)
+    hc = am.config.hexapod
+    turn = pin_exp3(got.body_displacement[3:])
+    centre = got.plates[:, -1, :3, 3].mean(0) + turn[:, 2] * 0.5 * (am.config.plate.thickness + hc.body_thickness)
+    body = ("body", coal.Cylinder(hc.body_radius, hc.body_thickness), coal.Transform3s(turn, centre))
+    beam = ("beam", coal.Box(0.2, 0.2, 0.1), coal.Transform3s(np.eye(3), np.array(box["pose"][:3])))
+    assert got.clearance.between == ("body", "beam")
+    assert got.clearance.min_distance == pytest.approx(_distance(body, beam), abs=1e-9)
+    assert not got.feasible and any("beam" in v for v in got.violations)  # 2 mm < clearance 5 mm
