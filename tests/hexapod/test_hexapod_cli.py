@@ -99,3 +99,13 @@ def test_optimal_commands_stand_the_body_where_it_is_with_smaller_forces(capsys,
     code, out, _ = _run(capsys, ["hexapod", "stand", "--config", str(heavy), "--commands", "optimal", "--json"])
     doc = json.loads(out)
     assert code == 1 and doc["commands"] == "own" and any("no force-optimal commands" in v for v in doc["violations"])
+
+
+def test_the_formats_page_lists_every_key_of_the_answer(capsys):
+    from pathlib import Path
+
+    page = (Path(__file__).resolve().parents[2] / "docs" / "formats.md").read_text(encoding="utf-8")
+    section = page[page.index("## `hexapod stand --json`") : page.index("## Errors in the API")]
+    _, out, _ = _run(capsys, ["hexapod", "stand", "--stacks", "2", "--json"])
+    for key in json.loads(out):
+        assert f"`{key}`" in section, f"docs/formats.md does not describe {key}"
