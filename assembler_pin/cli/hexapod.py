@@ -7,7 +7,7 @@ import argparse
 from .common import add_scene_argument, config_from_args, dumps, scene_from_args, writable_parent
 
 #: The hexapod's actions.
-ACTIONS = ("stand",)
+ACTIONS = ("stand", "capacity")
 
 
 def add_parser(add) -> None:
@@ -16,7 +16,11 @@ def add_parser(add) -> None:
         "hexapod",
         "stacks under one rigid body (the config's hexapod section): the whole structure's equilibrium",
     )
-    p.add_argument("action", choices=ACTIONS, help="stand: the equilibrium with each pose's own leg lengths")
+    p.add_argument(
+        "action",
+        choices=ACTIONS,
+        help="stand: the equilibrium for the commanded lengths; capacity: the largest body mass within every limit",
+    )
     p.add_argument("--stacks", type=int, metavar="K", help="stacks under the body (default: hexapod.stacks)")
     p.add_argument(
         "--radius", type=float, metavar="R", help="radius of the feet's circle [m] (default: hexapod.radius)"
@@ -102,12 +106,53 @@ def stand_document(am, result, commands: str = "own") -> dict:
 
 
 def run(args: argparse.Namespace) -> int:
-    """Exit 0 when the machine stands within every limit, 1 when not (the answer is still
-    printed), 2 for refused input."""
-    from ..hexapod import configured_hexapod, stand
+    """``stand``: exit 0 when the machine stands within every limit, 1 when not (the answer is
+    still printed); ``capacity``: 0 when it carries a body, 1 when not even an empty one; 2 for
+    refused input."""
+    from ..exceptions import CLIError
     from ..model.assembler import AssemblerModel
 
     am = AssemblerModel.from_config(_config(args))
+    if args.action == "capacity":
+        if args.plot or args.html or args.commands != "own" or args.body_mass is not None:
+            raise CLIError("capacity takes neither --plot, --html, --commands nor --body-mass (it finds the mass)")
+        return _capacity(am, args)
+    return _stand(am, args)
+
+
+def _capacity(am, args: argparse.Namespace) -> int:
+    """``hexapod capacity``: the largest body mass with the poses' own lengths
+    (:func:`~assembler_pin.hexapod.hexapod_capacity`) and, welded, with the force-optimal
+    commands of every mass (:func:`~assembler_pin.walk.macro_capacity`)."""
+    from ..hexapod import configured_hexapod, hexapod_capacity
+    from ..walk import macro_capacity
+
+    hc = am.config.hexapod
+    stacks, _, body_com = configured_hexapod(am)
+    scene = scene_from_args(args)
+    got = hexapod_capacity(am, stacks, body_com, None, args.feet, hc.friction, hc.min_margin, scene=scene)
+    optimal, note = macro_capacity(am, stacks, body_com)
+    doc = {
+        "feet": args.feet,
+        "capacity_kg": got.mass,
+        "limit": got.limit,
+        "max_abs_force": got.at_capacity.max_abs_force,
+        "optimal_commands_capacity_kg": optimal,
+        "optimal_commands_note": note,
+    }
+    if args.json:
+        print(dumps(doc))
+    else:
+        head = f"hexapod of {len(stacks)} stacks, feet {args.feet}: carries {got.mass:.2f} kg"
+        print(head)
+        print(f"  above it: {got.limit}"[:100])
+        print(f"  with the force-optimal commands of every mass, welded: {optimal:.2f} kg")
+    return 0 if got.mass > 0 else 1
+
+
+def _stand(am, args: argparse.Namespace) -> int:
+    from ..hexapod import configured_hexapod, stand
+
     if args.plot:
         writable_parent(args.plot, "--plot file")
     if args.html:

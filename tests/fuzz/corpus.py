@@ -515,6 +515,8 @@ def _hexapod_cases() -> list[CliCase]:
     return [
         *cases,
         _case("hexapod.action_unknown", "hexapod walk --json"),
+        _case("hexapod.capacity_with_plot", "hexapod capacity --plot {d}/cap.png"),
+        _case("hexapod.capacity_with_mass", "hexapod capacity --body-mass 5"),
         _case("hexapod.action_missing", "hexapod --json"),
         _case("hexapod.three_stacks", h + "--stacks 3 --radius 0.4", "answer"),
         _case("hexapod.resting_tipping", h + "--feet resting --config {d}/cfg_hexapod_tipping.yaml", "any"),

@@ -109,3 +109,21 @@ def test_the_formats_page_lists_every_key_of_the_answer(capsys):
     _, out, _ = _run(capsys, ["hexapod", "stand", "--stacks", "2", "--json"])
     for key in json.loads(out):
         assert f"`{key}`" in section, f"docs/formats.md does not describe {key}"
+
+
+def test_capacity_from_the_command_line(capsys):
+    """The capacity with the poses' own lengths: the machine stands there and not 1 % above it
+    (the API's stand), and no more than the linear program's best distribution of every mass."""
+    import assembler_pin as ap
+    from assembler_pin.hexapod import configured_hexapod, stand
+
+    code, out, _ = _run(capsys, ["hexapod", "capacity", "--stacks", "3", "--radius", "0.4", "--json"])
+    doc = json.loads(out)
+    assert code == 0 and "leg.max_" in doc["limit"]
+    assert doc["capacity_kg"] <= doc["optimal_commands_capacity_kg"] * (1 + 1e-3)
+    cfg = ap.load_config({"payload": {"mass": 0.0}, "hexapod": {"stacks": 3, "radius": 0.4}})
+    am = ap.AssemblerModel.from_config(cfg)
+    stacks, _, com = configured_hexapod(am)
+    assert stand(am, stacks, doc["capacity_kg"], com).feasible
+    assert not stand(am, stacks, 1.01 * doc["capacity_kg"], com).feasible
+    assert _run(capsys, ["hexapod", "capacity", "--plot", "x.png"])[0] == 2
