@@ -130,5 +130,9 @@ class WalkError(AssemblerError, ValueError):
     """Footholds that cannot start a walk: malformed, overlapping, off the declared floor."""
 
 
+class HexapodError(AssemblerError, ValueError):
+    """A hexapod that cannot be built or stood: malformed stacks, body, feet or lengths."""
+
+
 class MapError(AssemblerError, ValueError):
     """A capability map that cannot be run, resumed or read (arguments, directory, parts, cluster)."""

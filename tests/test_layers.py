@@ -29,6 +29,7 @@ LAYERS: tuple[tuple[str, ...], ...] = (
     ("solver", "export"),
     ("motion", "carrier", "plots"),
     ("maps", "walk", "simulate", "reproduce"),
+    ("hexapod",),
     ("viz", "bench"),
     ("cli",),
 )

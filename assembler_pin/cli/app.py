@@ -18,14 +18,28 @@ from collections.abc import Sequence
 from typing import Any, NoReturn
 
 from ..exceptions import AssemblerError, CLIError
-from . import bench, export, plan, reproduce, simulate, solve, statics, stiffness, support, view, walk
+from . import bench, export, hexapod, plan, reproduce, simulate, solve, statics, stiffness, support, view, walk
 from . import map as map_command  # the module of `assembler-pin map`; the builtin map stays map
 from .paths import check_paths_first, path_argument
 
 logger = logging.getLogger("assembler_pin")
 
 #: The subcommands in the order ``--help`` lists them.
-SUBCOMMANDS = (export, statics, stiffness, support, solve, reproduce, bench, plan, walk, map_command, simulate, view)
+SUBCOMMANDS = (
+    export,
+    statics,
+    stiffness,
+    support,
+    solve,
+    reproduce,
+    bench,
+    plan,
+    walk,
+    hexapod,
+    map_command,
+    simulate,
+    view,
+)
 
 
 class _Parser(argparse.ArgumentParser):

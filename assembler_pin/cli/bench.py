@@ -213,6 +213,9 @@ def _extra_figures(args: argparse.Namespace, am) -> int:
         doc["capacity_memory"] = benchmark_capacity_memory(am)
         doc["startup"] = benchmark_startup()
         doc["two_point"] = benchmark_two_point()
+        from ..bench.hexapod import benchmark_hexapod
+
+        doc["hexapod"] = benchmark_hexapod()
         doc["long_stacks"] = benchmark_long_stacks()
     if args.json:
         print(dumps(doc))

@@ -120,6 +120,12 @@ BOUNDS: dict[str, Bound] = {
         0.0, 1e4, "m/s, rad/s, m/s², rad/s²", False, "inverse_dynamics: largest component of a twist or acceleration"
     ),
     "macro.body_mass": Bound(0.0, 1e5, "kg", False, "macro_statics(body_mass=...): the body the stacks carry"),
+    "hexapod.stacks": Bound(1, 16, "", True, "stacks under one hexapod body (each a whole stack's structure)"),
+    "hexapod.platforms": Bound(1, 16, "", True, "platforms of each stack of a hexapod (a dense tangent)"),
+    "hexapod.radius": Bound(0.0, 100.0, "m", False, "radius of the circle of a hexapod's feet"),
+    "hexapod.body_mass": Bound(0.0, 1e5, "kg", False, "the body a hexapod's stacks carry"),
+    "hexapod.friction": Bound(0.0, 10.0, "", False, "Coulomb friction coefficient of a resting foot on the floor"),
+    "hexapod.min_margin": Bound(-100.0, 100.0, "m", False, "smallest static stability margin of a resting hexapod"),
     "pose.translation": Bound(
         0.0, 1e4, "m", False, "largest coordinate of a goal, waypoint, plate pose, foothold or carrier mount"
     ),

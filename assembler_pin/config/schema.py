@@ -35,6 +35,8 @@ The YAML format (every key optional; a missing key takes the default shown)::
     payload:
       mass: 5.0             # [kg] >= 0
       offset: 0.2           # [m] along the end-effector plate's local +z
+    hexapod:                # stacks under one body: :mod:`assembler_pin.config.hexapod`
+      stacks: 6
 
 Internally everything is SI and radians; only keys ending in ``_deg`` are in degrees.
 """
@@ -54,6 +56,7 @@ import yaml
 from ..exceptions import ConfigError, short_repr
 from .bounds import BOUNDS
 from .checks import MAX_MESSAGE, check, shorten, unknown_key, validate
+from .hexapod import HexapodConfig, hexapod_from_mapping
 from .inputs import read_input_text
 from .numbers import finite_float, is_number
 
@@ -160,6 +163,7 @@ class AssemblerConfig:
             :class:`PayloadConfig`.
         clearance: smallest distance allowed between two bodies that must not touch [m]
             (:mod:`assembler_pin.collision`).
+        hexapod: stacks under one body (:class:`~assembler_pin.config.hexapod.HexapodConfig`).
     """
 
     platforms: int = 4
@@ -168,6 +172,7 @@ class AssemblerConfig:
     leg: LegConfig = field(default_factory=LegConfig)
     payload: PayloadConfig = field(default_factory=PayloadConfig)
     clearance: float = 0.005
+    hexapod: HexapodConfig = field(default_factory=HexapodConfig)
 
     def __post_init__(self) -> None:
         validate(self)
@@ -190,7 +195,9 @@ class AssemblerConfig:
 
     def to_dict(self) -> dict[str, Any]:
         """The configuration as a plain dict, in the YAML file's layout."""
-        return dataclasses.asdict(self)
+        out = dataclasses.asdict(self)
+        out["hexapod"]["body_com"] = list(self.hexapod.body_com)  # YAML's safe dumper writes no tuple
+        return out
 
     def replace(self, **changes: Any) -> AssemblerConfig:
         """A copy with top-level fields or whole sections replaced (validated again)."""
@@ -341,7 +348,7 @@ def config_from_dict(data: Mapping[str, Any] | None) -> AssemblerConfig:
         data = {}
     if not isinstance(data, Mapping):
         raise ConfigError(f"a configuration must be a mapping of keys to values, got {short_repr(data)}")
-    allowed = list(_TOP_SCALARS) + list(_SECTIONS)
+    allowed = [*_TOP_SCALARS, *_SECTIONS, "hexapod"]
     for key in data:
         if key not in allowed:
             raise ConfigError(unknown_key(key, allowed))
@@ -364,6 +371,8 @@ def config_from_dict(data: Mapping[str, Any] | None) -> AssemblerConfig:
     for name, cls in _SECTIONS.items():
         if name in data:
             kwargs[name] = _section_from_mapping(name, cls, data[name])
+    if "hexapod" in data:
+        kwargs["hexapod"] = hexapod_from_mapping(data["hexapod"])
     return AssemblerConfig(**kwargs)
 
 

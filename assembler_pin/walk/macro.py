@@ -21,8 +21,9 @@ its configured tool payload (``payload.mass`` at ``payload.com`` on its EE plate
 each stack its loaded ``statics --home`` forces. For the body alone, model the stacks
 without a payload: ``AssemblerModel.from_config(cfg.replace(payload=PayloadConfig(mass=0.0)))``.
 
-Not here (left for later): the elastic distribution of the macro-configuration (the stacks'
-compliance sharing the body's load for given commanded lengths).
+The elastic distribution of the macro-configuration (the stacks' compliance sharing the
+body's load for given commanded lengths, on welded or resting feet) is
+:func:`assembler_pin.hexapod.stand`.
 """
 
 from __future__ import annotations

@@ -507,6 +507,45 @@ def _walk_cases() -> list[CliCase]:
     ]
 
 
+def _hexapod_cases() -> list[CliCase]:
+    """Counts, sizes and masses of the hexapod out of range are refused before any solve."""
+    h = "hexapod stand --json "
+    cases = [
+        _case(f"hexapod.{name}", h + args)
+        for name, args in (
+            ("stacks_zero", "--stacks 0"),
+            ("stacks_huge", "--stacks 1000000000"),
+            ("stacks_float", "--stacks 2.5"),
+            ("radius_nan", "--radius nan"),
+            ("radius_inf", "--radius inf"),
+            ("radius_negative", "--radius -0.5"),
+            ("radius_zero", "--radius 0"),
+            ("body_mass_nan", "--body-mass nan"),
+            ("body_mass_huge", "--body-mass 1e308"),
+            ("feet_unknown", "--feet glued"),
+            ("commands_unknown", "--commands best"),
+            ("config_platforms_64", "--config {d}/cfg_platforms_64.yaml"),
+            ("config_stacks_float", "--config {d}/cfg_hexapod_stacks_float.yaml"),
+            ("config_com_short", "--config {d}/cfg_hexapod_com_short.yaml"),
+            ("config_com_nan", "--config {d}/cfg_hexapod_com_nan.yaml"),
+            ("config_unknown_key", "--config {d}/cfg_hexapod_unknown.yaml"),
+            ("config_thick_body", "--config {d}/cfg_hexapod_thick_body.yaml"),
+            ("scene_missing", "--scene {d}/missing.yaml"),
+            ("html_unwritable", "--html " + UNDER_FILE + ".html"),
+            ("plot_unwritable", "--plot " + UNDER_FILE + ".png"),
+        )
+    ]
+    return [
+        *cases,
+        _case("hexapod.action_unknown", "hexapod walk --json"),
+        _case("hexapod.capacity_with_plot", "hexapod capacity --plot {d}/cap.png"),
+        _case("hexapod.capacity_with_mass", "hexapod capacity --body-mass 5"),
+        _case("hexapod.action_missing", "hexapod --json"),
+        _case("hexapod.three_stacks", h + "--stacks 3 --radius 0.4", "answer"),
+        _case("hexapod.resting_tipping", h + "--feet resting --config {d}/cfg_hexapod_tipping.yaml", "any"),
+    ]
+
+
 def _map_cases() -> list[CliCase]:
     m = "map --json --workers 0 --no-progress --grid x=0,y=0,z=0.85 --out "
     cases = [
@@ -665,6 +704,10 @@ def _export_cases() -> list[CliCase]:
         _case("export.out_is_file", "export --out {d}/afile"),
         _case("export.out_under_file", "export --out " + UNDER_FILE),
         _case("export.config_bad", "export --out {d}/export_bad --config {d}/cfg_dup.yaml"),
+        _case("export.hexapod_massless", "export --hexapod --out {d}/export_hx --config {d}/cfg_hexapod_massless.yaml"),
+        _case(
+            "export.hexapod_bad_section", "export --hexapod --out {d}/export_hx --config {d}/cfg_hexapod_unknown.yaml"
+        ),
         _case("export.ok", "export --mjcf --out {d}/export_ok", "answer", check="export"),
     ]
 
@@ -973,6 +1016,13 @@ CONFIG_FILES: dict[str, bytes] = {
     "cfg_node_zone_long.yaml": b"leg:\n  node_zone: 0.15\n",
     "cfg_plate_thick.yaml": b"plate:\n  radius: 0.1\n  thickness: 0.2\n",
     "cfg_plate_radius_zero.yaml": b"plate:\n  radius: 0.0\n",
+    "cfg_hexapod_stacks_float.yaml": b"hexapod:\n  stacks: 2.5\n",
+    "cfg_hexapod_com_short.yaml": b"hexapod:\n  body_com: [0.0, 0.1]\n",
+    "cfg_hexapod_com_nan.yaml": b"hexapod:\n  body_com: [.nan, 0.0, 0.1]\n",
+    "cfg_hexapod_unknown.yaml": b"hexapod:\n  legs: 6\n",
+    "cfg_hexapod_thick_body.yaml": b"hexapod:\n  body_radius: 0.1\n  body_thickness: 0.5\n",
+    "cfg_hexapod_massless.yaml": b"hexapod:\n  body_mass: 0.0\n",
+    "cfg_hexapod_tipping.yaml": b"hexapod:\n  stacks: 3\n  radius: 0.4\n  body_com: [-0.9, 0.0, 0.1]\n",
 }
 
 
@@ -1079,6 +1129,7 @@ CLI_CASES: list[CliCase] = [
     *_bench_cases(),
     *_plan_cases(),
     *_walk_cases(),
+    *_hexapod_cases(),
     *_map_cases(),
     *_simulate_cases(),
     *_view_cases(),
@@ -1695,6 +1746,7 @@ def _api_cases() -> list[ApiCase]:
             )
         ],
         ApiCase("api.macro_capacity.com_none", lambda c: ap.walk.macro_capacity(c.am, [c.am.home], None)),
+        *_hexapod_api_cases(),
         ApiCase("api.macro_statics.model_string", lambda c: ap.walk.macro_statics("am", [c.am.home], 1.0, [0, 0, 1])),
         ApiCase(
             "api.loaded_pose.max_iterations_negative", lambda c: ap.loaded_pose(c.am, c.am.home, max_iterations=-1)
@@ -1734,6 +1786,99 @@ def _api_cases() -> list[ApiCase]:
             "api.ee_jacobian.coinciding_joints",
             lambda c: ap.kinematics.jacobian.ee_jacobian_wrt_lengths(c.am, [_se3(p=(0, 0, 0))] * (c.am.n + 1)),
         ),
+    ]
+    return cases
+
+
+def _hexapod_api_cases() -> list[ApiCase]:
+    """The hexapod's entries: each hostile argument refused by a HexapodError (or the config's,
+    the pose's own), a machine that cannot stand answered infeasible, never claimed feasible."""
+    import assembler_pin as ap
+    from assembler_pin import hexapod as hx
+
+    def stand(c, **kw):
+        args = {"stacks": [c.am.home] * 3, "body_mass": 1.0, "body_com": [0, 0, 1.0]} | kw
+        return hx.stand(c.am, **args)
+
+    shape = (3, 4, 6)
+    cases = [
+        ApiCase(f"api.hexapod_stand.{name}", lambda c, kw=kw: stand(c, **kw))
+        for name, kw in (
+            ("mass_string", {"body_mass": "5"}),
+            ("mass_none", {"body_mass": None}),
+            ("mass_nan", {"body_mass": float("nan")}),
+            ("mass_bool", {"body_mass": True}),
+            ("mass_huge", {"body_mass": 1e308}),
+            ("com_none", {"body_com": None}),
+            ("com_complex", {"body_com": [1j, 0, 1]}),
+            ("com_inf", {"body_com": [0, float("inf"), 1]}),
+            ("feet_int", {"feet": 1}),
+            ("feet_unknown", {"feet": "glued"}),
+            ("friction_nan", {"friction": float("nan")}),
+            ("friction_negative", {"friction": -1.0}),
+            ("min_margin_string", {"min_margin": "0"}),
+            ("lengths_string", {"lengths": "abc"}),
+            ("lengths_shape", {"lengths": np.full((2, 4, 6), 0.27)}),
+            ("lengths_nan", {"lengths": np.full(shape, float("nan"))}),
+            ("lengths_negative", {"lengths": np.full(shape, -0.27)}),
+            ("lengths_huge", {"lengths": np.full(shape, 1e308)}),
+            ("stacks_empty", {"stacks": []}),
+            ("stacks_string", {"stacks": "stacks"}),
+            ("stacks_too_many", {"stacks": [np.eye(4)] * 17}),
+            ("stacks_short", {"stacks": [[np.eye(4)] * 2]}),
+            ("scene_int", {"scene": 5}),
+        )
+    ]
+    far = np.full(shape, 0.5)  # every leg commanded far beyond its stroke: an answer, infeasible
+    cases += [
+        ApiCase("api.hexapod_stand.lengths_far", lambda c: stand(c, lengths=far), "any", verdict="feasible"),
+        ApiCase(
+            "api.hexapod_stand.resting_tipping",
+            lambda c: stand(c, body_mass=50.0, body_com=[3.0, 0, 1.0], feet="resting"),
+            "any",
+            verdict="feasible",
+        ),
+        ApiCase("api.hexapod_stand.scene_missing", lambda c: stand(c, scene=c.ws.root / "missing.yaml")),
+        ApiCase("api.hexapod_stand.model_string", lambda c: hx.stand("am", [c.am.home], 1.0, [0, 0, 1])),
+        ApiCase(
+            "api.hexapod_stand.platforms_64",
+            lambda c: hx.stand(ap.AssemblerModel.from_config({"platforms": 64}), [c.am.home], 1.0, [0, 0, 1]),
+        ),
+        ApiCase(
+            "api.hexapod_capacity.rtol_zero", lambda c: hx.hexapod_capacity(c.am, [c.am.home], [0, 0, 1], rtol=0.0)
+        ),
+        ApiCase(
+            "api.hexapod_capacity.rtol_string", lambda c: hx.hexapod_capacity(c.am, [c.am.home], [0, 0, 1], rtol="1")
+        ),
+        ApiCase("api.hexapod_capacity.com_nan", lambda c: hx.hexapod_capacity(c.am, [c.am.home], [np.nan, 0, 1])),
+        ApiCase("api.ring_stacks.count_zero", lambda c: hx.ring_stacks(c.am, 0, 0.5)),
+        ApiCase("api.ring_stacks.count_float", lambda c: hx.ring_stacks(c.am, 2.5, 0.5)),
+        ApiCase("api.ring_stacks.count_huge", lambda c: hx.ring_stacks(c.am, 10**9, 0.5)),
+        ApiCase("api.ring_stacks.radius_nan", lambda c: hx.ring_stacks(c.am, 3, float("nan"))),
+        ApiCase(
+            "api.force_optimal_commands.mass_nan",
+            lambda c: hx.force_optimal_commands(c.am, [c.am.home], np.nan, [0, 0, 1]),
+        ),
+        ApiCase("api.length_sensitivity.result_string", lambda c: hx.length_sensitivity(c.am, "result")),
+        ApiCase(
+            "api.hexapod_clearance.scene_missing",
+            lambda c: hx.hexapod_clearance(c.am, stand(c), c.ws.root / "missing.yaml"),
+        ),
+    ]
+    cases += [
+        ApiCase(f"api.load_config.hexapod_{name}", lambda c, section=section: ap.load_config({"hexapod": section}))
+        for name, section in (
+            ("none", None),
+            ("list", [6]),
+            ("stacks_string", {"stacks": "6"}),
+            ("stacks_numpy_nan", {"stacks": np.float64("nan")}),
+            ("stacks_bool", {"stacks": True}),
+            ("com_bool", {"body_com": [True, 0, 0]}),
+            ("com_nested", {"body_com": [[0, 0, 0]]}),
+            ("com_huge", {"body_com": [1e308, 0, 0]}),
+            ("friction_complex", {"friction": 1 + 1j}),
+            ("radius_negative", {"radius": -1.0}),
+        )
     ]
     return cases
 

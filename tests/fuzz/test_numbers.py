@@ -243,7 +243,7 @@ def test_an_unknown_key_of_any_kind_is_named_in_one_short_line(key):
 def test_an_unknown_key_without_a_close_one_lists_them_or_names_the_page():
     with pytest.raises(ConfigError) as info:
         ap.load_config({"colour": "red"})
-    assert str(info.value).endswith("allowed: platforms, gravity, clearance, plate, leg, payload")
+    assert str(info.value).endswith("allowed: platforms, gravity, clearance, plate, leg, payload, hexapod")
     with pytest.raises(ConfigError) as info:
         ap.load_config({"leg": {"zzz": 1}})
     line = str(info.value)

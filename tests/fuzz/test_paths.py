@@ -185,6 +185,8 @@ OUTPUTS = [
     ("export", "--out", "e", "directory"),
     ("reproduce --scenario translation", "--out", "r", "directory"),
     ("stiffness --scaling", "--out", "x.png", "file"),
+    ("hexapod stand", "--html", "x.html", "file"),
+    ("hexapod stand", "--plot", "x.png", "file"),
 ]
 
 
