@@ -217,3 +217,30 @@ def test_a_walk_among_obstacles_draws_them(am, walk, tmp_path):
     assert "/meshcat/assembler_obstacles/box_0" in objects and "/meshcat/assembler_obstacles/floor" in objects
     assert "obstacles: post" in html
     assert any(c["type"] == "set_animation" for c in page_commands(html))
+
+
+def test_a_stack_without_a_tool_is_drawn_without_the_payload_cube(am, bent_plates):
+    """A walking stack carries no tool (``walk``'s default ``--payload 0``): its page draws no
+    payload cube; the same stack with a tool draws it, above the EE plate at its offset."""
+    from assembler_pin.cli.walk import walking_config
+
+    bare = ap.AssemblerModel.from_config(walking_config(am.config, 0.0))
+    objects = {}
+    for model in (am, bare):
+        with StackViewer(model) as v:
+            v.display(bent_plates)
+            cmds = page_commands(v.static_html())
+            objects[model.config.payload.mass] = {c["path"] for c in cmds if c["type"] == "set_object"}
+            payload = [g for g in v.visual_model.geometryObjects if g.name.startswith(names.payload)]
+            assert len(payload) == (1 if model is am else 0)
+            if payload:
+                path = "/meshcat/" + v.viz.getViewerNodeName(payload[0], pin.GeometryType.VISUAL)
+                placed = [c for c in cmds if c["type"] == "set_transform" and c["path"] == path]
+                T = np.array(placed[-1]["matrix"]).reshape(4, 4).T
+                ee = ap.kinematics.plate_arrays(am, bent_plates)
+                expected = ee.p[-1] + am.config.payload.offset * ee.R[-1][:, 2]
+                np.testing.assert_allclose(T[:3, 3], expected, atol=1e-9)
+    assert am.config.payload.mass > 0
+    extra = objects[am.config.payload.mass] - objects[0.0]
+    assert sorted(p.rsplit("/", 2)[-2] for p in extra) == ["assembler_payload_rod", "visuals"]  # the cube, its rod
+    assert all(names.payload in p for p in extra)
