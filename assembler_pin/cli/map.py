@@ -102,7 +102,8 @@ def _pictures(args: argparse.Namespace, table, configs: list, doc: dict) -> None
         from ..plots.figures import save
 
         scene = Path(args.scene).name if args.scene else ""
-        doc["png"] = str(save(map_heatmaps(table, am, configs[0][0], scene=scene), args.png))
+        figure = map_heatmaps(table, am, configs[0][0], scene=scene, obstacles=scene_from_args(args))
+        doc["png"] = str(save(figure, args.png))
     if args.html:
         from ..maps.pictures import write_map_page
         from ..viz import StackViewer

@@ -4,6 +4,7 @@ and a walk's time in seconds with no tool unless asked."""
 
 from __future__ import annotations
 
+from pathlib import Path
 from types import SimpleNamespace
 
 import numpy as np
@@ -55,6 +56,12 @@ def test_plan_plot_titles_in_mm_force_limits_drawn_and_bang_bang_named(am, short
         assert " mm (leg " in row.get_title(loc="left"), row.get_title(loc="left")  # length margin in millimetres
     forces = [ax for ax in fig.axes if ax.get_ylabel().startswith("force")]
     assert len(forces) == 2 * am.n
+    # the five columns, as docs/colours.md names them
+    columns = [ax.get_ylabel().split(" [")[0] for ax in fig.axes[:5]]
+    assert columns == ["length", "speed", "acceleration", "force", "force static+dynamic"]
+    assert len(fig.axes) == 5 * am.n and all(ax.get_ylabel() for ax in fig.axes)
+    page = (Path(__file__).parents[2] / "docs" / "colours.md").read_text(encoding="utf-8")
+    assert "one column each for leg length, speed, acceleration, force (statics) and force" in " ".join(page.split())
     for ax in forces:  # each force limit is drawn on the scale, or named at the panel's edge
         low, high = ax.get_ylim()
         named = " ".join(text.get_text() for text in ax.texts)

@@ -9,6 +9,8 @@ the sleeves of each sample's own forces and keep each held foot still through it
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import numpy as np
 import pinocchio as pin
 import pytest
@@ -152,13 +154,16 @@ def test_the_sleeves_show_each_samples_own_forces(am, walk, page):
     """Sleeve level of every leg = nearest twentieth of its force over the colour scale, the
     walk's largest force (at least a tenth of the limit), from the phase's forces (a
     transfer's load moves; the pose does not); the colour bar reads that scale."""
-    viewer, _, _, clips, _ = page
+    viewer, _, _, clips, html = page
     leg = am.config.leg
     samples = list(_samples(walk))
     peak = max(
         max(float(np.abs(F).max()) for _, _, F, _, _ in samples), 0.1 * min(leg.max_tension, leg.max_compression)
     )
     assert viewer.force_range == pytest.approx((peak, peak))
+    assert f"−{peak:.0f}" in html and f"+{peak:.0f}" in html  # the colour bar's ends
+    guide = " ".join((Path(__file__).parents[2] / "docs" / "guides" / "walking.md").read_text().split())
+    assert "the colour bar runs to the walk's largest force, at least a tenth of the smaller force limit" in guide
     levels = len(FORCE_BAND_LEVELS)
     for frame, (_, _, F, _, _) in enumerate(samples):
         want = np.rint((levels - 1) / 2 * (np.clip(F / peak, -1.0, 1.0) + 1.0)).astype(int)
