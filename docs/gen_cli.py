@@ -33,8 +33,12 @@ Every subcommand follows one rule:
 | 0 | answered, and successful |
 | 1 | answered, not possible: `success` false; the answer is still printed; files hold only valid content |
 | 2 | refused input: exactly one line on stderr naming what was wrong and what is allowed |
-| 130 | interrupted by Ctrl-C (143 on SIGTERM): one line on stderr, no partial output file (a live `view` server stopped once its URL is printed: its normal end, 0) |
+| 130 | interrupted by Ctrl-C (143 on SIGTERM): one line on stderr, no partial output file |
 | 141 | the reader of the output went away (`assembler-pin solve ... \\| head`): nothing on stderr |
+
+A live `view` server (no `--html`) serves until stopped: Ctrl-C once its URL is printed is its
+normal end, status 0. `statics` answers every pose: status 1 when it breaks a constraint
+(`feasible: NO`).
 
 `assembler-pin` alone (or with only `-v`/`-q`) prints its help, the list of subcommands, and
 exits 0.
