@@ -36,7 +36,10 @@ def add_parser(add) -> None:
     from ..config.choices import FORCE_SCALES, SCENARIO_NAMES
 
     src.add_argument(
-        "--scenario", choices=SCENARIO_NAMES, help="solve a scenario's goal and show its initial and optimized poses"
+        "--scenario",
+        choices=SCENARIO_NAMES,
+        metavar="NAME",
+        help=f"solve a scenario's goal and show its initial and optimized poses ({', '.join(SCENARIO_NAMES)})",
     )
     src.add_argument(
         "--trajectory", metavar="FILE", help="animate a trajectory written by 'plan --out' (legs colored by force)"

@@ -76,3 +76,24 @@ def test_view_prints_the_page_path_as_typed(tmp_path, monkeypatch, capsys):
     monkeypatch.chdir(tmp_path)
     assert main(["view", "--home", "--html", "page.html"]) == 0
     assert "wrote page.html" in capsys.readouterr().out.splitlines()
+
+
+@pytest.mark.parametrize("columns", [80, 102])
+def test_every_usage_fits_the_terminal_and_names_every_option(columns, monkeypatch):
+    """argparse leaves a group of alternatives on one line however long; the usage of every
+    subcommand is broken at its ``|`` to fit the terminal, and still names every option once."""
+    import argparse
+
+    from assembler_pin.cli import build_parser
+
+    monkeypatch.setenv("COLUMNS", str(columns))
+    parser = build_parser()
+    (sub,) = [a for a in parser._actions if isinstance(a, argparse._SubParsersAction)]
+    for name, p in sub.choices.items():
+        usage = p.format_help().split("\n\n")[0]
+        assert usage == p.format_usage().rstrip("\n")
+        assert max(len(line) for line in usage.splitlines()) <= columns - 2, (name, usage)
+        words = usage.replace("(", " ").replace(")", " ").replace("[", " ").replace("]", " ").split()
+        for action in p._actions:
+            if action.option_strings:
+                assert words.count(action.option_strings[0]) == 1, (name, action.option_strings[0])

@@ -150,3 +150,24 @@ def test_the_map_picture_is_drawn_as_map_png_draws_today():
     from assembler_pin.maps.pictures import MAP_FIGSIZE
 
     assert (width, height) == (round(150 * MAP_FIGSIZE[0]), round(150 * MAP_FIGSIZE[1])), (width, height)
+
+
+def test_solve_says_what_it_returns():
+    """``ap.solve``'s docstring has a Returns section, and every attribute it names is one of
+    the result's (or of the states it holds)."""
+    import dataclasses
+    import inspect
+
+    import assembler_pin as ap
+    from assembler_pin.solver.pipeline import SolveResult
+    from assembler_pin.state import StackState
+
+    doc = inspect.getdoc(ap.solve) or ""
+    assert "\nReturns:\n" in doc
+    returns = doc.split("\nReturns:\n")[1].split("\n\n")[0]
+    named = set(re.findall(r"``\.?(\w+)``", returns)) - {"False", "True"}
+    assert {"success", "message", "optimized", "initial", "best", "optimal"} <= named
+    for kind in (SolveResult, StackState):
+        fields = {f.name for f in dataclasses.fields(kind)} | set(dir(kind))
+        named -= fields
+    assert not named, f"ap.solve's Returns names {sorted(named)}, which its result does not have"
