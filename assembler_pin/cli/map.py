@@ -175,10 +175,11 @@ def _summary(args: argparse.Namespace, table, cells: int, run) -> dict[str, Any]
 
 def _print_summary(doc: dict[str, Any], run, rows: int) -> None:
     """The text answer of :func:`run` (``rows``: the cells the map file holds)."""
+    rate = f" ({run.cells_per_second:.2f} cells/s)" if doc["computed"] else ""  # a rerun computes nothing
     print(
         wrapped(
             f"map: {doc['computed']} cells computed, {doc['already_done']} already in {doc['out']}; "
-            f"{run.workers or 'no'} workers, {run.time_s:.1f} s ({run.cells_per_second:.2f} cells/s)"
+            f"{run.workers or 'no'} workers, {run.time_s:.1f} s{rate}"
         )
     )
     print(f"reachable: {doc['reachable']} of {rows} cells")

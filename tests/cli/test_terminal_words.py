@@ -97,3 +97,24 @@ def test_every_usage_fits_the_terminal_and_names_every_option(columns, monkeypat
         for action in p._actions:
             if action.option_strings:
                 assert words.count(action.option_strings[0]) == 1, (name, action.option_strings[0])
+
+
+def test_bench_truss_names_its_figures_with_their_unit(monkeypatch, capsys):
+    """``bench --truss``' figures are times per call: each key carries the header's ``_s``
+    suffix, so that ``stiffness`` does not read as a stiffness."""
+    import assembler_pin.bench.supports as supports
+    import assembler_pin.bench.truss as truss
+
+    monkeypatch.setattr(truss, "benchmark_stiffness", lambda am: {"stiffness": 1.5e-4, "loaded_pose": 2e-3})
+    monkeypatch.setattr(supports, "benchmark_supports", lambda am: {"two_point_statics": 3e-4})
+    assert main(["bench", "--truss"]) == 0
+    lines = capsys.readouterr().out.splitlines()
+    assert lines[2].startswith("units by suffix:") and "_s s" in lines[2]
+    figures = [line.split() for line in lines[3:]]
+    assert figures == [
+        ["stiffness", "(median", "time", "per", "call):"],
+        ["stiffness_s:", "0.00015"],
+        ["loaded_pose_s:", "0.002"],
+        ["supports", "(median", "time", "per", "call):"],
+        ["two_point_statics_s:", "0.0003"],
+    ]

@@ -136,7 +136,9 @@ def test_cli_map_scene(maps, tmp_path, capsys):
     lo, hi = doc["clearance_m_range"]
     assert 0.005 <= lo <= hi < 0.006
     assert main([*args, "--scene", str(scene_file)]) == 0
-    assert "clearance: 5.0 – 5.0 mm (scene " in capsys.readouterr().out
+    out = capsys.readouterr().out
+    assert "clearance: 5.0 – 5.0 mm (scene " in out
+    assert "map: 0 cells computed, 2 already in" in out and "cells/s" not in out  # no rate of nothing
     for extra, says in (([], "its scene differ"), (["--scene", str(tmp_path / "none.yaml")], "none.yaml")):
         assert main([*args, *extra]) != 0
         err = capsys.readouterr().err.strip().splitlines()
