@@ -171,3 +171,45 @@ def test_solve_says_what_it_returns():
         fields = {f.name for f in dataclasses.fields(kind)} | set(dir(kind))
         named -= fields
     assert not named, f"ap.solve's Returns names {sorted(named)}, which its result does not have"
+
+
+def test_formats_page_lists_every_key_and_violation_kind_statics_prints(tmp_path, capsys):
+    """``statics --json`` of a pose that meets an obstacle: every key it prints (the
+    ``clearance`` object's too) and the ``collision`` violation, with its keys, are on the
+    formats page."""
+    import json
+
+    from assembler_pin.cli import main
+
+    scene = tmp_path / "post.yaml"
+    scene.write_text(yaml.safe_dump({"obstacles": [{"sphere": {"radius": 0.05, "center": [0.0, 0.0, 0.5]}}]}))
+    assert main(["statics", "--home", "--json", "--scene", str(scene)]) == 1
+    doc = json.loads(capsys.readouterr().out)
+    page = _read("docs/formats.md")
+    section = page.split("## `statics --json`")[1].split("\n## ")[0]
+    for key in [*doc, *doc["clearance"]]:
+        assert f"`{key}`" in section, key
+    (collision,) = [v for v in doc["violations"] if v["kind"] == "collision"]
+    kinds = section.split("**Violation kinds**")[1]
+    assert "`collision`" in kinds and all(f"`{key}`" in section for key in collision)
+
+
+def test_collisions_guide_quotes_what_the_program_prints(tmp_path, capsys):
+    """The collision lines the guide quotes are those ``statics --scene`` prints for its
+    example, and the one-line message the solver gives for the same violation."""
+    from assembler_pin import AssemblerModel, evaluate_state
+    from assembler_pin.cli import main
+    from assembler_pin.collision.scene import scene_from_dict
+    from assembler_pin.common.messages import describe
+
+    post = {"obstacles": [{"sphere": {"radius": 0.05, "center": [0, 0, 0.5]}}]}
+    page = _read("docs/guides/collisions.md")
+    assert "`obstacles: [{sphere: {radius: 0.05, center: [0, 0, 0.5]}}]`" in page
+    scene = tmp_path / "post.yaml"
+    scene.write_text(yaml.safe_dump(post))
+    assert main(["statics", "--home", "--scene", str(scene)]) == 1
+    printed = capsys.readouterr().out.rstrip("\n").splitlines()[-3:]
+    assert "```text\n" + "\n".join(printed) + "\n```" in page
+    am = AssemblerModel.from_config()
+    (v,) = [v for v in evaluate_state(am, am.home, scene=scene_from_dict(post)).violations if v.kind == "collision"]
+    assert f"`{describe(v)}`" in " ".join(page.split())
