@@ -201,7 +201,7 @@ def slice_label(table, config: str | None = None, orientation: int = 0) -> str:
     rotation = ""
     if "rx" in table.column_names:
         r = [np.asarray(table.column(c).to_pylist())[keep][0] for c in ("rx", "ry", "rz")]
-        rotation = f", EE rotation ({', '.join(f'{np.degrees(v):g}' for v in r)})°"
+        rotation = f", EE rotation vector ({', '.join(f'{np.degrees(v):g}' for v in r)})°"
     return f"slice {where}, config {name}, orientation {orientation}{rotation}"
 
 

@@ -31,6 +31,7 @@ from ..common.files import atomic_path
 from ..common.labels import leg_label, platform_label
 from ..common.palette import hex_color
 from ..config.schema import LegConfig
+from ..constraints import at_stroke_end
 from ..exceptions import AssemblerError
 from ..state import StackState
 
@@ -75,17 +76,15 @@ def _named_states(
 
 
 # ---------------------------------------------------------------------- force tables
-STROKE_END_TOLERANCE = 1e-3
-"""A leg within this distance of its stroke end is marked "at a stroke end" in the figures [m]."""
 FORCE_BOUND_FRACTION = 0.99
 """A leg at this fraction of its force limit or more is marked "at the force bound"."""
 
 
 def leg_flags(state: StackState, leg: LegConfig) -> tuple[np.ndarray, np.ndarray]:
-    """(n, 6) masks of the legs at a stroke end (within :data:`STROKE_END_TOLERANCE`) and at
-    the force bound (at least :data:`FORCE_BOUND_FRACTION` of the tension or compression limit)."""
-    L = state.leg_lengths
-    stroke = (L <= leg.min_length + STROKE_END_TOLERANCE) | (L >= leg.max_length - STROKE_END_TOLERANCE)
+    """(n, 6) masks of the legs at a stroke end (:func:`~assembler_pin.constraints.at_stroke_end`:
+    within :data:`~assembler_pin.constraints.STROKE_END_TOLERANCE`) and at the force bound (at
+    least :data:`FORCE_BOUND_FRACTION` of the tension or compression limit)."""
+    stroke = at_stroke_end(state.leg_lengths, leg.min_length, leg.max_length)
     F = state.forces
     bound = (F >= FORCE_BOUND_FRACTION * leg.max_tension) | (F <= -FORCE_BOUND_FRACTION * leg.max_compression)
     return stroke, bound

@@ -152,3 +152,23 @@ def test_figures_say_what_they_show(am):
     } <= labels
     star = next(ln for ln in views.axes[0].lines if ln.get_label() == "EE goal")
     assert np.allclose([star.get_xdata()[0], star.get_ydata()[0]], goal.translation[[0, 2]])
+
+
+def test_one_definition_of_a_leg_at_a_stroke_end(am):
+    """The figures' flags and the results table count the same legs: those within
+    ``STROKE_END_TOLERANCE`` of an end of the stroke (a leg 0.5 mm inside is not at it, one
+    within the optimizer's margin is), and the pages state that tolerance."""
+    from pathlib import Path
+
+    from assembler_pin.config.options import OptimizeOptions
+    from assembler_pin.constraints import STROKE_END_TOLERANCE, at_stroke_end
+
+    leg = am.config.leg
+    lo, hi = leg.min_length, leg.max_length
+    lengths = np.array([lo, lo + 1e-7, lo + 5e-4, 0.5 * (lo + hi), hi - 5e-4, hi - 1e-7, hi])
+    assert at_stroke_end(lengths, lo, hi).tolist() == [True, True, False, False, False, True, True]
+    assert STROKE_END_TOLERANCE > OptimizeOptions().limit_margin  # beyond the optimizer's margin
+    docs = Path(__file__).resolve().parents[2] / "docs"
+    for page in ("guides/viewer.md", "results.md"):
+        text = " ".join((docs / page).read_text(encoding="utf-8").split())
+        assert f"within {STROKE_END_TOLERANCE:g} m of it, where the limit binds" in text, page
