@@ -129,6 +129,13 @@ def test_figures_say_what_they_show(am):
     fig = plots.force_heatmaps(state, leg=leg, title="my scenario")
     frames = [p for ax in fig.axes for p in ax.patches if isinstance(p, Rectangle) and not p.get_fill()]
     assert len(frames) == 2 and fig.get_suptitle() == "my scenario"
+    # the legend names the frames drawn, no other: no leg is at its force bound here
+    assert [t.get_text() for lg in fig.legends for t in lg.get_texts()] == ["at a stroke end"]
+    fig = plots.force_heatmaps(state, leg=tight)
+    assert sorted(t.get_text() for lg in fig.legends for t in lg.get_texts()) == [
+        "at a stroke end",
+        "at the force bound",
+    ]
     bars = plots.force_bars(state, limits=(leg.max_tension, leg.max_compression), leg=leg, title="my scenario")
     labels = [t.get_text() for t in bars.axes[0].get_legend().get_texts()]
     assert "initial: at a stroke end" in labels and {"tension limit", "compression limit"} <= set(labels)
@@ -148,8 +155,14 @@ def test_figures_say_what_they_show(am):
         "helper arm",
         "helper arm joints",
         "EE goal",
+        "EE goal's z axis (to the payload)",
         "floor",
     } <= labels
+    # every entry of the legend names something drawn in the views
+    drawn = {ln.get_label() for ax in views.axes for ln in ax.lines if len(ln.get_xdata())}
+    drawn |= {"EE goal's z axis (to the payload)"} if any(ax.texts for ax in views.axes) else set()
+    drawn |= {"plate centres", "optimized plates"}  # drawn unlabelled in the plates' colours, named once
+    assert labels <= drawn, labels - drawn
     star = next(ln for ln in views.axes[0].lines if ln.get_label() == "EE goal")
     assert np.allclose([star.get_xdata()[0], star.get_ydata()[0]], goal.translation[[0, 2]])
 
