@@ -108,3 +108,39 @@ def test_a_walk_carries_no_tool_unless_asked():
     assert cfg.payload.mass > 0
     assert walking_config(cfg, 0.0).payload.mass == 0.0
     assert walking_config(cfg, 2.5).payload == cfg.payload.__class__(mass=2.5, offset=cfg.payload.offset)
+
+
+def test_scaling_figure_puts_one_unit_on_each_axis_and_labels_its_ticks():
+    """``stiffness --scaling --out``: the N/m stiffnesses, the N·m/rad one and the sag each on
+    their own axis, with at least three labelled ticks within the drawn range."""
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+
+    from assembler_pin.compliance.scaling import ScalingTable, scaling_figure
+
+    n = np.array([1, 2, 4, 8, 16])
+    table = ScalingTable(
+        platforms=n,
+        lateral=5.5e5 / n**3,
+        axial=4.6e6 / n,
+        torsional=2.5e4 / n,
+        sag=1.2e-5 * n**1.5,
+        elastic={"lateral": 5.6e5 / n**3, "axial": 4.6e6 / n, "torsional": 2.5e4 / n},
+        stable=np.ones(5, dtype=bool),
+        message=[""] * 5,
+        leg_stiffness=1e6,
+    )
+    fig = scaling_figure(table)
+    FigureCanvasAgg(fig).draw()
+    units = {ax.get_ylabel().rsplit("[", 1)[-1].rstrip("]"): ax for ax in fig.axes}
+    assert sorted(units) == ["N/m", "N·m/rad", "mm"]
+    assert {ln.get_label() for ln in units["N·m/rad"].lines} == {
+        "torsional (about z), loaded",
+        "torsional (about z), legs' springs alone",
+    }
+    assert all("torsional" not in ln.get_label() for ln in units["N/m"].lines)
+    for unit, ax in units.items():
+        low, high = ax.get_ylim()
+        ticks = [*ax.yaxis.get_major_ticks(), *ax.yaxis.get_minor_ticks()]
+        shown = [t for t in ticks if t.label1.get_visible() and t.label1.get_text() and low <= t.get_loc() <= high]
+        assert len(shown) >= 3, (unit, [t.label1.get_text() for t in shown])
+    assert not texts_outside_the_canvas(fig)
