@@ -254,6 +254,11 @@ def draw_state(
     ax.plot(state.plates.p[:, a], state.plates.p[:, b], "o", color=plate_color, ms=3, alpha=alpha)
 
 
+VIEWS_LEGEND_PT = 11.0
+"""Font size of :func:`pose_views`' legend [pt]: 8.6 px tall when the 13.5-inch figure is shown
+760 px wide (a documentation page), readable."""
+
+
 def pose_views(
     initial: StackState | None,
     optimized: StackState | None = None,
@@ -309,7 +314,9 @@ def pose_views(
         ax.set_title(name)
         ax.grid(True, lw=0.4, alpha=0.5)
     handles, labels = side.get_legend_handles_labels()
-    fig.legend(handles, labels, loc="outside lower center", ncol=min(len(labels), 8), fontsize=8, frameon=False)
+    fig.legend(
+        handles, labels, loc="outside lower center", ncol=min(len(labels), 5), fontsize=VIEWS_LEGEND_PT, frameon=False
+    )
     forces = ", ".join(f"max|F| {t} {st.max_abs_force:.1f} N" for t, st in named)
     fig.suptitle(f"{title}: {forces}" if title else forces)
     return fig

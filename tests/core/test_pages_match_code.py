@@ -213,3 +213,19 @@ def test_collisions_guide_quotes_what_the_program_prints(tmp_path, capsys):
     am = AssemblerModel.from_config()
     (v,) = [v for v in evaluate_state(am, am.home, scene=scene_from_dict(post)).violations if v.kind == "collision"]
     assert f"`{describe(v)}`" in " ".join(page.split())
+
+
+def test_the_api_index_breaks_module_paths_only_after_a_dot():
+    """The API index's "defined in" links: a break opportunity after each dot and the site's
+    stylesheet forbids any other (identifiers are never broken mid-word)."""
+    import importlib.util
+
+    spec = importlib.util.spec_from_file_location("hooks", DOCS / "hooks.py")
+    hooks = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(hooks)
+    assert hooks.dotted_breaks("assembler_pin.solver.pipeline.solve") == (
+        "assembler_pin.<wbr>solver.<wbr>pipeline.<wbr>solve"
+    )
+    assert "stylesheets/extra.css" in yaml.safe_load(_read("mkdocs.yml").split("\nplugins:")[0])["extra_css"]
+    css = _read("docs/stylesheets/extra.css")
+    assert ".md-typeset td a code" in css and "word-break: normal" in css and "overflow-wrap: normal" in css

@@ -144,3 +144,29 @@ def test_scaling_figure_puts_one_unit_on_each_axis_and_labels_its_ticks():
         shown = [t for t in ticks if t.label1.get_visible() and t.label1.get_text() and low <= t.get_loc() <= high]
         assert len(shown) >= 3, (unit, [t.label1.get_text() for t in shown])
     assert not texts_outside_the_canvas(fig)
+
+
+#: The width a documentation page shows a wide figure at [px] (the site's content column).
+PAGE_WIDTH_PX = 760
+
+
+def test_the_pose_views_legend_reads_at_page_scale(am, bent_plates):
+    """The home page's picture (docs/vertical_lift_views.png, the pose views at 150 dpi): its
+    legend's letters stay at least 8 px tall when the figure is shown a page wide."""
+    import struct
+
+    from assembler_pin import evaluate_state
+    from assembler_pin.plots import pose_views
+
+    state = evaluate_state(am, bent_plates)
+    fig = pose_views(evaluate_state(am, am.home), state, title="t")
+    canvas = FigureCanvasAgg(fig)
+    canvas.draw()
+    renderer = canvas.get_renderer()
+    (legend,) = fig.legends
+    scale = PAGE_WIDTH_PX / fig.bbox.width
+    heights = [scale * t.get_window_extent(renderer).height for t in legend.get_texts()]
+    assert min(heights) >= 8.0, heights
+    with (Path(__file__).resolve().parents[2] / "docs" / "vertical_lift_views.png").open("rb") as png:
+        size = struct.unpack(">II", png.read(24)[16:24])
+    assert size == (round(fig.get_figwidth() * 150), round(fig.get_figheight() * 150))
