@@ -229,3 +229,32 @@ def test_the_api_index_breaks_module_paths_only_after_a_dot():
     assert "stylesheets/extra.css" in yaml.safe_load(_read("mkdocs.yml").split("\nplugins:")[0])["extra_css"]
     css = _read("docs/stylesheets/extra.css")
     assert ".md-typeset td a code" in css and "word-break: normal" in css and "overflow-wrap: normal" in css
+
+
+def test_the_truss_guides_scaling_table_is_what_the_command_computes():
+    """docs/guides/truss.md's table and sentence of ``stiffness --scaling``: every figure is
+    the table's (4 significant digits), the first n that buckles and the n = 46 figures too."""
+    from assembler_pin.compliance.scaling import stiffness_scaling
+
+    def g(x: float) -> str:
+        return re.sub(r"e\+?0*(\d)", r"e\1", f"{x:.4g}")
+
+    table = stiffness_scaling(max_platforms=64)
+    page = _read("docs/guides/truss.md").split("## How stiffness scales")[1].split("\n## ")[0]
+    rows = re.findall(r"^\| (\d+) \| (.+) \|$", page, flags=re.M)
+    assert [int(n) for n, _ in rows] == [1, 4, 8, 16, 64]
+    for n, cells in rows:
+        k = int(n) - 1
+        shown = [c.strip() for c in cells.split("|")]
+        if table.stable[k]:
+            sag_mm = 1e3 * table.sag[k]
+            want = [g(table.lateral[k]), g(table.axial[k]), g(table.torsional[k]), g(sag_mm)]
+        else:
+            want = ["buckles", "—", "—", "—"]
+        assert shown == [*want, g(table.elastic["lateral"][k])], n
+    first = table.first_unstable
+    words = " ".join(page.split())
+    assert f"buckles under its own weight from n = {first}" in words
+    before = first - 2  # the index of n = first - 1
+    assert f"at n = {first - 1} the lateral stiffness is {table.lateral[before]:.2g} N/m" in words
+    assert f"the sag {1e3 * table.sag[before]:.2g} mm" in words
