@@ -269,3 +269,20 @@ def test_cli_map_png_draws_the_scene(maps, tmp_path):
     assert main([*args, "--scene", str(maps[0])]) == 0
     bare = save(map_heatmaps(read_map(out), ap.AssemblerModel.from_config()), tmp_path / "bare.png")
     assert stone(str(out) + ".png") > 20 and stone(bare) == 0, (stone(str(out) + ".png"), stone(bare))
+
+
+def test_the_maps_guide_quotes_the_cell_beside_the_strut(am, maps):
+    """docs/guides/maps.md's figures for the cell (0.5, 0, 0.8): its clearance from the strut
+    and max|F| with the scene, and without it, max|F| and how far its pose passes into the strut."""
+    from pathlib import Path
+
+    scene_file, with_scene, free = maps
+    strut = read_scene(scene_file)
+    kept, loose = (next(r for r in read_map(d).to_pylist() if r["x"] == pytest.approx(0.5)) for d in (with_scene, free))
+    into = clearance(am, _plates(loose), strut).min_distance
+    guide = " ".join((Path(__file__).resolve().parents[2] / "docs/guides/maps.md").read_text(encoding="utf-8").split())
+    assert (
+        f"the cell (0.5, 0, 0.8) holds {1e3 * kept['clearance_m']:.4f} mm from the strut at max|F| "
+        f"{kept['max_abs_force']:.2f} N; the same cell without a scene, {loose['max_abs_force']:.2f} N, "
+        f"passes {-into:.4f} m into it"
+    ) in guide
