@@ -108,7 +108,7 @@ def _pictures(args: argparse.Namespace, table, configs: list, doc: dict) -> None
         from ..maps.pictures import write_map_page
         from ..viz import StackViewer
 
-        with StackViewer(am) as viewer:
+        with StackViewer(am, scene=scene_from_args(args)) as viewer:  # the cells among the scene
             viewer.display(am.home, color_forces=False)
             doc["html"] = str(Path(args.html))
             write_map_page(viewer, table, doc["html"], config=configs[0][0])

@@ -11,6 +11,7 @@ import numpy as np
 import pinocchio as pin
 import pytest
 import yaml
+from pages import page_commands
 
 import assembler_pin as ap
 from assembler_pin.cli import main
@@ -266,9 +267,13 @@ def test_cli_map_png_draws_the_scene(maps, tmp_path):
     out = tmp_path / "m"
     grid = "x=0.45:0.5:2,y=0,z=0.8:0.85:2"
     args = ["map", "--grid", grid, "--workers", "0", "--no-progress", "--out", str(out), "--png", str(out) + ".png"]
-    assert main([*args, "--scene", str(maps[0])]) == 0
+    assert main([*args, "--scene", str(maps[0]), "--html", str(out) + ".html"]) == 0
     bare = save(map_heatmaps(read_map(out), ap.AssemblerModel.from_config()), tmp_path / "bare.png")
     assert stone(str(out) + ".png") > 20 and stone(bare) == 0, (stone(str(out) + ".png"), stone(bare))
+    # the 3D page draws the strut among the cells, named in its legend
+    html = (tmp_path / "m.html").read_text(encoding="utf-8")
+    drawn = [c["path"] for c in page_commands(html) if c["type"] == "set_object"]
+    assert any(p.startswith("/meshcat/assembler_obstacles/") for p in drawn) and "obstacles: lower strut" in html
 
 
 def test_the_maps_guide_quotes_the_cell_beside_the_strut(am, maps):
