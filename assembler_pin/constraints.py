@@ -29,10 +29,25 @@ from .statics.result import StaticsResult
 
 __all__ = [
     "LEG_LIMIT_ROWS",
+    "STROKE_END_TOLERANCE",
     "Violation",
+    "at_stroke_end",
     "evaluate_constraints",
     "leg_limit_margins",
 ]
+
+
+#: A leg within this distance of an end of its stroke is "at a stroke end": that limit binds
+#: (the optimizer holds its legs ``limit_margin``, 1e-7 m, inside the stroke) [m]. The one
+#: definition for the results table, the figures and the pages.
+STROKE_END_TOLERANCE = 1e-6
+
+
+def at_stroke_end(lengths: np.ndarray, min_length: float, max_length: float) -> np.ndarray:
+    """Mask of the legs whose length [m] is within :data:`STROKE_END_TOLERANCE` of either end
+    of the stroke ``[min_length, max_length]``."""
+    L = np.asarray(lengths, dtype=float)
+    return (L <= min_length + STROKE_END_TOLERANCE) | (L >= max_length - STROKE_END_TOLERANCE)
 
 
 @dataclass(frozen=True)

@@ -26,6 +26,7 @@ import pinocchio as pin
 from .common.files import atomic_path
 from .common.labels import leg_label, platform_label
 from .common.progress import ProgressCallback, checked_progress
+from .constraints import STROKE_END_TOLERANCE, at_stroke_end
 from .helper_arm import perturbed_plates, repair_stack
 from .model.assembler import AssemblerModel
 from .optimize import OptimizeOptions, optimize_internal_poses
@@ -187,10 +188,9 @@ def _argmax_label(state: StackState) -> str:
     return leg_label(j, i)
 
 
-def _legs_at_stroke_end(state: StackState, stroke: tuple[float, float], tol: float = 1e-6) -> int:
-    """Legs within ``tol`` [m] of either end of their stroke: the limits that bind."""
-    lengths = state.leg_lengths
-    return int(np.sum((lengths <= stroke[0] + tol) | (lengths >= stroke[1] - tol)))
+def _legs_at_stroke_end(state: StackState, stroke: tuple[float, float]) -> int:
+    """Legs at a stroke end (:func:`~assembler_pin.constraints.at_stroke_end`): the limits that bind."""
+    return int(np.sum(at_stroke_end(state.leg_lengths, *stroke)))
 
 
 def _paper_reduction(scn: Scenario) -> float:
@@ -202,7 +202,7 @@ def figure_title(s: Scenario) -> str:
     taa = s.goal_taa
     return (
         f"{s.name}: goal ({', '.join(f'{x:.2f}' for x in taa[:3])}) m, "
-        f"rotation ({', '.join(f'{np.rad2deg(x):.0f}' for x in taa[3:])})°"
+        f"rotation vector ({', '.join(f'{np.rad2deg(x):.0f}' for x in taa[3:])})°"
     )
 
 
@@ -385,8 +385,8 @@ def findings(am: AssemblerModel, outcomes: Sequence[ScenarioOutcome]) -> str:
     starts = [_legs_at_stroke_end(o.initial, o.stroke) for o in solved if o.initial is not None]
     ends = [_legs_at_stroke_end(o.optimized, o.stroke) for o in solved if o.optimized is not None]
     lines.append(
-        f"- Legs at an end of their stroke: {_span(starts, '{:d}', '')} of {6 * am.n} at the start, "
-        f"{_span(ends, '{:d}', '')} at the optimum."
+        f"- Legs at an end of their stroke (within {STROKE_END_TOLERANCE:g} m of it, where the limit binds): "
+        f"{_span(starts, '{:d}', '')} of {6 * am.n} at the start, {_span(ends, '{:d}', '')} at the optimum."
     )
     rising = [o.scenario.name for o in solved if o.optimized.mean_abs_force > o.initial.mean_abs_force]  # type: ignore[union-attr]
     lines.append(

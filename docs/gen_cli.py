@@ -36,6 +36,10 @@ Every subcommand follows one rule:
 | 130 | interrupted by Ctrl-C (143 on SIGTERM): one line on stderr, no partial output file |
 | 141 | the reader of the output went away (`assembler-pin solve ... \\| head`): nothing on stderr |
 
+A live `view` server (no `--html`) serves until stopped: Ctrl-C once its URL is printed is its
+normal end, status 0. `statics` answers every pose: status 1 when it breaks a constraint
+(`feasible: NO`).
+
 `assembler-pin` alone (or with only `-v`/`-q`) prints its help, the list of subcommands, and
 exits 0.
 

@@ -111,7 +111,13 @@ def _describe(package, module: str, name: str, page_of: dict[str, str]) -> tuple
     if top is None:
         return f"`{canonical}`", doc
     anchor = f"#{canonical}" if doc else ""
-    return f"[`{canonical}`]({top}.md{anchor})", doc
+    return f"[<code>{dotted_breaks(canonical)}</code>]({top}.md{anchor})", doc
+
+
+def dotted_breaks(path: str) -> str:
+    """A dotted name with a line-break opportunity (``<wbr>``) after each dot: a narrow column
+    breaks it between its parts, never inside one (docs/stylesheets/extra.css)."""
+    return path.replace(".", ".<wbr>")
 
 
 def api_index(groups: dict[str, list[str]]) -> str:

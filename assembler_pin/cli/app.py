@@ -10,6 +10,7 @@ import argparse
 import logging
 import os
 import re
+import shutil
 import signal
 import sys
 import traceback
@@ -52,6 +53,36 @@ class _Parser(argparse.ArgumentParser):
 
     def error(self, message: str) -> NoReturn:
         raise CLIError(f"{message} (see '{self.prog} --help')")
+
+    def format_usage(self) -> str:
+        return wrap_usage(super().format_usage())
+
+    def format_help(self) -> str:
+        return wrap_usage(super().format_help())
+
+
+def wrap_usage(text: str, width: int | None = None) -> str:
+    """``text`` (a help or usage text) with every usage line longer than ``width`` (argparse's
+    own: the terminal's columns - 2) broken before a ``|`` of the group it is in, the rest
+    indented under the group's opening bracket: argparse keeps a group of alternatives on one
+    line however long it is."""
+    width = width or max(shutil.get_terminal_size().columns - 2, 40)
+    head, sep, rest = text.partition("\n\n")
+    lines: list[str] = []
+    for line in head.splitlines():
+        while len(line) > width and " | " in line[:width]:
+            cut = line.rindex(" | ", 0, width)
+            opened: list[int] = []
+            for k, c in enumerate(line[:cut]):
+                if c in "([":
+                    opened.append(k)
+                elif c in ")]" and opened:
+                    opened.pop()
+            indent = opened[0] + 1 if opened else 0
+            lines.append(line[:cut])
+            line = " " * indent + line[cut + 1 :]
+        lines.append(line)
+    return "\n".join(lines) + sep + rest
 
 
 def build_parser(only: str | None = None) -> argparse.ArgumentParser:

@@ -222,7 +222,14 @@ def _extra_figures(args: argparse.Namespace, am) -> int:
         return 0
     print(bench_header(am, "medians"))
     for group, figures in doc.items():
-        print(f"{group}:")
+        timed = group in PER_CALL_GROUPS
+        print(f"{group} (median time per call):" if timed else f"{group}:")
         for key, value in figures.items() if isinstance(figures, dict) else [("", figures)]:
+            key = f"{key}_s" if timed else key  # the header's unit suffix: these keys carry none
             print(f"  {key:>34}: {value:.4g}" if isinstance(value, float) else f"  {key:>34}: {value}")
     return 0
+
+
+#: The groups of ``bench --truss`` whose figures are times per call [s] under keys named
+#: after the call alone (``stiffness``: the time of a stiffness, not a stiffness).
+PER_CALL_GROUPS = ("stiffness", "supports")

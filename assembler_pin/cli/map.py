@@ -110,12 +110,13 @@ def _pictures(args: argparse.Namespace, table, configs: list, doc: dict) -> None
         from ..plots.figures import save
 
         scene = Path(args.scene).name if args.scene else ""
-        doc["png"] = str(save(map_heatmaps(table, am, configs[0][0], scene=scene), args.png))
+        figure = map_heatmaps(table, am, configs[0][0], scene=scene, obstacles=scene_from_args(args))
+        doc["png"] = str(save(figure, args.png))
     if args.html:
         from ..maps.pictures import write_map_page
         from ..viz import StackViewer
 
-        with StackViewer(am) as viewer:
+        with StackViewer(am, scene=scene_from_args(args)) as viewer:  # the cells among the scene
             viewer.display(am.home, color_forces=False)
             doc["html"] = str(Path(args.html))
             write_map_page(viewer, table, doc["html"], config=configs[0][0])
@@ -182,10 +183,11 @@ def _summary(args: argparse.Namespace, table, cells: int, run) -> dict[str, Any]
 
 def _print_summary(doc: dict[str, Any], run, rows: int) -> None:
     """The text answer of :func:`run` (``rows``: the cells the map file holds)."""
+    rate = f" ({run.cells_per_second:.2f} cells/s)" if doc["computed"] else ""  # a rerun computes nothing
     print(
         wrapped(
             f"map: {doc['computed']} cells computed, {doc['already_done']} already in {doc['out']}; "
-            f"{run.workers or 'no'} workers, {run.time_s:.1f} s ({run.cells_per_second:.2f} cells/s)"
+            f"{run.workers or 'no'} workers, {run.time_s:.1f} s{rate}"
         )
     )
     print(f"reachable: {doc['reachable']} of {rows} cells")

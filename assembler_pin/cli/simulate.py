@@ -102,6 +102,12 @@ def run(args: argparse.Namespace) -> int:
     return 0 if result.held else 1
 
 
+#: Why a table's t = 0 row carries no MuJoCo force (two lines, 100 characters at most).
+UNLOADED_NOTE = (
+    "At t = 0 the servos stand at the commanded lengths and push nothing; they take up the load\nas the stack settles."
+)
+
+
 def hold_note(am: AssemblerModel, ours, result) -> str:
     """What the hold table shows, below it: why the first row carries no force, and the EE's
     drift beside the legs' sag alone (``assembler-pin stiffness``)."""
@@ -112,8 +118,7 @@ def hold_note(am: AssemblerModel, ours, result) -> str:
     springs = stiffness(am, ours)
     sag = f"{1e3 * float(np.linalg.norm(springs.sag_translation)):.3f} mm" if springs.success else "none"
     return (
-        "At t = 0 the servos stand at the commanded lengths and push nothing; they take up the load\n"
-        f"as the stack settles. EE drift {1e3 * result.ee_drift[-1]:.3f} mm; the legs' sag alone "
+        f"{UNLOADED_NOTE} EE drift {1e3 * result.ee_drift[-1]:.3f} mm; the legs' sag alone "
         f"('assembler-pin stiffness'): {sag}.\n"
         "The servos are as stiff as those legs; the rest is MuJoCo's soft ball joints and loop\n"
         "closures, which the stiffness model takes as rigid (docs: MuJoCo)."
@@ -135,9 +140,12 @@ def _simulate_trajectory(args: argparse.Namespace, am: AssemblerModel) -> int:
     print(f"MuJoCo running {Path(args.trajectory).name}: {traj.duration:.2f} s, then 0.5 s settling")
     print(f"{'t [s]':>7} {'EE off plan [mm]':>17} {'max|F| MuJoCo':>14} {'max|F| plan':>12} {'at limit':>9}")
     for k in np.unique(np.linspace(0, len(result.times) - 1, 11).round().astype(int)):
+        ours = f"{'unloaded':>14}" if result.times[k] == 0.0 else f"{result.max_abs_force[k]:14.2f}"
         print(
-            f"{result.times[k]:7.2f} {1e3 * result.ee_error[k]:17.3f} {result.max_abs_force[k]:14.2f} "
+            f"{result.times[k]:7.2f} {1e3 * result.ee_error[k]:17.3f} {ours} "
             f"{result.planned_max_abs_force[k]:12.2f} {int(result.saturated[k]):9d}"
         )
+    if result.times[0] == 0.0:
+        print(UNLOADED_NOTE)
     print(f"followed: {'yes' if result.followed else 'NO'} — {result.message}")
     return 0 if result.followed else 1

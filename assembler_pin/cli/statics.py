@@ -64,6 +64,10 @@ def _fast_home(args: argparse.Namespace) -> bool:
 
 
 def run(args: argparse.Namespace) -> int:
+    """The forces of the given pose. Exit status 0 when the pose meets every constraint
+    (``feasible``: stroke, deflection, forces, the clearance with ``--scene``; on a carrier its
+    joints' effort limits too), 1 when it does not (the answer is printed all the same:
+    ``feasible: NO`` and the violations)."""
     if _fast_home(args):
         return 0
     from ..model.assembler import AssemblerModel
@@ -91,10 +95,10 @@ def run(args: argparse.Namespace) -> int:
         statics = carrier_statics(am, carrier, q, plates)
         if args.json:
             print(dumps(statics.state.to_dict() | statics.to_dict()))
-            return 0
+            return 0 if statics.within_limits else 1
         print(format_state_table(statics.state, f"Statics of {am.n} platforms on {carrier.name} (world gravity)"))
         print(format_carrier(carrier, statics))
-        return 0
+        return 0 if statics.within_limits else 1
     state = evaluate_state(am, plates, scene=scene)
     from .stiffness import stiffness_blocks
 
@@ -110,4 +114,4 @@ def run(args: argparse.Namespace) -> int:
         )
         if stiff_text is not None:
             print(stiff_text)
-    return 0 if stiff_ok else 1
+    return 0 if stiff_ok and state.feasible else 1

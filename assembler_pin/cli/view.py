@@ -38,7 +38,10 @@ def add_parser(add) -> None:
     from ..config.choices import FORCE_SCALES, SCENARIO_NAMES
 
     src.add_argument(
-        "--scenario", choices=SCENARIO_NAMES, help="solve a scenario's goal and show its initial and optimized poses"
+        "--scenario",
+        choices=SCENARIO_NAMES,
+        metavar="NAME",
+        help=f"solve a scenario's goal and show its initial and optimized poses ({', '.join(SCENARIO_NAMES)})",
     )
     src.add_argument(
         "--trajectory",
@@ -142,9 +145,8 @@ def _view_title(args: argparse.Namespace, result) -> str:
     else:
         taa = args.goal if args.goal is not None else args.goal_deg
         unit = "rad" if args.goal is not None else "deg"
-        what = (
-            f"Goal ({', '.join(f'{x:g}' for x in taa[:3])}) m, rotation ({', '.join(f'{x:g}' for x in taa[3:])}) {unit}"
-        )
+        xyz, rotation = ", ".join(f"{x:g}" for x in taa[:3]), ", ".join(f"{x:g}" for x in taa[3:])
+        what = f"Goal ({xyz}) m, rotation vector ({rotation}) {unit}"
     init = f"{result.initial.max_abs_force:.1f} N" if result.initial is not None else "none"
     opt = f"{result.optimized.max_abs_force:.1f} N" if result.optimized is not None else "none"
     return f"{what} — max|F| initial {init} → optimized {opt}"

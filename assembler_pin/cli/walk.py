@@ -121,13 +121,19 @@ def run(args: argparse.Namespace) -> int:
     finally:
         prog.close()
     doc = walk.to_dict()
+    written: list[Path] = []
     if out is not None:
         write_walk(am, walk, out)
+        written += [out / "walk.json", out / "walk.csv"]
     if args.plot:
         plot_walk(am, walk, args.plot)
-    if args.html:
-        view_walk(am, walk, args.html, DEFAULT_FPS if args.fps is None else args.fps)
+        written.append(Path(args.plot))
+    if args.html and view_walk(am, walk, args.html, DEFAULT_FPS if args.fps is None else args.fps):
+        written.append(Path(args.html))
     print(dumps(doc) if args.json else format_walk(walk))
+    if not args.json:
+        for path in written:
+            print(f"wrote {path}")
     return 0 if walk.success else 1
 
 
@@ -149,20 +155,21 @@ def write_walk(am, walk, out: Path) -> None:
     write_atomic(out / "walk.csv", walk_csv(am, walk))
 
 
-def view_walk(am, walk, path: str, fps: float) -> None:
+def view_walk(am, walk, path: str, fps: float) -> bool:
     """The standalone page animating the walk (:meth:`~assembler_pin.viz.StackViewer.show_walk`)
     among its scene's obstacles and floor, written atomically; a walk without a sample writes
-    none and says so on stderr."""
+    none and says so on stderr. Returns whether the page was written."""
     import sys
 
     from ..viz import StackViewer
 
     if not any(len(p.plates) for p in walk.phases):
         print(f"walk: no sample to animate, {path} not written", file=sys.stderr)
-        return
+        return False
     with StackViewer(am, scene=walk.scene) as viewer:  # the obstacles and floor it walked among
         viewer.show_walk(walk, fps=fps)
         viewer.static_html(path)
+    return True
 
 
 def walk_times(am, walk):
@@ -227,20 +234,28 @@ def plot_walk(am, walk, path: str):
     return fig
 
 
+#: The phase table's columns: (heading, width); each row's cell is right-aligned under it.
+WALK_COLUMNS = (("phase", 5), ("kind", 8), ("support", 7), ("foothold", 8), ("samples", 7), ("peak max|F| [N]", 15))
+
+
 def format_walk(walk) -> str:
-    """A compact text report (lines ≤ 100 characters)."""
+    """A compact text report: the verdict, then one row per phase under a header (lines ≤ 100
+    characters)."""
     import textwrap
 
     lines = [f"walk over {len(walk.footholds)} footholds: {'success' if walk.success else 'not possible'}"]
     if not walk.success:
         lines += textwrap.wrap(walk.reason, 96, initial_indent="  ", subsequent_indent="    ")
+    lines.append(
+        "  " + "  ".join(f"{h:>{w}s}" if k in (0, 3, 4, 5) else f"{h:{w}s}" for k, (h, w) in enumerate(WALK_COLUMNS))
+    )
+    (_, w0), (_, w1), (_, w2), (_, w3), (_, w4), (_, w5) = WALK_COLUMNS
     for k, p in enumerate(walk.phases):
-        peak = f"{p.max_abs_forces.max():7.2f} N" if len(p.plates) else "      - "
-        state = "" if p.complete else "  (incomplete)"
-        lines.append(
-            f"  {k:2d} {p.kind:8s} support {p.support:4s} foothold {p.step:2d} {len(p.plates):4d} samples {peak}{state}"
-        )
+        peak = f"{p.max_abs_forces.max():.2f}" if len(p.plates) else "-"
+        state = "  (incomplete)" if not p.complete else ""
+        cells = f"{k:{w0}d}  {p.kind:{w1}s}  {p.support:{w2}s}  {p.step:{w3}d}  {len(p.plates):{w4}d}"
+        lines.append(f"  {cells}  {peak:>{w5}s}{state}")
         if p.clearance is not None and walk.scene is not None:
             a, b = p.clearance.between
-            lines.append(f"       clearance {p.clearance.min_distance:.4f} m ({a} and {b})")
+            lines.append(f"         clearance {p.clearance.min_distance:.4f} m ({a} and {b})")
     return "\n".join(line[:100] for line in lines)

@@ -139,28 +139,36 @@ def stiffness_scaling(
 
 
 def scaling_figure(table: ScalingTable):
-    """Log-log figure: the three stiffnesses (loaded solid, springs alone dashed) and the sag
-    against n, the first buckling n marked."""
+    """Log-log figure, one unit per axis: the translational stiffnesses [N/m], the torsional
+    one [N·m/rad] (loaded solid, springs alone dashed) and the sag [mm] against n, the first
+    buckling n marked; every axis labels enough ticks to be read (minor ones too when its data
+    spans less than a few decades)."""
     from matplotlib.figure import Figure
+    from matplotlib.ticker import LogFormatterSciNotation, ScalarFormatter
 
-    fig = Figure(figsize=(11, 4.6), layout="constrained")
-    ax_k, ax_s = fig.subplots(1, 2)
-    labels = {"lateral": "lateral (x) [N/m]", "axial": "axial (z) [N/m]", "torsional": "torsional (about z) [N·m/rad]"}
+    fig = Figure(figsize=(14, 4.6), layout="constrained")
+    ax_t, ax_r, ax_s = fig.subplots(1, 3)
+    names = {"lateral": "lateral (x)", "axial": "axial (z)", "torsional": "torsional (about z)"}
     for colour, q in zip(LEG_CYCLE, _QUANTITIES, strict=False):
-        ax_k.loglog(table.platforms, getattr(table, q), "-", color=colour, lw=2, label=f"{labels[q]}, loaded")
-        ax_k.loglog(table.platforms, table.elastic[q], "--", color=colour, lw=1, label=f"{q}, legs' springs alone")
+        ax = ax_r if q == "torsional" else ax_t
+        ax.loglog(table.platforms, getattr(table, q), "-", color=colour, lw=2, label=f"{names[q]}, loaded")
+        ax.loglog(table.platforms, table.elastic[q], "--", color=colour, lw=1, label=f"{names[q]}, legs' springs alone")
     ax_s.loglog(table.platforms, 1e3 * table.sag, "-", color=OPTIMIZED, lw=2, label="EE sag, gravity + payload")
-    for ax in (ax_k, ax_s):
+    for ax in (ax_t, ax_r, ax_s):
         if table.first_unstable is not None:
             ax.axvline(
                 table.first_unstable, color=LIMIT, ls=":", lw=1.2, label=f"buckles from n = {table.first_unstable}"
             )
         ax.set_xlabel("platforms n")
+        ax.xaxis.set_major_formatter(ScalarFormatter())  # counts: 1, 10, not 10⁰, 10¹
         ax.grid(True, which="both", alpha=0.3)
         ax.legend(fontsize=8)
-    ax_k.set_ylabel("stiffness under a pure force / moment")
+        ax.yaxis.set_minor_formatter(LogFormatterSciNotation(labelOnlyBase=False, minor_thresholds=(2, 0.5)))
+    ax_t.set_ylabel("stiffness under a pure force [N/m]")
+    ax_r.set_ylabel("stiffness under a pure moment [N·m/rad]")
     ax_s.set_ylabel("sag [mm]")
     k = table.leg_stiffness
-    ax_k.set_title(f"EE stiffness at the home pose (legs {k:g} N/m)", fontsize=10)
-    ax_s.set_title("EE sag at the home pose, legs commanded to the home lengths", fontsize=10)
+    ax_t.set_title(f"EE translational stiffness at home (legs {k:g} N/m)", fontsize=10)
+    ax_r.set_title("EE torsional stiffness at home", fontsize=10)
+    ax_s.set_title("EE sag at home, legs commanded to the home lengths", fontsize=10)
     return fig

@@ -8,8 +8,10 @@ leg is vectorized with numpy. Angles in radians.
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+import operator
+from collections.abc import Iterator, Sequence
 from dataclasses import dataclass
+from typing import SupportsIndex, overload
 
 import numpy as np
 import numpy.typing as npt
@@ -49,13 +51,34 @@ MAX_ROTATION_VECTOR = 1e6
 
 @dataclass(frozen=True)
 class PlateArrays:
-    """World poses of plates 0..n as arrays: ``R`` (n+1, 3, 3), ``p`` (n+1, 3) [m]."""
+    """World poses of plates 0..n as arrays: ``R`` (n+1, 3, 3), ``p`` (n+1, 3) [m].
+
+    A sequence of plates, as a list of ``pin.SE3`` (``am.home``) is: ``plates[k]`` is plate k's
+    world pose as ``pin.SE3`` (``plates[-1]`` the EE plate), ``plates[i:j]`` the plates i..j-1
+    as :class:`PlateArrays`, and iterating gives the poses in order, plate 0 first.
+    """
 
     R: np.ndarray
     p: np.ndarray
 
     def __len__(self) -> int:
         return self.R.shape[0]
+
+    @overload
+    def __getitem__(self, k: SupportsIndex) -> pin.SE3: ...
+    @overload
+    def __getitem__(self, k: slice) -> PlateArrays: ...
+    def __getitem__(self, k: SupportsIndex | slice) -> pin.SE3 | PlateArrays:
+        """Plate ``k``'s world pose (negative counts from the EE plate), or a slice of plates."""
+        if isinstance(k, slice):
+            return PlateArrays(self.R[k].copy(), self.p[k].copy())
+        i = operator.index(k)  # TypeError for a float or a string, as a list raises
+        if not -len(self) <= i < len(self):
+            raise IndexError(f"plate index {i} out of range for {len(self)} plates (0..{len(self) - 1})")
+        return self.se3(i)
+
+    def __iter__(self) -> Iterator[pin.SE3]:
+        return (self.se3(k) for k in range(len(self)))
 
     def __repr__(self) -> str:
         return f"PlateArrays({len(self)} plates, EE at {np.round(self.p[-1], 4).tolist()} m)"
@@ -66,7 +89,7 @@ class PlateArrays:
         return cls(np.array([m.rotation for m in poses]), np.array([m.translation for m in poses]))
 
     def se3(self, k: int) -> pin.SE3:
-        """Pose of plate k in the world as ``pin.SE3``."""
+        """Pose of plate k in the world as ``pin.SE3`` (``plates[k]`` is the same)."""
         return pin.SE3(self.R[k].copy(), self.p[k].copy())
 
     def as_se3(self) -> list[pin.SE3]:

@@ -6,13 +6,17 @@ import numpy as np
 from matplotlib import colormaps
 from matplotlib.colors import ListedColormap
 from matplotlib.figure import Figure
+from scipy.spatial import ConvexHull
 
+from ..collision.scene import Obstacle, Scene
 from ..common.files import write_atomic
 from ..common.palette import (
     CAPACITY_CMAP,
     CLEARANCE_CMAP,
+    FLOOR,
     FORCE_MAGNITUDE_CMAP,
     LIMIT,
+    OBSTACLE,
     OUTSIDE_GRID,
     OUTSIDE_GRID_EDGE,
     OUTSIDE_GRID_HATCH,
@@ -39,6 +43,7 @@ __all__ = [
     "clearance_range",
     "map_heatmaps",
     "map_slice",
+    "obstacle_outlines",
     "point_size",
     "show_map_points",
     "slice_label",
@@ -95,7 +100,13 @@ def clearance_range(clearance_mm: np.ndarray, limit_mm: float) -> tuple[float, f
 
 
 def map_heatmaps(
-    table, am: AssemblerModel, config: str | None = None, orientation: int = 0, title: str = "", scene: str = ""
+    table,
+    am: AssemblerModel,
+    config: str | None = None,
+    orientation: int = 0,
+    title: str = "",
+    scene: str = "",
+    obstacles: Scene | None = None,
 ) -> Figure:
     """Clearance [mm], optimized max|F| [N], payload capacity [kg], EE sag [mm] and weakest EE
     stiffness [N/m] over a 2-D map slice, in a grid of panels (two rows of three, the legend
@@ -106,7 +117,10 @@ def map_heatmaps(
     the capacity scale is that of the HTML point cloud (:func:`capacity_range`), the clearance
     scale holds the configuration's ``clearance`` limit, drawn on its colour bar. The title
     names the slice: its fixed axis and value, the configuration, the EE orientation and
-    ``scene`` (a name for the scene the map was computed with, if any)."""
+    ``scene`` (a name for the scene the map was computed with, if any). The obstacles and the
+    floor of ``obstacles`` (that scene) are drawn in every panel: filled where the slice's
+    plane cuts them, outlined (dashed) where they stand beside it, both as their shadow on the
+    plane (:func:`obstacle_outlines`)."""
     u_axis, v_axis, s = map_slice(table, config, orientation)
     fig = Figure(figsize=MAP_FIGSIZE, layout="constrained")
     axes = fig.subplots(2, 3).ravel()
@@ -139,6 +153,8 @@ def map_heatmaps(
             vmax=hi,
         )
         _mark_unreached(ax, s, unreached, extent)
+        if obstacles is not None:
+            _draw_scene(ax, obstacles, u_axis, v_axis, _slice_value(table, config, orientation))
         draw_state(
             ax, home, (_AXIS[u_axis], _AXIS[v_axis]), hex_color(SCALE_POSE), hex_color(SCALE_POSE_PLATE), "", 0.5
         )
@@ -156,7 +172,11 @@ def map_heatmaps(
     legend_ax = axes[-1]
     legend_ax.axis("off")
     legend_ax.legend(
-        handles=_legend_handles(), fontsize=11, loc="center", frameon=False, title="yellow is better in every panel"
+        handles=_legend_handles(obstacles),
+        fontsize=11,
+        loc="center",
+        frameon=False,
+        title="yellow is better in every panel",
     )
     reached = np.nan_to_num(s["reachable"]).astype(bool)
     within = f", scene {scene}" if scene else ""
@@ -181,8 +201,84 @@ def slice_label(table, config: str | None = None, orientation: int = 0) -> str:
     rotation = ""
     if "rx" in table.column_names:
         r = [np.asarray(table.column(c).to_pylist())[keep][0] for c in ("rx", "ry", "rz")]
-        rotation = f", EE rotation ({', '.join(f'{np.degrees(v):g}' for v in r)})°"
+        rotation = f", EE rotation vector ({', '.join(f'{np.degrees(v):g}' for v in r)})°"
     return f"slice {where}, config {name}, orientation {orientation}{rotation}"
+
+
+def obstacle_outlines(scene: Scene, u_axis: str, v_axis: str, fixed: float) -> list[tuple[str, np.ndarray, bool]]:
+    """Each obstacle of ``scene`` as the slice's panels draw it: (name, its shadow on the
+    (u, v) plane as a convex polygon (k, 2) [m], whether the slice's plane cuts it). The plane
+    is the third axis at ``fixed`` [m]; a box is exact, a cylinder's rims and a sphere's outline
+    are polygons of 48 sides."""
+    iu, iv = _AXIS[u_axis], _AXIS[v_axis]
+    iw = 3 - iu - iv
+    out = []
+    for ob in scene.obstacles:
+        points = _obstacle_points(ob)
+        hull = ConvexHull(points[:, [iu, iv]])
+        cut = _half_extent(ob, iw) >= abs(fixed - ob.pose.translation[iw])
+        out.append((ob.name, points[hull.vertices][:, [iu, iv]], bool(cut)))
+    return out
+
+
+def _obstacle_points(ob: Obstacle) -> np.ndarray:
+    """World points whose convex hull is the obstacle (a box's corners, a cylinder's rims, a
+    sphere's great circles) [m]."""
+    R, p = ob.pose.rotation, ob.pose.translation
+    ang = np.linspace(0.0, 2.0 * np.pi, 48, endpoint=False)
+    ring = np.stack([np.cos(ang), np.sin(ang), np.zeros_like(ang)], axis=1)
+    if ob.kind == "box":
+        local = 0.5 * np.array([[sx, sy, sz] for sx in (-1, 1) for sy in (-1, 1) for sz in (-1, 1)]) * ob.size
+    elif ob.kind == "cylinder":
+        r, half = ob.size[0], 0.5 * ob.size[1]
+        local = np.concatenate([r * ring + [0.0, 0.0, -half], r * ring + [0.0, 0.0, half]])
+    else:
+        local = ob.size[0] * np.concatenate([ring, ring[:, [2, 0, 1]], ring[:, [1, 2, 0]]])
+    return local @ R.T + p
+
+
+def _half_extent(ob: Obstacle, axis: int) -> float:
+    """Half the obstacle's extent along a world axis [m]."""
+    R = ob.pose.rotation
+    if ob.kind == "box":
+        return float(0.5 * np.abs(R[axis]) @ np.asarray(ob.size))
+    if ob.kind == "cylinder":
+        r, length = ob.size
+        c = abs(R[axis, 2])
+        return float(0.5 * length * c + r * np.sqrt(max(0.0, 1.0 - c * c)))
+    return float(ob.size[0])
+
+
+def _slice_value(table, config: str | None, orientation: int) -> float:
+    """The fixed axis's value of the slice :func:`map_slice` draws [m]."""
+    u_axis, v_axis, _ = map_slice(table, config, orientation)
+    fixed = next(a for a in "xyz" if a not in (u_axis, v_axis))
+    cols = {c: np.asarray(table.column(c).to_pylist()) for c in ("config", "io", fixed)}
+    name = config if config is not None else cols["config"][0]
+    return float(cols[fixed][(cols["config"] == name) & (cols["io"] == orientation)].min())
+
+
+def _draw_scene(ax, scene: Scene, u_axis: str, v_axis: str, fixed: float) -> None:
+    """The scene in one panel: obstacles (:func:`obstacle_outlines`) over the cells, the floor
+    as a line where it is in the plane's view (a vertical slice)."""
+    from matplotlib.patches import Polygon
+
+    for name, polygon, cut in obstacle_outlines(scene, u_axis, v_axis, fixed):
+        ax.add_patch(
+            Polygon(
+                polygon,
+                closed=True,
+                facecolor=OBSTACLE if cut else "none",
+                edgecolor=PAGE_INK,
+                ls="-" if cut else "--",
+                lw=0.8,
+                zorder=3,
+                gid=f"obstacle {name}",
+            )
+        )
+    if scene.floor_z is not None and "z" in (u_axis, v_axis):
+        line = ax.axhline if v_axis == "z" else ax.axvline
+        line(scene.floor_z, color=hex_color(FLOOR), lw=2.5, zorder=3, label="floor")
 
 
 def capacity_range(capacity: np.ndarray) -> tuple[float, float]:
@@ -235,11 +331,20 @@ def _mark_unreached(ax, s: dict[str, np.ndarray], unreached: np.ndarray, extent)
     )
 
 
-def _legend_handles() -> list:
+def _legend_handles(scene: Scene | None = None) -> list:
     from matplotlib.lines import Line2D
     from matplotlib.patches import Patch
 
+    drawn: list = []
+    if scene is not None and scene.obstacles:
+        drawn += [
+            Patch(facecolor=OBSTACLE, edgecolor=PAGE_INK, label="obstacle the slice cuts"),
+            Patch(facecolor="none", edgecolor=PAGE_INK, ls="--", label="obstacle beside the slice (its shadow)"),
+        ]
+    if scene is not None and scene.floor_z is not None:
+        drawn.append(Line2D([], [], color=FLOOR, lw=2.5, label="floor"))
     return [
+        *drawn,
         Patch(facecolor=UNREACHABLE, label="not reachable (marked x)"),
         Patch(facecolor=OUTSIDE_GRID, edgecolor=OUTSIDE_GRID_EDGE, hatch=OUTSIDE_GRID_HATCH, label="outside the grid"),
         Line2D([], [], color=LIMIT, lw=2.5, ls="--", label="clearance limit (on its colour bar)"),

@@ -31,6 +31,7 @@ from ..common.files import atomic_path
 from ..common.labels import leg_label, platform_label
 from ..common.palette import hex_color
 from ..config.schema import LegConfig
+from ..constraints import at_stroke_end
 from ..exceptions import AssemblerError
 from ..state import StackState
 
@@ -75,17 +76,15 @@ def _named_states(
 
 
 # ---------------------------------------------------------------------- force tables
-STROKE_END_TOLERANCE = 1e-3
-"""A leg within this distance of its stroke end is marked "at a stroke end" in the figures [m]."""
 FORCE_BOUND_FRACTION = 0.99
 """A leg at this fraction of its force limit or more is marked "at the force bound"."""
 
 
 def leg_flags(state: StackState, leg: LegConfig) -> tuple[np.ndarray, np.ndarray]:
-    """(n, 6) masks of the legs at a stroke end (within :data:`STROKE_END_TOLERANCE`) and at
-    the force bound (at least :data:`FORCE_BOUND_FRACTION` of the tension or compression limit)."""
-    L = state.leg_lengths
-    stroke = (L <= leg.min_length + STROKE_END_TOLERANCE) | (L >= leg.max_length - STROKE_END_TOLERANCE)
+    """(n, 6) masks of the legs at a stroke end (:func:`~assembler_pin.constraints.at_stroke_end`:
+    within :data:`~assembler_pin.constraints.STROKE_END_TOLERANCE`) and at the force bound (at
+    least :data:`FORCE_BOUND_FRACTION` of the tension or compression limit)."""
+    stroke = at_stroke_end(state.leg_lengths, leg.min_length, leg.max_length)
     F = state.forces
     bound = (F >= FORCE_BOUND_FRACTION * leg.max_tension) | (F <= -FORCE_BOUND_FRACTION * leg.max_compression)
     return stroke, bound
@@ -107,8 +106,8 @@ def force_heatmaps(
     colormap is diverging and centred at 0 (red tension, grey 0, blue compression) with one
     symmetric scale for both panels: ±``limit`` if given, else ±max |F| over the states
     shown. With ``leg`` (the leg limits), a leg at a stroke end gets a black frame and
-    a leg at the force bound a yellow one (see :func:`leg_flags`), listed in a legend beside
-    the colour bar; ``title`` heads the figure.
+    a leg at the force bound a yellow one (see :func:`leg_flags`), each kind of frame drawn
+    listed in a legend below; ``title`` heads the figure.
     """
     states = _named_states(initial, optimized, titles)
     vmax = limit if limit is not None else max(float(np.abs(s.forces).max()) for _, s in states)
@@ -118,6 +117,7 @@ def force_heatmaps(
     fig = Figure(figsize=(1.2 + 1.25 * n * len(states), 4.2), layout="constrained")
     axes = fig.subplots(1, len(states), squeeze=False)[0]
     image = None
+    framed: set[int] = set()  # the kinds of frame drawn: 0 stroke end, 1 force bound
     for ax, (name, state) in zip(axes, states, strict=True):
         table = state.forces.T  # (6, n): leg × platform
         image = ax.imshow(table, cmap=FORCE_CMAP, norm=norm, aspect="auto")
@@ -134,14 +134,16 @@ def force_heatmaps(
         ax.set_ylabel("leg")
         ax.set_title(f"{name}: max |F| {state.max_abs_force:.1f} N, mean {state.mean_abs_force:.1f} N", fontsize=9)
         if leg is not None:
-            for mask, color in zip(leg_flags(state, leg), ("black", VIOLATION_COLOR), strict=True):
+            for k, (mask, color) in enumerate(zip(leg_flags(state, leg), ("black", VIOLATION_COLOR), strict=True)):
                 for j, i in zip(*np.nonzero(mask), strict=True):
                     ax.add_patch(Rectangle((j - 0.46, i - 0.46), 0.92, 0.92, fill=False, ec=color, lw=2.2))
-    if leg is not None:
-        frames = [
-            Patch(fill=False, ec="black", lw=2, label="at a stroke end"),
-            Patch(fill=False, ec=VIOLATION_COLOR, lw=2, label="at the force bound"),
-        ]
+                    framed.add(k)
+    frames = [
+        Patch(fill=False, ec=color, lw=2, label=label)
+        for k, (color, label) in enumerate((("black", "at a stroke end"), (VIOLATION_COLOR, "at the force bound")))
+        if k in framed  # a legend entry only for a frame drawn
+    ]
+    if frames:
         fig.legend(handles=frames, loc="outside lower center", ncol=2, fontsize=7, frameon=False)
     assert image is not None  # at least one state is drawn
     fig.colorbar(image, ax=list(axes), label="force [N] (tension +, compression −)", shrink=0.9)
@@ -252,6 +254,11 @@ def draw_state(
     ax.plot(state.plates.p[:, a], state.plates.p[:, b], "o", color=plate_color, ms=3, alpha=alpha)
 
 
+VIEWS_LEGEND_PT = 11.0
+"""Font size of :func:`pose_views`' legend [pt]: 8.6 px tall when the 13.5-inch figure is shown
+760 px wide (a documentation page), readable."""
+
+
 def pose_views(
     initial: StackState | None,
     optimized: StackState | None = None,
@@ -297,6 +304,8 @@ def pose_views(
             ax.plot(p[idx[0]], p[idx[1]], "*", color=GOAL_EDGE, ms=14, mfc=GOAL_FACE, label="EE goal", zorder=5)
             tip = (p[idx[0]] + 0.12 * z[idx[0]], p[idx[1]] + 0.12 * z[idx[1]])
             ax.annotate("", xy=tip, xytext=(p[idx[0]], p[idx[1]]), arrowprops={"arrowstyle": "->", "color": "k"})
+            axis = "EE goal's z axis (to the payload)"
+            ax.plot([], [], color="k", lw=1.0, marker=">", ms=5, markevery=[-1], label=axis)
         if floor_z is not None and idx[1] == 2:
             ax.axhline(floor_z, color=hex_color(palette.FLOOR), lw=2.0, label="floor")
         ax.set_aspect("equal", adjustable="datalim")
@@ -305,7 +314,9 @@ def pose_views(
         ax.set_title(name)
         ax.grid(True, lw=0.4, alpha=0.5)
     handles, labels = side.get_legend_handles_labels()
-    fig.legend(handles, labels, loc="outside lower center", ncol=min(len(labels), 8), fontsize=8, frameon=False)
+    fig.legend(
+        handles, labels, loc="outside lower center", ncol=min(len(labels), 5), fontsize=VIEWS_LEGEND_PT, frameon=False
+    )
     forces = ", ".join(f"max|F| {t} {st.max_abs_force:.1f} N" for t, st in named)
     fig.suptitle(f"{title}: {forces}" if title else forces)
     return fig

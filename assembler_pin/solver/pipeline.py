@@ -212,6 +212,14 @@ def solve(
             no start reaches without a collision is answered ``success=False`` with the cause
             ``collision``. The helper arm does not see the scene: its pose is only a start.
 
+    Returns:
+        A :class:`SolveResult`: ``success`` (a valid pose was found, every constraint
+        re-checked) and ``message`` (why not, when not); ``optimized`` the force-optimized
+        :class:`~assembler_pin.state.StackState` (``.plates``, ``.forces`` [N],
+        ``.max_abs_force``), ``initial`` the helper arm's, ``best`` the first of the two that
+        exists; ``optimal`` whether the pose is proven an optimum. An unreachable goal is an
+        answer (``success=False``), not an exception.
+
     Raises:
         PoseError: the goal is not a valid SE(3) pose.
         OptionsError: ``starts`` is not one of :data:`~assembler_pin.solver.starts.START_MODES`.

@@ -33,6 +33,7 @@ __all__ = [
     "make_visualizer",
     "pinocchio_placements",
     "stack_points",
+    "stack_visuals",
 ]
 
 GeometryFrame = tuple[str, tuple[int, ...], np.ndarray]
@@ -73,6 +74,16 @@ def make_visualizer(
     viz.initViewer(viewer=vis)
     viz.loadViewerModel(rootNodeName=root, visual_color=None if rgba is None else [float(c) for c in np.asarray(rgba)])
     return viz
+
+
+def stack_visuals(am: AssemblerModel) -> pin.GeometryModel:
+    """The visuals the viewer draws: the model's URDF visuals, without the payload cube when
+    the payload has no mass (a stack that carries no tool is drawn without one)."""
+    visual_model = pin.buildGeomFromUrdfString(am.model, am.urdf_text, pin.GeometryType.VISUAL)
+    if am.config.payload.mass <= 0:
+        for g in [g for g in visual_model.geometryObjects if is_payload(am, g)]:
+            visual_model.removeGeometryObject(g.name)
+    return visual_model
 
 
 def leg_geometries(am: AssemblerModel, visual_model: pin.GeometryModel) -> dict[tuple[int, int], list[int]]:
@@ -142,7 +153,8 @@ def drawn_joint_centres(viz: MeshcatVisualizer, am: AssemblerModel) -> tuple[np.
 
 
 def stack_points(am: AssemblerModel, pose: Pose) -> np.ndarray:
-    """World points bounding a drawn stack [m]: plate rims, the payload's top."""
+    """World points bounding a drawn stack [m]: plate rims, the payload's top (when it has a
+    mass, as :func:`stack_visuals` draws it)."""
     plates = as_plates(am, pose)
     r = am.config.plate.node_radius + DIMENSIONS.node_sphere_radius
     ang = np.linspace(0, 2 * np.pi, 12, endpoint=False)
@@ -150,7 +162,8 @@ def stack_points(am: AssemblerModel, pose: Pose) -> np.ndarray:
     pts = [np.einsum("kab,mb->kma", plates.R, rim).reshape(-1, 3) + np.repeat(plates.p, len(ang), axis=0)]
     half = 0.5 * DIMENSIONS.payload_size
     payload = plates.R[-1] @ np.array([0.0, 0.0, am.config.payload.offset + half]) + plates.p[-1]
-    pts.append(payload[None, :])
+    if am.config.payload.mass > 0:
+        pts.append(payload[None, :])
     return np.concatenate(pts)
 
 

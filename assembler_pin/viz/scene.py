@@ -107,7 +107,7 @@ class StackScene:
         if viewer is None:
             self.server, viewer = connect(host, port)
         self.meshcat: meshcat.Visualizer = viewer
-        self.visual_model = pin.buildGeomFromUrdfString(am.model, am.urdf_text, pin.GeometryType.VISUAL)
+        self.visual_model = pl.stack_visuals(am)
         self._geometry_frames = pl.geometry_frames(am, self.visual_model)
         self.scene_offset = np.zeros(3)
         self._ghosts: dict[str, MeshcatVisualizer] = {}  # second visualizers, by name

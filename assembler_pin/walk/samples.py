@@ -64,6 +64,14 @@ class WalkSamples:
     def __len__(self) -> int:
         return len(self.kind)
 
+    def __repr__(self) -> str:
+        kinds = [k for i, k in enumerate(self.kind) if i == 0 or self.phase[i] != self.phase[i - 1]]
+        peak = f"{float(self.max_abs_force.max()):.2f} N" if len(self) else "-"
+        return (
+            f"WalkSamples({len(self)} samples, {len(kinds)} phases ({', '.join(kinds)}), "
+            f"peak max|F| {peak}, {self.commanded.shape[1]} platforms)"
+        )
+
 
 def walk_rows(am, walk) -> tuple[list[str], list[list[object]]]:
     """The CSV header and rows of a :class:`~assembler_pin.walk.WalkResult`: one row per sample,

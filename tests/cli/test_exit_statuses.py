@@ -52,6 +52,27 @@ def _replace_run(monkeypatch, body) -> None:
     monkeypatch.setattr(statics_cli, "run", body)
 
 
+@pytest.mark.parametrize("json_out", [False, True])
+def test_statics_of_a_pose_that_breaks_a_constraint_is_exit_1(tmp_path, capsys, json_out):
+    """``statics`` answers every pose; the status says whether it is valid: 0 when every
+    constraint holds, 1 (the answer printed all the same) when one does not; here the clearance
+    of ``--scene``, a post through the stack's axis, against the same pose without it."""
+    import yaml
+
+    scene = tmp_path / "post.yaml"
+    scene.write_text(yaml.safe_dump({"obstacles": [{"sphere": {"radius": 0.05, "center": [0.0, 0.0, 0.5]}}]}))
+    flag = ["--json"] if json_out else []
+    code, out, err = _run(capsys, ["statics", "--home", *flag])
+    assert code == 0 and not err
+    code, out, err = _run(capsys, ["statics", "--home", "--scene", str(scene), *flag])
+    assert code == 1 and not err
+    if json_out:
+        doc = json.loads(out)
+        assert doc["feasible"] is False and any(v["kind"] == "collision" for v in doc["violations"])
+    else:
+        assert "feasible: NO" in out
+
+
 def test_an_unexpected_exception_is_one_line_and_exit_70(monkeypatch, capsys):
     def broken(args):
         raise TypeError("unsupported operand type(s)")

@@ -99,7 +99,7 @@ def test_cli_statics_home_json_is_todays_answer(tmp_path):
 
 def test_home_outside_a_limit_takes_the_full_path(tmp_path):
     """A payload the home pose cannot hold: no fast document; the command still lists the
-    violations of the full path (exit 0: the statics are an answer)."""
+    violations of the full path (exit 1: answered, the pose breaks a limit)."""
     cfg = _config({"payload": PayloadConfig(mass=400.0, offset=0.2)})
     assert home_state_document(cfg, home_clearance(cfg, *home_anchors(cfg))) is None
     path = tmp_path / "heavy.yaml"
@@ -107,7 +107,7 @@ def test_home_outside_a_limit_takes_the_full_path(tmp_path):
     status, doc = _cli_json(["statics", "--home", "--json", "--config", str(path)])
     am = AssemblerModel.from_config(cfg)
     ref = evaluate_state(am, am.home)
-    assert status == 0 and doc["feasible"] is False and not ref.feasible
+    assert status == 1 and doc["feasible"] is False and not ref.feasible
     assert doc["violations"] == [v.to_dict() for v in ref.violations]
     assert {v["kind"] for v in doc["violations"]} == {"compression"}
 

@@ -76,3 +76,45 @@ def test_view_prints_the_page_path_as_typed(tmp_path, monkeypatch, capsys):
     monkeypatch.chdir(tmp_path)
     assert main(["view", "--home", "--html", "page.html"]) == 0
     assert "wrote page.html" in capsys.readouterr().out.splitlines()
+
+
+@pytest.mark.parametrize("columns", [80, 102])
+def test_every_usage_fits_the_terminal_and_names_every_option(columns, monkeypatch):
+    """argparse leaves a group of alternatives on one line however long; the usage of every
+    subcommand is broken at its ``|`` to fit the terminal, and still names every option once."""
+    import argparse
+
+    from assembler_pin.cli import build_parser
+
+    monkeypatch.setenv("COLUMNS", str(columns))
+    parser = build_parser()
+    (sub,) = [a for a in parser._actions if isinstance(a, argparse._SubParsersAction)]
+    for name, p in sub.choices.items():
+        usage = p.format_help().split("\n\n")[0]
+        assert usage == p.format_usage().rstrip("\n")
+        assert max(len(line) for line in usage.splitlines()) <= columns - 2, (name, usage)
+        words = usage.replace("(", " ").replace(")", " ").replace("[", " ").replace("]", " ").split()
+        for action in p._actions:
+            if action.option_strings:
+                assert words.count(action.option_strings[0]) == 1, (name, action.option_strings[0])
+
+
+def test_bench_truss_names_its_figures_with_their_unit(monkeypatch, capsys):
+    """``bench --truss``' figures are times per call: each key carries the header's ``_s``
+    suffix, so that ``stiffness`` does not read as a stiffness."""
+    import assembler_pin.bench.supports as supports
+    import assembler_pin.bench.truss as truss
+
+    monkeypatch.setattr(truss, "benchmark_stiffness", lambda am: {"stiffness": 1.5e-4, "loaded_pose": 2e-3})
+    monkeypatch.setattr(supports, "benchmark_supports", lambda am: {"two_point_statics": 3e-4})
+    assert main(["bench", "--truss"]) == 0
+    lines = capsys.readouterr().out.splitlines()
+    assert lines[2].startswith("units by suffix:") and "_s s" in lines[2]
+    figures = [line.split() for line in lines[3:]]
+    assert figures == [
+        ["stiffness", "(median", "time", "per", "call):"],
+        ["stiffness_s:", "0.00015"],
+        ["loaded_pose_s:", "0.002"],
+        ["supports", "(median", "time", "per", "call):"],
+        ["two_point_statics_s:", "0.0003"],
+    ]

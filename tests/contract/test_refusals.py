@@ -146,6 +146,6 @@ def test_strict_json_for_a_singular_pose(tmp_path, capsys, am):
     plates = tmp_path / "coplanar.json"
     plates.write_text(json.dumps({"plates": [np.eye(4).tolist()] * (am.n + 1)}))
     code, out, _ = _run(capsys, ["statics", "--plates", str(plates), "--json"])
-    assert code == 0
+    assert code == 1  # answered, not a valid pose
     doc = json.loads(out, parse_constant=lambda c: pytest.fail(f"non-strict JSON token {c}"))
     assert doc["feasible"] is False

@@ -150,3 +150,111 @@ def test_the_map_picture_is_drawn_as_map_png_draws_today():
     from assembler_pin.maps.pictures import MAP_FIGSIZE
 
     assert (width, height) == (round(150 * MAP_FIGSIZE[0]), round(150 * MAP_FIGSIZE[1])), (width, height)
+
+
+def test_solve_says_what_it_returns():
+    """``ap.solve``'s docstring has a Returns section, and every attribute it names is one of
+    the result's (or of the states it holds)."""
+    import dataclasses
+    import inspect
+
+    import assembler_pin as ap
+    from assembler_pin.solver.pipeline import SolveResult
+    from assembler_pin.state import StackState
+
+    doc = inspect.getdoc(ap.solve) or ""
+    assert "\nReturns:\n" in doc
+    returns = doc.split("\nReturns:\n")[1].split("\n\n")[0]
+    named = set(re.findall(r"``\.?(\w+)``", returns)) - {"False", "True"}
+    assert {"success", "message", "optimized", "initial", "best", "optimal"} <= named
+    for kind in (SolveResult, StackState):
+        fields = {f.name for f in dataclasses.fields(kind)} | set(dir(kind))
+        named -= fields
+    assert not named, f"ap.solve's Returns names {sorted(named)}, which its result does not have"
+
+
+def test_formats_page_lists_every_key_and_violation_kind_statics_prints(tmp_path, capsys):
+    """``statics --json`` of a pose that meets an obstacle: every key it prints (the
+    ``clearance`` object's too) and the ``collision`` violation, with its keys, are on the
+    formats page."""
+    import json
+
+    from assembler_pin.cli import main
+
+    scene = tmp_path / "post.yaml"
+    scene.write_text(yaml.safe_dump({"obstacles": [{"sphere": {"radius": 0.05, "center": [0.0, 0.0, 0.5]}}]}))
+    assert main(["statics", "--home", "--json", "--scene", str(scene)]) == 1
+    doc = json.loads(capsys.readouterr().out)
+    page = _read("docs/formats.md")
+    section = page.split("## `statics --json`")[1].split("\n## ")[0]
+    for key in [*doc, *doc["clearance"]]:
+        assert f"`{key}`" in section, key
+    (collision,) = [v for v in doc["violations"] if v["kind"] == "collision"]
+    kinds = section.split("**Violation kinds**")[1]
+    assert "`collision`" in kinds and all(f"`{key}`" in section for key in collision)
+
+
+def test_collisions_guide_quotes_what_the_program_prints(tmp_path, capsys):
+    """The collision lines the guide quotes are those ``statics --scene`` prints for its
+    example, and the one-line message the solver gives for the same violation."""
+    from assembler_pin import AssemblerModel, evaluate_state
+    from assembler_pin.cli import main
+    from assembler_pin.collision.scene import scene_from_dict
+    from assembler_pin.common.messages import describe
+
+    post = {"obstacles": [{"sphere": {"radius": 0.05, "center": [0, 0, 0.5]}}]}
+    page = _read("docs/guides/collisions.md")
+    assert "`obstacles: [{sphere: {radius: 0.05, center: [0, 0, 0.5]}}]`" in page
+    scene = tmp_path / "post.yaml"
+    scene.write_text(yaml.safe_dump(post))
+    assert main(["statics", "--home", "--scene", str(scene)]) == 1
+    printed = capsys.readouterr().out.rstrip("\n").splitlines()[-3:]
+    assert "```text\n" + "\n".join(printed) + "\n```" in page
+    am = AssemblerModel.from_config()
+    (v,) = [v for v in evaluate_state(am, am.home, scene=scene_from_dict(post)).violations if v.kind == "collision"]
+    assert f"`{describe(v)}`" in " ".join(page.split())
+
+
+def test_the_api_index_breaks_module_paths_only_after_a_dot():
+    """The API index's "defined in" links: a break opportunity after each dot and the site's
+    stylesheet forbids any other (identifiers are never broken mid-word)."""
+    import importlib.util
+
+    spec = importlib.util.spec_from_file_location("hooks", DOCS / "hooks.py")
+    hooks = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(hooks)
+    assert hooks.dotted_breaks("assembler_pin.solver.pipeline.solve") == (
+        "assembler_pin.<wbr>solver.<wbr>pipeline.<wbr>solve"
+    )
+    assert "stylesheets/extra.css" in yaml.safe_load(_read("mkdocs.yml").split("\nplugins:")[0])["extra_css"]
+    css = _read("docs/stylesheets/extra.css")
+    assert ".md-typeset td a code" in css and "word-break: normal" in css and "overflow-wrap: normal" in css
+
+
+def test_the_truss_guides_scaling_table_is_what_the_command_computes():
+    """docs/guides/truss.md's table and sentence of ``stiffness --scaling``: every figure is
+    the table's (4 significant digits), the first n that buckles and the n = 46 figures too."""
+    from assembler_pin.compliance.scaling import stiffness_scaling
+
+    def g(x: float) -> str:
+        return re.sub(r"e\+?0*(\d)", r"e\1", f"{x:.4g}")
+
+    table = stiffness_scaling(max_platforms=64)
+    page = _read("docs/guides/truss.md").split("## How stiffness scales")[1].split("\n## ")[0]
+    rows = re.findall(r"^\| (\d+) \| (.+) \|$", page, flags=re.M)
+    assert [int(n) for n, _ in rows] == [1, 4, 8, 16, 64]
+    for n, cells in rows:
+        k = int(n) - 1
+        shown = [c.strip() for c in cells.split("|")]
+        if table.stable[k]:
+            sag_mm = 1e3 * table.sag[k]
+            want = [g(table.lateral[k]), g(table.axial[k]), g(table.torsional[k]), g(sag_mm)]
+        else:
+            want = ["buckles", "—", "—", "—"]
+        assert shown == [*want, g(table.elastic["lateral"][k])], n
+    first = table.first_unstable
+    words = " ".join(page.split())
+    assert f"buckles under its own weight from n = {first}" in words
+    before = first - 2  # the index of n = first - 1
+    assert f"at n = {first - 1} the lateral stiffness is {table.lateral[before]:.2g} N/m" in words
+    assert f"the sag {1e3 * table.sag[before]:.2g} mm" in words

@@ -144,5 +144,5 @@ def test_json_answers_are_strict(ws):
     """``dumps``'s contract seen from outside: the answer of a singular pose has no NaN token."""
     outcome = run_cli(["statics", "--plates", str(ws.root / "plates_far.json"), "--json"], cwd=ws.root)
     judge_cli(outcome, "any", "statics of a far pose")
-    if outcome.code == 0:
+    if outcome.code in (0, 1):
         json.loads(outcome.out, parse_constant=lambda c: fail("wrong-answer", f"token {c}"))

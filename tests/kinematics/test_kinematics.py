@@ -239,3 +239,33 @@ def test_the_compiled_leg_state_is_the_numpy_composition(am, random_poses):
     for fn in (leg_state, reference_leg_state):
         with pytest.raises(PoseError, match="joint centres on top of each other"):
             fn(am, collapsed)
+
+
+def test_plate_arrays_index_and_iterate_as_the_list_of_poses(am, bent_plates):
+    """``PlateArrays`` reads as the list of ``pin.SE3`` it was made from: every index, negative
+    ones included, each slice, iteration, and the same errors for an index out of range or not
+    an integer."""
+    poses = bent_plates.as_se3()
+    plates = plate_arrays(am, poses)
+    n1 = len(poses)
+    for k in range(-n1 - 1, n1 + 1):
+        if -n1 <= k < n1:
+            assert plates[k].isApprox(poses[k], 0.0), k
+            assert plates[np.int64(k)].isApprox(poses[k], 0.0), k
+        else:
+            with pytest.raises(IndexError):
+                poses[k]
+            with pytest.raises(IndexError):
+                plates[k]
+    for cut in (slice(1, 3), slice(None, None, -1), slice(-2, None), slice(3, 1)):
+        part = plates[cut]
+        assert isinstance(part, PlateArrays) and len(part) == len(poses[cut])
+        assert all(a.isApprox(b, 0.0) for a, b in zip(part, poses[cut], strict=True))
+    assert all(a.isApprox(b, 0.0) for a, b in zip(plates, poses, strict=True)) and len(list(plates)) == n1
+    for bad in (1.0, "1", None):
+        with pytest.raises(TypeError):
+            poses[bad]
+        with pytest.raises(TypeError):
+            plates[bad]
+    plates[-1].translation[:] = 0.0  # a copy: the arrays are not changed through it
+    assert np.array_equal(plates.p[-1], poses[-1].translation)

@@ -11,6 +11,7 @@ import numpy as np
 import pinocchio as pin
 import pytest
 import yaml
+from pages import page_commands
 
 import assembler_pin as ap
 from assembler_pin.cli import main
@@ -136,7 +137,9 @@ def test_cli_map_scene(maps, tmp_path, capsys):
     lo, hi = doc["clearance_m_range"]
     assert 0.005 <= lo <= hi < 0.006
     assert main([*args, "--scene", str(scene_file)]) == 0
-    assert "clearance: 5.0 – 5.0 mm (scene " in capsys.readouterr().out
+    out = capsys.readouterr().out
+    assert "clearance: 5.0 – 5.0 mm (scene " in out
+    assert "map: 0 cells computed, 2 already in" in out and "cells/s" not in out  # no rate of nothing
     for extra, says in (([], "its scene differ"), (["--scene", str(tmp_path / "none.yaml")], "none.yaml")):
         assert main([*args, *extra]) != 0
         err = capsys.readouterr().err.strip().splitlines()
@@ -194,3 +197,97 @@ def test_solve_capacity_with_a_scene_keeps_its_clearance(am, tmp_path, capsys):
     free = payload_capacity(am, goal, start=start)
     assert doc["capacity"]["capacity_kg"] == pytest.approx(held.capacity_kg, rel=1e-9)
     assert held.capacity_kg < free.capacity_kg * (1 - 1e-3)
+
+
+def test_the_slice_draws_each_obstacle_as_its_shadow_filled_where_the_plane_cuts_it(am, maps):
+    """The obstacles of a scene on a map's slice (the y = 0 plane here): an axis-aligned box's
+    shadow is its rectangle, a cylinder along y casts its disc, a sphere its disc; the plane
+    cuts what spans y = 0 (filled), not what stands beside it (dashed). Every panel draws them."""
+    from matplotlib.patches import Polygon
+
+    from assembler_pin.collision.scene import scene_from_dict
+    from assembler_pin.maps.pictures import map_heatmaps, obstacle_outlines
+
+    scene = scene_from_dict(
+        {
+            "floor": {"z": 0.0},
+            "obstacles": [
+                {"name": "block", "box": {"size": [0.1, 0.2, 0.3], "pose": [0.6, 0.05, 0.4, 0, 0, 0]}},
+                STRUT["obstacles"][0],
+                {"name": "ball", "sphere": {"radius": 0.05, "center": [0.3, 0.2, 0.9]}},
+            ],
+        }
+    )
+    outlines = {name: (polygon, cut) for name, polygon, cut in obstacle_outlines(scene, "x", "z", 0.0)}
+    block, cut = outlines["block"]
+    assert cut and sorted(map(tuple, np.round(block, 12))) == [(0.55, 0.25), (0.55, 0.55), (0.65, 0.25), (0.65, 0.55)]
+    for name, centre, radius, spans in (("lower strut", (0.36, 0.52), 0.015, True), ("ball", (0.3, 0.9), 0.05, False)):
+        disc, cut = outlines[name]
+        r = np.linalg.norm(disc - centre, axis=1)
+        assert cut is spans and len(disc) == 48
+        assert np.all(r <= radius + 1e-12) and np.all(r >= radius * np.cos(np.pi / 48))
+    fig = map_heatmaps(_two_rows(read_map(maps[1])), am, scene="s.yaml", obstacles=scene)
+    panels = [ax for ax in fig.axes if ax.images and ax.get_xlabel() == "x [m]"]
+    assert len(panels) == 5
+    for ax in panels:
+        drawn = {p.get_gid(): p for p in ax.patches if isinstance(p, Polygon) and p.get_gid()}
+        assert sorted(drawn) == sorted(f"obstacle {name}" for name in outlines)
+        for name, (polygon, cut) in outlines.items():
+            p = drawn[f"obstacle {name}"]
+            np.testing.assert_allclose(p.get_xy()[:-1], polygon)  # matplotlib closes the path
+            assert (p.get_fill() and p.get_facecolor()[3] > 0) is cut
+        floor = [line for line in ax.lines if line.get_label() == "floor"]
+        assert len(floor) == 1 and set(floor[0].get_ydata()) == {0.0}
+
+
+def _two_rows(table):
+    """The map's row of cells and a copy of it 0.1 m higher: a slice for the heatmaps."""
+    import pyarrow as pa
+
+    from assembler_pin.maps.store import schema
+
+    rows = table.to_pylist()
+    up = [r | {"cell": r["cell"] + len(rows), "iz": 1, "z": r["z"] + 0.1} for r in rows]
+    return pa.Table.from_pylist(rows + up, schema=schema())
+
+
+def test_cli_map_png_draws_the_scene(maps, tmp_path):
+    """``map --scene ... --png``: the PNG holds the stone of the strut the slice cuts; the
+    heatmaps of the same map drawn without the scene have none of it."""
+    from matplotlib.image import imread
+
+    from assembler_pin.common.palette import OBSTACLE
+    from assembler_pin.maps.pictures import map_heatmaps
+    from assembler_pin.plots.figures import save
+
+    def stone(png) -> int:
+        rgb = imread(str(png))[..., :3]
+        return int((np.abs(rgb - np.asarray(OBSTACLE)).max(axis=2) < 2 / 255).sum())
+
+    out = tmp_path / "m"
+    grid = "x=0.45:0.5:2,y=0,z=0.8:0.85:2"
+    args = ["map", "--grid", grid, "--workers", "0", "--no-progress", "--out", str(out), "--png", str(out) + ".png"]
+    assert main([*args, "--scene", str(maps[0]), "--html", str(out) + ".html"]) == 0
+    bare = save(map_heatmaps(read_map(out), ap.AssemblerModel.from_config()), tmp_path / "bare.png")
+    assert stone(str(out) + ".png") > 20 and stone(bare) == 0, (stone(str(out) + ".png"), stone(bare))
+    # the 3D page draws the strut among the cells, named in its legend
+    html = (tmp_path / "m.html").read_text(encoding="utf-8")
+    drawn = [c["path"] for c in page_commands(html) if c["type"] == "set_object"]
+    assert any(p.startswith("/meshcat/assembler_obstacles/") for p in drawn) and "obstacles: lower strut" in html
+
+
+def test_the_maps_guide_quotes_the_cell_beside_the_strut(am, maps):
+    """docs/guides/maps.md's figures for the cell (0.5, 0, 0.8): its clearance from the strut
+    and max|F| with the scene, and without it, max|F| and how far its pose passes into the strut."""
+    from pathlib import Path
+
+    scene_file, with_scene, free = maps
+    strut = read_scene(scene_file)
+    kept, loose = (next(r for r in read_map(d).to_pylist() if r["x"] == pytest.approx(0.5)) for d in (with_scene, free))
+    into = clearance(am, _plates(loose), strut).min_distance
+    guide = " ".join((Path(__file__).resolve().parents[2] / "docs/guides/maps.md").read_text(encoding="utf-8").split())
+    assert (
+        f"the cell (0.5, 0, 0.8) holds {1e3 * kept['clearance_m']:.4f} mm from the strut at max|F| "
+        f"{kept['max_abs_force']:.2f} N; the same cell without a scene, {loose['max_abs_force']:.2f} N, "
+        f"passes {-into:.4f} m into it"
+    ) in guide

@@ -4,6 +4,7 @@ and a walk's time in seconds with no tool unless asked."""
 
 from __future__ import annotations
 
+from pathlib import Path
 from types import SimpleNamespace
 
 import numpy as np
@@ -55,6 +56,12 @@ def test_plan_plot_titles_in_mm_force_limits_drawn_and_bang_bang_named(am, short
         assert " mm (leg " in row.get_title(loc="left"), row.get_title(loc="left")  # length margin in millimetres
     forces = [ax for ax in fig.axes if ax.get_ylabel().startswith("force")]
     assert len(forces) == 2 * am.n
+    # the five columns, as docs/colours.md names them
+    columns = [ax.get_ylabel().split(" [")[0] for ax in fig.axes[:5]]
+    assert columns == ["length", "speed", "acceleration", "force", "force static+dynamic"]
+    assert len(fig.axes) == 5 * am.n and all(ax.get_ylabel() for ax in fig.axes)
+    page = (Path(__file__).parents[2] / "docs" / "colours.md").read_text(encoding="utf-8")
+    assert "one column each for leg length, speed, acceleration, force (statics) and force" in " ".join(page.split())
     for ax in forces:  # each force limit is drawn on the scale, or named at the panel's edge
         low, high = ax.get_ylim()
         named = " ".join(text.get_text() for text in ax.texts)
@@ -101,3 +108,65 @@ def test_a_walk_carries_no_tool_unless_asked():
     assert cfg.payload.mass > 0
     assert walking_config(cfg, 0.0).payload.mass == 0.0
     assert walking_config(cfg, 2.5).payload == cfg.payload.__class__(mass=2.5, offset=cfg.payload.offset)
+
+
+def test_scaling_figure_puts_one_unit_on_each_axis_and_labels_its_ticks():
+    """``stiffness --scaling --out``: the N/m stiffnesses, the N·m/rad one and the sag each on
+    their own axis, with at least three labelled ticks within the drawn range."""
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+
+    from assembler_pin.compliance.scaling import ScalingTable, scaling_figure
+
+    n = np.array([1, 2, 4, 8, 16])
+    table = ScalingTable(
+        platforms=n,
+        lateral=5.5e5 / n**3,
+        axial=4.6e6 / n,
+        torsional=2.5e4 / n,
+        sag=1.2e-5 * n**1.5,
+        elastic={"lateral": 5.6e5 / n**3, "axial": 4.6e6 / n, "torsional": 2.5e4 / n},
+        stable=np.ones(5, dtype=bool),
+        message=[""] * 5,
+        leg_stiffness=1e6,
+    )
+    fig = scaling_figure(table)
+    FigureCanvasAgg(fig).draw()
+    units = {ax.get_ylabel().rsplit("[", 1)[-1].rstrip("]"): ax for ax in fig.axes}
+    assert sorted(units) == ["N/m", "N·m/rad", "mm"]
+    assert {ln.get_label() for ln in units["N·m/rad"].lines} == {
+        "torsional (about z), loaded",
+        "torsional (about z), legs' springs alone",
+    }
+    assert all("torsional" not in ln.get_label() for ln in units["N/m"].lines)
+    for unit, ax in units.items():
+        low, high = ax.get_ylim()
+        ticks = [*ax.yaxis.get_major_ticks(), *ax.yaxis.get_minor_ticks()]
+        shown = [t for t in ticks if t.label1.get_visible() and t.label1.get_text() and low <= t.get_loc() <= high]
+        assert len(shown) >= 3, (unit, [t.label1.get_text() for t in shown])
+    assert not texts_outside_the_canvas(fig)
+
+
+#: The width a documentation page shows a wide figure at [px] (the site's content column).
+PAGE_WIDTH_PX = 760
+
+
+def test_the_pose_views_legend_reads_at_page_scale(am, bent_plates):
+    """The home page's picture (docs/vertical_lift_views.png, the pose views at 150 dpi): its
+    legend's letters stay at least 8 px tall when the figure is shown a page wide."""
+    import struct
+
+    from assembler_pin import evaluate_state
+    from assembler_pin.plots import pose_views
+
+    state = evaluate_state(am, bent_plates)
+    fig = pose_views(evaluate_state(am, am.home), state, title="t")
+    canvas = FigureCanvasAgg(fig)
+    canvas.draw()
+    renderer = canvas.get_renderer()
+    (legend,) = fig.legends
+    scale = PAGE_WIDTH_PX / fig.bbox.width
+    heights = [scale * t.get_window_extent(renderer).height for t in legend.get_texts()]
+    assert min(heights) >= 8.0, heights
+    with (Path(__file__).resolve().parents[2] / "docs" / "vertical_lift_views.png").open("rb") as png:
+        size = struct.unpack(">II", png.read(24)[16:24])
+    assert size == (round(fig.get_figwidth() * 150), round(fig.get_figheight() * 150))

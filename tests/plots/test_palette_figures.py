@@ -13,6 +13,7 @@ import ast
 import base64
 import colorsys
 import contextlib
+import dataclasses
 import inspect
 import re
 import shutil
@@ -180,7 +181,10 @@ def test_force_figures_legends_hide_nothing(vertical_lift, am):
     leg = am.config.leg
     bars = plots.force_bars(home, res.state, limits=(leg.max_tension, leg.max_compression), leg=leg)
     assert legend_overlaps(bars) == []
-    heat = plots.force_heatmaps(home, res.state, leg=leg)
+    # limits at the largest force, so that a leg is framed and the frames' legend is drawn
+    peak = max(home.max_abs_force, res.state.max_abs_force)
+    bound = dataclasses.replace(leg, max_tension=peak, max_compression=peak)
+    heat = plots.force_heatmaps(home, res.state, leg=bound)
     assert legend_overlaps(heat) == []
 
 

@@ -129,6 +129,13 @@ def test_figures_say_what_they_show(am):
     fig = plots.force_heatmaps(state, leg=leg, title="my scenario")
     frames = [p for ax in fig.axes for p in ax.patches if isinstance(p, Rectangle) and not p.get_fill()]
     assert len(frames) == 2 and fig.get_suptitle() == "my scenario"
+    # the legend names the frames drawn, no other: no leg is at its force bound here
+    assert [t.get_text() for lg in fig.legends for t in lg.get_texts()] == ["at a stroke end"]
+    fig = plots.force_heatmaps(state, leg=tight)
+    assert sorted(t.get_text() for lg in fig.legends for t in lg.get_texts()) == [
+        "at a stroke end",
+        "at the force bound",
+    ]
     bars = plots.force_bars(state, limits=(leg.max_tension, leg.max_compression), leg=leg, title="my scenario")
     labels = [t.get_text() for t in bars.axes[0].get_legend().get_texts()]
     assert "initial: at a stroke end" in labels and {"tension limit", "compression limit"} <= set(labels)
@@ -148,7 +155,33 @@ def test_figures_say_what_they_show(am):
         "helper arm",
         "helper arm joints",
         "EE goal",
+        "EE goal's z axis (to the payload)",
         "floor",
     } <= labels
+    # every entry of the legend names something drawn in the views
+    drawn = {ln.get_label() for ax in views.axes for ln in ax.lines if len(ln.get_xdata())}
+    drawn |= {"EE goal's z axis (to the payload)"} if any(ax.texts for ax in views.axes) else set()
+    drawn |= {"plate centres", "optimized plates"}  # drawn unlabelled in the plates' colours, named once
+    assert labels <= drawn, labels - drawn
     star = next(ln for ln in views.axes[0].lines if ln.get_label() == "EE goal")
     assert np.allclose([star.get_xdata()[0], star.get_ydata()[0]], goal.translation[[0, 2]])
+
+
+def test_one_definition_of_a_leg_at_a_stroke_end(am):
+    """The figures' flags and the results table count the same legs: those within
+    ``STROKE_END_TOLERANCE`` of an end of the stroke (a leg 0.5 mm inside is not at it, one
+    within the optimizer's margin is), and the pages state that tolerance."""
+    from pathlib import Path
+
+    from assembler_pin.config.options import OptimizeOptions
+    from assembler_pin.constraints import STROKE_END_TOLERANCE, at_stroke_end
+
+    leg = am.config.leg
+    lo, hi = leg.min_length, leg.max_length
+    lengths = np.array([lo, lo + 1e-7, lo + 5e-4, 0.5 * (lo + hi), hi - 5e-4, hi - 1e-7, hi])
+    assert at_stroke_end(lengths, lo, hi).tolist() == [True, True, False, False, False, True, True]
+    assert STROKE_END_TOLERANCE > OptimizeOptions().limit_margin  # beyond the optimizer's margin
+    docs = Path(__file__).resolve().parents[2] / "docs"
+    for page in ("guides/viewer.md", "results.md"):
+        text = " ".join((docs / page).read_text(encoding="utf-8").split())
+        assert f"within {STROKE_END_TOLERANCE:g} m of it, where the limit binds" in text, page

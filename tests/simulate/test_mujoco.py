@@ -196,7 +196,7 @@ def test_cli_export_mjcf_and_simulate(tmp_path, am):
     assert bad.returncode == 2 and len(bad.stderr.strip().splitlines()) == 1 and "seconds" in bad.stderr
 
 
-def test_servos_follow_a_planned_trajectory(am, tmp_path):
+def test_servos_follow_a_planned_trajectory(am, tmp_path, capsys):
     import assembler_pin as ap
     from assembler_pin.cli import main
     from assembler_pin.motion import EEPath
@@ -220,6 +220,13 @@ def test_servos_follow_a_planned_trajectory(am, tmp_path):
     path = motion.trajectory.write(tmp_path / "t.csv")
     assert main(["simulate", "--trajectory", str(path), "--json"]) == 0
     assert main(["simulate", "--trajectory", str(path), "--html", str(tmp_path / "x.html")]) == 2
+    # the text answer: its t = 0 row is unloaded, and says why, as simulate --home does
+    capsys.readouterr()
+    assert main(["simulate", "--trajectory", str(path)]) == 0
+    lines = capsys.readouterr().out.splitlines()
+    first = lines[2].split()
+    assert first[0] == "0.00" and first[2] == "unloaded" and result.max_abs_force[0] == 0.0
+    assert "At t = 0 the servos stand at the commanded lengths and push nothing" in "\n".join(lines)
 
 
 def test_cli_hold_text_explains_its_first_row_and_the_drift(am, capsys):

@@ -73,4 +73,22 @@ def test_a_page_without_force_colours_has_no_force_legend(am):
 def test_pages_name_the_world_axes_and_look_down_on_the_floor(am, animated):
     _, _, html = animated
     assert re.search(r"world axes at the origin: .*x.*y.*z", html)
-    assert DEFAULT_ELEVATION_DEG >= 20
+    assert DEFAULT_ELEVATION_DEG >= 30
+
+
+def test_the_page_camera_looks_down_on_the_floor_from_the_side(am):
+    """The camera a page sets (three.js is y-up) looks down on the stack at the default
+    elevation, from -y (the paper's side view), and the floor grid lies under the stack."""
+    with StackViewer(am) as v:
+        v.display(am.home)
+        cmds = page_commands(v.static_html())
+    (position,) = [
+        c["value"] for c in cmds if c["path"] == "/Cameras/default/rotated/<object>" and c.get("property") == "position"
+    ][-1:]
+    x, up, back = position  # three.js (x, z, -y) of the world
+    elevation = np.degrees(np.arctan2(up, np.hypot(x, back)))
+    assert elevation == pytest.approx(DEFAULT_ELEVATION_DEG) and elevation >= 30
+    assert back > 0 and abs(x) < 1e-9  # from world -y, x to the right
+    (grid,) = [c for c in cmds if c["type"] == "set_transform" and c["path"] == "/Grid"][-1:]
+    offset = np.array(grid["matrix"]).reshape(4, 4).T[:3, 3]
+    assert offset[2] < 0  # the scene is moved down by the stack's centre: the floor is below the target

@@ -9,6 +9,8 @@ the sleeves of each sample's own forces and keep each held foot still through it
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import numpy as np
 import pinocchio as pin
 import pytest
@@ -152,13 +154,16 @@ def test_the_sleeves_show_each_samples_own_forces(am, walk, page):
     """Sleeve level of every leg = nearest twentieth of its force over the colour scale, the
     walk's largest force (at least a tenth of the limit), from the phase's forces (a
     transfer's load moves; the pose does not); the colour bar reads that scale."""
-    viewer, _, _, clips, _ = page
+    viewer, _, _, clips, html = page
     leg = am.config.leg
     samples = list(_samples(walk))
     peak = max(
         max(float(np.abs(F).max()) for _, _, F, _, _ in samples), 0.1 * min(leg.max_tension, leg.max_compression)
     )
     assert viewer.force_range == pytest.approx((peak, peak))
+    assert f"−{peak:.0f}" in html and f"+{peak:.0f}" in html  # the colour bar's ends
+    guide = " ".join((Path(__file__).parents[2] / "docs" / "guides" / "walking.md").read_text().split())
+    assert "the colour bar runs to the walk's largest force, at least a tenth of the smaller force limit" in guide
     levels = len(FORCE_BAND_LEVELS)
     for frame, (_, _, F, _, _) in enumerate(samples):
         want = np.rint((levels - 1) / 2 * (np.clip(F / peak, -1.0, 1.0) + 1.0)).astype(int)
@@ -217,3 +222,30 @@ def test_a_walk_among_obstacles_draws_them(am, walk, tmp_path):
     assert "/meshcat/assembler_obstacles/box_0" in objects and "/meshcat/assembler_obstacles/floor" in objects
     assert "obstacles: post" in html
     assert any(c["type"] == "set_animation" for c in page_commands(html))
+
+
+def test_a_stack_without_a_tool_is_drawn_without_the_payload_cube(am, bent_plates):
+    """A walking stack carries no tool (``walk``'s default ``--payload 0``): its page draws no
+    payload cube; the same stack with a tool draws it, above the EE plate at its offset."""
+    from assembler_pin.cli.walk import walking_config
+
+    bare = ap.AssemblerModel.from_config(walking_config(am.config, 0.0))
+    objects = {}
+    for model in (am, bare):
+        with StackViewer(model) as v:
+            v.display(bent_plates)
+            cmds = page_commands(v.static_html())
+            objects[model.config.payload.mass] = {c["path"] for c in cmds if c["type"] == "set_object"}
+            payload = [g for g in v.visual_model.geometryObjects if g.name.startswith(names.payload)]
+            assert len(payload) == (1 if model is am else 0)
+            if payload:
+                path = "/meshcat/" + v.viz.getViewerNodeName(payload[0], pin.GeometryType.VISUAL)
+                placed = [c for c in cmds if c["type"] == "set_transform" and c["path"] == path]
+                T = np.array(placed[-1]["matrix"]).reshape(4, 4).T
+                ee = ap.kinematics.plate_arrays(am, bent_plates)
+                expected = ee.p[-1] + am.config.payload.offset * ee.R[-1][:, 2]
+                np.testing.assert_allclose(T[:3, 3], expected, atol=1e-9)
+    assert am.config.payload.mass > 0
+    extra = objects[am.config.payload.mass] - objects[0.0]
+    assert sorted(p.rsplit("/", 2)[-2] for p in extra) == ["assembler_payload_rod", "visuals"]  # the cube, its rod
+    assert all(names.payload in p for p in extra)

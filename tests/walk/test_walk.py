@@ -216,8 +216,20 @@ def test_cli_walk_one_step_writes_the_samples_and_the_figure(capsys, tmp_path, a
 
     out, png, page = tmp_path / "walk", tmp_path / "walk.png", tmp_path / "walk.html"
     assert main(["walk", "--floor", "0.5", "2", "--out", str(out), "--plot", str(png), "--html", str(page)]) == 0
-    assert "success" in capsys.readouterr().out
+    text = capsys.readouterr().out.splitlines()
     doc = json.loads((out / "walk.json").read_text())
+    # the report: the verdict, a header naming every column, a row per phase under it, the files
+    assert text[0] == "walk over 2 footholds: success"
+    assert text[1].split() == ["phase", "kind", "support", "foothold", "samples", "peak", "max|F|", "[N]"]
+    for k, (row, phase) in enumerate(zip(text[2:4], doc["phases"], strict=True)):
+        words = [str(k), phase["kind"], phase["support"], str(phase["step"]), str(phase["samples"])]
+        assert row.split() == [*words, f"{phase['max_abs_force']:.2f}"]
+        assert len(row) == len(text[1])  # right-aligned under the header
+    assert text[-4:] == [f"wrote {f}" for f in (out / "walk.json", out / "walk.csv", png, page)]
+    assert repr(read_walk_csv(out / "walk.csv", n=am.n)) == (
+        f"WalkSamples({sum(p['samples'] for p in doc['phases'])} samples, 2 phases (reach, transfer), "
+        f"peak max|F| {max(p['max_abs_force'] for p in doc['phases']):.2f} N, {am.n} platforms)"
+    )
     assert doc["success"] is True and [p["kind"] for p in doc["phases"]] == ["reach", "transfer"]
     lines = (out / "walk.csv").read_text().splitlines()
     header = lines[0].split(",")

@@ -12,14 +12,14 @@ import pinocchio as pin
 import pytest
 from checks import design_anchors, strut_distance
 
-from assembler_pin.collision import Scene, read_scene
+from assembler_pin.collision import Scene, clearance, read_scene
 from assembler_pin.exceptions import WalkError
 from assembler_pin.kinematics import stack_forward_kinematics
 from assembler_pin.walk import WalkOptions, plan_walk, plate_target, verify_walk
 from assembler_pin.walk.footholds import floor_footholds
 
 #: examples/walk_strut.yaml: a strut behind the stack (its axis from start to start + vector, its
-#: radius); the free walk's plate 2 passes 11.7 mm into it as the stack bends.
+#: radius); the free walk's plate 2 passes 13.1 mm into it as the stack bends (docs/guides/walking.md).
 EXAMPLE = Path(__file__).resolve().parents[2] / "examples" / "walk_strut.yaml"
 AXIS = (np.array([-0.2, -0.3, 0.55]), np.array([0.0, 0.6, 0.0]), 0.015)
 
@@ -83,6 +83,17 @@ def test_a_walk_past_a_strut_keeps_its_clearance_between_samples(am, walks):
         on_normal = np.linalg.norm(pin.log3(rel.rotation)) < 1e-6 and np.hypot(*rel.translation[:2]) < 1e-6
         if not on_normal:
             assert _lowest(cfg, pa.as_matrices()[n]) >= cfg.clearance - 1e-9
+    # the walking guide's figures: how far the free walk passes into the strut, what the reach keeps
+    guide = " ".join((EXAMPLE.parents[1] / "docs" / "guides" / "walking.md").read_text(encoding="utf-8").split())
+    scene = read_scene(EXAMPLE)
+    deepest = min((clearance(am, pa, scene) for pa in free.phases[0].plates), key=lambda c: c.min_distance)
+    sampled = min(strut_distance(cfg, pa.as_matrices(), *AXIS) for pa in free.phases[0].plates)
+    # a separating move takes at least the deepest point's depth: the penetration depth is at
+    # least the sampled one (which can only miss the deepest point by ~1e-4 m)
+    assert set(deepest.between) == {"plate 2", "strut"} and deepest.min_distance <= sampled + 1e-4 < 0
+    into_mm = -1e3 * deepest.min_distance
+    assert f"the free walk's plate 2 passes {into_mm:.1f} mm into the strut" in guide, (into_mm, sampled)
+    assert f"the reach keeps {reach.clearance.min_distance:.4f} m" in guide, reach.clearance.min_distance
     doc = json.loads(json.dumps(kept.to_dict(), allow_nan=False))
     first = doc["phases"][0]["clearance"]
     assert first["min_distance_m"] == pytest.approx(reach.clearance.min_distance) and len(first["between"]) == 2
