@@ -51,17 +51,16 @@ from ..config.schema import AssemblerConfig
 from ..exceptions import SceneError
 from ..kinematics import PlateArrays, plate_arrays
 from ..model.assembler import AssemblerModel
-from ..model.geometry import LEGS_PER_PLATFORM, leg_geometry
+from ..model.geometry import LEGS_PER_PLATFORM
 from .bodies import MOTOR, SHAFT, StackBodies, leg_segments, stack_body_names
 from .distance import (
     cylinder_lowest_point,
     point_in_cylinder_distance,
     segment_point,
     segment_segment,
-    segment_segment_columns,
 )
-from .kernel import ROW_HB, ROW_NORMAL, ROW_SIGMA, ROW_WIDTH, ROW_XA, ROW_XB, self_kernel
-from .pairs import pair_table, per_config
+from .kernel import ROW_HB, ROW_NORMAL, ROW_SIGMA, ROW_XA, ROW_XB, KernelInputs, kernel_inputs, own_pairs
+from .pairs import pair_table
 from .scene import Obstacle, Scene, read_scene
 
 __all__ = ["GJK_TOLERANCE", "NEAR", "Clearance", "clearance", "physical_bodies"]
@@ -207,17 +206,6 @@ class Clearance:
 
 
 # ---------------------------------------------------------------- closed forms
-def _variant_index(t) -> tuple[np.ndarray, np.ndarray]:
-    """Rows of the leg–leg capsule pairs (4 per leg pair: motor/shaft × motor/shaft) as
-    indices into the 8 variants of each leg part (part × bottom trim × top trim)."""
-    parts_a = np.tile(np.array([MOTOR, MOTOR, SHAFT, SHAFT]), len(t.leg_a))
-    parts_b = np.tile(np.array([MOTOR, SHAFT, MOTOR, SHAFT]), len(t.leg_a))
-    tr = np.repeat(t.trim.astype(int), 4, axis=0)
-    va = np.repeat(t.leg_a, 4) * 8 + parts_a * 4 + tr[:, 0] * 2 + tr[:, 1]
-    vb = np.repeat(t.leg_b, 4) * 8 + parts_b * 4 + tr[:, 2] * 2 + tr[:, 3]
-    return va, vb
-
-
 def _legs_all_parts(bodies: StackBodies, trim_bottom=False, trim_top=False) -> tuple[np.ndarray, ...]:
     """Every leg's motor and shaft (rows 2g, 2g+1): leg, part and
     :func:`~assembler_pin.collision.bodies.leg_segments` (trims given per leg or for all)."""
@@ -424,7 +412,7 @@ class _Layout:
     Q: int
     S: int
     X: int
-    kernel_inputs: tuple
+    kernel_inputs: KernelInputs
     leg_plate: np.ndarray  # (Q, 2) (leg, plate)
     plate_pairs: np.ndarray  # (S, 2)
     floor: tuple | None  # (first row, z [m], trim bottom (G,), trim top (G,), plates checked)
@@ -508,7 +496,7 @@ def _build_layout(cfg: AssemblerConfig, scene: Scene | None) -> _Layout:
         len(g),
         len(ka),
         X,
-        _kernel_inputs(cfg),
+        kernel_inputs(cfg),
         t.leg_plate,
         t.plate_pairs,
         floor,
@@ -693,133 +681,11 @@ def _measure_near(src: _Source, horizon: float) -> None:
             return
 
 
-@per_config
-def _kernel_inputs(cfg: AssemblerConfig) -> tuple:
-    """The kernel's constant inputs for a configuration: anchors, variant pairs, pair lists, sizes."""
-    t = pair_table(cfg)
-    va, vb = _variant_index(t)
-    sizes = np.array(
-        [
-            cfg.leg.motor_length,
-            cfg.leg.node_zone,
-            cfg.leg.motor_radius,
-            cfg.leg.shaft_radius,
-            cfg.plate.radius,
-            0.5 * cfg.plate.thickness,
-            math.hypot(cfg.plate.radius, 0.5 * cfg.plate.thickness),
-        ]
-    )
-    geometry = leg_geometry(cfg)
-    bottom = np.ascontiguousarray(geometry.bottom_in_plate.reshape(-1, 3))
-    top = np.ascontiguousarray(geometry.top_in_plate.reshape(-1, 3))
-    return bottom, top, va, vb, t.leg_plate, t.plate_pairs, sizes
-
-
-def _kernel_pass(lay: _Layout, pa: PlateArrays, kernel, dist: np.ndarray) -> _Source:
+def _kernel_pass(lay: _Layout, pa: PlateArrays, dist: np.ndarray) -> _Source:
     """The stack's own rows from the compiled kernel: leg pairs exact, the coal pairs' bounds
     (written into ``dist``). Every array is made for this call: the clearance owns them."""
-    btu, length, legs, lp = np.empty((3, lay.G, 3)), np.empty(lay.G), np.empty((lay.P, ROW_WIDTH)), np.empty((lay.Q, 2))
-    kernel(pa.R, pa.p, *lay.kernel_inputs, lay.X, btu, length, dist, legs, lp)
-    return _Source(lay, pa.R, pa.p, btu, length, legs, dist, lp)
-
-
-@per_config
-def _numpy_inputs(cfg: AssemblerConfig) -> tuple:
-    """Constants of the numpy pass: for the leg-part variants the pairs use (part × trims of
-    :func:`~assembler_pin.collision.bodies.leg_segments`), their leg, ``lo``, the two
-    candidates of ``hi = min(a1 + b1 L, a2 + b2 L)``, radius; the pairs as variant rows; the
-    platform of each leg's two plates; the leg parts and plates of the screens."""
-    bottom, top, va, vb, leg_plate, plate_pairs, *_ = _kernel_inputs(cfg)
-    G = len(bottom)
-    used, inverse = np.unique(np.concatenate([va, vb]), return_inverse=True)
-    g, part, tb, tt = used // 8, (used // 4) % 2, (used // 2) % 2 == 1, used % 2 == 1
-    leg = cfg.leg
-    shaft = part == SHAFT
-    lo = np.where(shaft, leg.motor_length, 0.0)
-    lo = np.where(tb, np.maximum(lo, leg.node_zone), lo)
-    a1, b1 = np.where(shaft, 0.0, leg.motor_length), shaft.astype(float)
-    a2, b2 = np.where(tt, -leg.node_zone, np.inf), tt.astype(float)
-    radius = np.where(shaft, leg.shaft_radius, leg.motor_radius)
-    ia, ib = inverse[: len(va)], inverse[len(va) :]
-    plate_of = np.arange(G) // LEGS_PER_PLATFORM
-    lp_g = np.repeat(leg_plate[:, 0], 2)  # the screens: (leg, plate) × (motor, shaft)
-    lp_k = np.repeat(leg_plate[:, 1], 2)
-    lp_shaft = np.tile(np.array([False, True]), len(leg_plate))
-    radius_sum = radius[ia] + radius[ib]
-    return g, lo, a1, b1, a2, b2, ia, ib, radius_sum, plate_of, bottom, top, lp_g, lp_k, lp_shaft, plate_pairs
-
-
-def _numpy_pass(lay: _Layout, pa: PlateArrays, dist: np.ndarray) -> _Source:
-    """The kernel's pass in numpy (:func:`_kernel_pass`'s outputs, the same into ``dist``).
-    Points are kept as columns (3, m) and gathered with ``np.take``: the cost of this pass is
-    the count of numpy calls, not the pairs."""
-    cfg = lay.cfg
-    g, lo, a1, b1, a2, b2, ia, ib, radius_sum, plate_of, bottom_in, top_in, lp_g, lp_k, lp_shaft, plate_pairs = (
-        _numpy_inputs(cfg)
-    )
-    R, p = pa.R, pa.p
-    bottom = np.einsum("gij,gj->gi", R[plate_of], bottom_in) + p[plate_of]
-    top = np.einsum("gij,gj->gi", R[plate_of + 1], top_in) + p[plate_of + 1]
-    vec = top - bottom
-    length = np.sqrt(np.einsum("ij,ij->i", vec, vec))
-    axis = vec / np.maximum(length, 1e-300)[:, None]
-    Lg = length[g]
-    h1, h2 = a1 + b1 * Lg, a2 + b2 * Lg
-    hi = np.minimum(h1, h2)
-    hb = np.where(h2 < h1, 1.0, b1)
-    span = hi - lo
-    axis_g = np.take(axis.T, g, axis=1)
-    start = np.take(bottom.T, g, axis=1) + lo * axis_g  # (3, V)
-    seg = np.maximum(span, 0.0) * axis_g
-    take = np.take
-    axis_d, s, u = segment_segment_columns(
-        take(start, ia, axis=1), take(seg, ia, axis=1), take(start, ib, axis=1), take(seg, ib, axis=1)
-    )
-    d = axis_d - radius_sum
-    empty = span < 0
-    d[take(empty, ia) | take(empty, ib)] = np.inf
-    P = len(d) // 4
-    best = np.argmin(d.reshape(P, 4), axis=1) + 4 * np.arange(P)
-    va, vb, sb, ub = ia[best], ib[best], s[best], u[best]
-    full = np.maximum(span, 0.0)
-    xa = take(start, va, axis=1) + sb * take(seg, va, axis=1)
-    xb = take(start, vb, axis=1) + ub * take(seg, vb, axis=1)
-    legs = np.empty((P, ROW_WIDTH))
-    legs[:, ROW_XA : ROW_XA + 3], legs[:, ROW_XB : ROW_XB + 3] = xa.T, xb.T
-    legs[:, ROW_NORMAL : ROW_NORMAL + 3] = _unit((xa - xb).T)
-    legs[:, ROW_SIGMA], legs[:, ROW_SIGMA + 1] = lo[va] + sb * full[va], lo[vb] + ub * full[vb]
-    legs[:, ROW_HB], legs[:, ROW_HB + 1] = sb * hb[va], ub * hb[vb]
-    dist[:P] = d[best]
-    # lower bounds: a leg part against a plate (its bounding sphere, and the slab of its faces)
-    leg = cfg.leg
-    half, rho = 0.5 * cfg.plate.thickness, math.hypot(cfg.plate.radius, 0.5 * cfg.plate.thickness)
-    L = length[lp_g]
-    lo_p = np.where(lp_shaft, leg.motor_length, 0.0)
-    hi_p = np.where(lp_shaft, L, leg.motor_length)
-    r_p = np.where(lp_shaft, leg.shaft_radius, leg.motor_radius)
-    a0 = bottom[lp_g] + lo_p[:, None] * axis[lp_g] - p[lp_k]  # from the plate's centre
-    dk = (hi_p - lo_p)[:, None] * axis[lp_g]
-    normal = R[lp_k][:, :, 2]
-    d_centre, _ = segment_point(a0, dk, np.zeros(3))
-    h0 = np.einsum("ij,ij->i", a0, normal)
-    h1 = h0 + np.einsum("ij,ij->i", dk, normal)
-    slab = np.maximum(np.minimum(h0, h1), -np.maximum(h0, h1)) - half - r_p
-    lp = np.maximum(d_centre - rho - r_p, slab)
-    lp[hi_p < lo_p] = np.inf
-    # plate against plate: bounding spheres, and each one's slab against the other's spread
-    ka, kb = plate_pairs[:, 0], plate_pairs[:, 1]
-    dc = p[kb] - p[ka]
-    pp = np.sqrt(np.einsum("ij,ij->i", dc, dc)) - 2.0 * rho
-    na, nb = R[ka][:, :, 2], R[kb][:, :, 2]
-    c = np.einsum("ij,ij->i", na, nb)
-    spread = cfg.plate.radius * np.sqrt(np.maximum(1.0 - c * c, 0.0)) + half * np.abs(c) + half
-    h = np.maximum(np.abs(np.einsum("ij,ij->i", na, dc)), np.abs(np.einsum("ij,ij->i", nb, dc)))
-    pp = np.maximum(pp, h - spread)
-    lp = lp.reshape(-1, 2)
-    X, Q = lay.X, len(lp)
-    dist[X : X + Q] = lp.min(axis=1)
-    dist[X + Q : X + Q + len(pp)] = pp
-    return _Source(lay, R, p, np.stack([bottom, top, axis]), length, legs, dist, lp)
+    own = own_pairs(lay.kernel_inputs, pa.R, pa.p, dist, lay.X)
+    return _Source(lay, pa.R, pa.p, own.btu, own.length, own.legs, dist, own.lp)
 
 
 def physical_bodies(
@@ -836,21 +702,20 @@ def physical_bodies(
     return original, PlateArrays(np.matmul(pa.R[::-1], flip.T), pa.p[::-1].copy())
 
 
-def _turned_clearance(am: AssemblerModel, plates, scene: Scene | None, engine: str) -> Clearance:
+def _turned_clearance(am: AssemblerModel, plates, scene: Scene | None) -> Clearance:
     """The clearance of a turned model's plates (:attr:`AssemblerModel.physical`): the original
     stack's at the same bodies, its derivatives in the turned model's plate order (a world twist
     of turned plate k is the same twist of original plate n−k)."""
     original, bodies = physical_bodies(am, plates)
     if scene is not None:
         scene = dataclasses.replace(scene, standing=tuple(sorted(am.n - k for k in scene.standing)))
-    return dataclasses.replace(clearance(original, bodies, scene, engine), _reversed=True)
+    return dataclasses.replace(clearance(original, bodies, scene), _reversed=True)
 
 
 def clearance(
     am: AssemblerModel,
     plates: PlateArrays | Sequence | np.ndarray,
     scene: Scene | str | None = None,
-    engine: str = "auto",
 ) -> Clearance:
     """The clearance of a pose: every checked pair's distance, the smallest and its two bodies.
 
@@ -859,24 +724,20 @@ def clearance(
         plates: world poses of plates 0..n, plate 0 first.
         scene: obstacles and floor (a :class:`~assembler_pin.collision.scene.Scene`, a path
             of a scene file, or None for the stack's own bodies only).
-        engine: the stack's own pairs through the compiled kernel (``numba``), numpy
-            (``numpy``) or ``auto`` (:func:`~assembler_pin.collision.kernel.self_kernel`); the
-            answers agree to rounding.
 
     Returns:
         a :class:`Clearance` (distances [m], world frame).
     """
     scene = read_scene(scene)
     if am.physical is not None:  # a stack seen from its other end: its bodies are the original's
-        return _turned_clearance(am, plates, scene, engine)
+        return _turned_clearance(am, plates, scene)
     if scene is not None and any(k > am.n for k in scene.standing):
         raise SceneError(f"scene standing {scene.standing} names a plate beyond plate {am.n}")
-    kernel = self_kernel(engine)
     pa = plate_arrays(am, plates)
     cfg = am.config
     lay = _layout(cfg, scene)
     dist = np.empty(lay.m)
-    src = _numpy_pass(lay, pa, dist) if kernel is None else _kernel_pass(lay, pa, kernel, dist)
+    src = _kernel_pass(lay, pa, dist)
     if scene is not None:
         _scene_pass(src)
     _measure_near(src, cfg.clearance + NEAR)
