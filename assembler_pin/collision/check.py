@@ -59,7 +59,8 @@ from .distance import (
     segment_point,
     segment_segment,
 )
-from .kernel import ROW_HB, ROW_NORMAL, ROW_SIGMA, ROW_XA, ROW_XB, KernelInputs, kernel_inputs, own_pairs
+from .home import TIE
+from .kernel import ROW_HB, ROW_NORMAL, ROW_RADIUS, ROW_SIGMA, ROW_XA, ROW_XB, KernelInputs, kernel_inputs, own_pairs
 from .pairs import pair_table
 from .scene import Obstacle, Scene, read_scene
 
@@ -91,6 +92,7 @@ class _Rows:
     index: np.ndarray  # (m, 2) leg g or plate k
     sigma: np.ndarray  # (m, 2) σ of a leg point [m]
     hb: np.ndarray  # (m, 2) d σ / d L of a leg point
+    radius: np.ndarray  # (m, 2) radius of the leg's capsule holding the point [m] (0: not a leg)
     point: np.ndarray  # (m, 2, 3) closest points (a leg's on its axis), world [m]
     normal: np.ndarray  # (m, 3) unit normal from body b to body a
 
@@ -157,17 +159,17 @@ class Clearance:
         the second body to the first); None when no pair is checked.
 
         A leg's closest point is on its axis: its surface point is that point moved by the
-        radius of its motor or shaft (whichever holds it) towards the other body.
+        radius of the capsule (motor or shaft) the distance was measured on towards the other
+        body (at the motor/shaft junction, the one that holds the pair's distance).
         """
         if not math.isfinite(self.min_distance) or not len(self.distances):
             return None
         r = self._rows
-        i = int(np.flatnonzero(r.dist <= self.min_distance + 1e-12)[0])
+        i = int(np.flatnonzero(r.dist <= self.min_distance + TIE)[0])
         n = r.normal[i]
         a = r.point[i, 0].copy()
         if r.kind[i, 0] == _LEG:
-            leg = self._bodies.cfg.leg
-            a -= (leg.motor_radius if r.sigma[i, 0] <= leg.motor_length else leg.shaft_radius) * n
+            a -= r.radius[i, 0] * n
         return a, a - self.min_distance * n
 
     def gradient(self, rows: np.ndarray | Sequence[int] | None = None) -> np.ndarray:
@@ -217,16 +219,17 @@ def _legs_all_parts(bodies: StackBodies, trim_bottom=False, trim_top=False) -> t
     return (g, part, *leg_segments(bodies, g, part, tb, tt))
 
 
-def _best_parts(d: np.ndarray, s: np.ndarray, start, vec, lo, hi, hb) -> tuple[np.ndarray, ...]:
+def _best_parts(d: np.ndarray, s: np.ndarray, start, vec, lo, hi, hb, radius) -> tuple[np.ndarray, ...]:
     """Per leg, the closer of its two parts: distances ``d`` (..., 2G) [m] and the parameters
     ``s`` of the closest points on the parts (:func:`_legs_all_parts`' rows) → the distance
-    (..., G) [m], the closest point on the axis (..., G, 3) world [m], its σ [m] and dσ/dL."""
+    (..., G) [m], the closest point on the axis (..., G, 3) world [m], its σ [m], dσ/dL and
+    the radius of the part [m]."""
     G = d.shape[-1] // 2
     pick = np.argmin(d.reshape(*d.shape[:-1], G, 2), axis=-1) + 2 * np.arange(G)
     best, sb = np.take_along_axis(d, pick, axis=-1), np.take_along_axis(s, pick, axis=-1)
     x = start[pick] + sb[..., None] * vec[pick]
     sigma = lo[pick] + sb * np.maximum(hi[pick] - lo[pick], 0.0)
-    return best, x, sigma, sb * hb[pick]
+    return best, x, sigma, sb * hb[pick], radius[pick]
 
 
 def _floor_pass(bodies: StackBodies, lay: _Layout, dist: np.ndarray) -> list[tuple]:
@@ -239,19 +242,19 @@ def _floor_pass(bodies: StackBodies, lay: _Layout, dist: np.ndarray) -> list[tup
     s = (vec[:, 2] < 0.0).astype(float)  # the lower end
     d = start[:, 2] + s * vec[:, 2] - floor_z - radius
     d[hi < lo] = np.inf
-    best, x, sigma, hbest = _best_parts(d, s, start, vec, lo, hi, hb)
+    best, x, sigma, hbest, rbest = _best_parts(d, s, start, vec, lo, hi, hb, radius)
     G = len(best)
     dist[at : at + G] = best
     on_floor = x.copy()
     on_floor[:, 2] = floor_z
-    out: list[tuple] = [(at, sigma, hbest, np.stack([x, on_floor], 1), _up(G))]
+    out: list[tuple] = [(at, sigma, hbest, rbest, np.stack([x, on_floor], 1), _up(G))]
     if len(k):
         plate = lay.cfg.plate
         low, height = cylinder_lowest_point(bodies.p[k], bodies.R[k][:, :, 2], plate.radius, plate.thickness)
         dist[at + G : at + G + len(k)] = height - floor_z
         below = low.copy()
         below[:, 2] = floor_z
-        out.append((at + G, None, None, np.stack([low, below], 1), _up(len(k))))
+        out.append((at + G, None, None, None, np.stack([low, below], 1), _up(len(k))))
     return out
 
 
@@ -270,7 +273,7 @@ def _spheres_pass(bodies: StackBodies, lay: _Layout, dist: np.ndarray, parts: tu
     d_axis, s = segment_point(start[None], vec[None], centre[:, None])  # (N, 2G)
     d = d_axis - radius - r[:, None]
     d[:, hi < lo] = np.inf
-    best, x, sigma, hbest = _best_parts(d, s, start, vec, lo, hi, hb)  # (N, G)
+    best, x, sigma, hbest, rbest = _best_parts(d, s, start, vec, lo, hi, hb, radius)  # (N, G)
     n = _unit(x - centre[:, None])
     cfg, R, p = lay.cfg, bodies.R, bodies.p
     local = np.einsum("kji,skj->ski", R, centre[:, None] - p)  # Rᵀ (c - p), (N, K, 3)
@@ -285,10 +288,10 @@ def _spheres_pass(bodies: StackBodies, lay: _Layout, dist: np.ndarray, parts: tu
     point = np.empty((N, G + K, 2, 3))
     point[:, :G, 0], point[:, :G, 1] = x, centre[:, None] + r[:, None, None] * n
     point[:, G:, 0], point[:, G:, 1] = on_plate, centre[:, None] + r[:, None, None] * nk
-    sig, hbv = np.zeros((N, G + K)), np.zeros((N, G + K))
-    sig[:, :G], hbv[:, :G] = sigma, hbest
+    sig, hbv, rad = np.zeros((N, G + K)), np.zeros((N, G + K)), np.zeros((N, G + K))
+    sig[:, :G], hbv[:, :G], rad[:, :G] = sigma, hbest, rbest
     normal = np.concatenate([n, nk], axis=1)
-    return [(lay.sphere_at, sig.ravel(), hbv.ravel(), point.reshape(-1, 2, 3), normal.reshape(-1, 3))]
+    return [(lay.sphere_at, sig.ravel(), hbv.ravel(), rad.ravel(), point.reshape(-1, 2, 3), normal.reshape(-1, 3))]
 
 
 # ---------------------------------------------------------------- coal pairs
@@ -336,30 +339,29 @@ def _coal_distance(shape_a, R_a, p_a, shape_b, R_b, p_b) -> tuple[float, np.ndar
     return float(d), wa, wb, -np.array(res.normal)
 
 
-def _measure_leg(bodies: StackBodies, g: int, lb: np.ndarray, other: tuple) -> tuple | None:
+def _measure_leg(
+    bodies: StackBodies, g: int, lb: np.ndarray, other: tuple, trims: tuple[bool, bool] = (False, False)
+) -> tuple | None:
     """One leg against a body coal measures (``other``: shape, R, p): both parts whose bound
     ``lb`` (2,) is finite (the capsules of
-    :func:`~assembler_pin.collision.bodies.leg_segments`, untrimmed), the closer one
-    ``(d, x_a, x_b, n, σ_a, dσ_a/dL)`` (x_a on the axis, world [m]); None for none."""
-    leg = bodies.cfg.leg
-    bottom, axis, L = bodies.bottom[g], bodies.axis[g], float(bodies.length[g])
+    :func:`~assembler_pin.collision.bodies.leg_segments`, trimmed at the bottom and the top
+    as ``trims`` says), the closer one ``(d, x_a, x_b, n, σ_a, dσ_a/dL, radius_a)`` (x_a on
+    the axis, world [m]); None for none."""
+    axis = bodies.axis[g]
     turn = _z_to(axis)
     best = None
+    legs, parts = np.array([g, g]), np.array([MOTOR, SHAFT])
+    starts, _, los, his, hbs, radii = leg_segments(bodies, legs, parts, trims[0], trims[1])
     for part in (MOTOR, SHAFT):
-        if not math.isfinite(lb[part]):
-            continue
-        if part == MOTOR:
-            lo, hi, hb, radius = 0.0, leg.motor_length, 0.0, leg.motor_radius
-        else:
-            lo, hi, hb, radius = leg.motor_length, L, 1.0, leg.shaft_radius
-        if hi < lo:
+        lo, hi, hb, radius = float(los[part]), float(his[part]), float(hbs[part]), float(radii[part])
+        if not math.isfinite(lb[part]) or hi < lo:
             continue
         length = max(hi - lo, 1e-12)
-        start, vec = bottom + lo * axis, (hi - lo) * axis
+        start, vec = starts[part], (hi - lo) * axis
         d, wa, wb, n = _coal_distance(_coal().Capsule(radius, length), turn, start + 0.5 * vec, *other)
         s = min(max(float(np.dot(wa - start, axis)) / length, 0.0), 1.0)
         if best is None or d < best[0]:
-            best = (d, start + s * vec, wb, n, lo + s * (hi - lo), s * hb)
+            best = (d, start + s * vec, wb, n, lo + s * (hi - lo), s * hb, radius)
     return best
 
 
@@ -413,7 +415,7 @@ class _Layout:
     S: int
     X: int
     kernel_inputs: KernelInputs
-    leg_plate: np.ndarray  # (Q, 2) (leg, plate)
+    leg_plate: np.ndarray  # (Q, 4) (leg, plate, trim bottom, trim top)
     plate_pairs: np.ndarray  # (S, 2)
     floor: tuple | None  # (first row, z [m], trim bottom (G,), trim top (G,), plates checked)
     sphere_at: int
@@ -469,6 +471,7 @@ def _build_layout(cfg: AssemblerConfig, scene: Scene | None) -> _Layout:
         against(ids[o.name])
     X = rows()
     g, k = t.leg_plate[:, 0], t.leg_plate[:, 1]
+    lay_leg_plate = kernel_inputs(cfg).leg_plate
     blocks.append(_block(len(g), (g, G + k), (_LEG, _PLATE), (g, k)))
     ka, kb = t.plate_pairs[:, 0], t.plate_pairs[:, 1]
     blocks.append(_block(len(ka), (G + ka, G + kb), (_PLATE, _PLATE), (ka, kb)))
@@ -497,7 +500,7 @@ def _build_layout(cfg: AssemblerConfig, scene: Scene | None) -> _Layout:
         len(ka),
         X,
         kernel_inputs(cfg),
-        t.leg_plate,
+        lay_leg_plate,
         t.plate_pairs,
         floor,
         sphere_at,
@@ -579,18 +582,21 @@ class _Source:
         "legs",
         "length",
         "lp",
+        "lp_row",
         "p",
         "scene_rows",
         "solid_lb",
     )
 
-    def __init__(self, layout, R, p, btu, length, legs, dist, lp) -> None:
+    def __init__(self, layout, R, p, btu, length, legs, dist, lp, exact) -> None:
         self.layout, self.R, self.p, self.btu, self.length = layout, R, p, btu, length
         self.legs, self.dist, self.lp = legs, dist, lp
-        self.exact = layout.exact.copy()
+        self.lp_row: np.ndarray | None = None  # (Q, 2) the nearer part, its end nearest the plate or -1
+        self.exact = exact
         self.solid_lb: np.ndarray | None = None
-        self.scene_rows: list[tuple] = []  # (first row, σ_a, dσ_a/dL or None, points (m, 2, 3), normals (m, 3))
-        self.got: dict[int, tuple] = {}  # coal's rows: (x_a, x_b, n, σ_a, dσ_a/dL)
+        # (first row, σ_a, dσ_a/dL, radius_a or None, points (m, 2, 3), normals (m, 3))
+        self.scene_rows: list[tuple] = []
+        self.got: dict[int, tuple] = {}  # coal's rows: (x_a, x_b, n, σ_a, dσ_a/dL, radius_a)
         self._bodies: StackBodies | None = None
 
     def bodies(self) -> StackBodies:
@@ -604,18 +610,45 @@ class _Source:
         """Every row with its closest points and normal."""
         lay, legs = self.layout, self.legs
         m, P = lay.m, lay.P
-        sigma, hb, point, normal = np.zeros((m, 2)), np.zeros((m, 2)), np.zeros((m, 2, 3)), _up(m)
+        sigma, hb, radius = np.zeros((m, 2)), np.zeros((m, 2)), np.zeros((m, 2))
+        point, normal = np.zeros((m, 2, 3)), _up(m)
         point[:P, 0], point[:P, 1] = legs[:, ROW_XA : ROW_XA + 3], legs[:, ROW_XB : ROW_XB + 3]
         normal[:P] = legs[:, ROW_NORMAL : ROW_NORMAL + 3]
         sigma[:P], hb[:P] = legs[:, ROW_SIGMA : ROW_SIGMA + 2], legs[:, ROW_HB : ROW_HB + 2]
-        for at, sig, h, pt, nm in self.scene_rows:
+        radius[:P] = legs[:, ROW_RADIUS : ROW_RADIUS + 2]
+        self._leg_plate_rows(sigma, hb, radius, point, normal)
+        for at, sig, h, rad, pt, nm in self.scene_rows:
             stop = at + len(pt)
             if sig is not None:
-                sigma[at:stop, 0], hb[at:stop, 0] = sig, h
+                sigma[at:stop, 0], hb[at:stop, 0], radius[at:stop, 0] = sig, h, rad
             point[at:stop], normal[at:stop] = pt, nm
-        for r, (xa, xb, n, sig, h) in self.got.items():
-            point[r, 0], point[r, 1], normal[r], sigma[r, 0], hb[r, 0] = xa, xb, n, sig, h
-        return _Rows(self.dist, self.exact, lay.pairs, lay.kind, lay.index, sigma, hb, point, normal)
+        for r, (xa, xb, n, sig, h, rad) in self.got.items():
+            point[r, 0], point[r, 1], normal[r], sigma[r, 0], hb[r, 0], radius[r, 0] = xa, xb, n, sig, h, rad
+        return _Rows(self.dist, self.exact, lay.pairs, lay.kind, lay.index, sigma, hb, radius, point, normal)
+
+    def _leg_plate_rows(self, sigma, hb, radius, point, normal) -> None:
+        """The closest points of the leg–plate rows exact by the closed form (a part's end over
+        the disc: the point below it on the face), into the rows' arrays."""
+        lay = self.layout
+        if self.lp_row is None:
+            return
+        rows = np.flatnonzero(self.lp_row[:, 1] >= 0)
+        if not len(rows):
+            return
+        g, k, tb, tt = (lay.leg_plate[rows, c] for c in range(4))
+        part = self.lp_row[rows, 0]
+        bodies = self.bodies()
+        _, _, lo, hi, hbs, rad = leg_segments(bodies, g, part, tb == 1, tt == 1)
+        end = self.lp_row[rows, 1]
+        s = np.where(end == 1, hi, lo)
+        x = bodies.bottom[g] + s[:, None] * bodies.axis[g]
+        nk = self.R[k][:, :, 2]
+        h = np.einsum("ij,ij->i", x - self.p[k], nk)
+        up = np.where(h >= 0, 1.0, -1.0)[:, None] * nk  # from the plate to the leg
+        half = 0.5 * lay.cfg.plate.thickness
+        r = lay.X + rows
+        sigma[r, 0], hb[r, 0], radius[r, 0] = s, np.where(end == 1, hbs, 0.0), rad
+        point[r, 0], point[r, 1], normal[r] = x, x - (np.abs(h) - half)[:, None] * up, up
 
 
 def _scene_pass(src: _Source) -> None:
@@ -639,11 +672,11 @@ def _measure_row(src: _Source, r: int) -> None:
     i = r - lay.X
     got: tuple | None
     if i < lay.Q:  # a leg against a plate it does not sit on
-        g, k = int(lay.leg_plate[i, 0]), int(lay.leg_plate[i, 1])
-        got = _measure_leg(bodies, g, src.lp[i], (plate, bodies.R[k], bodies.p[k]))
+        g, k, tb, tt = (int(v) for v in lay.leg_plate[i])
+        got = _measure_leg(bodies, g, src.lp[i], (plate, bodies.R[k], bodies.p[k]), (tb == 1, tt == 1))
     elif i < lay.Q + lay.S:  # plate against plate
         a, b = (int(v) for v in lay.plate_pairs[i - lay.Q])
-        got = (*_coal_distance(plate, bodies.R[a], bodies.p[a], plate, bodies.R[b], bodies.p[b]), 0.0, 0.0)
+        got = (*_coal_distance(plate, bodies.R[a], bodies.p[a], plate, bodies.R[b], bodies.p[b]), 0.0, 0.0, 0.0)
     else:  # a leg or a plate against a box or a cylinder
         o, j = divmod(i - lay.Q - lay.S, lay.G + lay.K)
         fixed = solids[o]
@@ -652,7 +685,7 @@ def _measure_row(src: _Source, r: int) -> None:
             got = _measure_leg(bodies, j, src.solid_lb[o, j], fixed)
         else:
             k = j - lay.G
-            got = (*_coal_distance(plate, bodies.R[k], bodies.p[k], *fixed), 0.0, 0.0)
+            got = (*_coal_distance(plate, bodies.R[k], bodies.p[k], *fixed), 0.0, 0.0, 0.0)
     src.exact[r] = True
     if got is None:
         src.dist[r] = np.inf
@@ -670,7 +703,9 @@ def _measure_near(src: _Source, horizon: float) -> None:
     if lay.m == X:
         return
     screened, exact = dist[X:], src.exact[X:]
-    todo = np.flatnonzero(screened < horizon)
+    if exact.any():
+        best = min(best, float(screened[exact].min()))
+    todo = np.flatnonzero((screened < horizon) & ~exact)
     while True:
         if len(todo):
             for i in todo.tolist():
@@ -683,9 +718,15 @@ def _measure_near(src: _Source, horizon: float) -> None:
 
 def _kernel_pass(lay: _Layout, pa: PlateArrays, dist: np.ndarray) -> _Source:
     """The stack's own rows from the compiled kernel: leg pairs exact, the coal pairs' bounds
-    (written into ``dist``). Every array is made for this call: the clearance owns them."""
-    own = own_pairs(lay.kernel_inputs, pa.R, pa.p, dist, lay.X)
-    return _Source(lay, pa.R, pa.p, own.btu, own.length, own.legs, dist, own.lp)
+    (written into ``dist``), exact too for a leg and a plate whose nearer part has its end
+    nearest the plate over the disc (:attr:`~assembler_pin.collision.kernel.OwnPairs.lp_end`)
+    while the other part's bound is no nearer. Every array is made for this call: the
+    clearance owns them."""
+    exact = lay.exact.copy()
+    own = own_pairs(lay.kernel_inputs, pa.R, pa.p, dist, lay.X, exact)
+    src = _Source(lay, pa.R, pa.p, own.btu, own.length, own.legs, dist, own.lp, exact)
+    src.lp_row = own.lp_row
+    return src
 
 
 def physical_bodies(
@@ -743,7 +784,7 @@ def clearance(
     _measure_near(src, cfg.clearance + NEAR)
     if len(dist):
         dmin = float(dist.min())
-        first = int(np.argmax(dist <= dmin + 1e-12))
+        first = int(np.argmax(dist <= dmin + TIE))
         pair = lay.pairs[first]
         between = (lay.names[pair[0]], lay.names[pair[1]])
     else:

@@ -25,7 +25,16 @@ from ..config.schema import AssemblerConfig
 from ..model.geometry import leg_geometry
 from .pairs import pair_table, per_config
 
-__all__ = ["ROW_WIDTH", "SIZE_NAMES", "KernelInputs", "OwnPairs", "kernel_inputs", "own_pairs", "variant_index"]
+__all__ = [
+    "ROW_RADIUS",
+    "ROW_WIDTH",
+    "SIZE_NAMES",
+    "KernelInputs",
+    "OwnPairs",
+    "kernel_inputs",
+    "own_pairs",
+    "variant_index",
+]
 
 #: The entries of the kernel's ``sizes`` array.
 SIZE_NAMES = ("motor_length", "node_zone", "motor_radius", "shaft_radius", "plate_radius", "half_thickness", "rho")
@@ -56,17 +65,36 @@ def _variant_py(code, L, sizes):  # pragma: no cover - compiled
 _variant = _variant_py  # interpreted here; the compiled kernel calls a compiled copy
 
 #: Columns of the kernel's leg-pair rows: the closest points on the two axes (x_a, x_b),
-#: the unit normal from leg b to leg a, σ of the two points [m], dσ/dL of the two points.
-ROW_XA, ROW_XB, ROW_NORMAL, ROW_SIGMA, ROW_HB, ROW_WIDTH = 0, 3, 6, 9, 11, 13
+#: the unit normal from leg b to leg a, σ of the two points [m], dσ/dL of the two points,
+#: the radii of the two capsules (motor or shaft) that hold them [m].
+ROW_XA, ROW_XB, ROW_NORMAL, ROW_SIGMA, ROW_HB, ROW_RADIUS, ROW_WIDTH = 0, 3, 6, 9, 11, 13, 15
 
 
 def _self_py(
-    R, p, bottom_in, top_in, va, vb, leg_plate, plate_pairs, sizes, base, BTU, L, dist, rows, lp_lb
+    R,
+    p,
+    bottom_in,
+    top_in,
+    va,
+    vb,
+    leg_plate,
+    plate_pairs,
+    sizes,
+    base,
+    BTU,
+    L,
+    dist,
+    rows,
+    lp_lb,
+    lp_end,
+    lp_row,
+    exact,
 ):  # pragma: no cover - compiled
     """Fills the legs' joint centres ``BTU[0]``, ``BTU[1]`` (G, 3), directions ``BTU[2]`` (G, 3)
     and lengths L (G,) [m]; per leg pair q the distance ``dist[q]`` [m] and its row ``rows[q]``
     (:data:`ROW_XA`...: closest points on the axes, world [m], normal from leg b to leg a, σ
-    [m], dσ/dL); the lower bounds lp_lb (Q, 2) of each leg part against each plate, their
+    [m], dσ/dL); the lower bounds lp_lb (Q, 2) of each leg part (trimmed as ``leg_plate``'s
+    last two columns say) against each plate, their
     smaller one in ``dist[base + q]``, and of each plate pair in ``dist[base + Q + q]`` [m].
 
     Each capsule pair is the closed form of
@@ -138,6 +166,7 @@ def _self_py(
         dist[q] = best
         rows[q, 9], rows[q, 10] = bsa, bsb
         rows[q, 11], rows[q, 12] = bs * vhb[va[br]], bt * vhb[vb[br]]
+        rows[q, 13], rows[q, 14] = vr[va[br]], vr[vb[br]]
         n2 = 0.0
         for k in range(3):
             xa = B[ga, k] + bsa * U[ga, k]
@@ -150,14 +179,19 @@ def _self_py(
                 rows[q, 6 + k] /= norm
         else:
             rows[q, 6], rows[q, 7], rows[q, 8] = 0.0, 0.0, 1.0
-    motor_length, rho, half = sizes[0], sizes[6], sizes[5]
+    motor_length, zone, rho, half = sizes[0], sizes[1], sizes[6], sizes[5]
     Q = leg_plate.shape[0]
     for q in range(Q):
         g, kp = leg_plate[q, 0], leg_plate[q, 1]
         for part in range(2):
             lo = motor_length if part == 1 else 0.0
             hi = L[g] if part == 1 else motor_length
+            if leg_plate[q, 2] == 1 and zone > lo:
+                lo = zone
+            if leg_plate[q, 3] == 1 and L[g] - zone < hi:
+                hi = L[g] - zone
             radius = sizes[3] if part == 1 else sizes[2]
+            lp_end[q, part] = -1.0
             if hi < lo:
                 lp_lb[q, part] = math.inf
                 continue
@@ -174,8 +208,27 @@ def _self_py(
             for k in range(3):
                 w += (B[g, k] + (lo + s * (hi - lo)) * U[g, k] - p[kp, k]) ** 2
             slab = max(min(h0, h1), min(-h0, -h1)) - half - radius
-            lp_lb[q, part] = max(math.sqrt(w) - rho - radius, slab)
-        dist[base + q] = min(lp_lb[q, 0], lp_lb[q, 1])
+            bound = max(math.sqrt(w) - rho - radius, slab)
+            if min(h0, h1) > half or max(h0, h1) < -half:  # the part clear of the plate's slab
+                hmin = min(abs(h0), abs(h1))
+                for end in range(2):
+                    hn = h0 if end == 0 else h1
+                    sn = lo if end == 0 else hi
+                    if abs(hn) > hmin:
+                        continue
+                    r2 = 0.0
+                    for k in range(3):
+                        r2 += (B[g, k] + sn * U[g, k] - p[kp, k]) ** 2
+                    if r2 - hn * hn <= sizes[4] * sizes[4]:  # over the disc: its face is nearest
+                        lp_end[q, part] = end
+                        bound = abs(hn) - half - radius
+                        break
+            lp_lb[q, part] = bound
+        near = 0 if lp_lb[q, 0] <= lp_lb[q, 1] else 1
+        dist[base + q] = lp_lb[q, near]
+        lp_row[q, 0], lp_row[q, 1] = near, lp_end[q, near]
+        if lp_end[q, near] >= 0:  # the nearer part's distance, no farther than the other's bound
+            exact[base + q] = True
     plate_radius = sizes[4]
     for q in range(plate_pairs.shape[0]):
         ka, kb = plate_pairs[q, 0], plate_pairs[q, 1]
@@ -213,7 +266,8 @@ class KernelInputs:
     Attributes:
         bottom_in, top_in: (G, 3) each leg's joint centres in its bottom and top plate's frame [m].
         va, vb: (4P,) the leg-part variants of every capsule pair (:func:`variant_index`).
-        leg_plate: (Q, 2) (leg, plate) pairs screened; plate_pairs: (S, 2).
+        leg_plate: (Q, 4) (leg, plate, trim bottom, trim top) pairs screened (the trims in
+            {0, 1}: ``leg.node_zone`` left out at that end); plate_pairs: (S, 2).
         sizes: (7,) :data:`SIZE_NAMES` [m].
     """
 
@@ -245,7 +299,8 @@ def kernel_inputs(cfg: AssemblerConfig) -> KernelInputs:
     geometry = leg_geometry(cfg)
     bottom = np.ascontiguousarray(geometry.bottom_in_plate.reshape(-1, 3))
     top = np.ascontiguousarray(geometry.top_in_plate.reshape(-1, 3))
-    return KernelInputs(bottom, top, va, vb, t.leg_plate, t.plate_pairs, sizes)
+    leg_plate = np.ascontiguousarray(np.hstack([t.leg_plate, t.leg_plate_trim.astype(int)]))
+    return KernelInputs(bottom, top, va, vb, leg_plate, t.plate_pairs, sizes)
 
 
 @dataclass(frozen=True)
@@ -257,26 +312,39 @@ class OwnPairs:
         length: (G,) pin-to-pin lengths [m].
         legs: (P, :data:`ROW_WIDTH`) the leg-pair rows (:data:`ROW_XA`...).
         lp: (Q, 2) the lower bounds of each leg's motor and shaft against each screened plate [m].
+        lp_end: (Q, 2) where that bound is the distance: 0 or 1 when the part's end at ``lo``
+            or ``hi`` lies over the plate's disc, nearest its face, the part clear of the
+            plate's slab (the distance is then that end's height over the face less the
+            radius); -1 where the bound is only a bound.
+        lp_row: (Q, 2) each row's nearer part (:data:`~assembler_pin.collision.bodies.MOTOR`
+            or ``SHAFT``) and its ``lp_end``: the row's distance is exact where that is not -1
+            (the other part's bound is then no nearer).
     """
 
     btu: np.ndarray
     length: np.ndarray
     legs: np.ndarray
     lp: np.ndarray
+    lp_end: np.ndarray
+    lp_row: np.ndarray
 
 
-def own_pairs(inputs: KernelInputs, R: np.ndarray, p: np.ndarray, dist: np.ndarray, at: int) -> OwnPairs:
+def own_pairs(
+    inputs: KernelInputs, R: np.ndarray, p: np.ndarray, dist: np.ndarray, at: int, exact: np.ndarray
+) -> OwnPairs:
     """The stack's own pairs at the plate poses ``R`` (n+1, 3, 3), ``p`` (n+1, 3) (world
     [m]): the leg pairs' exact distances into ``dist[:P]`` and the screened pairs' lower
-    bounds (leg–plate, then plate–plate) into ``dist[at:at + Q + S]`` [m]. Every returned
-    array is made for this call."""
+    bounds (leg–plate, then plate–plate) into ``dist[at:at + Q + S]`` [m], ``exact[at + q]``
+    set True where a leg–plate row's bound is its distance (:attr:`OwnPairs.lp_row`). Every
+    returned array is made for this call."""
     G, P, Q = len(inputs.bottom_in), len(inputs.va) // 4, len(inputs.leg_plate)
     btu, length, legs, lp = np.empty((3, G, 3)), np.empty(G), np.empty((P, ROW_WIDTH)), np.empty((Q, 2))
+    lp_end, lp_row = np.empty((Q, 2)), np.empty((Q, 2), dtype=np.int64)
     _compiled()(
         R, p, inputs.bottom_in, inputs.top_in, inputs.va, inputs.vb, inputs.leg_plate, inputs.plate_pairs,
-        inputs.sizes, at, btu, length, dist, legs, lp,
+        inputs.sizes, at, btu, length, dist, legs, lp, lp_end, lp_row, exact,
     )  # fmt: skip
-    return OwnPairs(btu, length, legs, lp)
+    return OwnPairs(btu, length, legs, lp, lp_end, lp_row)
 
 
 def _compiled() -> Any:
