@@ -255,7 +255,42 @@ def _floor_pass(bodies: StackBodies, lay: _Layout, dist: np.ndarray) -> list[tup
         below = low.copy()
         below[:, 2] = floor_z
         out.append((at + G, None, None, None, np.stack([low, below], 1), _up(len(k))))
+    if lay.W:
+        c = payload_centre(bodies)
+        low, below = c - [0.0, 0.0, lay.cfg.payload.radius], c.copy()
+        below[2] = floor_z
+        dist[at + G + len(k)] = low[2] - floor_z
+        out.append((at + G + len(k), None, None, None, np.stack([low, below])[None], _up(1)))
     return out
+
+
+def payload_centre(bodies: StackBodies) -> np.ndarray:
+    """The payload's centre (3,), world [m]: ``payload.offset`` along plate n's +z."""
+    return bodies.p[-1] + bodies.cfg.payload.offset * bodies.R[-1][:, 2]
+
+
+def _payload_pass(bodies: StackBodies, lay: _Layout, dist: np.ndarray) -> list[tuple]:
+    """The payload (a sphere on plate n) against every leg (not the last ``node_zone`` of the
+    legs jointed to plate n) and plates 0..n-1: closed forms, exact, written into ``dist``.
+    Returns the rows' closest points and normals (:attr:`_Source.scene_rows`)."""
+    cfg, G, n = lay.cfg, lay.G, lay.K - 1
+    c, rp = payload_centre(bodies), cfg.payload.radius
+    top = np.arange(G) // LEGS_PER_PLATFORM == n - 1
+    _, _, start, vec, lo, hi, hb, radius = _legs_all_parts(bodies, False, top)
+    d_axis, s = segment_point(start, vec, c)
+    d = d_axis - radius - rp
+    d[hi < lo] = np.inf
+    best, x, sigma, hbest, rbest = _best_parts(d, s, start, vec, lo, hi, hb, radius)
+    nl = _unit(x - c)
+    R, p = bodies.R[:n], bodies.p[:n]
+    dc, closest = point_in_cylinder_distance(np.einsum("kji,kj->ki", R, c - p), cfg.plate.radius, cfg.plate.thickness)
+    on_plate = p + np.einsum("kij,kj->ki", R, closest)
+    nk = _unit(on_plate - c)
+    nk = np.where((dc < 0)[:, None], -nk, nk)
+    at = lay.payload_at
+    dist[at : at + G], dist[at + G : at + G + n] = best, dc - rp
+    legs = (at, sigma, hbest, rbest, np.stack([x, c + rp * nl], 1), nl)
+    return [legs, (at + G, None, None, None, np.stack([on_plate, c + rp * nk], 1), nk)]
 
 
 def _up(m: int) -> np.ndarray:
@@ -281,16 +316,23 @@ def _spheres_pass(bodies: StackBodies, lay: _Layout, dist: np.ndarray, parts: tu
     on_plate = p + np.einsum("kij,skj->ski", R, closest)
     nk = _unit(on_plate - centre[:, None])
     nk = np.where((dc < 0)[..., None], -nk, nk)
-    N, G, K = len(r), lay.G, lay.K
-    block = dist[lay.sphere_at : lay.sphere_at + N * (G + K)].reshape(N, G + K)
+    N, G, K, W = len(r), lay.G, lay.K, lay.W
+    block = dist[lay.sphere_at : lay.sphere_at + N * (G + K + W)].reshape(N, G + K + W)
     block[:, :G] = best
-    block[:, G:] = dc - r[:, None]
-    point = np.empty((N, G + K, 2, 3))
+    block[:, G : G + K] = dc - r[:, None]
+    point = np.empty((N, G + K + W, 2, 3))
     point[:, :G, 0], point[:, :G, 1] = x, centre[:, None] + r[:, None, None] * n
-    point[:, G:, 0], point[:, G:, 1] = on_plate, centre[:, None] + r[:, None, None] * nk
-    sig, hbv, rad = np.zeros((N, G + K)), np.zeros((N, G + K)), np.zeros((N, G + K))
+    point[:, G : G + K, 0], point[:, G : G + K, 1] = on_plate, centre[:, None] + r[:, None, None] * nk
+    sig, hbv, rad = np.zeros((N, G + K + W)), np.zeros((N, G + K + W)), np.zeros((N, G + K + W))
     sig[:, :G], hbv[:, :G], rad[:, :G] = sigma, hbest, rbest
     normal = np.concatenate([n, nk], axis=1)
+    if W:  # the payload: two spheres
+        c, rp = payload_centre(bodies), cfg.payload.radius
+        gap = c - centre  # (N, 3)
+        block[:, -1] = np.sqrt(np.einsum("ij,ij->i", gap, gap)) - rp - r
+        npay = _unit(gap)
+        point[:, -1, 0], point[:, -1, 1] = c - rp * npay, centre + r[:, None] * npay
+        normal = np.concatenate([normal, npay[:, None]], axis=1)
     return [(lay.sphere_at, sig.ravel(), hbv.ravel(), rad.ravel(), point.reshape(-1, 2, 3), normal.reshape(-1, 3))]
 
 
@@ -385,9 +427,17 @@ def _solids_pass(bodies: StackBodies, lay: _Layout, dist: np.ndarray, parts: tup
     rho = math.hypot(lay.cfg.plate.radius, 0.5 * lay.cfg.plate.thickness)
     d_plate = segment_point(c0[:, None], cv[:, None], bodies.p)[0] - cr[:, None]  # (N, K)
     h = np.abs(np.matmul(bodies.p[None] - centre[:, None], axes)) - half[:, None]
-    block = dist[lay.solid_at : lay.solid_at + len(cr) * (lay.G + lay.K)].reshape(len(cr), lay.G + lay.K)
+    width = lay.G + lay.K + lay.W
+    block = dist[lay.solid_at : lay.solid_at + len(cr) * width].reshape(len(cr), width)
     block[:, : lay.G] = lb.min(axis=2)
-    block[:, lay.G :] = np.maximum(d_plate, h.max(axis=2)) - rho
+    block[:, lay.G : lay.G + lay.K] = np.maximum(d_plate, h.max(axis=2)) - rho
+    if lay.unchecked is not None:  # a support obstacle and a standing plate: never measured
+        block[lay.unchecked] = np.inf
+    if lay.W:  # the payload's centre held the same way, less its radius
+        c = payload_centre(bodies)
+        d_c = segment_point(c0, cv, c[None])[0] - cr
+        h_c = (np.abs(np.einsum("nji,nj->ni", axes, c - centre)) - half).max(axis=1)
+        block[:, -1] = np.maximum(d_c, h_c) - lay.cfg.payload.radius
     return lb
 
 
@@ -396,10 +446,11 @@ def _solids_pass(bodies: StackBodies, lay: _Layout, dist: np.ndarray, parts: tup
 class _Layout:
     """The rows of one configuration and scene, in the order of every clearance's arrays,
     the same call after call (:class:`~assembler_pin.optimize.rows.ClearanceRows` needs a fixed
-    count and order): first the exact ones, the ``P`` leg pairs (the kernel's), the floor's (the
-    ``G`` legs, then the plates not standing), each sphere's (its ``G`` legs, then its ``K``
-    plates); then, from row ``X``, the screened ones: the ``Q`` leg–plate pairs, the ``S`` plate
-    pairs, each box's or cylinder's (its legs, then its plates)."""
+    count and order): first the exact ones, the ``P`` leg pairs (the kernel's), the payload's
+    (against the ``G`` legs and plates 0..n-1, when it has a radius), the floor's (the ``G``
+    legs, the plates not standing, the payload), each sphere's (its ``G`` legs, its ``K``
+    plates, the payload); then, from row ``X``, the screened ones: the ``Q`` leg–plate pairs,
+    the ``S`` plate pairs, each box's or cylinder's (its legs, its plates, the payload)."""
 
     cfg: AssemblerConfig
     scene: Scene | None
@@ -415,6 +466,9 @@ class _Layout:
     S: int
     X: int
     kernel_inputs: KernelInputs
+    payload_at: int  # first row of the payload against the legs and plates 0..n-1 (-1: no payload)
+    unchecked: np.ndarray | None  # (solids, G + K + W) a support obstacle's rows with the standing plates
+    W: int  # rows of the payload per obstacle and the floor: 1, or 0 without a payload
     leg_plate: np.ndarray  # (Q, 4) (leg, plate, trim bottom, trim top)
     plate_pairs: np.ndarray  # (S, 2)
     floor: tuple | None  # (first row, z [m], trim bottom (G,), trim top (G,), plates checked)
@@ -443,9 +497,15 @@ def _build_layout(cfg: AssemblerConfig, scene: Scene | None) -> _Layout:
     t = pair_table(cfg)
     G, K = LEGS_PER_PLATFORM * cfg.platforms, cfg.platforms + 1
     legs, plates = np.arange(G), np.arange(K)
-    own = stack_body_names(cfg.platforms)
+    n, W = cfg.platforms, int(cfg.payload.radius > 0)
+    own = (*stack_body_names(n), *(("payload",) if W else ()))
     names = tuple(own)
     blocks = [_block(len(t.leg_a), (t.leg_a, t.leg_b), (_LEG, _LEG), (t.leg_a, t.leg_b))]
+    payload_at = -1
+    if W:  # the payload, on plate n, against every leg and the plates below plate n
+        payload_at = len(t.leg_a)
+        blocks.append(_block(G, (legs, len(own) - 1), (_LEG, _PLATE), (legs, n)))
+        blocks.append(_block(n, (G + plates[:n], len(own) - 1), (_PLATE, _PLATE), (plates[:n], n)))
     obstacles = () if scene is None else scene.obstacles
     floor = None
     if scene is not None:
@@ -458,6 +518,8 @@ def _build_layout(cfg: AssemblerConfig, scene: Scene | None) -> _Layout:
     def against(oid: int, k: np.ndarray = plates) -> None:
         blocks.append(_block(G, (legs, oid), (_LEG, _FIXED), (legs, 0)))
         blocks.append(_block(len(k), (G + k, oid), (_PLATE, _FIXED), (k, 0)))
+        if W:
+            blocks.append(_block(1, (len(own) - 1, oid), (_PLATE, _FIXED), (n, 0)))
 
     if scene is not None and scene.floor_z is not None:
         on = np.asarray(scene.standing, dtype=int)
@@ -484,6 +546,13 @@ def _build_layout(cfg: AssemblerConfig, scene: Scene | None) -> _Layout:
         a.flags.writeable = False
     exact = np.zeros(len(pairs), bool)
     exact[:X] = True
+    unchecked = None
+    if any(o.support for o in solids):
+        assert scene is not None
+        unchecked = np.zeros((len(solids), G + K + W), bool)
+        standing = [k for k in scene.standing if k < K]
+        unchecked[np.ix_([o.support for o in solids], [G + k for k in standing])] = True
+        exact[solid_at : solid_at + unchecked.size] |= unchecked.ravel()  # kept at inf, never measured
     cores = [o.bounding_capsule() for o in solids]
     return _Layout(
         cfg,
@@ -500,6 +569,9 @@ def _build_layout(cfg: AssemblerConfig, scene: Scene | None) -> _Layout:
         len(ka),
         X,
         kernel_inputs(cfg),
+        payload_at,
+        unchecked,
+        W,
         lay_leg_plate,
         t.plate_pairs,
         floor,
@@ -652,9 +724,14 @@ class _Source:
 
 
 def _scene_pass(src: _Source) -> None:
-    """The scene's rows: the floor and the spheres exactly, the boxes' and cylinders' bounds."""
+    """The payload's rows and the scene's: the floor and the spheres exactly, the boxes' and
+    cylinders' bounds."""
     lay = src.layout
     bodies = src.bodies()
+    if lay.W:
+        src.scene_rows += _payload_pass(bodies, lay, src.dist)
+    if lay.scene is None:
+        return
     if lay.floor is not None:
         src.scene_rows += _floor_pass(bodies, lay, src.dist)
     if len(lay.radii) or lay.solids:
@@ -678,11 +755,19 @@ def _measure_row(src: _Source, r: int) -> None:
         a, b = (int(v) for v in lay.plate_pairs[i - lay.Q])
         got = (*_coal_distance(plate, bodies.R[a], bodies.p[a], plate, bodies.R[b], bodies.p[b]), 0.0, 0.0, 0.0)
     else:  # a leg or a plate against a box or a cylinder
-        o, j = divmod(i - lay.Q - lay.S, lay.G + lay.K)
+        o, j = divmod(i - lay.Q - lay.S, lay.G + lay.K + lay.W)
         fixed = solids[o]
         if j < lay.G:
             assert src.solid_lb is not None
-            got = _measure_leg(bodies, j, src.solid_lb[o, j], fixed)
+            trims = (False, False)
+            if lay.solids[o].support:  # the floor's rule at the standing plates' joints
+                platform = j // LEGS_PER_PLATFORM
+                standing = lay.scene.standing if lay.scene is not None else ()
+                trims = (platform in standing, platform + 1 in standing)
+            got = _measure_leg(bodies, j, src.solid_lb[o, j], fixed, trims)
+        elif j == lay.G + lay.K:  # the payload
+            ball = _coal().Sphere(lay.cfg.payload.radius)
+            got = (*_coal_distance(ball, np.eye(3), payload_centre(bodies), *fixed), 0.0, 0.0, 0.0)
         else:
             k = j - lay.G
             got = (*_coal_distance(plate, bodies.R[k], bodies.p[k], *fixed), 0.0, 0.0, 0.0)
@@ -779,7 +864,7 @@ def clearance(
     lay = _layout(cfg, scene)
     dist = np.empty(lay.m)
     src = _kernel_pass(lay, pa, dist)
-    if scene is not None:
+    if scene is not None or lay.W:
         _scene_pass(src)
     _measure_near(src, cfg.clearance + NEAR)
     if len(dist):

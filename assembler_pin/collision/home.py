@@ -6,7 +6,8 @@ leg–leg distance and leg–own-plate distance by the rule of :mod:`~assembler_
 (the same pairs, in the same order, the same tie rule), once the other bodies measured through
 coal in the full path (plates against legs and plates) are certainly farther: in the home pose
 every plate is level, so a leg is at least ``home_height - thickness / 2 - motor_radius`` from
-a plate it does not sit on and two plates are ``home_height - thickness`` apart or more. A
+a plate it does not sit on and two plates are ``home_height - thickness`` apart or more; a payload of radius ``r`` is at
+least ``offset - r - motor_radius`` from every leg and plate below it. A
 leg's trimmed capsule against its own level plate is the height of the segment's end nearest
 that plate above (below) the plate's face, minus the radius there, when that end lies over
 the disc and the segment does not reach the face. When any of that does not hold,
@@ -93,6 +94,8 @@ def home_clearance(cfg: AssemblerConfig, bottom_in_plate: list, top_in_plate: li
     rows += [(d, f"SP{g // 6} leg {g % 6}", f"plate {g // 6 + end}") for d, g, end in own]
     dmin = min(d for d, _, _ in rows)
     plates_bound = min(h - 0.5 * cfg.plate.thickness - leg.motor_radius, h - cfg.plate.thickness)
+    if cfg.payload.radius > 0:  # the payload, offset above plate n; every leg and plate below it
+        plates_bound = min(plates_bound, cfg.payload.offset - cfg.payload.radius - leg.motor_radius)
     if not dmin < plates_bound - 1e-9:
         return None
     _, a, c = next(x for x in rows if x[0] <= dmin + TIE)

@@ -15,7 +15,8 @@ numbered ``g = 6 j + i`` (platform j, leg i); plates ``k = 0..n``.
 * **Scene**: every leg and every plate against every obstacle; every leg and every plate
   against the floor, but not the plates standing on it (:attr:`Scene.standing
   <assembler_pin.collision.scene.Scene.standing>`: the base plate; a walk's foot as it lands
-  or lifts off) and not the first ``leg.node_zone`` of a leg from a joint on a standing plate.
+  or lifts off) and not the first ``leg.node_zone`` of a leg from a joint on a standing plate;
+  the same rule for an obstacle the stack stands on (``support``, a table or a mount).
 
 The table depends on the configuration only and is built once per configuration.
 """

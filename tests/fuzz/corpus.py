@@ -101,6 +101,10 @@ def _statics_config_cases() -> list[CliCase]:
         "cfg_node_zone_long.yaml",
         "cfg_plate_thick.yaml",
         "cfg_plate_radius_zero.yaml",
+        "cfg_payload_radius_negative.yaml",
+        "cfg_payload_radius_huge.yaml",
+        "cfg_payload_radius_text.yaml",
+        "cfg_payload_radius_nan.yaml",
     ]
     cases = [_case(f"config.{Path(n).stem}", ["statics", "--home", "--json", "--config", f"{{d}}/{n}"]) for n in refuse]
     cases += [
@@ -947,6 +951,10 @@ CONFIG_FILES: dict[str, bytes] = {
     "cfg_node_zone_long.yaml": b"leg:\n  node_zone: 0.15\n",
     "cfg_plate_thick.yaml": b"plate:\n  radius: 0.1\n  thickness: 0.2\n",
     "cfg_plate_radius_zero.yaml": b"plate:\n  radius: 0.0\n",
+    "cfg_payload_radius_negative.yaml": b"payload:\n  radius: -0.01\n",
+    "cfg_payload_radius_huge.yaml": b"payload:\n  radius: 1.5\n",
+    "cfg_payload_radius_text.yaml": b"payload:\n  radius: big\n",
+    "cfg_payload_radius_nan.yaml": b"payload:\n  radius: .nan\n",
 }
 
 
