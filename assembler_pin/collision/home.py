@@ -23,7 +23,7 @@ from ..config.schema import AssemblerConfig
 __all__ = ["TIE", "home_clearance", "segment_distance"]
 
 #: Distances within this of the smallest are ties, broken by the pairs' order [m]: above
-#: coal's noise (:data:`~assembler_pin.collision.check.GJK_TOLERANCE`), so that equal pairs
+#: coal's noise (:data:`~assembler_pin.collision.screens.GJK_TOLERANCE`), so that equal pairs
 #: measured by coal (the legs against their own level plates at home) name the first.
 TIE = 1e-9
 
