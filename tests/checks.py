@@ -357,7 +357,8 @@ def check_result(am, result) -> None:
     np.testing.assert_allclose(fk.plates.p, result.state.plates.p, atol=1e-9)
     assert kinematic_problems(am.config, result.state.plates, result.goal) == []
     kinds = {v.kind for v in result.state.violations}
-    assert not kinds - {"tension", "compression"}
+    # the helper arm's pose is kinematic: its forces and clearance are the optimizer's to repair
+    assert not kinds - {"tension", "compression", "collision"}
 
 
 def brute_segment_distance(p1, d1, p2, d2) -> float:

@@ -229,8 +229,6 @@ def test_no_import_cycle():
 #: The package's reads of the environment that pick no code path: (module, why).
 ENVIRONMENT_READS = {
     "assembler_pin/viz/server.py": "copies the environment for the viewer's server process",
-    # the collision engine's variable, until the compiled clearance is its one engine
-    "assembler_pin/collision/kernel.py": "the clearance engine's variable",
 }
 
 

@@ -50,8 +50,7 @@ def run_benchmarks(
 ) -> dict[str, Any]:
     """Median per-call times [µs] of statics, SP FK, stack FK, closed-form q and the
     clearance (:func:`~assembler_pin.bench.collision.benchmark_clearance`: the stack's own
-    pairs on the compiled kernel and on numpy, ``clearance_us``, ``clearance_numpy_us``, and
-    among the truss bay, ``clearance_scene_us``), ``solve`` with a scene of ten obstacles
+    pairs, ``clearance_us``, and among the truss bay, ``clearance_scene_us``), ``solve`` with a scene of ten obstacles
     against without (:func:`~assembler_pin.bench.collision.benchmark_solve_scene`:
     ``solve_free_ms``, ``solve_scene_ms``, ``solve_scene_ratio``), then the
     helper-arm initial condition (:func:`benchmark_initial_condition`: ``initial_scenarios_ms``,

@@ -14,7 +14,6 @@ from typing import Any
 import numpy as np
 
 from ..collision.check import clearance
-from ..collision.kernel import kernel_available
 from ..collision.scene import Scene, scene_from_dict
 from ..kinematics import PlateArrays
 from ..model.assembler import AssemblerModel
@@ -67,22 +66,17 @@ SOLVE_SCENE_GOAL = (0.2, 0.1, 0.9)
 
 def benchmark_clearance(am: AssemblerModel, poses: list[PlateArrays], repeat: int) -> dict[str, float]:
     """Median time per :func:`~assembler_pin.collision.check.clearance` call [µs], cycling
-    through ``poses``: the stack's own pairs on the compiled kernel (``clearance_us``; NaN
-    without numba) and on numpy (``clearance_numpy_us``), and among the truss bay
-    (:data:`TRUSS_BAY`) on the kernel where installed (``clearance_scene_us``)."""
+    through ``poses``: the stack's own pairs (``clearance_us``) and among the truss bay
+    (:data:`TRUSS_BAY`, ``clearance_scene_us``)."""
     scene = scene_from_dict(TRUSS_BAY)
     counter = iter(range(10**9))
 
     def pick() -> PlateArrays:
         return poses[next(counter) % len(poses)]
 
-    compiled = kernel_available()
-    engine = "numba" if compiled else "numpy"
-    nan = float("nan")
     return {
-        "clearance_us": median_time_us(lambda: clearance(am, pick(), engine="numba"), repeat) if compiled else nan,
-        "clearance_numpy_us": median_time_us(lambda: clearance(am, pick(), engine="numpy"), repeat),
-        "clearance_scene_us": median_time_us(lambda: clearance(am, pick(), scene, engine=engine), repeat),
+        "clearance_us": median_time_us(lambda: clearance(am, pick()), repeat),
+        "clearance_scene_us": median_time_us(lambda: clearance(am, pick(), scene), repeat),
     }
 
 

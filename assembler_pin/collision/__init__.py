@@ -4,6 +4,10 @@
 * :mod:`~assembler_pin.collision.pairs`: which pairs are checked (the rule);
 * :mod:`~assembler_pin.collision.distance`: closed-form vectorized distances;
 * :mod:`~assembler_pin.collision.scene`: obstacles and the floor, read strictly from YAML;
+* :mod:`~assembler_pin.collision.kernel`: the compiled pass of the stack's own pairs;
+* :mod:`~assembler_pin.collision.layout`: the rows of a configuration and a scene;
+* :mod:`~assembler_pin.collision.closed`: the payload's, the floor's and the spheres' rows;
+* :mod:`~assembler_pin.collision.screens`: lower bounds and coal's distances of the rest;
 * :mod:`~assembler_pin.collision.check`: the clearance of a pose and its derivatives;
 * :mod:`~assembler_pin.collision.home`: the home pose's clearance on plain floats.
 

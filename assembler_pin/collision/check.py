@@ -20,8 +20,9 @@ made once, plus a few µs of Python around each call). Pinocchio's ``GeometryMod
 each, and updating the 48 capsules' placements and lengths from Python costs more again: the
 vectorized closed form is the faster of the two.
 
-The rows of a configuration and a scene (``_Layout``: pairs, order, the kernel's inputs)
-are built once per configuration object and obstacle tuple; a call fills one distance array.
+The rows of a configuration and a scene (:class:`~assembler_pin.collision.layout.Layout`:
+pairs, order, the kernel's inputs) are built once per configuration object and obstacle tuple;
+a call fills one distance array.
 
 **Distances** are between surfaces [m], negative when two bodies overlap (for capsules, the
 distance of the axes minus the radii; for coal pairs, coal's signed distance). Pairs the
@@ -47,38 +48,24 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..config.schema import AssemblerConfig
 from ..exceptions import SceneError
 from ..kinematics import PlateArrays, plate_arrays
 from ..model.assembler import AssemblerModel
-from ..model.geometry import LEGS_PER_PLATFORM, leg_geometry
-from .bodies import MOTOR, SHAFT, StackBodies, leg_segments, stack_body_names
-from .distance import (
-    cylinder_lowest_point,
-    point_in_cylinder_distance,
-    segment_point,
-    segment_segment,
-    segment_segment_columns,
-)
-from .kernel import ROW_HB, ROW_NORMAL, ROW_SIGMA, ROW_WIDTH, ROW_XA, ROW_XB, self_kernel
-from .pairs import pair_table, per_config
-from .scene import Obstacle, Scene, read_scene
+from ..model.geometry import LEGS_PER_PLATFORM
+from .bodies import StackBodies, leg_segments
+from .closed import floor_pass, legs_all_parts, payload_centre, payload_pass, spheres_pass, up_normals
+from .home import TIE
+from .kernel import ROW_HB, ROW_NORMAL, ROW_RADIUS, ROW_SIGMA, ROW_XA, ROW_XB, own_pairs
+from .layout import LEG, PLATE, Layout, layout_of
+from .scene import Scene, read_scene
+from .screens import coal_distance, coal_module, measure_leg, shapes_of, solids_pass
 
-__all__ = ["GJK_TOLERANCE", "NEAR", "Clearance", "clearance", "physical_bodies"]
+__all__ = ["NEAR", "Clearance", "clearance", "physical_bodies"]
 
 logger = logging.getLogger(__name__)
 
 #: Pairs whose screening bound is within this of the clearance are measured exactly [m].
 NEAR = 0.05
-
-#: coal's GJK tolerance [m] (the default, 1e-6, leaves the distance noisy at that level: too
-#: coarse for derivatives held to central differences). The penetration depth of overlapping
-#: pairs comes from coal's EPA at its default tolerance: its derivative is good to ~1e-3.
-GJK_TOLERANCE = 1e-10
-
-# carrier kinds of a closest point: on a leg (moves with its two plates and its length),
-# on a plate (rigid with it), fixed (an obstacle, the floor)
-_LEG, _PLATE, _FIXED = 0, 1, 2
 
 
 @dataclass
@@ -92,11 +79,12 @@ class _Rows:
     index: np.ndarray  # (m, 2) leg g or plate k
     sigma: np.ndarray  # (m, 2) σ of a leg point [m]
     hb: np.ndarray  # (m, 2) d σ / d L of a leg point
+    radius: np.ndarray  # (m, 2) radius of the leg's capsule holding the point [m] (0: not a leg)
     point: np.ndarray  # (m, 2, 3) closest points (a leg's on its axis), world [m]
     normal: np.ndarray  # (m, 3) unit normal from body b to body a
 
 
-def _unit(v: np.ndarray) -> np.ndarray:
+def unit(v: np.ndarray) -> np.ndarray:
     norm = np.sqrt(np.einsum("...k,...k->...", v, v))
     fallback = np.broadcast_to(np.array([0.0, 0.0, 1.0]), v.shape)
     return np.where(norm[..., None] > 1e-15, v / np.maximum(norm, 1e-300)[..., None], fallback)
@@ -158,17 +146,17 @@ class Clearance:
         the second body to the first); None when no pair is checked.
 
         A leg's closest point is on its axis: its surface point is that point moved by the
-        radius of its motor or shaft (whichever holds it) towards the other body.
+        radius of the capsule (motor or shaft) the distance was measured on towards the other
+        body (at the motor/shaft junction, the one that holds the pair's distance).
         """
         if not math.isfinite(self.min_distance) or not len(self.distances):
             return None
         r = self._rows
-        i = int(np.flatnonzero(r.dist <= self.min_distance + 1e-12)[0])
+        i = int(np.flatnonzero(r.dist <= self.min_distance + TIE)[0])
         n = r.normal[i]
         a = r.point[i, 0].copy()
-        if r.kind[i, 0] == _LEG:
-            leg = self._bodies.cfg.leg
-            a -= (leg.motor_radius if r.sigma[i, 0] <= leg.motor_length else leg.shaft_radius) * n
+        if r.kind[i, 0] == LEG:
+            a -= r.radius[i, 0] * n
         return a, a - self.min_distance * n
 
     def gradient(self, rows: np.ndarray | Sequence[int] | None = None) -> np.ndarray:
@@ -188,9 +176,9 @@ class Clearance:
         n = r.normal[sel]
         for side, sign in ((0, 1.0), (1, -1.0)):
             kind, idx, x = r.kind[sel, side], r.index[sel, side], r.point[sel, side]
-            at = np.nonzero(kind == _PLATE)[0]
+            at = np.nonzero(kind == PLATE)[0]
             np.add.at(out, (at, idx[at]), sign * np.hstack([n[at], np.cross(x[at], n[at])]))
-            at = np.nonzero(kind == _LEG)[0]
+            at = np.nonzero(kind == LEG)[0]
             if not len(at):
                 continue
             g = idx[at]
@@ -206,373 +194,6 @@ class Clearance:
         return out[:, ::-1].copy() if self._reversed else out
 
 
-# ---------------------------------------------------------------- closed forms
-def _variant_index(t) -> tuple[np.ndarray, np.ndarray]:
-    """Rows of the leg–leg capsule pairs (4 per leg pair: motor/shaft × motor/shaft) as
-    indices into the 8 variants of each leg part (part × bottom trim × top trim)."""
-    parts_a = np.tile(np.array([MOTOR, MOTOR, SHAFT, SHAFT]), len(t.leg_a))
-    parts_b = np.tile(np.array([MOTOR, SHAFT, MOTOR, SHAFT]), len(t.leg_a))
-    tr = np.repeat(t.trim.astype(int), 4, axis=0)
-    va = np.repeat(t.leg_a, 4) * 8 + parts_a * 4 + tr[:, 0] * 2 + tr[:, 1]
-    vb = np.repeat(t.leg_b, 4) * 8 + parts_b * 4 + tr[:, 2] * 2 + tr[:, 3]
-    return va, vb
-
-
-def _legs_all_parts(bodies: StackBodies, trim_bottom=False, trim_top=False) -> tuple[np.ndarray, ...]:
-    """Every leg's motor and shaft (rows 2g, 2g+1): leg, part and
-    :func:`~assembler_pin.collision.bodies.leg_segments` (trims given per leg or for all)."""
-    G = len(bodies.length)
-    g = np.repeat(np.arange(G), 2)
-    part = np.tile(np.array([MOTOR, SHAFT]), G)
-    tb = np.repeat(np.asarray(trim_bottom), 2) if np.ndim(trim_bottom) else trim_bottom
-    tt = np.repeat(np.asarray(trim_top), 2) if np.ndim(trim_top) else trim_top
-    return (g, part, *leg_segments(bodies, g, part, tb, tt))
-
-
-def _best_parts(d: np.ndarray, s: np.ndarray, start, vec, lo, hi, hb) -> tuple[np.ndarray, ...]:
-    """Per leg, the closer of its two parts: distances ``d`` (..., 2G) [m] and the parameters
-    ``s`` of the closest points on the parts (:func:`_legs_all_parts`' rows) → the distance
-    (..., G) [m], the closest point on the axis (..., G, 3) world [m], its σ [m] and dσ/dL."""
-    G = d.shape[-1] // 2
-    pick = np.argmin(d.reshape(*d.shape[:-1], G, 2), axis=-1) + 2 * np.arange(G)
-    best, sb = np.take_along_axis(d, pick, axis=-1), np.take_along_axis(s, pick, axis=-1)
-    x = start[pick] + sb[..., None] * vec[pick]
-    sigma = lo[pick] + sb * np.maximum(hi[pick] - lo[pick], 0.0)
-    return best, x, sigma, sb * hb[pick]
-
-
-def _floor_pass(bodies: StackBodies, lay: _Layout, dist: np.ndarray) -> list[tuple]:
-    """Every leg and plate against the floor (a half-space below ``z``): exact, signed, written
-    into ``dist`` at the floor's rows; but not the standing plates, nor a leg's ``node_zone``
-    at a standing plate. Returns the rows' closest points (:attr:`_Source.scene_rows`)."""
-    assert lay.floor is not None
-    at, floor_z, trim_bottom, trim_top, k = lay.floor
-    _, _, start, vec, lo, hi, hb, radius = _legs_all_parts(bodies, trim_bottom, trim_top)
-    s = (vec[:, 2] < 0.0).astype(float)  # the lower end
-    d = start[:, 2] + s * vec[:, 2] - floor_z - radius
-    d[hi < lo] = np.inf
-    best, x, sigma, hbest = _best_parts(d, s, start, vec, lo, hi, hb)
-    G = len(best)
-    dist[at : at + G] = best
-    on_floor = x.copy()
-    on_floor[:, 2] = floor_z
-    out: list[tuple] = [(at, sigma, hbest, np.stack([x, on_floor], 1), _up(G))]
-    if len(k):
-        plate = lay.cfg.plate
-        low, height = cylinder_lowest_point(bodies.p[k], bodies.R[k][:, :, 2], plate.radius, plate.thickness)
-        dist[at + G : at + G + len(k)] = height - floor_z
-        below = low.copy()
-        below[:, 2] = floor_z
-        out.append((at + G, None, None, np.stack([low, below], 1), _up(len(k))))
-    return out
-
-
-def _up(m: int) -> np.ndarray:
-    up = np.zeros((m, 3))
-    up[:, 2] = 1.0
-    return up
-
-
-def _spheres_pass(bodies: StackBodies, lay: _Layout, dist: np.ndarray, parts: tuple) -> list[tuple]:
-    """Every leg and plate against every sphere, in one pass over (spheres × bodies): closed
-    forms, exact, written into ``dist`` at the spheres' rows (per sphere: its G legs, then its
-    plates). Returns the rows' closest points and normals (:attr:`_Source.scene_rows`)."""
-    centre, r = lay.centres, lay.radii  # (N, 3), (N,) world [m]
-    _, _, start, vec, lo, hi, hb, radius = parts
-    d_axis, s = segment_point(start[None], vec[None], centre[:, None])  # (N, 2G)
-    d = d_axis - radius - r[:, None]
-    d[:, hi < lo] = np.inf
-    best, x, sigma, hbest = _best_parts(d, s, start, vec, lo, hi, hb)  # (N, G)
-    n = _unit(x - centre[:, None])
-    cfg, R, p = lay.cfg, bodies.R, bodies.p
-    local = np.einsum("kji,skj->ski", R, centre[:, None] - p)  # Rᵀ (c - p), (N, K, 3)
-    dc, closest = point_in_cylinder_distance(local, cfg.plate.radius, cfg.plate.thickness)
-    on_plate = p + np.einsum("kij,skj->ski", R, closest)
-    nk = _unit(on_plate - centre[:, None])
-    nk = np.where((dc < 0)[..., None], -nk, nk)
-    N, G, K = len(r), lay.G, lay.K
-    block = dist[lay.sphere_at : lay.sphere_at + N * (G + K)].reshape(N, G + K)
-    block[:, :G] = best
-    block[:, G:] = dc - r[:, None]
-    point = np.empty((N, G + K, 2, 3))
-    point[:, :G, 0], point[:, :G, 1] = x, centre[:, None] + r[:, None, None] * n
-    point[:, G:, 0], point[:, G:, 1] = on_plate, centre[:, None] + r[:, None, None] * nk
-    sig, hbv = np.zeros((N, G + K)), np.zeros((N, G + K))
-    sig[:, :G], hbv[:, :G] = sigma, hbest
-    normal = np.concatenate([n, nk], axis=1)
-    return [(lay.sphere_at, sig.ravel(), hbv.ravel(), point.reshape(-1, 2, 3), normal.reshape(-1, 3))]
-
-
-# ---------------------------------------------------------------- coal pairs
-def _coal():
-    import coal  # shipped with pin; imported on the first pair that needs it
-
-    return coal
-
-
-def _obstacle_shape(o: Obstacle):
-    coal = _coal()
-    if o.kind == "box":
-        return coal.Box(*o.size)
-    return coal.Cylinder(o.size[0], o.size[1])
-
-
-def _z_to(u: np.ndarray) -> np.ndarray:
-    """A rotation whose z axis is the unit vector ``u``."""
-    ux, uy, uz = float(u[0]), float(u[1]), float(u[2])
-    if abs(ux) < 0.9:  # x = e_x × u, normalized
-        x = (0.0, -uz, uy)
-    else:  # x = e_y × u
-        x = (uz, 0.0, -ux)
-    norm = math.sqrt(x[0] * x[0] + x[1] * x[1] + x[2] * x[2])
-    x = (x[0] / norm, x[1] / norm, x[2] / norm)
-    y = (uy * x[2] - uz * x[1], uz * x[0] - ux * x[2], ux * x[1] - uy * x[0])
-    return np.array([[x[0], y[0], ux], [x[1], y[1], uy], [x[2], y[2], uz]])
-
-
-_REQUEST: list = []  # coal's distance request, made once
-
-
-def _coal_distance(shape_a, R_a, p_a, shape_b, R_b, p_b) -> tuple[float, np.ndarray, np.ndarray, np.ndarray]:
-    """coal's signed distance [m] of two shapes at their world poses, the witness points on
-    each (3,), (3,) world [m] and the unit normal from b to a."""
-    coal = _coal()
-    if not _REQUEST:
-        req = coal.DistanceRequest()
-        req.gjk_tolerance = GJK_TOLERANCE
-        req.gjk_max_iterations = 1000
-        _REQUEST.append(req)
-    res = coal.DistanceResult()
-    d = coal.distance(shape_a, coal.Transform3s(R_a, p_a), shape_b, coal.Transform3s(R_b, p_b), _REQUEST[0], res)
-    wa, wb = np.array(res.getNearestPoint1()), np.array(res.getNearestPoint2())
-    return float(d), wa, wb, -np.array(res.normal)
-
-
-def _measure_leg(bodies: StackBodies, g: int, lb: np.ndarray, other: tuple) -> tuple | None:
-    """One leg against a body coal measures (``other``: shape, R, p): both parts whose bound
-    ``lb`` (2,) is finite (the capsules of
-    :func:`~assembler_pin.collision.bodies.leg_segments`, untrimmed), the closer one
-    ``(d, x_a, x_b, n, σ_a, dσ_a/dL)`` (x_a on the axis, world [m]); None for none."""
-    leg = bodies.cfg.leg
-    bottom, axis, L = bodies.bottom[g], bodies.axis[g], float(bodies.length[g])
-    turn = _z_to(axis)
-    best = None
-    for part in (MOTOR, SHAFT):
-        if not math.isfinite(lb[part]):
-            continue
-        if part == MOTOR:
-            lo, hi, hb, radius = 0.0, leg.motor_length, 0.0, leg.motor_radius
-        else:
-            lo, hi, hb, radius = leg.motor_length, L, 1.0, leg.shaft_radius
-        if hi < lo:
-            continue
-        length = max(hi - lo, 1e-12)
-        start, vec = bottom + lo * axis, (hi - lo) * axis
-        d, wa, wb, n = _coal_distance(_coal().Capsule(radius, length), turn, start + 0.5 * vec, *other)
-        s = min(max(float(np.dot(wa - start, axis)) / length, 0.0), 1.0)
-        if best is None or d < best[0]:
-            best = (d, start + s * vec, wb, n, lo + s * (hi - lo), s * hb)
-    return best
-
-
-def _solids_pass(bodies: StackBodies, lay: _Layout, dist: np.ndarray, parts: tuple) -> np.ndarray:
-    """Lower bounds of every leg and plate against every box and cylinder, in one pass over
-    (obstacles × bodies), written into ``dist`` at the obstacles' rows (per obstacle: its G
-    legs, the smaller bound of their two parts, then its plates). A leg part is held in its
-    capsule, a plate in its bounding sphere; each obstacle in its bounding capsule and between
-    the two faces of each of its slabs (a box's three, a cylinder's caps): the larger bound.
-    Returns the legs' bounds per part (N, G, 2) [m] (:func:`_measure_leg`)."""
-    c0, cv, cr = lay.cores  # (N, 3), (N, 3), (N,) world [m]
-    centre, axes, half = lay.slabs  # (N, 3), (N, 3, 3) axes as columns, (N, 3) [m]
-    _, _, start, vec, lo, hi, _, radius = parts
-    d_axis = segment_segment(start[None], vec[None], c0[:, None], cv[:, None])[0]  # (N, 2G)
-    h0 = np.matmul(start[None] - centre[:, None], axes)  # (N, 2G, 3): the ends along each axis
-    h1 = h0 + np.matmul(vec[None], axes)
-    slab = np.maximum(np.minimum(h0, h1), -np.maximum(h0, h1)) - half[:, None]
-    lb = np.maximum(d_axis - cr[:, None], slab.max(axis=2)) - radius
-    lb[:, hi < lo] = np.inf
-    lb = lb.reshape(len(cr), lay.G, 2)
-    rho = math.hypot(lay.cfg.plate.radius, 0.5 * lay.cfg.plate.thickness)
-    d_plate = segment_point(c0[:, None], cv[:, None], bodies.p)[0] - cr[:, None]  # (N, K)
-    h = np.abs(np.matmul(bodies.p[None] - centre[:, None], axes)) - half[:, None]
-    block = dist[lay.solid_at : lay.solid_at + len(cr) * (lay.G + lay.K)].reshape(len(cr), lay.G + lay.K)
-    block[:, : lay.G] = lb.min(axis=2)
-    block[:, lay.G :] = np.maximum(d_plate, h.max(axis=2)) - rho
-    return lb
-
-
-# ---------------------------------------------------------------- the rows of a scene
-@dataclass(frozen=True)
-class _Layout:
-    """The rows of one configuration and scene, in the order of every clearance's arrays,
-    the same call after call (:class:`~assembler_pin.optimize.rows.ClearanceRows` needs a fixed
-    count and order): first the exact ones, the ``P`` leg pairs (the kernel's), the floor's (the
-    ``G`` legs, then the plates not standing), each sphere's (its ``G`` legs, then its ``K``
-    plates); then, from row ``X``, the screened ones: the ``Q`` leg–plate pairs, the ``S`` plate
-    pairs, each box's or cylinder's (its legs, then its plates)."""
-
-    cfg: AssemblerConfig
-    scene: Scene | None
-    names: tuple[str, ...]
-    pairs: np.ndarray  # (m, 2) body ids (read-only: shared by every clearance)
-    kind: np.ndarray  # (m, 2) carrier kinds
-    index: np.ndarray  # (m, 2) leg g or plate k
-    exact: np.ndarray  # (m,) the exact rows (a template)
-    G: int
-    K: int
-    P: int
-    Q: int
-    S: int
-    X: int
-    kernel_inputs: tuple
-    leg_plate: np.ndarray  # (Q, 2) (leg, plate)
-    plate_pairs: np.ndarray  # (S, 2)
-    floor: tuple | None  # (first row, z [m], trim bottom (G,), trim top (G,), plates checked)
-    sphere_at: int
-    centres: np.ndarray  # (spheres, 3) world [m]
-    radii: np.ndarray  # (spheres,) [m]
-    solid_at: int
-    solids: tuple[Obstacle, ...]
-    cores: tuple[np.ndarray, np.ndarray, np.ndarray]  # bounding capsules: start, vector (N, 3), radius (N,) [m]
-    slabs: tuple[np.ndarray, np.ndarray, np.ndarray]  # centre (N, 3), axes (N, 3, 3) as columns, half widths (N, 3) [m]
-
-    @property
-    def m(self) -> int:
-        """The count of rows."""
-        return len(self.pairs)
-
-
-def _block(m: int, body: tuple, kind: tuple, index: tuple) -> tuple[np.ndarray, ...]:
-    """Static columns of ``m`` rows: each of ``body``, ``kind``, ``index`` a pair of (m,) arrays
-    or scalars."""
-    columns = (body, kind, index)
-    return tuple(np.stack([np.broadcast_to(a, m), np.broadcast_to(b, m)], 1).astype(int) for a, b in columns)
-
-
-def _build_layout(cfg: AssemblerConfig, scene: Scene | None) -> _Layout:
-    t = pair_table(cfg)
-    G, K = LEGS_PER_PLATFORM * cfg.platforms, cfg.platforms + 1
-    legs, plates = np.arange(G), np.arange(K)
-    own = stack_body_names(cfg.platforms)
-    names = tuple(own)
-    blocks = [_block(len(t.leg_a), (t.leg_a, t.leg_b), (_LEG, _LEG), (t.leg_a, t.leg_b))]
-    obstacles = () if scene is None else scene.obstacles
-    floor = None
-    if scene is not None:
-        names = (*own, *(o.name for o in obstacles)) + (("floor",) if scene.floor_z is not None else ())
-    ids = {o.name: len(own) + i for i, o in enumerate(obstacles)}
-
-    def rows() -> int:
-        return sum(len(b[0]) for b in blocks)
-
-    def against(oid: int, k: np.ndarray = plates) -> None:
-        blocks.append(_block(G, (legs, oid), (_LEG, _FIXED), (legs, 0)))
-        blocks.append(_block(len(k), (G + k, oid), (_PLATE, _FIXED), (k, 0)))
-
-    if scene is not None and scene.floor_z is not None:
-        on = np.asarray(scene.standing, dtype=int)
-        platform = legs // LEGS_PER_PLATFORM
-        k = np.setdiff1d(plates, on)
-        floor = (rows(), float(scene.floor_z), np.isin(platform, on), np.isin(platform + 1, on), k)
-        against(len(names) - 1, k)
-    spheres = [o for o in obstacles if o.kind == "sphere"]
-    sphere_at = rows()
-    for o in spheres:
-        against(ids[o.name])
-    X = rows()
-    g, k = t.leg_plate[:, 0], t.leg_plate[:, 1]
-    blocks.append(_block(len(g), (g, G + k), (_LEG, _PLATE), (g, k)))
-    ka, kb = t.plate_pairs[:, 0], t.plate_pairs[:, 1]
-    blocks.append(_block(len(ka), (G + ka, G + kb), (_PLATE, _PLATE), (ka, kb)))
-    solids = tuple(o for o in obstacles if o.kind != "sphere")
-    solid_at = rows()
-    for o in solids:
-        against(ids[o.name])
-    pairs, kind, index = (np.concatenate([b[i] for b in blocks]).reshape(-1, 2) for i in range(3))
-    for a in (pairs, kind, index):
-        a.flags.writeable = False
-    exact = np.zeros(len(pairs), bool)
-    exact[:X] = True
-    cores = [o.bounding_capsule() for o in solids]
-    return _Layout(
-        cfg,
-        scene,
-        names,
-        pairs,
-        kind,
-        index,
-        exact,
-        G,
-        K,
-        len(t.leg_a),
-        len(g),
-        len(ka),
-        X,
-        _kernel_inputs(cfg),
-        t.leg_plate,
-        t.plate_pairs,
-        floor,
-        sphere_at,
-        np.array([o.pose.translation for o in spheres], dtype=float).reshape(-1, 3),
-        np.array([o.size[0] for o in spheres], dtype=float),
-        solid_at,
-        solids,
-        (
-            np.array([c[0] for c in cores], dtype=float).reshape(-1, 3),
-            np.array([c[1] for c in cores], dtype=float).reshape(-1, 3),
-            np.array([c[2] for c in cores], dtype=float),
-        ),
-        (
-            np.array([o.pose.translation for o in solids], dtype=float).reshape(-1, 3),
-            np.array([o.pose.rotation for o in solids], dtype=float).reshape(-1, 3, 3),
-            np.array([_half_widths(o) for o in solids], dtype=float).reshape(-1, 3),
-        ),
-    )
-
-
-def _half_widths(o: Obstacle) -> tuple[float, float, float]:
-    """Half the width of a box or a cylinder between the faces of its slabs, along its own
-    axes [m] (a cylinder has one slab, its caps: ``inf`` across it)."""
-    if o.kind == "box":
-        return (0.5 * o.size[0], 0.5 * o.size[1], 0.5 * o.size[2])
-    return (math.inf, math.inf, 0.5 * o.size[1])
-
-
-_LAYOUTS: dict[tuple, _Layout] = {}
-
-
-def _layout(cfg: AssemblerConfig, scene: Scene | None) -> _Layout:
-    """The rows of ``cfg`` and ``scene``, built once per configuration object and obstacle
-    tuple (by identity: a scene rebuilt from its file builds them again), floor and standing."""
-    key = (id(cfg),) if scene is None else (id(cfg), id(scene.obstacles), scene.floor_z, scene.standing)
-    hit = _LAYOUTS.get(key)
-    if hit is not None and hit.cfg is cfg and (scene is None or (hit.scene and hit.scene.obstacles is scene.obstacles)):
-        return hit
-    lay = _build_layout(cfg, scene)
-    if len(_LAYOUTS) >= 16:
-        _LAYOUTS.pop(next(iter(_LAYOUTS)))
-    _LAYOUTS[key] = lay
-    return lay
-
-
-_SHAPES: dict[int, tuple] = {}
-
-
-def _shapes(lay: _Layout) -> tuple:
-    """coal's plate cylinder and the layout's boxes and cylinders (shape, R, p), made once per
-    layout."""
-    hit = _SHAPES.get(id(lay))
-    if hit is None or hit[0] is not lay:
-        plate = _coal().Cylinder(lay.cfg.plate.radius, max(lay.cfg.plate.thickness, 1e-9))
-        solids = [(_obstacle_shape(o), o.pose.rotation, o.pose.translation) for o in lay.solids]
-        hit = (lay, plate, solids)
-        if len(_SHAPES) >= 16:
-            _SHAPES.pop(next(iter(_SHAPES)))
-        _SHAPES[id(lay)] = hit
-    return hit[1], hit[2]
-
-
-# ---------------------------------------------------------------- one call
 class _Source:
     """The arrays of one clearance: the plate poses, the legs' joint centres and directions
     (``btu`` (3, G, 3)) and lengths, the leg-pair rows (:data:`~assembler_pin.collision.kernel.ROW_WIDTH`
@@ -591,18 +212,21 @@ class _Source:
         "legs",
         "length",
         "lp",
+        "lp_row",
         "p",
         "scene_rows",
         "solid_lb",
     )
 
-    def __init__(self, layout, R, p, btu, length, legs, dist, lp) -> None:
+    def __init__(self, layout, R, p, btu, length, legs, dist, lp, exact) -> None:
         self.layout, self.R, self.p, self.btu, self.length = layout, R, p, btu, length
         self.legs, self.dist, self.lp = legs, dist, lp
-        self.exact = layout.exact.copy()
+        self.lp_row: np.ndarray | None = None  # (Q, 2) the nearer part, its end nearest the plate or -1
+        self.exact = exact
         self.solid_lb: np.ndarray | None = None
-        self.scene_rows: list[tuple] = []  # (first row, σ_a, dσ_a/dL or None, points (m, 2, 3), normals (m, 3))
-        self.got: dict[int, tuple] = {}  # coal's rows: (x_a, x_b, n, σ_a, dσ_a/dL)
+        # (first row, σ_a, dσ_a/dL, radius_a or None, points (m, 2, 3), normals (m, 3))
+        self.scene_rows: list[tuple] = []
+        self.got: dict[int, tuple] = {}  # coal's rows: (x_a, x_b, n, σ_a, dσ_a/dL, radius_a)
         self._bodies: StackBodies | None = None
 
     def bodies(self) -> StackBodies:
@@ -616,55 +240,95 @@ class _Source:
         """Every row with its closest points and normal."""
         lay, legs = self.layout, self.legs
         m, P = lay.m, lay.P
-        sigma, hb, point, normal = np.zeros((m, 2)), np.zeros((m, 2)), np.zeros((m, 2, 3)), _up(m)
+        sigma, hb, radius = np.zeros((m, 2)), np.zeros((m, 2)), np.zeros((m, 2))
+        point, normal = np.zeros((m, 2, 3)), up_normals(m)
         point[:P, 0], point[:P, 1] = legs[:, ROW_XA : ROW_XA + 3], legs[:, ROW_XB : ROW_XB + 3]
         normal[:P] = legs[:, ROW_NORMAL : ROW_NORMAL + 3]
         sigma[:P], hb[:P] = legs[:, ROW_SIGMA : ROW_SIGMA + 2], legs[:, ROW_HB : ROW_HB + 2]
-        for at, sig, h, pt, nm in self.scene_rows:
+        radius[:P] = legs[:, ROW_RADIUS : ROW_RADIUS + 2]
+        self._leg_plate_rows(sigma, hb, radius, point, normal)
+        for at, sig, h, rad, pt, nm in self.scene_rows:
             stop = at + len(pt)
             if sig is not None:
-                sigma[at:stop, 0], hb[at:stop, 0] = sig, h
+                sigma[at:stop, 0], hb[at:stop, 0], radius[at:stop, 0] = sig, h, rad
             point[at:stop], normal[at:stop] = pt, nm
-        for r, (xa, xb, n, sig, h) in self.got.items():
-            point[r, 0], point[r, 1], normal[r], sigma[r, 0], hb[r, 0] = xa, xb, n, sig, h
-        return _Rows(self.dist, self.exact, lay.pairs, lay.kind, lay.index, sigma, hb, point, normal)
+        for r, (xa, xb, n, sig, h, rad) in self.got.items():
+            point[r, 0], point[r, 1], normal[r], sigma[r, 0], hb[r, 0], radius[r, 0] = xa, xb, n, sig, h, rad
+        return _Rows(self.dist, self.exact, lay.pairs, lay.kind, lay.index, sigma, hb, radius, point, normal)
+
+    def _leg_plate_rows(self, sigma, hb, radius, point, normal) -> None:
+        """The closest points of the leg–plate rows exact by the closed form (a part's end over
+        the disc: the point below it on the face), into the rows' arrays."""
+        lay = self.layout
+        if self.lp_row is None:
+            return
+        rows = np.flatnonzero(self.lp_row[:, 1] >= 0)
+        if not len(rows):
+            return
+        g, k, tb, tt = (lay.leg_plate[rows, c] for c in range(4))
+        part = self.lp_row[rows, 0]
+        bodies = self.bodies()
+        _, _, lo, hi, hbs, rad = leg_segments(bodies, g, part, tb == 1, tt == 1)
+        end = self.lp_row[rows, 1]
+        s = np.where(end == 1, hi, lo)
+        x = bodies.bottom[g] + s[:, None] * bodies.axis[g]
+        nk = self.R[k][:, :, 2]
+        h = np.einsum("ij,ij->i", x - self.p[k], nk)
+        up = np.where(h >= 0, 1.0, -1.0)[:, None] * nk  # from the plate to the leg
+        half = 0.5 * lay.cfg.plate.thickness
+        r = lay.X + rows
+        sigma[r, 0], hb[r, 0], radius[r, 0] = s, np.where(end == 1, hbs, 0.0), rad
+        point[r, 0], point[r, 1], normal[r] = x, x - (np.abs(h) - half)[:, None] * up, up
 
 
 def _scene_pass(src: _Source) -> None:
-    """The scene's rows: the floor and the spheres exactly, the boxes' and cylinders' bounds."""
+    """The payload's rows and the scene's: the floor and the spheres exactly, the boxes' and
+    cylinders' bounds."""
     lay = src.layout
     bodies = src.bodies()
+    if lay.W:
+        src.scene_rows += payload_pass(bodies, lay, src.dist)
+    if lay.scene is None:
+        return
     if lay.floor is not None:
-        src.scene_rows += _floor_pass(bodies, lay, src.dist)
+        src.scene_rows += floor_pass(bodies, lay, src.dist)
     if len(lay.radii) or lay.solids:
-        parts = _legs_all_parts(bodies)
+        parts = legs_all_parts(bodies)
         if len(lay.radii):
-            src.scene_rows += _spheres_pass(bodies, lay, src.dist, parts)
+            src.scene_rows += spheres_pass(bodies, lay, src.dist, parts)
         if lay.solids:
-            src.solid_lb = _solids_pass(bodies, lay, src.dist, parts)
+            src.solid_lb = solids_pass(bodies, lay, src.dist, parts)
 
 
 def _measure_row(src: _Source, r: int) -> None:
     """coal's distance of the screened row ``r``, into the source's arrays."""
     lay, bodies = src.layout, src.bodies()
-    plate, solids = _shapes(lay)
+    plate, solids = shapes_of(lay)
     i = r - lay.X
     got: tuple | None
     if i < lay.Q:  # a leg against a plate it does not sit on
-        g, k = int(lay.leg_plate[i, 0]), int(lay.leg_plate[i, 1])
-        got = _measure_leg(bodies, g, src.lp[i], (plate, bodies.R[k], bodies.p[k]))
+        g, k, tb, tt = (int(v) for v in lay.leg_plate[i])
+        got = measure_leg(bodies, g, src.lp[i], (plate, bodies.R[k], bodies.p[k]), (tb == 1, tt == 1))
     elif i < lay.Q + lay.S:  # plate against plate
         a, b = (int(v) for v in lay.plate_pairs[i - lay.Q])
-        got = (*_coal_distance(plate, bodies.R[a], bodies.p[a], plate, bodies.R[b], bodies.p[b]), 0.0, 0.0)
+        got = (*coal_distance(plate, bodies.R[a], bodies.p[a], plate, bodies.R[b], bodies.p[b]), 0.0, 0.0, 0.0)
     else:  # a leg or a plate against a box or a cylinder
-        o, j = divmod(i - lay.Q - lay.S, lay.G + lay.K)
+        o, j = divmod(i - lay.Q - lay.S, lay.G + lay.K + lay.W)
         fixed = solids[o]
         if j < lay.G:
             assert src.solid_lb is not None
-            got = _measure_leg(bodies, j, src.solid_lb[o, j], fixed)
+            trims = (False, False)
+            if lay.solids[o].support:  # the floor's rule at the standing plates' joints
+                platform = j // LEGS_PER_PLATFORM
+                standing = lay.scene.standing if lay.scene is not None else ()
+                trims = (platform in standing, platform + 1 in standing)
+            got = measure_leg(bodies, j, src.solid_lb[o, j], fixed, trims)
+        elif j == lay.G + lay.K:  # the payload
+            ball = coal_module().Sphere(lay.cfg.payload.radius)
+            got = (*coal_distance(ball, np.eye(3), payload_centre(bodies), *fixed), 0.0, 0.0, 0.0)
         else:
             k = j - lay.G
-            got = (*_coal_distance(plate, bodies.R[k], bodies.p[k], *fixed), 0.0, 0.0)
+            got = (*coal_distance(plate, bodies.R[k], bodies.p[k], *fixed), 0.0, 0.0, 0.0)
     src.exact[r] = True
     if got is None:
         src.dist[r] = np.inf
@@ -682,7 +346,9 @@ def _measure_near(src: _Source, horizon: float) -> None:
     if lay.m == X:
         return
     screened, exact = dist[X:], src.exact[X:]
-    todo = np.flatnonzero(screened < horizon)
+    if exact.any():
+        best = min(best, float(screened[exact].min()))
+    todo = np.flatnonzero((screened < horizon) & ~exact)
     while True:
         if len(todo):
             for i in todo.tolist():
@@ -693,133 +359,17 @@ def _measure_near(src: _Source, horizon: float) -> None:
             return
 
 
-@per_config
-def _kernel_inputs(cfg: AssemblerConfig) -> tuple:
-    """The kernel's constant inputs for a configuration: anchors, variant pairs, pair lists, sizes."""
-    t = pair_table(cfg)
-    va, vb = _variant_index(t)
-    sizes = np.array(
-        [
-            cfg.leg.motor_length,
-            cfg.leg.node_zone,
-            cfg.leg.motor_radius,
-            cfg.leg.shaft_radius,
-            cfg.plate.radius,
-            0.5 * cfg.plate.thickness,
-            math.hypot(cfg.plate.radius, 0.5 * cfg.plate.thickness),
-        ]
-    )
-    geometry = leg_geometry(cfg)
-    bottom = np.ascontiguousarray(geometry.bottom_in_plate.reshape(-1, 3))
-    top = np.ascontiguousarray(geometry.top_in_plate.reshape(-1, 3))
-    return bottom, top, va, vb, t.leg_plate, t.plate_pairs, sizes
-
-
-def _kernel_pass(lay: _Layout, pa: PlateArrays, kernel, dist: np.ndarray) -> _Source:
+def _kernel_pass(lay: Layout, pa: PlateArrays, dist: np.ndarray) -> _Source:
     """The stack's own rows from the compiled kernel: leg pairs exact, the coal pairs' bounds
-    (written into ``dist``). Every array is made for this call: the clearance owns them."""
-    btu, length, legs, lp = np.empty((3, lay.G, 3)), np.empty(lay.G), np.empty((lay.P, ROW_WIDTH)), np.empty((lay.Q, 2))
-    kernel(pa.R, pa.p, *lay.kernel_inputs, lay.X, btu, length, dist, legs, lp)
-    return _Source(lay, pa.R, pa.p, btu, length, legs, dist, lp)
-
-
-@per_config
-def _numpy_inputs(cfg: AssemblerConfig) -> tuple:
-    """Constants of the numpy pass: for the leg-part variants the pairs use (part × trims of
-    :func:`~assembler_pin.collision.bodies.leg_segments`), their leg, ``lo``, the two
-    candidates of ``hi = min(a1 + b1 L, a2 + b2 L)``, radius; the pairs as variant rows; the
-    platform of each leg's two plates; the leg parts and plates of the screens."""
-    bottom, top, va, vb, leg_plate, plate_pairs, *_ = _kernel_inputs(cfg)
-    G = len(bottom)
-    used, inverse = np.unique(np.concatenate([va, vb]), return_inverse=True)
-    g, part, tb, tt = used // 8, (used // 4) % 2, (used // 2) % 2 == 1, used % 2 == 1
-    leg = cfg.leg
-    shaft = part == SHAFT
-    lo = np.where(shaft, leg.motor_length, 0.0)
-    lo = np.where(tb, np.maximum(lo, leg.node_zone), lo)
-    a1, b1 = np.where(shaft, 0.0, leg.motor_length), shaft.astype(float)
-    a2, b2 = np.where(tt, -leg.node_zone, np.inf), tt.astype(float)
-    radius = np.where(shaft, leg.shaft_radius, leg.motor_radius)
-    ia, ib = inverse[: len(va)], inverse[len(va) :]
-    plate_of = np.arange(G) // LEGS_PER_PLATFORM
-    lp_g = np.repeat(leg_plate[:, 0], 2)  # the screens: (leg, plate) × (motor, shaft)
-    lp_k = np.repeat(leg_plate[:, 1], 2)
-    lp_shaft = np.tile(np.array([False, True]), len(leg_plate))
-    radius_sum = radius[ia] + radius[ib]
-    return g, lo, a1, b1, a2, b2, ia, ib, radius_sum, plate_of, bottom, top, lp_g, lp_k, lp_shaft, plate_pairs
-
-
-def _numpy_pass(lay: _Layout, pa: PlateArrays, dist: np.ndarray) -> _Source:
-    """The kernel's pass in numpy (:func:`_kernel_pass`'s outputs, the same into ``dist``).
-    Points are kept as columns (3, m) and gathered with ``np.take``: the cost of this pass is
-    the count of numpy calls, not the pairs."""
-    cfg = lay.cfg
-    g, lo, a1, b1, a2, b2, ia, ib, radius_sum, plate_of, bottom_in, top_in, lp_g, lp_k, lp_shaft, plate_pairs = (
-        _numpy_inputs(cfg)
-    )
-    R, p = pa.R, pa.p
-    bottom = np.einsum("gij,gj->gi", R[plate_of], bottom_in) + p[plate_of]
-    top = np.einsum("gij,gj->gi", R[plate_of + 1], top_in) + p[plate_of + 1]
-    vec = top - bottom
-    length = np.sqrt(np.einsum("ij,ij->i", vec, vec))
-    axis = vec / np.maximum(length, 1e-300)[:, None]
-    Lg = length[g]
-    h1, h2 = a1 + b1 * Lg, a2 + b2 * Lg
-    hi = np.minimum(h1, h2)
-    hb = np.where(h2 < h1, 1.0, b1)
-    span = hi - lo
-    axis_g = np.take(axis.T, g, axis=1)
-    start = np.take(bottom.T, g, axis=1) + lo * axis_g  # (3, V)
-    seg = np.maximum(span, 0.0) * axis_g
-    take = np.take
-    axis_d, s, u = segment_segment_columns(
-        take(start, ia, axis=1), take(seg, ia, axis=1), take(start, ib, axis=1), take(seg, ib, axis=1)
-    )
-    d = axis_d - radius_sum
-    empty = span < 0
-    d[take(empty, ia) | take(empty, ib)] = np.inf
-    P = len(d) // 4
-    best = np.argmin(d.reshape(P, 4), axis=1) + 4 * np.arange(P)
-    va, vb, sb, ub = ia[best], ib[best], s[best], u[best]
-    full = np.maximum(span, 0.0)
-    xa = take(start, va, axis=1) + sb * take(seg, va, axis=1)
-    xb = take(start, vb, axis=1) + ub * take(seg, vb, axis=1)
-    legs = np.empty((P, ROW_WIDTH))
-    legs[:, ROW_XA : ROW_XA + 3], legs[:, ROW_XB : ROW_XB + 3] = xa.T, xb.T
-    legs[:, ROW_NORMAL : ROW_NORMAL + 3] = _unit((xa - xb).T)
-    legs[:, ROW_SIGMA], legs[:, ROW_SIGMA + 1] = lo[va] + sb * full[va], lo[vb] + ub * full[vb]
-    legs[:, ROW_HB], legs[:, ROW_HB + 1] = sb * hb[va], ub * hb[vb]
-    dist[:P] = d[best]
-    # lower bounds: a leg part against a plate (its bounding sphere, and the slab of its faces)
-    leg = cfg.leg
-    half, rho = 0.5 * cfg.plate.thickness, math.hypot(cfg.plate.radius, 0.5 * cfg.plate.thickness)
-    L = length[lp_g]
-    lo_p = np.where(lp_shaft, leg.motor_length, 0.0)
-    hi_p = np.where(lp_shaft, L, leg.motor_length)
-    r_p = np.where(lp_shaft, leg.shaft_radius, leg.motor_radius)
-    a0 = bottom[lp_g] + lo_p[:, None] * axis[lp_g] - p[lp_k]  # from the plate's centre
-    dk = (hi_p - lo_p)[:, None] * axis[lp_g]
-    normal = R[lp_k][:, :, 2]
-    d_centre, _ = segment_point(a0, dk, np.zeros(3))
-    h0 = np.einsum("ij,ij->i", a0, normal)
-    h1 = h0 + np.einsum("ij,ij->i", dk, normal)
-    slab = np.maximum(np.minimum(h0, h1), -np.maximum(h0, h1)) - half - r_p
-    lp = np.maximum(d_centre - rho - r_p, slab)
-    lp[hi_p < lo_p] = np.inf
-    # plate against plate: bounding spheres, and each one's slab against the other's spread
-    ka, kb = plate_pairs[:, 0], plate_pairs[:, 1]
-    dc = p[kb] - p[ka]
-    pp = np.sqrt(np.einsum("ij,ij->i", dc, dc)) - 2.0 * rho
-    na, nb = R[ka][:, :, 2], R[kb][:, :, 2]
-    c = np.einsum("ij,ij->i", na, nb)
-    spread = cfg.plate.radius * np.sqrt(np.maximum(1.0 - c * c, 0.0)) + half * np.abs(c) + half
-    h = np.maximum(np.abs(np.einsum("ij,ij->i", na, dc)), np.abs(np.einsum("ij,ij->i", nb, dc)))
-    pp = np.maximum(pp, h - spread)
-    lp = lp.reshape(-1, 2)
-    X, Q = lay.X, len(lp)
-    dist[X : X + Q] = lp.min(axis=1)
-    dist[X + Q : X + Q + len(pp)] = pp
-    return _Source(lay, R, p, np.stack([bottom, top, axis]), length, legs, dist, lp)
+    (written into ``dist``), exact too for a leg and a plate whose nearer part has its end
+    nearest the plate over the disc (:attr:`~assembler_pin.collision.kernel.OwnPairs.lp_end`)
+    while the other part's bound is no nearer. Every array is made for this call: the
+    clearance owns them."""
+    exact = lay.exact.copy()
+    own = own_pairs(lay.kernel_inputs, pa.R, pa.p, dist, lay.X, exact)
+    src = _Source(lay, pa.R, pa.p, own.btu, own.length, own.legs, dist, own.lp, exact)
+    src.lp_row = own.lp_row
+    return src
 
 
 def physical_bodies(
@@ -836,21 +386,20 @@ def physical_bodies(
     return original, PlateArrays(np.matmul(pa.R[::-1], flip.T), pa.p[::-1].copy())
 
 
-def _turned_clearance(am: AssemblerModel, plates, scene: Scene | None, engine: str) -> Clearance:
+def _turned_clearance(am: AssemblerModel, plates, scene: Scene | None) -> Clearance:
     """The clearance of a turned model's plates (:attr:`AssemblerModel.physical`): the original
     stack's at the same bodies, its derivatives in the turned model's plate order (a world twist
     of turned plate k is the same twist of original plate n−k)."""
     original, bodies = physical_bodies(am, plates)
     if scene is not None:
         scene = dataclasses.replace(scene, standing=tuple(sorted(am.n - k for k in scene.standing)))
-    return dataclasses.replace(clearance(original, bodies, scene, engine), _reversed=True)
+    return dataclasses.replace(clearance(original, bodies, scene), _reversed=True)
 
 
 def clearance(
     am: AssemblerModel,
     plates: PlateArrays | Sequence | np.ndarray,
     scene: Scene | str | None = None,
-    engine: str = "auto",
 ) -> Clearance:
     """The clearance of a pose: every checked pair's distance, the smallest and its two bodies.
 
@@ -859,30 +408,26 @@ def clearance(
         plates: world poses of plates 0..n, plate 0 first.
         scene: obstacles and floor (a :class:`~assembler_pin.collision.scene.Scene`, a path
             of a scene file, or None for the stack's own bodies only).
-        engine: the stack's own pairs through the compiled kernel (``numba``), numpy
-            (``numpy``) or ``auto`` (:func:`~assembler_pin.collision.kernel.self_kernel`); the
-            answers agree to rounding.
 
     Returns:
         a :class:`Clearance` (distances [m], world frame).
     """
     scene = read_scene(scene)
     if am.physical is not None:  # a stack seen from its other end: its bodies are the original's
-        return _turned_clearance(am, plates, scene, engine)
+        return _turned_clearance(am, plates, scene)
     if scene is not None and any(k > am.n for k in scene.standing):
         raise SceneError(f"scene standing {scene.standing} names a plate beyond plate {am.n}")
-    kernel = self_kernel(engine)
     pa = plate_arrays(am, plates)
     cfg = am.config
-    lay = _layout(cfg, scene)
+    lay = layout_of(cfg, scene)
     dist = np.empty(lay.m)
-    src = _numpy_pass(lay, pa, dist) if kernel is None else _kernel_pass(lay, pa, kernel, dist)
-    if scene is not None:
+    src = _kernel_pass(lay, pa, dist)
+    if scene is not None or lay.W:
         _scene_pass(src)
     _measure_near(src, cfg.clearance + NEAR)
     if len(dist):
         dmin = float(dist.min())
-        first = int(np.argmax(dist <= dmin + 1e-12))
+        first = int(np.argmax(dist <= dmin + TIE))
         pair = lay.pairs[first]
         between = (lay.names[pair[0]], lay.names[pair[1]])
     else:

@@ -2,11 +2,15 @@
 
 The fast ``statics --home --json`` answer (:mod:`assembler_pin.statics.home`) carries the same
 ``clearance`` as :func:`~assembler_pin.collision.check.clearance` of the home pose: the smallest
-leg–leg distance by the rule of :mod:`~assembler_pin.collision.pairs` (the same pairs, in the
-same order, the same tie rule), once the bodies measured through coal in the full path (plates
-against legs and plates) are certainly farther: in the home pose every plate is level, so a
-leg is at least ``home_height - thickness / 2 - motor_radius`` from a plate it does not sit on
-and two plates are ``home_height - thickness`` apart or more. When that does not hold,
+leg–leg distance and leg–own-plate distance by the rule of :mod:`~assembler_pin.collision.pairs`
+(the same pairs, in the same order, the same tie rule), once the other bodies measured through
+coal in the full path (plates against legs and plates) are certainly farther: in the home pose
+every plate is level, so a leg is at least ``home_height - thickness / 2 - motor_radius`` from
+a plate it does not sit on and two plates are ``home_height - thickness`` apart or more; a payload of radius ``r`` is at
+least ``offset - r - motor_radius`` from every leg and plate below it. A
+leg's trimmed capsule against its own level plate is the height of the segment's end nearest
+that plate above (below) the plate's face, minus the radius there, when that end lies over
+the disc and the segment does not reach the face. When any of that does not hold,
 :func:`home_clearance` returns None and the caller takes the full path.
 """
 
@@ -18,8 +22,10 @@ from ..config.schema import AssemblerConfig
 
 __all__ = ["TIE", "home_clearance", "segment_distance"]
 
-#: Distances within this of the smallest are ties, broken by the pairs' order [m].
-TIE = 1e-12
+#: Distances within this of the smallest are ties, broken by the pairs' order [m]: above
+#: coal's noise (:data:`~assembler_pin.collision.screens.GJK_TOLERANCE`), so that equal pairs
+#: measured by coal (the legs against their own level plates at home) name the first.
+TIE = 1e-9
 
 Vec = list[float]
 
@@ -81,12 +87,71 @@ def home_clearance(cfg: AssemblerConfig, bottom_in_plate: list, top_in_plate: li
                 if oka and okb:
                     best = min(best, segment_distance(sa, va, sb, vb) - ra - rb)
             distances.append((best, ga, gb))
-    if not distances:
+    own = _own_plates(cfg, b, length, axis)
+    if not distances or own is None:
         return None
-    dmin = min(d for d, _, _ in distances)
+    rows = [(d, f"SP{ga // 6} leg {ga % 6}", f"SP{gb // 6} leg {gb % 6}") for d, ga, gb in distances]
+    rows += [(d, f"SP{g // 6} leg {g % 6}", f"plate {g // 6 + end}") for d, g, end in own]
+    dmin = min(d for d, _, _ in rows)
     plates_bound = min(h - 0.5 * cfg.plate.thickness - leg.motor_radius, h - cfg.plate.thickness)
+    if cfg.payload.radius > 0:  # the payload, offset above plate n; every leg and plate below it
+        plates_bound = min(plates_bound, cfg.payload.offset - cfg.payload.radius - leg.motor_radius)
     if not dmin < plates_bound - 1e-9:
         return None
-    _, ga, gb = next(x for x in distances if x[0] <= dmin + TIE)
-    name = [f"SP{g // 6} leg {g % 6}" for g in (ga, gb)]
-    return {"min_distance_m": dmin, "between": name}
+    _, a, c = next(x for x in rows if x[0] <= dmin + TIE)
+    return {"min_distance_m": dmin, "between": [a, c]}
+
+
+def _own_plates(cfg: AssemblerConfig, b: list[Vec], length: list[float], axis: list[Vec]) -> list | None:
+    """Each leg against its bottom plate, then its top plate, beyond ``node_zone`` from the
+    joint there: ``(d, g, end)`` [m] in the full path's order; None when a leg is not rising
+    or a part touches its plate (the full path measures the depth)."""
+    leg, h = cfg.leg, cfg.home_height
+    out = []
+    for g in range(len(length)):
+        j, L = g // 6, length[g]
+        if axis[g][2] <= 0.0:
+            return None
+        for end in (0, 1):
+            best = math.inf
+            for lo, hi, radius in ((0.0, leg.motor_length, leg.motor_radius), (leg.motor_length, L, leg.shaft_radius)):
+                lo = max(lo, leg.node_zone) if end == 0 else lo
+                hi = min(hi, L - leg.node_zone) if end == 1 else hi
+                if hi < lo:
+                    continue
+                d = _part_to_disc(cfg, b[g], axis[g], lo, hi, end, (j + end) * h)
+                if d is None:
+                    return None
+                best = min(best, d - radius)
+            out.append((best, g, end))
+    return out
+
+
+def _part_to_disc(cfg: AssemblerConfig, b: Vec, u: Vec, lo: float, hi: float, end: int, z: float) -> float | None:
+    """Distance [m] of the axis segment ``b + σ u``, σ in [lo, hi], to the level plate at
+    height ``z`` (a solid disc centred on the z axis) that the segment rises from (end 0) or
+    to (end 1); None when they touch. The end nearest the plate when it lies over the disc
+    (the face is the closest of the disc there); else the smallest point–disc distance along
+    the segment, a convex function, by golden-section search."""
+    radius, half = cfg.plate.radius, 0.5 * cfg.plate.thickness
+
+    def to_disc(sigma: float) -> tuple[float, float, float]:
+        x, y, zz = (b[k] + sigma * u[k] for k in range(3))
+        return max(math.hypot(x, y) - radius, 0.0), max(abs(zz - z) - half, 0.0), math.hypot(x, y)
+
+    near = lo if end == 0 else hi
+    _, up, rho = to_disc(near)
+    if up <= 0.0:
+        return None
+    if rho <= radius:
+        return up
+    a, c = lo, hi
+    ratio = 0.5 * (math.sqrt(5.0) - 1.0)
+    for _ in range(90):
+        m1, m2 = c - ratio * (c - a), a + ratio * (c - a)
+        if math.hypot(*to_disc(m1)[:2]) <= math.hypot(*to_disc(m2)[:2]):
+            c = m2
+        else:
+            a = m1
+    best = min(math.hypot(*to_disc(sigma)[:2]) for sigma in (lo, hi, 0.5 * (a + c)))
+    return best if best > 0.0 else None

@@ -1,45 +1,45 @@
-"""A compiled loop of the stack's own pairs: the leg–leg closed form and the screens.
+"""The compiled loop of the stack's own pairs: the leg–leg closed form and the screens.
 
 :func:`_self_py` is the self-collision pass of :mod:`~assembler_pin.collision.check` written
 as plain loops over legs and pairs: the joint centres of every leg from the plate poses, the
 smallest of the four capsule pairs (motor/shaft × motor/shaft, trimmed by the pair rule) of
 every leg pair with its closest points, and the lower bounds of the leg–plate and plate–plate
-pairs that coal measures when near. numba compiles it (``cache=True``) the first time
-:func:`self_kernel` is asked for it; the numpy path of :mod:`~assembler_pin.collision.check`
-stays the reference, and the tests hold the two to 1e-12 m.
-
-numba is optional (the ``fast`` extra). ``cache=True`` compiles the kernel once per install
-and Python version (a few seconds, the first time only); after that, importing numba and
-loading the cached kernel still take about 1.3 s in each new process (a self clearance costs
-~0.3 ms on numpy, ~0.04 ms on the kernel: the load pays for itself after ~5000 clearances).
-The two paths agree to rounding, not bit for bit, so an answer must not depend on which one a
-process happens to run: :func:`~assembler_pin.collision.check.clearance` takes the numpy path
-unless asked for the kernel (``engine="numba"``, or ``ASSEMBLER_PIN_COLLISION=numba`` for a
-whole process: a long map or walk, ``bench``), whatever the process has computed before.
+pairs that coal measures when near. numba compiles it (``cache=True``: once per install and
+Python version, a few seconds the first time) on the first clearance of a process; a new
+process then loads the cached kernel when it first measures a clearance, not at import, so
+that commands that measure none start as fast as before. It is the one engine of the
+clearance; the tests hold it to an independent numpy version to 1e-12 m.
 
 Frames: world, z up; lengths [m].
 """
 
 from __future__ import annotations
 
-import importlib.util
 import math
-import os
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
-from ..exceptions import OptionsError, short_repr
+from ..config.schema import AssemblerConfig
+from ..model.geometry import leg_geometry
+from .pairs import pair_table, per_config
 
-__all__ = ["ENGINES", "ENV_VAR", "ROW_WIDTH", "SIZE_NAMES", "kernel_available", "self_kernel"]
-
-#: Environment variable choosing the self-collision engine: ``numba``, ``numpy`` or unset (auto).
-ENV_VAR = "ASSEMBLER_PIN_COLLISION"
+__all__ = [
+    "ROW_RADIUS",
+    "ROW_WIDTH",
+    "SIZE_NAMES",
+    "KernelInputs",
+    "OwnPairs",
+    "kernel_inputs",
+    "own_pairs",
+    "variant_index",
+]
 
 #: The entries of the kernel's ``sizes`` array.
 SIZE_NAMES = ("motor_length", "node_zone", "motor_radius", "shaft_radius", "plate_radius", "half_thickness", "rho")
 
-_kernel: Any = None  # the compiled function (None: not yet; False: unavailable)
+_kernel: Any = None  # the compiled function (None: not yet)
 
 
 def _variant_py(code, L, sizes):  # pragma: no cover - compiled
@@ -65,17 +65,36 @@ def _variant_py(code, L, sizes):  # pragma: no cover - compiled
 _variant = _variant_py  # interpreted here; the compiled kernel calls a compiled copy
 
 #: Columns of the kernel's leg-pair rows: the closest points on the two axes (x_a, x_b),
-#: the unit normal from leg b to leg a, σ of the two points [m], dσ/dL of the two points.
-ROW_XA, ROW_XB, ROW_NORMAL, ROW_SIGMA, ROW_HB, ROW_WIDTH = 0, 3, 6, 9, 11, 13
+#: the unit normal from leg b to leg a, σ of the two points [m], dσ/dL of the two points,
+#: the radii of the two capsules (motor or shaft) that hold them [m].
+ROW_XA, ROW_XB, ROW_NORMAL, ROW_SIGMA, ROW_HB, ROW_RADIUS, ROW_WIDTH = 0, 3, 6, 9, 11, 13, 15
 
 
 def _self_py(
-    R, p, bottom_in, top_in, va, vb, leg_plate, plate_pairs, sizes, base, BTU, L, dist, rows, lp_lb
+    R,
+    p,
+    bottom_in,
+    top_in,
+    va,
+    vb,
+    leg_plate,
+    plate_pairs,
+    sizes,
+    base,
+    BTU,
+    L,
+    dist,
+    rows,
+    lp_lb,
+    lp_end,
+    lp_row,
+    exact,
 ):  # pragma: no cover - compiled
     """Fills the legs' joint centres ``BTU[0]``, ``BTU[1]`` (G, 3), directions ``BTU[2]`` (G, 3)
     and lengths L (G,) [m]; per leg pair q the distance ``dist[q]`` [m] and its row ``rows[q]``
     (:data:`ROW_XA`...: closest points on the axes, world [m], normal from leg b to leg a, σ
-    [m], dσ/dL); the lower bounds lp_lb (Q, 2) of each leg part against each plate, their
+    [m], dσ/dL); the lower bounds lp_lb (Q, 2) of each leg part (trimmed as ``leg_plate``'s
+    last two columns say) against each plate, their
     smaller one in ``dist[base + q]``, and of each plate pair in ``dist[base + Q + q]`` [m].
 
     Each capsule pair is the closed form of
@@ -147,6 +166,7 @@ def _self_py(
         dist[q] = best
         rows[q, 9], rows[q, 10] = bsa, bsb
         rows[q, 11], rows[q, 12] = bs * vhb[va[br]], bt * vhb[vb[br]]
+        rows[q, 13], rows[q, 14] = vr[va[br]], vr[vb[br]]
         n2 = 0.0
         for k in range(3):
             xa = B[ga, k] + bsa * U[ga, k]
@@ -159,14 +179,19 @@ def _self_py(
                 rows[q, 6 + k] /= norm
         else:
             rows[q, 6], rows[q, 7], rows[q, 8] = 0.0, 0.0, 1.0
-    motor_length, rho, half = sizes[0], sizes[6], sizes[5]
+    motor_length, zone, rho, half = sizes[0], sizes[1], sizes[6], sizes[5]
     Q = leg_plate.shape[0]
     for q in range(Q):
         g, kp = leg_plate[q, 0], leg_plate[q, 1]
         for part in range(2):
             lo = motor_length if part == 1 else 0.0
             hi = L[g] if part == 1 else motor_length
+            if leg_plate[q, 2] == 1 and zone > lo:
+                lo = zone
+            if leg_plate[q, 3] == 1 and L[g] - zone < hi:
+                hi = L[g] - zone
             radius = sizes[3] if part == 1 else sizes[2]
+            lp_end[q, part] = -1.0
             if hi < lo:
                 lp_lb[q, part] = math.inf
                 continue
@@ -183,8 +208,27 @@ def _self_py(
             for k in range(3):
                 w += (B[g, k] + (lo + s * (hi - lo)) * U[g, k] - p[kp, k]) ** 2
             slab = max(min(h0, h1), min(-h0, -h1)) - half - radius
-            lp_lb[q, part] = max(math.sqrt(w) - rho - radius, slab)
-        dist[base + q] = min(lp_lb[q, 0], lp_lb[q, 1])
+            bound = max(math.sqrt(w) - rho - radius, slab)
+            if min(h0, h1) > half or max(h0, h1) < -half:  # the part clear of the plate's slab
+                hmin = min(abs(h0), abs(h1))
+                for end in range(2):
+                    hn = h0 if end == 0 else h1
+                    sn = lo if end == 0 else hi
+                    if abs(hn) > hmin:
+                        continue
+                    r2 = 0.0
+                    for k in range(3):
+                        r2 += (B[g, k] + sn * U[g, k] - p[kp, k]) ** 2
+                    if r2 - hn * hn <= sizes[4] * sizes[4]:  # over the disc: its face is nearest
+                        lp_end[q, part] = end
+                        bound = abs(hn) - half - radius
+                        break
+            lp_lb[q, part] = bound
+        near = 0 if lp_lb[q, 0] <= lp_lb[q, 1] else 1
+        dist[base + q] = lp_lb[q, near]
+        lp_row[q, 0], lp_row[q, 1] = near, lp_end[q, near]
+        if lp_end[q, near] >= 0:  # the nearer part's distance, no farther than the other's bound
+            exact[base + q] = True
     plate_radius = sizes[4]
     for q in range(plate_pairs.shape[0]):
         ka, kb = plate_pairs[q, 0], plate_pairs[q, 1]
@@ -203,41 +247,111 @@ def _self_py(
         dist[base + Q + q] = lb
 
 
-def kernel_available() -> bool:
-    """True when numba is installed (the kernel can be compiled)."""
-    return importlib.util.find_spec("numba") is not None
+def variant_index(leg_a: np.ndarray, leg_b: np.ndarray, trim: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Rows of the leg–leg capsule pairs (4 per leg pair: motor/shaft × motor/shaft) as
+    variant codes of each leg part (``8 g + 4 part + 2 trim_bottom + trim_top``) for the leg
+    pairs ``leg_a``, ``leg_b`` (P,) and their trims (P, 4) (:class:`~assembler_pin.collision.pairs.PairTable`)."""
+    parts_a = np.tile(np.array([0, 0, 1, 1]), len(leg_a))
+    parts_b = np.tile(np.array([0, 1, 0, 1]), len(leg_a))
+    tr = np.repeat(trim.astype(int), 4, axis=0)
+    va = np.repeat(leg_a, 4) * 8 + parts_a * 4 + tr[:, 0] * 2 + tr[:, 1]
+    vb = np.repeat(leg_b, 4) * 8 + parts_b * 4 + tr[:, 2] * 2 + tr[:, 3]
+    return va, vb
 
 
-#: The engines of :func:`self_kernel`.
-ENGINES = ("auto", "numba", "numpy")
+@dataclass(frozen=True)
+class KernelInputs:
+    """The kernel's constants of one configuration.
 
-
-def self_kernel(engine: str = "auto") -> Any:
-    """The compiled :func:`_self_py`, or None for the numpy path.
-
-    Args:
-        engine: ``numba`` (the kernel when numba is installed), ``numpy``, or ``auto``:
-            :data:`ENV_VAR` when set, else numpy (the same path in every process, whatever it
-            computed before).
-
-    Raises:
-        OptionsError: an unknown engine, or :data:`ENV_VAR` set to one.
+    Attributes:
+        bottom_in, top_in: (G, 3) each leg's joint centres in its bottom and top plate's frame [m].
+        va, vb: (4P,) the leg-part variants of every capsule pair (:func:`variant_index`).
+        leg_plate: (Q, 4) (leg, plate, trim bottom, trim top) pairs screened (the trims in
+            {0, 1}: ``leg.node_zone`` left out at that end); plate_pairs: (S, 2).
+        sizes: (7,) :data:`SIZE_NAMES` [m].
     """
+
+    bottom_in: np.ndarray
+    top_in: np.ndarray
+    va: np.ndarray
+    vb: np.ndarray
+    leg_plate: np.ndarray
+    plate_pairs: np.ndarray
+    sizes: np.ndarray
+
+
+@per_config
+def kernel_inputs(cfg: AssemblerConfig) -> KernelInputs:
+    """The kernel's constant inputs for a configuration (cached per configuration object)."""
+    t = pair_table(cfg)
+    va, vb = variant_index(t.leg_a, t.leg_b, t.trim)
+    sizes = np.array(
+        [
+            cfg.leg.motor_length,
+            cfg.leg.node_zone,
+            cfg.leg.motor_radius,
+            cfg.leg.shaft_radius,
+            cfg.plate.radius,
+            0.5 * cfg.plate.thickness,
+            math.hypot(cfg.plate.radius, 0.5 * cfg.plate.thickness),
+        ]
+    )
+    geometry = leg_geometry(cfg)
+    bottom = np.ascontiguousarray(geometry.bottom_in_plate.reshape(-1, 3))
+    top = np.ascontiguousarray(geometry.top_in_plate.reshape(-1, 3))
+    leg_plate = np.ascontiguousarray(np.hstack([t.leg_plate, t.leg_plate_trim.astype(int)]))
+    return KernelInputs(bottom, top, va, vb, leg_plate, t.plate_pairs, sizes)
+
+
+@dataclass(frozen=True)
+class OwnPairs:
+    """The arrays of the stack's own pairs at one pose (the kernel's outputs).
+
+    Attributes:
+        btu: (3, G, 3) every leg's bottom and top joint centres and unit direction, world [m].
+        length: (G,) pin-to-pin lengths [m].
+        legs: (P, :data:`ROW_WIDTH`) the leg-pair rows (:data:`ROW_XA`...).
+        lp: (Q, 2) the lower bounds of each leg's motor and shaft against each screened plate [m].
+        lp_end: (Q, 2) where that bound is the distance: 0 or 1 when the part's end at ``lo``
+            or ``hi`` lies over the plate's disc, nearest its face, the part clear of the
+            plate's slab (the distance is then that end's height over the face less the
+            radius); -1 where the bound is only a bound.
+        lp_row: (Q, 2) each row's nearer part (:data:`~assembler_pin.collision.bodies.MOTOR`
+            or ``SHAFT``) and its ``lp_end``: the row's distance is exact where that is not -1
+            (the other part's bound is then no nearer).
+    """
+
+    btu: np.ndarray
+    length: np.ndarray
+    legs: np.ndarray
+    lp: np.ndarray
+    lp_end: np.ndarray
+    lp_row: np.ndarray
+
+
+def own_pairs(
+    inputs: KernelInputs, R: np.ndarray, p: np.ndarray, dist: np.ndarray, at: int, exact: np.ndarray
+) -> OwnPairs:
+    """The stack's own pairs at the plate poses ``R`` (n+1, 3, 3), ``p`` (n+1, 3) (world
+    [m]): the leg pairs' exact distances into ``dist[:P]`` and the screened pairs' lower
+    bounds (leg–plate, then plate–plate) into ``dist[at:at + Q + S]`` [m], ``exact[at + q]``
+    set True where a leg–plate row's bound is its distance (:attr:`OwnPairs.lp_row`). Every
+    returned array is made for this call."""
+    G, P, Q = len(inputs.bottom_in), len(inputs.va) // 4, len(inputs.leg_plate)
+    btu, length, legs, lp = np.empty((3, G, 3)), np.empty(G), np.empty((P, ROW_WIDTH)), np.empty((Q, 2))
+    lp_end, lp_row = np.empty((Q, 2)), np.empty((Q, 2), dtype=np.int64)
+    _compiled()(
+        R, p, inputs.bottom_in, inputs.top_in, inputs.va, inputs.vb, inputs.leg_plate, inputs.plate_pairs,
+        inputs.sizes, at, btu, length, dist, legs, lp, lp_end, lp_row, exact,
+    )  # fmt: skip
+    return OwnPairs(btu, length, legs, lp, lp_end, lp_row)
+
+
+def _compiled() -> Any:
+    """The compiled :func:`_self_py` (compiled or loaded from numba's cache on first use)."""
     global _kernel
-    if engine not in ENGINES:
-        raise OptionsError(f"collision engine must be one of {', '.join(ENGINES)}, got {short_repr(engine)}")
-    choice = engine
-    if engine == "auto":
-        choice = os.environ.get(ENV_VAR, "") or "numpy"
-        if choice not in ENGINES:
-            raise OptionsError(f"{ENV_VAR} must be one of {', '.join(ENGINES)}, got {short_repr(choice)}")
-    if choice != "numba" or _kernel is False:
-        return None
     if _kernel is None:
-        if not kernel_available():
-            _kernel = False
-            return None
-        import numba
+        import numba  # about a second: paid by the first clearance of a process, not at import
 
         jit = numba.njit(cache=True, nogil=True)
         globals()["_variant"] = jit(_variant_py)

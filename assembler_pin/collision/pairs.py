@@ -8,13 +8,15 @@ numbered ``g = 6 j + i`` (platform j, leg i); plates ``k = 0..n``.
   an intermediate plate, whose joint centres coincide there) touch there by design: each of
   the two is checked only beyond ``leg.node_zone`` from that node (measured along its axis
   from its joint centre). No two legs share both ends.
-* **Leg against plate**, every plate but the two the leg's joints sit on.
+* **Leg against plate**, every plate; against the two plates its joints sit on, only beyond
+  ``leg.node_zone`` from that joint (a lean can bring the motor into its own base plate).
 * **Plate against plate**, every pair of plates (neighbours too: a lean can bring two rims
   together).
 * **Scene**: every leg and every plate against every obstacle; every leg and every plate
   against the floor, but not the plates standing on it (:attr:`Scene.standing
   <assembler_pin.collision.scene.Scene.standing>`: the base plate; a walk's foot as it lands
-  or lifts off) and not the first ``leg.node_zone`` of a leg from a joint on a standing plate.
+  or lifts off) and not the first ``leg.node_zone`` of a leg from a joint on a standing plate;
+  the same rule for an obstacle the stack stands on (``support``, a table or a mount).
 
 The table depends on the configuration only and is built once per configuration.
 """
@@ -71,7 +73,10 @@ class PairTable:
         leg_a, leg_b: (P,) legs of each leg pair, ``leg_a < leg_b``.
         trim: (P, 4) booleans: is leg a trimmed at its bottom, at its top; is leg b trimmed
             at its bottom, at its top (the shared node's end).
-        leg_plate: (Q, 2) (leg, plate) pairs.
+        leg_plate: (Q, 2) (leg, plate) pairs: the other plates first, then each leg's own
+            two plates.
+        leg_plate_trim: (Q, 2) booleans: is the leg trimmed at its bottom, at its top (its
+            joint on that plate).
         plate_pairs: (S, 2) (plate, plate) pairs.
     """
 
@@ -79,6 +84,7 @@ class PairTable:
     leg_b: np.ndarray
     trim: np.ndarray
     leg_plate: np.ndarray
+    leg_plate_trim: np.ndarray
     plate_pairs: np.ndarray
 
 
@@ -99,6 +105,11 @@ def pair_table(cfg: AssemblerConfig) -> PairTable:
         axis=1,
     )
     platform = np.arange(G) // LEGS_PER_PLATFORM
-    leg_plate = np.array([(g, k) for g in range(G) for k in range(n + 1) if k not in (platform[g], platform[g] + 1)])
+    other = [(g, k) for g in range(G) for k in range(n + 1) if k not in (platform[g], platform[g] + 1)]
+    own = [(g, platform[g] + end) for g in range(G) for end in (0, 1)]
+    leg_plate = np.array(other + own, dtype=int).reshape(-1, 2)
+    lp_trim = np.zeros((len(leg_plate), 2), dtype=bool)
+    lp_trim[len(other) :: 2, 0] = True  # its bottom plate: beyond the bottom joint's zone
+    lp_trim[len(other) + 1 :: 2, 1] = True  # its top plate: beyond the top joint's zone
     plate_pairs = np.array([(k, m) for k in range(n + 1) for m in range(k + 1, n + 1)]).reshape(-1, 2)
-    return PairTable(a, b, trim, leg_plate.reshape(-1, 2).astype(int), plate_pairs.astype(int))
+    return PairTable(a, b, trim, leg_plate, lp_trim, plate_pairs.astype(int))

@@ -9,11 +9,16 @@ rotation vectors in radians)::
         name: column                # optional, at most 40 characters
       - cylinder: {radius: 0.02, length: 1.0, pose: [0.5, -0.3, 0.5, 1.5708, 0.0, 0.0]}
       - sphere: {radius: 0.05, center: [0.4, 0.3, 0.9]}
+      - box: {size: [0.6, 0.6, 0.1], pose: [0.0, 0.0, -0.056, 0.0, 0.0, 0.0]}
+        support: true               # optional: the stack is mounted on it (boxes, cylinders)
 
 ``size`` is the box's full edge lengths along its own axes; ``pose`` is the box's or the
 cylinder's centre ``(x, y, z)`` and the rotation vector ``(rx, ry, rz)`` of its frame (a
 cylinder's axis is its frame's z). An obstacle without ``name`` is called ``"box 0"``,
-``"cylinder 1"``... by its kind and its index in the list. Counts and sizes are bounded
+``"cylinder 1"``... by its kind and its index in the list. A box or a cylinder with
+``support: true`` is what the stack stands on (a table, a mount): it gets the floor's rule,
+not checked against the standing plates nor against the first ``leg.node_zone`` of a leg
+from its joint on one. Counts and sizes are bounded
 (:data:`MAX_OBSTACLES`, :data:`MAX_SIZE`); every refusal is one
 :class:`~assembler_pin.exceptions.SceneError` line naming the entry and what is allowed.
 """
@@ -59,12 +64,16 @@ class Obstacle:
         name: how messages name it.
         pose: its frame in the world (identity rotation for a sphere) [m].
         size: box: full edge lengths (3,); cylinder: (radius, length); sphere: (radius,) [m].
+        support: the stack stands on it (a box or a cylinder): the floor's rule (not checked
+            against the standing plates nor the first ``leg.node_zone`` of a leg from its
+            joint on one).
     """
 
     kind: str
     name: str
     pose: pin.SE3
     size: tuple[float, ...]
+    support: bool = False
 
     def bounding_capsule(self) -> tuple[np.ndarray, np.ndarray, float]:
         """A capsule holding the obstacle: start (3,), start→end vector (3,) world [m] and
@@ -155,7 +164,11 @@ def _obstacle(entry: Any, index: int) -> Obstacle:
             shorten(f"scene {where} must have exactly one of {', '.join(_KINDS)}, got {short_repr(list(entry))}")
         )
     kind = kinds[0]
-    _keys(entry, where, (kind,), ("name",))
+    _keys(entry, where, (kind,), ("name", "support"))
+    support = entry.get("support", False)
+    if not isinstance(support, bool) or (support and kind == "sphere"):
+        allowed = "true or false" if kind != "sphere" else "not allowed on a sphere (a box or a cylinder)"
+        raise SceneError(shorten(f"scene {where}.support = {short_repr(support)} is invalid: {allowed}"))
     name = entry.get("name", f"{kind} {index}")
     if not isinstance(name, str) or not name.strip() or len(name) > MAX_NAME or not name.isprintable():
         raise SceneError(
@@ -165,16 +178,15 @@ def _obstacle(entry: Any, index: int) -> Obstacle:
     at = f"{where}.{kind}"
     if kind == "box":
         _keys(body, at, ("size", "pose"))
-        return Obstacle(
-            kind, name, _pose(body["pose"], f"{at}.pose"), tuple(_vector(body["size"], f"{at}.size", 3, True))
-        )
+        size3 = tuple(_vector(body["size"], f"{at}.size", 3, True))
+        return Obstacle(kind, name, _pose(body["pose"], f"{at}.pose"), size3, support)
     if kind == "cylinder":
         _keys(body, at, ("radius", "length", "pose"))
         size = (
             _number(body["radius"], f"{at}.radius", positive=True),
             _number(body["length"], f"{at}.length", positive=True),
         )
-        return Obstacle(kind, name, _pose(body["pose"], f"{at}.pose"), size)
+        return Obstacle(kind, name, _pose(body["pose"], f"{at}.pose"), size, support)
     _keys(body, at, ("radius", "center"))
     centre = np.array(_vector(body["center"], f"{at}.center", 3))
     return Obstacle(kind, name, pin.SE3(np.eye(3), centre), (_number(body["radius"], f"{at}.radius", positive=True),))

@@ -19,10 +19,13 @@ from .numbers import finite_float
 if TYPE_CHECKING:
     from .schema import AssemblerConfig
 
-__all__ = ["LIMITS", "MAX_MESSAGE", "check", "shorten", "unknown_key", "validate"]
+__all__ = ["LIMITS", "MAX_MESSAGE", "MAX_PAYLOAD_RADIUS", "check", "shorten", "unknown_key", "validate"]
 
 #: Longest message of a :class:`ConfigError` [characters].
 MAX_MESSAGE = 200
+
+#: Largest ``payload.radius`` [m]: a sphere of 2 m across is no tool of a stack of ~0.3 m legs.
+MAX_PAYLOAD_RADIUS = 1.0
 
 #: Physically meaningful ranges beyond the per-key rules: every value is at most this
 #: large, so no product of them (forces ~ masses × gravity × lengths) overflows.
@@ -112,6 +115,7 @@ def _check_plate_and_payload(cfg: AssemblerConfig) -> None:
     check(0 <= p.node_spacing_deg < 60, "plate.node_spacing_deg", p.node_spacing_deg, "must be in [0, 60) degrees")
     check(p.mass >= 0, "plate.mass", p.mass, "must be >= 0 [kg]")
     check(pl.mass >= 0, "payload.mass", pl.mass, "must be >= 0 [kg]")
+    check(0 <= pl.radius <= MAX_PAYLOAD_RADIUS, "payload.radius", pl.radius, "must be in [0, 1] [m]")
 
 
 def _check_leg(cfg: AssemblerConfig) -> None:

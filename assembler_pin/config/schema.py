@@ -35,6 +35,7 @@ The YAML format (every key optional; a missing key takes the default shown)::
     payload:
       mass: 5.0             # [kg] >= 0
       offset: 0.2           # [m] along the end-effector plate's local +z
+      radius: 0.0           # [m] a sphere at the payload's centre (collisions), in [0, 1]; 0: none
     hexapod:                # stacks under one body: :mod:`assembler_pin.config.hexapod`
       stacks: 6
 
@@ -146,10 +147,13 @@ class PayloadConfig:
     Attributes:
         mass: [kg].
         offset: distance along the end-effector plate's local +z [m].
+        radius: the payload's body, a sphere at its centre, in [0, 1] [m] (0: none;
+            :mod:`assembler_pin.collision`).
     """
 
     mass: float = 5.0
     offset: float = 0.2
+    radius: float = 0.0
 
 
 @dataclass(frozen=True)

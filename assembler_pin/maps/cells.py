@@ -145,6 +145,7 @@ def scene_key(scene: Scene | None) -> str:
             "rotation": o.pose.rotation.tolist(),
             "translation": o.pose.translation.tolist(),
             "size": [float(v) for v in o.size],
+            "support": o.support,
         }
         for o in scene.obstacles
     ]
@@ -160,7 +161,7 @@ def scene_from_key(key: str) -> Scene | None:
         doc = json.loads(key)
         frames = [pin.SE3(np.array(o["rotation"]), np.array(o["translation"])) for o in doc["obstacles"]]
         obstacles = tuple(
-            Obstacle(o["kind"], o["name"], frame, tuple(o["size"]))
+            Obstacle(o["kind"], o["name"], frame, tuple(o["size"]), bool(o.get("support", False)))
             for o, frame in zip(doc["obstacles"], frames, strict=True)
         )
         _SCENES[key] = Scene(obstacles, doc["floor_z"], tuple(doc["standing"]))

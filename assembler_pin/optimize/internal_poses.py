@@ -65,15 +65,19 @@ def optimize_internal_poses(
             of bodies :func:`~assembler_pin.collision.check.clearance` checks at least the
             configuration's ``clearance`` apart, and the states are checked against the scene
             (an empty ``Scene()`` holds the stack's own pairs alone). Without a scene the
-            optimizer has no clearance rows and a colliding result is reported, not avoided.
-            IPOPT's moment-variable form has no clearance rows: with a scene, ``ipopt`` (and
-            ``auto`` on long stacks) runs SLSQP.
+            first run has no clearance rows (most optima are clear, and the rows cost time);
+            when its state collides, the run is made again with the stack's own pairs as
+            rows (an empty scene). IPOPT's moment-variable form has no clearance rows: with a
+            scene, ``ipopt`` (and ``auto`` on long stacks) runs SLSQP.
     """
     opts, start, goal = _checked_inputs(am, initial, goal, options, motion)
     scene = read_scene(scene)
     if scene is not None and opts.method == "ipopt":
         opts = dataclasses.replace(opts, method="slsqp")
     result = _optimized(am, start, goal, opts, motion, scene)
+    if scene is None and opts.method != "ipopt" and _collides(result):
+        scene = Scene()  # the stack's own pairs as rows, from the same start
+        result = _optimized(am, start, goal, opts, motion, scene)
     if _asked_for_auto(options) and result.method == "ipopt" and not result.optimal:
         result = _polished(am, result, goal, opts, motion)
     # the restarts are SLSQP runs, for SLSQP's stalls (IPOPT's run is finished by _polished);
@@ -81,6 +85,12 @@ def optimize_internal_poses(
     if result.optimal or not result.success or opts.method != "slsqp" or motion is not None:
         return result
     return _restarted(am, result, goal, opts, motion, scene)
+
+
+def _collides(result: OptimizeResult) -> bool:
+    """True when the run's state (or, having none valid, its reason) is a collision."""
+    state = result.optimized
+    return any(v.kind == "collision" for v in state.violations) or "collision" in result.message
 
 
 #: The extra margins [m, cos] of the restarts from a valid state that is not an optimum

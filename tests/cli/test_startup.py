@@ -180,3 +180,18 @@ def test_parser_of_one_subcommand_reads_as_the_whole_parser(argv):
         return next(a for a in parser._actions if a.dest == "command").choices[name].format_help()
 
     assert sub_help(partial) == sub_help(full)
+
+
+def test_home_document_with_a_payload_body_equals_the_pinocchio_path():
+    """A payload sphere (``payload.radius``): the fast document equals the full path's, and a
+    sphere too large for its bound (offset − radius − motor radius ≤ the closest pair) leaves
+    the answer to the full path."""
+    for radius in (0.05, 0.19):
+        cfg = load_config().replace(payload=PayloadConfig(mass=5.0, offset=0.2, radius=radius))
+        fast = home_state_document(cfg)
+        full = evaluate_state(AssemblerModel.from_config(cfg), AssemblerModel.from_config(cfg).home).to_dict()
+        if radius == 0.19:
+            assert fast is None and full["clearance"]["min_distance_m"] > 0
+        else:
+            assert fast is not None
+            _assert_same_document(fast, full)

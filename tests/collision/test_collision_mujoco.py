@@ -3,8 +3,8 @@
 The tests build their own MJCF of one pose: each leg's motor and shaft a capsule, each plate a
 cylinder, every body free (MuJoCo does not collide two bodies welded to the world), every geom
 with a margin, so ``mj_forward`` reports a contact, with its distance, for every pair closer
-than the margin. Pairs the rule leaves out (a leg's own two capsules, legs sharing a node, a leg
-and its own plates) are excluded; MuJoCo's distance of every other leg pair, and of a leg and
+than the margin. Pairs the rule trims or leaves out (a leg's own two capsules, legs sharing a
+node, a leg and its own plates) are excluded; MuJoCo's distance of every other leg pair, and of a leg and
 another platform's plate, is the package's.
 """
 
@@ -51,7 +51,7 @@ def _model(am, plates):
         owner.append(G + k)
     t = pair_table(cfg)
     shared = {(int(a), int(c)) for a, c, tr in zip(t.leg_a, t.leg_b, t.trim, strict=True) if tr.any()}
-    own = {(int(g), int(k)) for g in range(G) for k in range(len(b.p))} - {tuple(map(int, r)) for r in t.leg_plate}
+    own = {(g, g // 6 + end) for g in range(G) for end in (0, 1)}  # whole capsules here: not trimmed
     names = [f"c{g}_{p}" for g in range(G) for p in (MOTOR, SHAFT)] + [f"p{k}" for k in range(len(b.p))]
     excludes = []
     for i in range(len(names)):

@@ -53,6 +53,9 @@ HOSTILE = {
     "big_rotation": {"obstacles": [{"box": {"size": [1, 1, 1], "pose": [0, 0, 0, 1e9, 0, 0]}}]},
     "bad_name": {"obstacles": [{"name": "x" * 41, "sphere": {"radius": 1, "center": [0, 0, 0]}}]},
     "dup_name": {"obstacles": [{"name": "a", "sphere": {"radius": 1, "center": [0, 0, 0]}}] * 2},
+    "support_text": {"obstacles": [{"support": "yes", "box": {"size": [1, 1, 1], "pose": [0, 0, -1, 0, 0, 0]}}]},
+    "support_number": {"obstacles": [{"support": 1, "box": {"size": [1, 1, 1], "pose": [0, 0, -1, 0, 0, 0]}}]},
+    "support_sphere": {"obstacles": [{"support": True, "sphere": {"radius": 1, "center": [0, 0, -1]}}]},
     "too_many": {"obstacles": [{"sphere": {"radius": 1, "center": [0, 0, 0]}}] * (MAX_OBSTACLES + 1)},
     "top_list": [1, 2],
 }
@@ -106,6 +109,7 @@ entry = st.fixed_dictionaries(
         "cylinder": st.one_of(bad, st.fixed_dictionaries({"radius": bad, "length": bad, "pose": bad})),
         "sphere": st.one_of(bad, st.fixed_dictionaries({"radius": bad, "center": bad})),
         "name": bad,
+        "support": st.one_of(bad, st.booleans()),
     },
 )
 
@@ -131,3 +135,45 @@ def test_any_mapping_is_a_scene_or_one_scene_error(doc):
         return
     for o in scene.obstacles:
         assert all(math.isfinite(x) and x > 0 for x in o.size)
+
+
+def test_a_support_obstacle_gets_the_floor_rule():
+    """A table just under the base plate: every pose collides with it unless it is the
+    stack's support; as a support it is not checked against the base plate nor the base
+    legs' joint zones, and a base leg beyond its zone is still measured (coal on a capsule
+    and a box built here)."""
+    import coal
+
+    import assembler_pin as ap
+    from assembler_pin.collision import clearance
+    from assembler_pin.collision.bodies import stack_bodies
+
+    am = ap.AssemblerModel.from_config()
+    top = -0.5 * am.config.plate.thickness  # the table's top face under the base plate
+    table = {"size": [0.8, 0.8, 0.1], "pose": [0.0, 0.0, top - 0.05, 0.0, 0.0, 0.0]}
+    plain = scene_from_dict({"obstacles": [{"name": "table", "box": table}]})
+    mounted = scene_from_dict({"obstacles": [{"name": "table", "box": table, "support": True}]})
+    assert mounted.obstacles[0].support and not plain.obstacles[0].support
+    c = clearance(am, am.home, plain)
+    assert c.between[1] == "table" and c.min_distance < 0  # the motors reach below the plate
+    c = clearance(am, am.home, mounted)
+    rows = {(c.names[i], c.names[j]): r for r, (i, j) in enumerate(c.pairs)}
+    assert c.clear and c.distances[rows[("plate 0", "table")]] == np.inf
+    leg = am.config.leg
+    b = stack_bodies(am, am.home)
+    box = (coal.Box(*table["size"]), coal.Transform3s(np.eye(3), np.array(table["pose"][:3])))
+    for g in range(6):  # base legs: beyond their bottom joint's zone
+        u, best = b.axis[g], np.inf
+        for lo, hi, r in (
+            (leg.node_zone, leg.motor_length, leg.motor_radius),
+            (leg.motor_length, b.length[g], leg.shaft_radius),
+        ):
+            R = ap.model.geometry.rotation_z_to(u)
+            capsule = (coal.Capsule(r, hi - lo), coal.Transform3s(R, b.bottom[g] + 0.5 * (lo + hi) * u))
+            best = min(best, coal.distance(*capsule, *box, coal.DistanceRequest(), coal.DistanceResult()))
+        r = rows[(f"SP0 leg {g}", "table")]
+        assert c.distances[r] <= best + 1e-9 and (not c.exact[r] or c.distances[r] == pytest.approx(best, abs=1e-6))
+    with pytest.raises(SceneError, match="support"):
+        scene_from_dict({"obstacles": [{"sphere": {"radius": 0.1, "center": [0, 0, -1]}, "support": True}]})
+    with pytest.raises(SceneError, match="support"):
+        scene_from_dict({"obstacles": [{"box": table, "support": "yes"}]})

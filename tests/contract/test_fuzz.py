@@ -52,7 +52,7 @@ sections = {
         "motor_length",
         "node_zone",
     ],
-    "payload": ["mass", "offset"],
+    "payload": ["mass", "offset", "radius"],
 }
 
 

@@ -39,7 +39,7 @@ def _drawn_pair(html: str, prefix: str = "assembler") -> tuple[np.ndarray, np.nd
 @pytest.fixture(scope="module")
 def floor_page(am):
     post = {"name": "post", "sphere": {"radius": 0.05, "center": [0.6, 0.0, 0.5]}}
-    scene = {"floor": {"z": 0.0}, "obstacles": [post]}
+    scene = {"floor": {"z": 0.01}, "obstacles": [post]}  # above the motors' 0.0229 m to their plate
     with StackViewer(am, scene=scene) as v:
         state = v.display(am.home)
         yield v, state, v.static_html()
@@ -50,7 +50,7 @@ def test_obstacles_and_floor_are_drawn_and_named(floor_page):
     objects = {c["path"]: c for c in page_commands(html) if c["type"] == "set_object"}
     assert "/meshcat/assembler_obstacles/sphere_0" in objects
     assert "/meshcat/assembler_obstacles/floor" in objects
-    assert "obstacles: post" in html and "floor at z = 0 m" in html
+    assert "obstacles: post" in html and "floor at z = 0.01 m" in html
     assert viewer.closest is not None and viewer.closest.label in html
 
 
@@ -60,7 +60,7 @@ def test_closest_pair_is_drawn_its_clearance_apart_on_both_surfaces(am, floor_pa
     assert near is not None and near.between == ("SP0 leg 0", "floor") == viewer.closest.between
     a, b = _drawn_pair(html)
     assert np.linalg.norm(a - b) == pytest.approx(near.min_distance, abs=1e-9)
-    assert b[2] == pytest.approx(0.0, abs=1e-12)  # on the floor plane
+    assert b[2] == pytest.approx(0.01, abs=1e-12)  # on the floor plane
     bottom, top = state.legs.bottom_points[0, 0], state.legs.top_points[0, 0]
     u = (top - bottom) / np.linalg.norm(top - bottom)
     leg = am.config.leg  # the motor's capsule beyond the node zone of the bottom joint (on the floor)
