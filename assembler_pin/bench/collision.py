@@ -84,7 +84,8 @@ def benchmark_solve_scene(am: AssemblerModel, rounds: int = 5) -> dict[str, Any]
     """``solve`` of :data:`SOLVE_SCENE_GOAL` without a scene and with :data:`SOLVE_SCENE` (ten
     obstacles and the floor), interleaved round by round after one warm-up of each: medians
     [ms], their ratio (``solve_scene_ratio``, target ≤ 2), and whether both found the same
-    optimum (plate origins within 1e-6 m)."""
+    optimum (plate origins within 1e-5 m: the two problems differ by their clearance rows, so
+    SLSQP stops at points of the same optimum a few µm apart)."""
     import pinocchio as pin
 
     goal = pin.SE3(np.eye(3), np.array(SOLVE_SCENE_GOAL, dtype=float))
@@ -100,7 +101,7 @@ def benchmark_solve_scene(am: AssemblerModel, rounds: int = 5) -> dict[str, Any]
     same = (
         free.best is not None
         and within.best is not None
-        and bool(np.abs(free.best.plates.p - within.best.plates.p).max() < 1e-6)
+        and bool(np.abs(free.best.plates.p - within.best.plates.p).max() < 1e-5)
     )
     return {
         "solve_free_ms": free_ms,

@@ -188,7 +188,7 @@ def test_home_document_with_a_payload_body_equals_the_pinocchio_path():
     the answer to the full path."""
     for radius in (0.05, 0.19):
         cfg = load_config().replace(payload=PayloadConfig(mass=5.0, offset=0.2, radius=radius))
-        fast = home_state_document(cfg)
+        fast = home_state_document(cfg, home_clearance(cfg, *home_anchors(cfg)))
         full = evaluate_state(AssemblerModel.from_config(cfg), AssemblerModel.from_config(cfg).home).to_dict()
         if radius == 0.19:
             assert fast is None and full["clearance"]["min_distance_m"] > 0
