@@ -231,7 +231,8 @@ def _add_bodies(world: ET.Element, cfg: AssemblerConfig) -> None:
     payload = ET.SubElement(parent, "body", name=names.payload, pos=xml_vector(cfg.payload.offset * _Z_AXIS))
     m = cfg.payload.mass
     _inertial(payload, m, np.zeros(3), np.full(3, m * size**2 / 6.0))
-    ET.SubElement(payload, "geom", type="box", size=xml_vector(np.full(3, 0.5 * size)), material="payload")
+    if cfg.payload.radius > 0:  # the sphere the package checks; radius 0: a point mass, no shape
+        ET.SubElement(payload, "geom", type="sphere", size=f"{cfg.payload.radius!r}", material="payload")
 
 
 def _add_equalities(root: ET.Element, cfg: AssemblerConfig, weld_ee: bool) -> None:

@@ -234,12 +234,15 @@ def _add_platform(robot: ET.Element, cfg: AssemblerConfig, geo: LegGeometry, j: 
 
 
 def _add_payload(robot: ET.Element, cfg: AssemblerConfig) -> None:
-    """The payload: a box of the payload's mass fixed above the EE plate at its offset."""
+    """The payload: its mass fixed above the EE plate at its offset (the inertia of a cube of
+    ``payload_size``), drawn and collided as the sphere the package checks (``payload.radius``);
+    a payload of radius 0 is a point mass, with no shape."""
     size = DIMENSIONS.payload_size
     payload = ET.SubElement(robot, "link", name=names.payload)
     m = cfg.payload.mass
     _inertial(payload, m, _ZERO, np.full(3, m * size**2 / 6.0))
-    _shape(payload, _ZERO, ("box", {"size": xml_vector(np.full(3, size))}), "payload")
+    if cfg.payload.radius > 0:
+        _shape(payload, _ZERO, ("sphere", {"radius": f"{cfg.payload.radius!r}"}), "payload")
     offset = np.array([0.0, 0.0, cfg.payload.offset])
     _joint(robot, names.payload_joint, "fixed", names.plate(cfg.platforms), names.payload, offset)
 

@@ -153,16 +153,16 @@ def drawn_joint_centres(viz: MeshcatVisualizer, am: AssemblerModel) -> tuple[np.
 
 
 def stack_points(am: AssemblerModel, pose: Pose) -> np.ndarray:
-    """World points bounding a drawn stack [m]: plate rims, the payload's top (when it has a
-    mass, as :func:`stack_visuals` draws it)."""
+    """World points bounding a drawn stack [m]: plate rims, the payload sphere's top (when it
+    has a mass and a radius, as :func:`stack_visuals` draws it)."""
     plates = as_plates(am, pose)
     r = am.config.plate.node_radius + DIMENSIONS.node_sphere_radius
     ang = np.linspace(0, 2 * np.pi, 12, endpoint=False)
     rim = np.stack([r * np.cos(ang), r * np.sin(ang), np.zeros_like(ang)], axis=1)
     pts = [np.einsum("kab,mb->kma", plates.R, rim).reshape(-1, 3) + np.repeat(plates.p, len(ang), axis=0)]
-    half = 0.5 * DIMENSIONS.payload_size
-    payload = plates.R[-1] @ np.array([0.0, 0.0, am.config.payload.offset + half]) + plates.p[-1]
-    if am.config.payload.mass > 0:
+    top = am.config.payload.offset + am.config.payload.radius
+    payload = plates.R[-1] @ np.array([0.0, 0.0, top]) + plates.p[-1]
+    if am.config.payload.mass > 0 and am.config.payload.radius > 0:
         pts.append(payload[None, :])
     return np.concatenate(pts)
 

@@ -226,26 +226,33 @@ def test_a_walk_among_obstacles_draws_them(am, walk, tmp_path):
 
 def test_a_stack_without_a_tool_is_drawn_without_the_payload_cube(am, bent_plates):
     """A walking stack carries no tool (``walk``'s default ``--payload 0``): its page draws no
-    payload cube; the same stack with a tool draws it, above the EE plate at its offset."""
+    payload. A payload of mass but no radius (the default: a point mass) is drawn as the rod to
+    its centre only; one with a radius as that sphere too, the body the clearance checks,
+    centred at its offset above the EE plate."""
+    import dataclasses
+
     from assembler_pin.cli.walk import walking_config
 
     bare = ap.AssemblerModel.from_config(walking_config(am.config, 0.0))
+    tool = ap.AssemblerModel.from_config(am.config.replace(payload=dataclasses.replace(am.config.payload, radius=0.05)))
     objects = {}
-    for model in (am, bare):
+    for key, model in (("tool", tool), ("point", am), ("bare", bare)):
         with StackViewer(model) as v:
             v.display(bent_plates)
             cmds = page_commands(v.static_html())
-            objects[model.config.payload.mass] = {c["path"] for c in cmds if c["type"] == "set_object"}
+            objects[key] = {c["path"] for c in cmds if c["type"] == "set_object"}
             payload = [g for g in v.visual_model.geometryObjects if g.name.startswith(names.payload)]
-            assert len(payload) == (1 if model is am else 0)
+            assert len(payload) == (1 if key == "tool" else 0)
             if payload:
+                assert payload[0].geometry.radius == pytest.approx(0.05)
                 path = "/meshcat/" + v.viz.getViewerNodeName(payload[0], pin.GeometryType.VISUAL)
                 placed = [c for c in cmds if c["type"] == "set_transform" and c["path"] == path]
                 T = np.array(placed[-1]["matrix"]).reshape(4, 4).T
                 ee = ap.kinematics.plate_arrays(am, bent_plates)
                 expected = ee.p[-1] + am.config.payload.offset * ee.R[-1][:, 2]
                 np.testing.assert_allclose(T[:3, 3], expected, atol=1e-9)
-    assert am.config.payload.mass > 0
-    extra = objects[am.config.payload.mass] - objects[0.0]
-    assert sorted(p.rsplit("/", 2)[-2] for p in extra) == ["assembler_payload_rod", "visuals"]  # the cube, its rod
+    assert am.config.payload.mass > 0 and am.config.payload.radius == 0
+    extra = objects["tool"] - objects["bare"]
+    assert sorted(p.rsplit("/", 2)[-2] for p in extra) == ["assembler_payload_rod", "visuals"]  # the sphere, its rod
     assert all(names.payload in p for p in extra)
+    assert sorted(p.rsplit("/", 2)[-2] for p in objects["point"] - objects["bare"]) == ["assembler_payload_rod"]
