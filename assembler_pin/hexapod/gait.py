@@ -20,10 +20,8 @@ and its EE plate ``Pₙ`` (fixed to the body) are its home poses with the deform
 ``D = log6(Hₙ⁻¹ P₀⁻¹ Pₙ)`` shared evenly: plate ``j`` at ``P₀ Hⱼ exp6(j D / n)`` (``H`` the home
 poses relative to plate 0).
 
-Distribution (:func:`distribution`). A hanging stack carries its own weight (its unique
-forces held at its EE plate, :func:`~assembler_pin.supports.choice.held_equilibrium`); the
-standing stacks carry the body and the hanging stacks' weight (:func:`.commands.
-force_optimal_commands`, the smallest ``Σ F²`` among the smallest max|F|). The commanded lengths
+The forces are :func:`.share.distribution`'s (a hanging stack carries its own weight, the
+standing feet are point supports, the smallest ``Σ F²``). The commanded lengths
 are the planned poses' own minus ``F / k``: the structure stands at the planned poses with those
 forces. Every sample is re-solved by :func:`.stand.stand` (the hanging feet free): its forces are
 the sample's, and a sample whose equilibrium leaves the plan by more than :data:`PLAN_TOL`, or
@@ -47,12 +45,11 @@ from ..config.bounds import BOUNDS, check_bound
 from ..exceptions import HexapodError
 from ..kinematics import PlateArrays, leg_state
 from ..model.assembler import AssemblerModel, checked_model
-from ..supports.choice import held_equilibrium
-from .commands import force_optimal_commands
-from .machine import configured_hexapod, machine_com
+from .machine import configured_hexapod
+from .share import distribution
 from .stand import FEET, stand
 
-__all__ = ["GAITS", "MAX_CYCLES", "PLAN_TOL", "HexapodWalk", "WalkSample", "distribution", "walk"]
+__all__ = ["GAITS", "MAX_CYCLES", "PLAN_TOL", "HexapodWalk", "WalkSample", "walk"]
 
 #: The gaits: how the stacks are grouped to step.
 GAITS = ("tripod", "wave")
@@ -73,6 +70,8 @@ class WalkSample:
         body_pose: (6,) the body's centre of mass [m] and its rotation vector from the start [rad].
         feet: (k, 4, 4) every foot plate's world pose; stance: (k,) the feet on the ground.
         lengths: (k, n, 6) commanded lengths [m]; forces: (k, n, 6) the equilibrium's [N].
+        plates: (k, n+1, 4, 4) every plate's pose at the equilibrium (planned, when none);
+        foot_wrenches: (k, 6) the ground's on each foot [N, N·m] (moment about the foot's origin).
         stability_margin_m: [m] (NaN with welded feet); max_abs_force: [N].
         violations: what the sample breaks (empty when feasible).
     """
@@ -85,6 +84,8 @@ class WalkSample:
     stance: np.ndarray
     lengths: np.ndarray
     forces: np.ndarray
+    plates: np.ndarray
+    foot_wrenches: np.ndarray
     stability_margin_m: float
     max_abs_force: float
     violations: tuple[str, ...]
@@ -115,27 +116,6 @@ def _plates(rel: list[pin.SE3], foot: pin.SE3, ee: pin.SE3) -> PlateArrays:
     n = len(rel) - 1
     D = pin.log6(rel[-1].inverse() * foot.inverse() * ee).vector
     return PlateArrays.from_se3([foot, *[foot * rel[j] * pin.exp6(D * j / n) for j in range(1, n)], ee])
-
-
-def distribution(am: AssemblerModel, pas: list[PlateArrays], body_mass: float, body_com, hanging: np.ndarray):
-    """The leg forces (k, n, 6) [N] with the ``hanging`` stacks hanging from the body (module
-    doc), and None, or NaN and why not."""
-    k = len(pas)
-    forces = np.full((k, am.n, 6), np.nan)
-    mass, moment = float(body_mass), float(body_mass) * np.asarray(body_com, float)
-    for i in np.flatnonzero(hanging):
-        held = held_equilibrium(am, pas[i], "ee")
-        if isinstance(held, str):
-            return forces, f"stack {i} cannot hang: {held}"
-        forces[i] = held.particular
-        m_i, c_i = machine_com(am, pas[i].R[None], pas[i].p[None], 0.0, np.zeros(3))
-        mass, moment = mass + m_i, moment + m_i * c_i
-    standing = [pas[i] for i in np.flatnonzero(~hanging)]
-    got = force_optimal_commands(am, standing, mass, moment / mass if mass > 0 else body_com, smallest=True)
-    if not got.success:
-        return forces, f"no distribution within the limits: {got.message}"
-    forces[~hanging] = got.forces
-    return forces, None
 
 
 def _checked(to: npt.ArrayLike, gait: object, step: object, feet: object, samples: object, lift: object):
@@ -231,7 +211,17 @@ class _Walker:
         matrices = np.array([f.homogeneous for f in feet])
         if why is not None:
             nan = float("nan")
-            return WalkSample(self.t, cycle + 1, phase, pose, matrices, ~hanging, lengths, forces, nan, nan, (why,))
+            planned = np.zeros((k, am.n + 1, 4, 4))
+            planned[..., :3, :3], planned[..., :3, 3], planned[..., 3, 3] = (
+                [pa.R for pa in pas],
+                [pa.p for pa in pas],
+                1,
+            )
+            wrenches = np.full((k, 6), np.nan)
+            stance = ~hanging
+            return WalkSample(
+                self.t, cycle + 1, phase, pose, matrices, stance, lengths, forces, planned, wrenches, nan, nan, (why,)
+            )
         got = stand(
             am,
             pas,
@@ -258,6 +248,8 @@ class _Walker:
             ~got.lifted,
             lengths,
             got.forces,
+            got.plates,
+            got.foot_wrenches,
             got.stability_margin_m,
             got.max_abs_force,
             tuple(violations),
