@@ -80,6 +80,6 @@ def distribution(
     solution, *_ = np.linalg.lstsq(kkt, rhs, rcond=None)
     f = solution[:m]
     if not np.allclose(E @ f, d, rtol=1e-9, atol=1e-9 * total * g):
-        return forces, "the standing feet cannot carry the machine (they lie on one line, or fewer than one)"
+        return forces, "the standing feet cannot carry the machine (a single foot, or feet on one line)"
     forces[standing] = (A + B @ f).reshape(m, am.n, 6)
     return forces, None

@@ -507,6 +507,39 @@ def _walk_cases() -> list[CliCase]:
     ]
 
 
+def _hexapod_walk_cases() -> list[CliCase]:
+    """A walk's goal, gait, step, samples and lift out of range are refused before any solve."""
+    w = "hexapod walk --json "
+    refused = [
+        _case(f"hexapod.walk_{name}", w + args)
+        for name, args in (
+            ("without_to", ""),
+            ("to_short", "--to 0.1 0"),
+            ("to_nan", "--to nan 0 0"),
+            ("to_inf", "--to 0 inf 0"),
+            ("to_far", "--to 1e9 0 0"),
+            ("yaw_past_pi", "--to 0 0 4"),
+            ("too_many_steps", "--to 5 0 0 --step 0.01"),
+            ("gait_unknown", "--to 0.1 0 0 --gait gallop"),
+            ("step_zero", "--to 0.1 0 0 --step 0"),
+            ("step_huge", "--to 0.1 0 0 --step 1e300"),
+            ("step_nan", "--to 0.1 0 0 --step nan"),
+            ("samples_zero", "--to 0.1 0 0 --samples 0"),
+            ("samples_huge", "--to 0.1 0 0 --samples 1000000000"),
+            ("samples_float", "--to 0.1 0 0 --samples 1.5"),
+            ("lift_negative", "--to 0.1 0 0 --lift -0.1"),
+            ("lift_nan", "--to 0.1 0 0 --lift nan"),
+            ("with_scene", "--to 0.1 0 0 --scene {d}/missing.yaml"),
+            ("with_html", "--to 0.1 0 0 --html {d}/w.html"),
+        )
+    ]
+    return [
+        *refused,
+        _case("hexapod.stand_with_to", "hexapod stand --json --to 0.1 0 0"),
+        _case("hexapod.walk_three_stacks", w + "--to 0.05 0 0 --samples 1 --stacks 3 --radius 0.4", "any"),
+    ]
+
+
 def _hexapod_cases() -> list[CliCase]:
     """Counts, sizes and masses of the hexapod out of range are refused before any solve."""
     h = "hexapod stand --json "
@@ -537,7 +570,8 @@ def _hexapod_cases() -> list[CliCase]:
     ]
     return [
         *cases,
-        _case("hexapod.action_unknown", "hexapod walk --json"),
+        _case("hexapod.action_unknown", "hexapod gallop --json"),
+        *_hexapod_walk_cases(),
         _case("hexapod.capacity_with_plot", "hexapod capacity --plot {d}/cap.png"),
         _case("hexapod.capacity_with_mass", "hexapod capacity --body-mass 5"),
         _case("hexapod.action_missing", "hexapod --json"),
