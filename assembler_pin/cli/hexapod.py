@@ -72,6 +72,12 @@ def _add_walk_arguments(p) -> None:
     p.add_argument("--step", type=float, default=0.1, metavar="L", help="walk: a foot's longest step [m], in (0, 2]")
     p.add_argument("--samples", type=int, default=4, metavar="N", help="walk: samples per phase, 1..50")
     p.add_argument("--lift", type=float, default=0.03, metavar="H", help="walk: a swinging foot's lift [m], in [0, 1]")
+    p.add_argument(
+        "--out",
+        type=path_argument,
+        metavar="FILE",
+        help="walk: write the trajectory (every sample's feet, commands and forces; docs/formats.md)",
+    )
 
 
 def _config(args: argparse.Namespace):
@@ -139,6 +145,8 @@ def run(args: argparse.Namespace) -> int:
     walking = args.action == "walk"
     if walking != (args.to is not None):
         raise CLIError("--to X Y YAW is needed by walk, and only by walk")
+    if not walking and args.out:
+        raise CLIError("--out is for walk (its trajectory file)")
     if args.feet is None:
         args.feet = "resting" if walking else "welded"
     am = AssemblerModel.from_config(_config(args))
@@ -272,13 +280,17 @@ def walk_document(result) -> dict:
 
 def _walk(am, args: argparse.Namespace) -> int:
     from ..exceptions import CLIError, HexapodError
-    from ..hexapod import walk
+    from ..hexapod import walk, write_walk
 
+    if args.out:
+        writable_parent(args.out, "--out file")
     try:
         got = walk(am, args.to, args.gait, args.step, args.feet, args.samples, args.lift)
     except HexapodError as exc:
         raise CLIError(str(exc)) from None
     doc = walk_document(got)
+    if args.out:
+        write_walk(args.out, got)
     if args.json:
         print(dumps(doc))
     else:

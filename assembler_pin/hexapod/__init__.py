@@ -9,6 +9,7 @@ their base plates (the feet), welded or resting on a floor.
 - :mod:`.capacity`: the largest body mass within every limit.
 - :mod:`.clearance`: the machine's clearance (stacks, body, scene).
 - :mod:`.gait`: the walk on a flat floor, every sample checked (:func:`walk`).
+- :mod:`.walkfile`: a walk's trajectory file, written atomically and read back strictly.
 """
 
 from __future__ import annotations
@@ -19,6 +20,7 @@ from .commands import HexapodCommands, force_optimal_commands, length_sensitivit
 from .gait import GAITS, HexapodWalk, WalkSample, walk
 from .machine import MAX_STACKS, configured_hexapod, machine_com, ring_stacks
 from .stand import FEET, HexapodStand, stand
+from .walkfile import WalkFile, read_walk, write_walk
 
 __all__ = [
     "FEET",
@@ -29,6 +31,7 @@ __all__ = [
     "HexapodCommands",
     "HexapodStand",
     "HexapodWalk",
+    "WalkFile",
     "WalkSample",
     "configured_hexapod",
     "force_optimal_commands",
@@ -36,7 +39,9 @@ __all__ = [
     "hexapod_clearance",
     "length_sensitivity",
     "machine_com",
+    "read_walk",
     "ring_stacks",
     "stand",
     "walk",
+    "write_walk",
 ]

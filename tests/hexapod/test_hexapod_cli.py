@@ -176,3 +176,41 @@ def test_a_walk_that_stops_says_which_step_and_exits_1(capsys):
 def test_walk_refusals_are_one_line(capsys, extra):
     code, out, err = _run(capsys, ["hexapod", "walk", *extra])
     assert code == 2 and not out and len(err) <= 2 and "error" in err[-1]
+
+
+def test_walk_out_writes_the_file_that_reads_back(capsys, tmp_path):
+    from assembler_pin.hexapod import read_walk
+
+    out = tmp_path / "walk.json"
+    argv = [
+        "hexapod",
+        "walk",
+        "--to",
+        "0.04",
+        "0",
+        "0",
+        "--step",
+        "0.05",
+        "--samples",
+        "1",
+        "--out",
+        str(out),
+        "--json",
+    ]
+    code, printed, _ = _run(capsys, argv)
+    doc, back = json.loads(printed), read_walk(out)
+    assert code == 0 and back.success and len(back.t) == len(doc["samples"])
+    np.testing.assert_array_equal(back.body_pose, [s["body_pose"] for s in doc["samples"]])
+    np.testing.assert_array_equal(back.stance, [s["stance"] for s in doc["samples"]])
+    assert [p.name for p in tmp_path.iterdir()] == ["walk.json"]
+    # every sample's forces in the file: six stacks of four platforms of six legs
+    assert np.isfinite(back.forces).all() and back.forces.shape[1:] == (6, 4, 6)
+
+
+def test_out_is_refused_for_stand_and_an_unwritable_out_for_walk(capsys, tmp_path):
+    code, _, err = _run(capsys, ["hexapod", "stand", "--out", str(tmp_path / "x.json")])
+    assert code == 2 and "--out" in err[-1]
+    bad = tmp_path / "file"
+    bad.write_text("")
+    code, out, err = _run(capsys, ["hexapod", "walk", "--to", "0.04", "0", "0", "--out", str(bad / "w.json")])
+    assert code == 2 and not out and "--out" in err[-1]
