@@ -147,6 +147,8 @@ def run(args: argparse.Namespace) -> int:
         raise CLIError("--to X Y YAW is needed by walk, and only by walk")
     if not walking and args.out:
         raise CLIError("--out is for walk (its trajectory file)")
+    if args.out:
+        writable_parent(args.out, "--out file")
     if args.feet is None:
         args.feet = "resting" if walking else "welded"
     am = AssemblerModel.from_config(_config(args))
@@ -282,8 +284,6 @@ def _walk(am, args: argparse.Namespace) -> int:
     from ..exceptions import CLIError, HexapodError
     from ..hexapod import walk, write_walk
 
-    if args.out:
-        writable_parent(args.out, "--out file")
     try:
         got = walk(am, args.to, args.gait, args.step, args.feet, args.samples, args.lift)
     except HexapodError as exc:
