@@ -1,11 +1,11 @@
 """The hexapod walks on a flat floor (:func:`walk`): the body moves along a straight path to a
 goal ``(x, y, yaw)`` while the stacks step in groups, every sample checked by :func:`.stand.stand`.
 
-The walk is a sequence of cycles (the steps), as many as make every foot's travel at most
-``step`` [m]; cycle ``c`` takes the body from ``B(c/m)`` to ``B((c+1)/m)`` with
-``B(s) = (Rz(s yaw), s (x, y, 0))`` (the body turns about the vertical through the centre of the
-feet's circle, carried along). In a cycle each group of stacks (``tripod``: the even and the odd
-stacks; ``wave``: one stack at a time) in turn
+The walk is a sequence of cycles (the steps), as many as make every foot's travel in each (the
+chord of its arc when the body turns) at most ``step`` [m]; cycle ``c`` takes the body from
+``B(c/m)`` to ``B((c+1)/m)`` with ``B(s) = (Rz(s yaw), s (x, y, 0))`` (the body turns about the
+vertical through the centre of the feet's circle, carried along). In a cycle each group of
+stacks (``tripod``: the even and the odd stacks; ``wave``: one stack at a time) in turn
 
 1. **unloads**: the commands go from the distribution where the group stands to the one where
    it hangs, linearly, so its feet's share of the load goes to zero through the commanded
@@ -149,9 +149,17 @@ def _swing(a: pin.SE3, b: pin.SE3, u: float, lift: float) -> pin.SE3:
 
 
 def _cycles(start: list[pin.SE3], goal: np.ndarray, step: float) -> int:
+    """The fewest cycles that keep every foot's travel in every cycle within ``step`` [m] (the
+    chord of a turning foot's arc: counted cycle by cycle), or ``MAX_CYCLES + 1``."""
+    feet = np.array([f.translation for f in start])
     end = _body(goal, 1.0)
-    travel = max(float(np.linalg.norm((end * f).translation - f.translation)) for f in start)
-    return max(1, math.ceil(travel / step - 1e-12))
+    m = max(1, math.ceil(max(float(np.linalg.norm(end.act(f) - f)) for f in feet) / step - 1e-12))
+    while m <= MAX_CYCLES:
+        at = np.array([[_body(goal, c / m).act(f) for f in feet] for c in range(m + 1)])
+        if float(np.linalg.norm(np.diff(at, axis=0), axis=-1).max()) <= step + 1e-12:  # round-off
+            return m
+        m += 1
+    return m
 
 
 def _plan(k: int, gait: str, cycles: int, samples: int):

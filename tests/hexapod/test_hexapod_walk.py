@@ -211,3 +211,13 @@ def test_stand_refuses_malformed_hanging_feet():
     low = [PlateArrays(s.R.copy(), s.p - [0.0, 0.0, 0.01]) if i == 0 else s for i, s in enumerate(stacks)]
     with pytest.raises(HexapodError, match="below the floor"):
         stand(am, low, mass, com, feet="resting", hanging=np.eye(6, dtype=bool)[0])
+
+
+def test_a_turning_foot_steps_at_most_step_along_its_chord():
+    """A pure turn: each cycle moves every foot along the same chord, 2 r sin(yaw / 2m) ≤ step
+    (the whole turn's chord over m would undercount: 24 cycles instead of 36 here)."""
+    am = _model(stacks=3)  # three stacks stop at once: the count is all this needs
+    got = walk(am, (0.0, 0.0, 3.0), step=0.05, samples=1)
+    radius, step = am.config.hexapod.radius, 0.05
+    assert got.cycles == int(np.ceil(3.0 / (2.0 * np.arcsin(step / (2.0 * radius)))))
+    assert 2 * radius * np.sin(3.0 / (2 * got.cycles)) <= step < 2 * radius * np.sin(3.0 / (2 * (got.cycles - 1)))
