@@ -1912,7 +1912,39 @@ def _hexapod_api_cases() -> list[ApiCase]:
             ("com_huge", {"body_com": [1e308, 0, 0]}),
             ("friction_complex", {"friction": 1 + 1j}),
             ("radius_negative", {"radius": -1.0}),
+            ("min_margin_nan", {"min_margin": float("nan")}),
+            ("min_margin_huge", {"min_margin": 1e9}),
+            ("min_margin_string", {"min_margin": "0.05"}),
+            ("min_margin_bool", {"min_margin": True}),
         )
+    ]
+    cases += [
+        ApiCase(f"api.hexapod_walk.{name}", lambda c, kw=kw: hx.walk(c.am, **({"to": (0.05, 0.0, 0.0)} | kw)))
+        for name, kw in (
+            ("to_none", {"to": None}),
+            ("to_string", {"to": "forward"}),
+            ("to_nan", {"to": (np.nan, 0.0, 0.0)}),
+            ("to_complex", {"to": (1j, 0.0, 0.0)}),
+            ("yaw_past_pi", {"to": (0.0, 0.0, 3.5)}),
+            ("gait_none", {"gait": None}),
+            ("step_negative", {"step": -0.1}),
+            ("step_string", {"step": "0.1"}),
+            ("samples_numpy_float", {"samples": np.float64(2.0)}),
+            ("lift_huge", {"lift": 1e308}),
+            ("min_margin_nan", {"min_margin": float("nan")}),
+            ("too_many_cycles", {"to": (50.0, 0.0, 0.0), "step": 0.01}),
+            ("model_string", {"am": "am"}),
+        )
+        if "am" not in kw
+    ]
+    cases += [
+        ApiCase("api.hexapod_walk.model_string", lambda c: hx.walk("am", (0.05, 0.0, 0.0))),
+        ApiCase("api.hexapod_stand.hanging_short", lambda c: stand(c, hanging=[True])),
+        ApiCase("api.hexapod_stand.hanging_ints", lambda c: stand(c, hanging=[1, 0, 0])),
+        ApiCase("api.hexapod_stand.hanging_all", lambda c: stand(c, feet="resting", hanging=[True] * 3)),
+        ApiCase("api.read_walk.missing", lambda c: hx.read_walk(c.ws.root / "missing.json")),
+        ApiCase("api.read_walk.directory", lambda c: hx.read_walk(c.ws.root)),
+        ApiCase("api.read_walk.int", lambda c: hx.read_walk(5)),
     ]
     return cases
 
