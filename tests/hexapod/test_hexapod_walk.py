@@ -221,3 +221,12 @@ def test_a_turning_foot_steps_at_most_step_along_its_chord():
     radius, step = am.config.hexapod.radius, 0.05
     assert got.cycles == int(np.ceil(3.0 / (2.0 * np.arcsin(step / (2.0 * radius)))))
     assert 2 * radius * np.sin(3.0 / (2 * got.cycles)) <= step < 2 * radius * np.sin(3.0 / (2 * (got.cycles - 1)))
+
+
+def test_the_configured_min_margin_stops_a_walk_that_comes_closer_to_tipping():
+    am = _model(min_margin=0.45)  # the tripod's swing comes to about 0.38 m
+    got = walk(am, (0.04, 0.0, 0.0), step=0.05, samples=1)
+    last = got.samples[-1]
+    assert not got.success and last.phase == "swing" and "min_margin 0.45 m" in got.reason
+    assert last.stability_margin_m < 0.45 <= min(s.stability_margin_m for s in got.samples[:-1])
+    assert walk(am, (0.04, 0.0, 0.0), step=0.05, samples=1, min_margin=0.3).success
