@@ -127,6 +127,9 @@ def test_every_force_is_its_springs_and_the_feet_carry_the_machine(feet):
         origins = s.plates[:, 0, :3, 3]
         moment = (np.cross(origins, w[:, :3]) + w[:, 3:]).sum(axis=0)
         np.testing.assert_allclose(moment, np.cross(com, [0, 0, weight]), atol=1e-6 * weight)
+        # the load shared by point feet: each standing foot pushed straight up at its centre
+        assert np.abs(w[s.stance][:, [0, 1, 3, 4, 5]]).max() <= 1e-6 * weight
+        assert w[s.stance, 2].min() >= -1e-9 * weight  # zero when unloaded, about to lift
 
 
 def test_margins_from_the_tests_own_hull():
