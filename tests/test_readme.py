@@ -196,6 +196,7 @@ COMMANDS: list[tuple[str, str, str]] = [
         "",
     ),
     (r"assembler-pin hexapod (stand|capacity)( --\S+ \S+)*( --json)?$", RUN, ""),
+    (r"assembler-pin hexapod walk --to [-\d.]+ [-\d.]+ [-\d.]+( --\S+ \S+)*( --json)?$", RUN, ""),
     (r"pip install", "", "installs packages"),
     (r"python -c from assembler_pin .*benchmark_wide_search", "", "300 starts a goal, ~10 s each (test_bench runs 3)"),
     (r"assembler-pin bench --(truss|speed|platforms-sweep)$", "", "minutes of timings"),

@@ -1,4 +1,5 @@
-"""``assembler-pin hexapod stand``: k stacks under one body, the structure's equilibrium."""
+"""``assembler-pin hexapod stand|capacity|walk``: k stacks under one body, the structure's
+equilibrium, the body it carries and its walk."""
 
 from __future__ import annotations
 
@@ -8,7 +9,7 @@ from .common import add_scene_argument, config_from_args, dumps, scene_from_args
 from .paths import path_argument, writable_parent
 
 #: The hexapod's actions.
-ACTIONS = ("stand", "capacity")
+ACTIONS = ("stand", "capacity", "walk")
 
 
 def add_parser(add) -> None:
@@ -20,7 +21,8 @@ def add_parser(add) -> None:
     p.add_argument(
         "action",
         choices=ACTIONS,
-        help="stand: the equilibrium for the commanded lengths; capacity: the largest body mass within every limit",
+        help="stand: the equilibrium for the commanded lengths; capacity: the largest body mass within every "
+        "limit; walk: a walk on the floor to --to, every sample checked",
     )
     p.add_argument("--stacks", type=int, metavar="K", help="stacks under the body (default: hexapod.stacks)")
     p.add_argument(
@@ -30,8 +32,8 @@ def add_parser(add) -> None:
     p.add_argument(
         "--feet",
         choices=("welded", "resting"),
-        default="welded",
-        help="welded: the feet are held; resting: they stand on the floor (friction, lift-off, tipping)",
+        help="welded: the feet are held; resting: they stand on the floor (friction, lift-off, tipping) "
+        "(default: welded; walk: resting)",
     )
     p.add_argument(
         "--commands",
@@ -53,8 +55,29 @@ def add_parser(add) -> None:
         metavar="PNG",
         help="write the feet from above and the legs by force from the side",
     )
+    _add_walk_arguments(p)
     p.add_argument("--json", action="store_true", help="print one JSON object")
     p.set_defaults(func=run)
+
+
+def _add_walk_arguments(p) -> None:
+    p.add_argument(
+        "--to",
+        type=float,
+        nargs=3,
+        metavar=("X", "Y", "YAW"),
+        help="walk: the body's displacement, x and y [m] and yaw [rad] (|yaw| <= pi)",
+    )
+    p.add_argument("--gait", choices=("tripod", "wave"), default="tripod", help="walk: the stacks step in groups")
+    p.add_argument("--step", type=float, default=0.1, metavar="L", help="walk: a foot's longest step [m], in (0, 2]")
+    p.add_argument("--samples", type=int, default=4, metavar="N", help="walk: samples per phase, 1..50")
+    p.add_argument("--lift", type=float, default=0.03, metavar="H", help="walk: a swinging foot's lift [m], in [0, 1]")
+    p.add_argument(
+        "--out",
+        type=path_argument,
+        metavar="FILE",
+        help="walk: write the trajectory (every sample's feet, commands and forces; docs/formats.md)",
+    )
 
 
 def _config(args: argparse.Namespace):
@@ -114,12 +137,25 @@ def stand_document(am, result, commands: str = "own") -> dict:
 
 def run(args: argparse.Namespace) -> int:
     """``stand``: exit 0 when the machine stands within every limit, 1 when not (the answer is
-    still printed); ``capacity``: 0 when it carries a body, 1 when not even an empty one; 2 for
-    refused input."""
+    still printed); ``capacity``: 0 when it carries a body, 1 when not even an empty one;
+    ``walk``: 0 when the walk succeeds, 1 when it stops (and why); 2 for refused input."""
     from ..exceptions import CLIError
     from ..model.assembler import AssemblerModel
 
+    walking = args.action == "walk"
+    if walking != (args.to is not None):
+        raise CLIError("--to X Y YAW is needed by walk, and only by walk")
+    if not walking and args.out:
+        raise CLIError("--out is for walk (its trajectory file)")
+    if args.out:
+        writable_parent(args.out, "--out file")
+    if args.feet is None:
+        args.feet = "resting" if walking else "welded"
     am = AssemblerModel.from_config(_config(args))
+    if walking:
+        if args.plot or args.html or args.commands != "own" or args.scene is not None:
+            raise CLIError("walk takes neither --plot, --html, --commands nor --scene")
+        return _walk(am, args)
     if args.action == "capacity":
         if args.plot or args.html or args.commands != "own" or args.body_mass is not None:
             raise CLIError("capacity takes neither --plot, --html, --commands nor --body-mass (it finds the mass)")
@@ -213,3 +249,60 @@ def format_stand(doc: dict) -> str:
         state = "lifted" if lifted else f"force {np.round(w[:3], 3).tolist()} N"
         lines.append(f"  foot {i}: {state}"[:100])
     return "\n".join(lines)
+
+
+def walk_document(result) -> dict:
+    """The JSON answer of ``hexapod walk`` (``docs/guides/hexapod.md``)."""
+    import math
+
+    def number(x: float) -> float | None:
+        return None if math.isnan(x) else x
+
+    return {
+        "success": result.success,
+        "reason": result.reason,
+        "gait": result.gait,
+        "feet": result.feet,
+        "steps": result.cycles,
+        "samples": [
+            {
+                "t": s.t,
+                "step": s.step,
+                "phase": s.phase,
+                "body_pose": s.body_pose.tolist(),
+                "stance": s.stance.tolist(),
+                "stability_margin_m": number(s.stability_margin_m),
+                "max_abs_force": number(s.max_abs_force),
+                "violations": list(s.violations),
+            }
+            for s in result.samples
+        ],
+    }
+
+
+def _walk(am, args: argparse.Namespace) -> int:
+    from ..exceptions import CLIError, HexapodError
+    from ..hexapod import walk, write_walk
+
+    try:
+        got = walk(am, args.to, args.gait, args.step, args.feet, args.samples, args.lift)
+    except HexapodError as exc:
+        raise CLIError(str(exc)) from None
+    doc = walk_document(got)
+    if args.out:
+        write_walk(args.out, got)
+    if args.json:
+        print(dumps(doc))
+    else:
+        last = doc["samples"][-1]
+        verdict = "walks" if got.success else "stops"
+        print(f"hexapod {args.gait} walk, feet {args.feet}: {verdict} in {got.cycles} steps, {last['t']:.3f} s")
+        margins = [s["stability_margin_m"] for s in doc["samples"] if s["stability_margin_m"] is not None]
+        forces = [s["max_abs_force"] for s in doc["samples"] if s["max_abs_force"] is not None]
+        if margins:
+            print(f"  smallest stability margin {min(margins):.4f} m")
+        if forces:
+            print(f"  largest leg force {max(forces):.3f} N over {len(doc['samples'])} samples")
+        if got.reason:
+            print(f"  {got.reason}"[:100])
+    return 0 if got.success else 1

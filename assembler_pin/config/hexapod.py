@@ -11,7 +11,7 @@ The YAML section (every key optional; a missing key takes the default shown)::
       body_radius: 0.8      # [m] the body as a disc about that circle's axis (collisions), > 0
       body_thickness: 0.05  # [m] the disc's thickness, above the EE plates, in [0, body_radius]
       friction: 0.5         # Coulomb friction coefficient of a resting foot on the floor, in [0, 10]
-      min_margin: 0.0       # [m] smallest static stability margin of a resting stand, in [-100, 100]
+      min_margin: 0.0       # [m] smallest stability margin of a resting stand and walk, in [-100, 100]
 """
 
 from __future__ import annotations
@@ -41,7 +41,7 @@ class HexapodConfig:
             plates' circle (world axes).
         body_radius, body_thickness: the body as a disc [m] (collisions).
         friction: Coulomb coefficient of a resting foot; min_margin: smallest stability
-            margin [m] of a resting stand.
+            margin [m] of a resting stand and of every sample of a walk.
     """
 
     stacks: int = 6

@@ -110,11 +110,26 @@ def _checked_lengths(am: AssemblerModel, pas: list[PlateArrays], lengths: object
     return got
 
 
-def _check_level(am: AssemblerModel, pas: list[PlateArrays]) -> None:
-    z = np.array([pa.p[0, 2] for pa in pas])
-    tilt = max(float(np.abs(pa.R[0][:, 2] - [0.0, 0.0, 1.0]).max()) for pa in pas)
+def _check_level(am: AssemblerModel, pas: list[PlateArrays], hanging: np.ndarray) -> None:
+    """The feet not ``hanging`` flat on one floor, the hanging ones not below it."""
+    if hanging.all():
+        raise HexapodError("at least one foot must stand on the floor (every foot is given as hanging)")
+    down = [pa for pa, h in zip(pas, hanging, strict=True) if not h]
+    z = np.array([pa.p[0, 2] for pa in down])
+    tilt = max(float(np.abs(pa.R[0][:, 2] - [0.0, 0.0, 1.0]).max()) for pa in down)
     if tilt > LEVEL_TOL or np.ptp(z) > LEVEL_TOL:
         raise HexapodError("resting feet must lie flat (foot plates level) on one horizontal floor (one height)")
+    if any(pa.p[0, 2] < z[0] - LEVEL_TOL for pa, h in zip(pas, hanging, strict=True) if h):
+        raise HexapodError("a hanging foot must not be below the floor of the standing feet")
+
+
+def _checked_hanging(k: int, hanging: object) -> np.ndarray:
+    if hanging is None:
+        return np.zeros(k, bool)
+    got = np.asarray(hanging)
+    if got.shape != (k,) or got.dtype != bool:
+        raise HexapodError(f"hanging must be {k} booleans (one per stack: its foot hangs from the body)")
+    return got.copy()
 
 
 def _limit_violations(am: AssemblerModel, eq: StructureEquilibrium, rest: np.ndarray) -> list[str]:
@@ -138,12 +153,14 @@ def _limit_violations(am: AssemblerModel, eq: StructureEquilibrium, rest: np.nda
     return out
 
 
-def _resting(am: AssemblerModel, start: StructureState, rest: np.ndarray, body_mass: float, tol: float):
-    """The equilibrium with feet that lift off when they would pull (module doc), and the
-    wrenches of the feet."""
+def _resting(
+    am: AssemblerModel, start: StructureState, rest: np.ndarray, body_mass: float, tol: float, hanging: np.ndarray
+):
+    """The equilibrium with feet that lift off when they would pull (module doc), the
+    ``hanging`` ones free from the start, and the wrenches of the feet."""
     k = rest.shape[0]
-    free = np.zeros(k, bool)
-    floor = start.p[0, 0, 2]
+    free = hanging.copy()
+    floor = start.p[int(np.argmin(hanging)), 0, 2]
     for _ in range(k + 1):
         eq = solve_structure(am, start, rest, body_mass, free)
         w = np.array([t.base_gradient for t in eq.terms.stacks])
@@ -205,6 +222,7 @@ def stand(
     min_margin: float = 0.0,
     scene: Scene | str | None = None,
     check_clearance: bool = True,
+    hanging: npt.ArrayLike | None = None,
 ) -> HexapodStand:
     """The equilibrium of the hexapod (module doc): ``stacks`` (each its n+1 world plate poses,
     the foot first) under a rigid body of ``body_mass`` [kg] centred at ``body_com`` (world, [m])
@@ -212,11 +230,13 @@ def stand(
     own lengths). The given poses are the start; the body and every plate but the held feet move.
     With ``check_clearance`` (default) the equilibrium's clearance (:mod:`.clearance`, among
     ``scene``'s obstacles and floor: a scene, a scene file or None) below the configuration's
-    ``clearance`` is a violation.
+    ``clearance`` is a violation. ``hanging`` (k booleans, None: none) are the feet that hang
+    from the body (a stack in its swing): free from the start, on welded or resting feet.
 
     Raises:
         HexapodError: malformed stacks, body, lengths, ``feet`` not in :data:`FEET`, resting
-            feet not level on one floor, ``friction``/``min_margin`` outside their bounds.
+            feet not level on one floor (or a hanging foot below it, or every foot
+            hanging), ``hanging`` not k booleans, ``friction``/``min_margin`` outside their bounds.
         PoseError: a malformed stack's poses.
     """
     pas = checked_stacks(am, stacks)
@@ -226,22 +246,24 @@ def stand(
     check_bound("hexapod.friction", friction, "friction", HexapodError)
     check_bound("hexapod.min_margin", min_margin, "min_margin", HexapodError)
     rest = _checked_lengths(am, pas, lengths)
+    hung = _checked_hanging(len(pas), hanging)
     obstacles = read_scene(scene)
     start = StructureState(np.array([pa.R for pa in pas]), np.array([pa.p for pa in pas]), com)
-    k, g = len(pas), am.config.gravity
+    g = am.config.gravity
     total, _ = machine_com(am, start.R, start.p, mass, com)
     tol = 1e-9 * (1.0 + total * g)
     if feet == "welded":
-        eq = solve_structure(am, start, rest, mass, np.zeros(k, bool))
-        wrenches, lifted = np.array([t.base_gradient for t in eq.terms.stacks]), np.zeros(k, bool)
+        eq = solve_structure(am, start, rest, mass, hung)
+        wrenches, lifted = np.array([t.base_gradient for t in eq.terms.stacks]), hung
+        wrenches[hung] = 0.0
     else:
-        _check_level(am, pas)
-        eq, wrenches, lifted = _resting(am, start, rest, mass, tol)
+        _check_level(am, pas, hung)
+        eq, wrenches, lifted = _resting(am, start, rest, mass, tol, hung)
     violations = _limit_violations(am, eq, rest)
     total, machine = machine_com(am, eq.state.R, eq.state.p, mass, eq.state.com)
     margin = float("nan")
     if feet == "resting":
-        floor = float(start.p[0, 0, 2])
+        floor = float(start.p[int(np.argmin(hung)), 0, 2])
         margin = _ground_violations(am, eq, wrenches, lifted, machine, floor, friction, min_margin, tol, violations)
     turn = eq.state.R[0, -1] @ start.R[0, -1].T
     apart = machine_clearance(am, _matrices(eq.state), turn, obstacles) if check_clearance else None

@@ -258,3 +258,17 @@ def test_the_truss_guides_scaling_table_is_what_the_command_computes():
     before = first - 2  # the index of n = first - 1
     assert f"at n = {first - 1} the lateral stiffness is {table.lateral[before]:.2g} N/m" in words
     assert f"the sag {1e3 * table.sag[before]:.2g} mm" in words
+
+
+def test_formats_page_documents_the_walk_file_the_code_writes():
+    from assembler_pin.hexapod import walkfile
+
+    page = _read("docs/formats.md")
+    section = page[page.index("## Walk files") : page.index("## Errors in the API")]
+    assert f"format v{walkfile.VERSION})" in section.splitlines()[0]
+    assert f'"format": "{walkfile.FORMAT}", "version": {walkfile.VERSION}' in section
+    for key in (*walkfile._TOP, *walkfile._SAMPLE):
+        assert f"`{key}`" in section or f'"{key}"' in section, f"walk file key {key} not on the formats page"
+    for phase in walkfile.PHASES:
+        assert f"`{phase}`" in section
+    assert "more\nthan 1 + 100 × 49 × 50 samples" in section and walkfile.MAX_FILE_SAMPLES == 1 + 100 * 49 * 50

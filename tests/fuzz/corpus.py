@@ -511,6 +511,39 @@ def _walk_cases() -> list[CliCase]:
     ]
 
 
+def _hexapod_walk_cases() -> list[CliCase]:
+    """A walk's goal, gait, step, samples and lift out of range are refused before any solve."""
+    w = "hexapod walk --json "
+    refused = [
+        _case(f"hexapod.walk_{name}", w + args)
+        for name, args in (
+            ("without_to", ""),
+            ("to_short", "--to 0.1 0"),
+            ("to_nan", "--to nan 0 0"),
+            ("to_inf", "--to 0 inf 0"),
+            ("to_far", "--to 1e9 0 0"),
+            ("yaw_past_pi", "--to 0 0 4"),
+            ("too_many_steps", "--to 5 0 0 --step 0.01"),
+            ("gait_unknown", "--to 0.1 0 0 --gait gallop"),
+            ("step_zero", "--to 0.1 0 0 --step 0"),
+            ("step_huge", "--to 0.1 0 0 --step 1e300"),
+            ("step_nan", "--to 0.1 0 0 --step nan"),
+            ("samples_zero", "--to 0.1 0 0 --samples 0"),
+            ("samples_huge", "--to 0.1 0 0 --samples 1000000000"),
+            ("samples_float", "--to 0.1 0 0 --samples 1.5"),
+            ("lift_negative", "--to 0.1 0 0 --lift -0.1"),
+            ("lift_nan", "--to 0.1 0 0 --lift nan"),
+            ("with_scene", "--to 0.1 0 0 --scene {d}/missing.yaml"),
+            ("with_html", "--to 0.1 0 0 --html {d}/w.html"),
+        )
+    ]
+    return [
+        *refused,
+        _case("hexapod.stand_with_to", "hexapod stand --json --to 0.1 0 0"),
+        _case("hexapod.walk_three_stacks", w + "--to 0.05 0 0 --samples 1 --stacks 3 --radius 0.4", "any"),
+    ]
+
+
 def _hexapod_cases() -> list[CliCase]:
     """Counts, sizes and masses of the hexapod out of range are refused before any solve."""
     h = "hexapod stand --json "
@@ -541,7 +574,8 @@ def _hexapod_cases() -> list[CliCase]:
     ]
     return [
         *cases,
-        _case("hexapod.action_unknown", "hexapod walk --json"),
+        _case("hexapod.action_unknown", "hexapod gallop --json"),
+        *_hexapod_walk_cases(),
         _case("hexapod.capacity_with_plot", "hexapod capacity --plot {d}/cap.png"),
         _case("hexapod.capacity_with_mass", "hexapod capacity --body-mass 5"),
         _case("hexapod.action_missing", "hexapod --json"),
@@ -1886,7 +1920,39 @@ def _hexapod_api_cases() -> list[ApiCase]:
             ("com_huge", {"body_com": [1e308, 0, 0]}),
             ("friction_complex", {"friction": 1 + 1j}),
             ("radius_negative", {"radius": -1.0}),
+            ("min_margin_nan", {"min_margin": float("nan")}),
+            ("min_margin_huge", {"min_margin": 1e9}),
+            ("min_margin_string", {"min_margin": "0.05"}),
+            ("min_margin_bool", {"min_margin": True}),
         )
+    ]
+    cases += [
+        ApiCase(f"api.hexapod_walk.{name}", lambda c, kw=kw: hx.walk(c.am, **({"to": (0.05, 0.0, 0.0)} | kw)))
+        for name, kw in (
+            ("to_none", {"to": None}),
+            ("to_string", {"to": "forward"}),
+            ("to_nan", {"to": (np.nan, 0.0, 0.0)}),
+            ("to_complex", {"to": (1j, 0.0, 0.0)}),
+            ("yaw_past_pi", {"to": (0.0, 0.0, 3.5)}),
+            ("gait_none", {"gait": None}),
+            ("step_negative", {"step": -0.1}),
+            ("step_string", {"step": "0.1"}),
+            ("samples_numpy_float", {"samples": np.float64(2.0)}),
+            ("lift_huge", {"lift": 1e308}),
+            ("min_margin_nan", {"min_margin": float("nan")}),
+            ("too_many_cycles", {"to": (50.0, 0.0, 0.0), "step": 0.01}),
+            ("model_string", {"am": "am"}),
+        )
+        if "am" not in kw
+    ]
+    cases += [
+        ApiCase("api.hexapod_walk.model_string", lambda c: hx.walk("am", (0.05, 0.0, 0.0))),
+        ApiCase("api.hexapod_stand.hanging_short", lambda c: stand(c, hanging=[True])),
+        ApiCase("api.hexapod_stand.hanging_ints", lambda c: stand(c, hanging=[1, 0, 0])),
+        ApiCase("api.hexapod_stand.hanging_all", lambda c: stand(c, feet="resting", hanging=[True] * 3)),
+        ApiCase("api.read_walk.missing", lambda c: hx.read_walk(c.ws.root / "missing.json")),
+        ApiCase("api.read_walk.directory", lambda c: hx.read_walk(c.ws.root)),
+        ApiCase("api.read_walk.int", lambda c: hx.read_walk(5)),
     ]
     return cases
 

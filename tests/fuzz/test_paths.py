@@ -187,6 +187,7 @@ OUTPUTS = [
     ("stiffness --scaling", "--out", "x.png", "file"),
     ("hexapod stand", "--html", "x.html", "file"),
     ("hexapod stand", "--plot", "x.png", "file"),
+    ("hexapod walk --to 0.05 0 0", "--out", "w.json", "file"),
 ]
 
 

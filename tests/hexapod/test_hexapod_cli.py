@@ -127,3 +127,90 @@ def test_capacity_from_the_command_line(capsys):
     assert stand(am, stacks, doc["capacity_kg"], com).feasible
     assert not stand(am, stacks, 1.01 * doc["capacity_kg"], com).feasible
     assert _run(capsys, ["hexapod", "capacity", "--plot", "x.png"])[0] == 2
+
+
+WALK_KEYS = {"t", "step", "phase", "body_pose", "stance", "stability_margin_m", "max_abs_force", "violations"}
+
+
+def test_walk_json_reaches_the_goal_and_exits_0(capsys):
+    argv = ["hexapod", "walk", "--to", "0.08", "0.0", "0.1", "--step", "0.05", "--samples", "1", "--json"]
+    code, out, err = _run(capsys, argv)
+    doc = json.loads(out)
+    assert code == 0 and not err and doc["success"] and doc["reason"] is None
+    # the longest foot travel over the step, rounded up: the default ring of six feet, 0.6 m
+    angles = np.arange(6) * np.pi / 3
+    feet = 0.6 * np.stack([np.cos(angles), np.sin(angles)], axis=1)
+    moved = 0.6 * np.stack([np.cos(angles + 0.1), np.sin(angles + 0.1)], axis=1) + [0.08, 0.0]
+    steps = int(np.ceil(np.linalg.norm(moved - feet, axis=1).max() / 0.05))
+    assert (doc["gait"], doc["feet"], doc["steps"]) == ("tripod", "resting", steps)
+    samples = doc["samples"]
+    assert len(samples) == 1 + steps * (2 * 3 + 1) and all(WALK_KEYS == set(s) for s in samples)
+    assert all(not s["violations"] and s["stability_margin_m"] >= 0.0 for s in samples)
+    assert {sum(s["stance"]) for s in samples} == {3, 6}
+    assert np.all(np.diff([s["t"] for s in samples]) >= 0)
+    # the body's centre of mass turned by the yaw about the feet's centre, then moved
+    start = np.array(samples[0]["body_pose"][:3])
+    c, s_ = np.cos(0.1), np.sin(0.1)
+    goal = np.array([c * start[0] - s_ * start[1] + 0.08, s_ * start[0] + c * start[1], start[2]])
+    np.testing.assert_allclose(samples[-1]["body_pose"], [*goal, 0.0, 0.0, 0.1], atol=1e-12)
+
+
+def test_a_walk_that_stops_says_which_step_and_exits_1(capsys):
+    argv = ["hexapod", "walk", "--to", "0.5", "0", "0", "--step", "0.5", "--samples", "1", "--json"]
+    code, out, _ = _run(capsys, argv)
+    doc = json.loads(out)
+    assert code == 1 and not doc["success"] and doc["reason"].startswith("step 1 (")
+    assert doc["samples"][-1]["violations"] and doc["reason"].endswith(doc["samples"][-1]["violations"][0])
+
+
+@pytest.mark.parametrize(
+    "extra",
+    [
+        [],
+        ["--to", "0.1", "0"],
+        ["--to", "0", "0", "4"],
+        ["--to", "0.1", "0", "0", "--step", "0"],
+        ["--to", "0.1", "0", "0", "--html", "x.html"],
+    ],
+)
+def test_walk_refusals_are_one_line(capsys, extra):
+    code, out, err = _run(capsys, ["hexapod", "walk", *extra])
+    assert code == 2 and not out and len(err) <= 2 and "error" in err[-1]
+
+
+def test_walk_out_writes_the_file_that_reads_back(capsys, tmp_path):
+    from assembler_pin.hexapod import read_walk
+
+    out = tmp_path / "walk.json"
+    argv = [
+        "hexapod",
+        "walk",
+        "--to",
+        "0.04",
+        "0",
+        "0",
+        "--step",
+        "0.05",
+        "--samples",
+        "1",
+        "--out",
+        str(out),
+        "--json",
+    ]
+    code, printed, _ = _run(capsys, argv)
+    doc, back = json.loads(printed), read_walk(out)
+    assert code == 0 and back.success and len(back.t) == len(doc["samples"])
+    np.testing.assert_array_equal(back.body_pose, [s["body_pose"] for s in doc["samples"]])
+    np.testing.assert_array_equal(back.stance, [s["stance"] for s in doc["samples"]])
+    assert [p.name for p in tmp_path.iterdir()] == ["walk.json"]
+    # every sample's forces in the file: six stacks of four platforms of six legs
+    assert np.isfinite(back.forces).all() and back.forces.shape[1:] == (6, 4, 6)
+
+
+def test_out_is_refused_for_stand_and_an_unwritable_out_for_walk(capsys, tmp_path):
+    code, _, err = _run(capsys, ["hexapod", "stand", "--out", str(tmp_path / "x.json")])
+    assert code == 2 and "--out" in err[-1]
+    bad = tmp_path / "file"
+    bad.write_text("")
+    code, out, err = _run(capsys, ["hexapod", "walk", "--to", "0.04", "0", "0", "--out", str(bad / "w.json")])
+    assert code == 2 and not out and "--out" in err[-1]
