@@ -248,7 +248,7 @@ def payload_capacity(
         configured_failed: the caller's solve at the configured payload failed (start from
             the solve without payload).
         arm_start: the helper arm's valid pose for the goal, if the caller has it (a start
-            only: it need not clear the scene).
+            only: it need not be clear of the stack's own bodies or of the scene).
         scene: obstacles and floor (:class:`~assembler_pin.collision.scene.Scene` or a scene
             file): every optimization keeps its clearance from them, and ``start`` must too.
     """
@@ -262,7 +262,7 @@ def payload_capacity(
     goal = to_se3(goal, "goal")
     scene = read_scene(scene)
     start = _checked_start(am, goal, start, "start", forces=not configured_failed, scene=scene)
-    arm_start = _checked_start(am, goal, arm_start, "arm_start", forces=False)
+    arm_start = _checked_start(am, goal, arm_start, "arm_start", forces=False, clear=False)
     models = models or PayloadModels(am)
     plates, why = _valid_start(am, goal, models, start, configured_failed, scene)
     if plates is None:
@@ -296,9 +296,12 @@ def _checked_start(
     what: str,
     forces: bool,
     scene: Scene | None = None,
+    clear: bool = True,
 ) -> PlateArrays | None:
     """``start`` as plates when it is a valid pose at ``goal`` (every limit, or every limit but
-    the forces when not ``forces``; its clearance measured with ``scene``); None stays None.
+    the forces when not ``forces``, and but the clearance when not ``clear``: the helper arm's
+    pose is a start only, which the optimizer's clearance rows move clear; its clearance
+    measured with ``scene``); None stays None.
 
     Raises:
         PoseError: malformed plates, or a pose off the goal or beyond a limit (naming the first).
@@ -307,7 +310,8 @@ def _checked_start(
         return None
     pa = plate_arrays(am, start)
     state = evaluate_state(am, pa, goal=goal, scene=scene)
-    bad = [v for v in state.violations if forces or v.kind not in _FORCE_KINDS]
+    ignored = (frozenset() if forces else _FORCE_KINDS) | (frozenset() if clear else {"collision"})
+    bad = [v for v in state.violations if v.kind not in ignored]
     if bad:
         raise PoseError(one_line(f"{what} is not a valid pose at the goal: {describe(binding(bad))}"))
     return pa

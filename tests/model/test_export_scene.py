@@ -91,19 +91,21 @@ def test_yourdfpy_scene_matches_the_stack(am, pose, tmp_path):
     out = tmp_path / "assembler.glb"
     out.write_bytes(glb)
     scene = trimesh.load(str(out), file_type="glb")
-    n_visual_links = (am.n + 1) + 2 * 6 * am.n + 1  # plates, motors + shafts, payload
-    n_visuals = 4 * (am.n + 1) + 2 * 6 * am.n + 1  # each plate: disc + 3 node spheres
+    shaped_payload = int(am.config.payload.radius > 0)  # a point-mass payload has no shape
+    n_visual_links = (am.n + 1) + 2 * 6 * am.n + shaped_payload  # plates, motors + shafts, payload
+    n_visuals = 4 * (am.n + 1) + 2 * 6 * am.n + shaped_payload  # each plate: disc + 3 node spheres
     assert len(urdf.scene.graph.nodes_geometry) == n_visuals
     assert len(scene.graph.nodes_geometry) == n_visuals
     parents = urdf.scene.graph.transforms.parents
     links = {parents[g] for g in urdf.scene.graph.nodes_geometry}
     assert len(links) == n_visual_links
-    assert {names.plate(k) for k in range(am.n + 1)} | {names.payload} <= links
+    assert {names.plate(k) for k in range(am.n + 1)} | ({names.payload} if shaped_payload else set()) <= links
 
     # the exported extent is the stack's extent computed from Pinocchio's geometry
     ref = expected_scene(am, pose)
     assert np.allclose(scene.bounds, ref.bounds, atol=2e-3), (scene.bounds, ref.bounds)
-    # and the extent covers the stack from below the base disc to the top of the payload
-    payload_top = pose.R[-1] @ [0, 0, am.config.payload.offset] + pose.p[-1]
-    assert scene.bounds[1, 2] >= payload_top[2]
+    # and the extent covers the stack from below the base disc to the EE plate (and the
+    # payload's sphere when it has one)
+    top = am.config.payload.offset + am.config.payload.radius if shaped_payload else 0.0
+    assert scene.bounds[1, 2] >= (pose.R[-1] @ [0, 0, top] + pose.p[-1])[2]
     assert scene.bounds[0, 2] < 0.0 < scene.bounds[1, 2]

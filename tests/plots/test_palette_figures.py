@@ -28,7 +28,7 @@ from matplotlib.colors import to_rgb
 from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 
-from assembler_pin import evaluate_state, plots, scenario, stack_forward_kinematics, viz
+from assembler_pin import AssemblerModel, evaluate_state, plots, scenario, stack_forward_kinematics, viz
 from assembler_pin.common import palette
 from assembler_pin.common.labels import leg_label
 from assembler_pin.motion.trajfile import MARGIN_KINDS, Trajectory
@@ -269,8 +269,11 @@ def test_viewer_payload_stays_orange_beside_the_ghost(am, bent_plates, tmp_path)
     """The ghost's payload is an opaque orange wireframe: nothing translucent green lies over
     the payload to tint it olive. (Materials of the page's scene; headless Chromium is used
     by tests/viz/test_viewer.py where installed.)"""
+    import dataclasses
+
     from assembler_pin.carrier import Carrier
 
+    am = AssemblerModel.from_config(am.config.replace(payload=dataclasses.replace(am.config.payload, radius=0.05)))
     with viz.StackViewer(am) as v:
         v.display(bent_plates)
         v.show_ghost(am.home)
