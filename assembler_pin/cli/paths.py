@@ -43,6 +43,17 @@ def _existing_ancestor(path: Path) -> Path:
     return Path(".")
 
 
+def _writable_existing_parent(parent: Path, path: str, what: str) -> None:
+    """``parent`` (of ``path``, as typed) exists, is a directory and can be written in; else a
+    CLIError naming ``path`` and what is wrong with it."""
+    found = _existing_ancestor(parent)
+    if not found.is_dir():
+        raise CLIError(f"{what} '{path}': '{found}' is not a directory")
+    if found != parent:
+        raise CLIError(f"{what} '{path}': directory '{parent}' does not exist")
+    _probe_directory(parent, path, what)
+
+
 def writable_parent(path: str, what: str) -> Path:
     """``path`` of an output file, checked before any work: its directory exists, is a
     directory and can be written in (probed), and ``path`` is not a directory; else a
@@ -51,12 +62,7 @@ def writable_parent(path: str, what: str) -> Path:
     parent = target.parent
     if target.is_dir() and what.endswith("file"):
         raise CLIError(f"{what} '{path}' is a directory")
-    found = _existing_ancestor(parent)
-    if not found.is_dir():
-        raise CLIError(f"{what} '{path}': '{found}' is not a directory")
-    if found != parent:
-        raise CLIError(f"{what} '{path}': directory '{parent}' does not exist")
-    _probe_directory(parent, path, what)
+    _writable_existing_parent(parent, path, what)
     return target
 
 
@@ -71,12 +77,7 @@ def writable_directory(path: str, what: str) -> Path:
         _probe_directory(target, path, what)
         return target
     parent = target.parent
-    found = _existing_ancestor(parent)
-    if not found.is_dir():
-        raise CLIError(f"{what} '{path}': '{found}' is not a directory")
-    if found != parent:
-        raise CLIError(f"{what} '{path}': directory '{parent}' does not exist")
-    _probe_directory(parent, path, what)
+    _writable_existing_parent(parent, path, what)
     return target
 
 

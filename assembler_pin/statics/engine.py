@@ -20,12 +20,12 @@ import numpy.typing as npt
 import pinocchio as pin
 
 from ..common.validation import as_float_array
-from ..exceptions import ArgumentError, PoseError
+from ..exceptions import PoseError
 from ..kinematics import LegState, PlateArrays, checked_rotations
-from ..model.assembler import AssemblerModel, checked_model
+from ..model.assembler import AssemblerModel
 from .closed_form import CONDITION_LIMIT
 from .kernel import closed_form_forces, kernel_result
-from .pinocchio_statics import solve_statics_pinocchio
+from .pinocchio_statics import check_statics_arguments, solve_statics_pinocchio
 from .result import StaticsResult
 
 __all__ = ["solve_statics", "solve_statics_batch"]
@@ -64,11 +64,7 @@ def solve_statics(
     """
     if data is not None:
         return solve_statics_pinocchio(am, plates, raise_on_singular, legs, data)
-    checked_model(am)
-    if not isinstance(raise_on_singular, bool):
-        raise ArgumentError(f"raise_on_singular must be True or False, got {type(raise_on_singular).__name__}")
-    if legs is not None and not (isinstance(legs, LegState) and legs.lengths.shape == (am.n, 6)):
-        raise ArgumentError(f"legs must be the LegState of these plates ({am.n} x 6 legs) or None")
+    check_statics_arguments(am, raise_on_singular, legs)
     return kernel_result(am, plates, raise_on_singular)
 
 

@@ -23,6 +23,7 @@ supplies.
 from __future__ import annotations
 
 from collections.abc import Sequence
+from typing import cast
 
 import numpy as np
 import pinocchio as pin
@@ -44,6 +45,7 @@ from .result import StaticsResult
 
 __all__ = [
     "WHOLE_STACK_STATICS_MAX_PLATFORMS",
+    "check_statics_arguments",
     "checked_data",
     "closure_jacobian_blocks",
     "gravity_terms",
@@ -149,6 +151,20 @@ def gravity_terms(
     return PlatformStatics(g[am.leg_idx_v], g[am.plate_rows_ff], J.T[am.leg_idx_v], top_columns, g[:6])
 
 
+def check_statics_arguments(am: AssemblerModel, raise_on_singular: object, legs: object) -> None:
+    """The arguments every statics entry point shares: a checked model, ``raise_on_singular``
+    a bool, ``legs`` None or the LegState of an n-platform stack.
+
+    Raises:
+        ArgumentError: naming the argument and what it must be.
+    """
+    checked_model(am)
+    if not isinstance(raise_on_singular, bool):
+        raise ArgumentError(f"raise_on_singular must be True or False, got {type(raise_on_singular).__name__}")
+    if legs is not None and not (isinstance(legs, LegState) and legs.lengths.shape == (am.n, 6)):
+        raise ArgumentError(f"legs must be the LegState of these plates ({am.n} x 6 legs) or None")
+
+
 def _checked_inputs(
     am: AssemblerModel,
     plates: PlateArrays | Sequence | np.ndarray,
@@ -158,19 +174,16 @@ def _checked_inputs(
 ) -> tuple[PlateArrays, np.ndarray, np.ndarray, np.ndarray, pin.Data | None]:
     """The validated plates, top joint centres (n, 6, 3), leg vectors (n, 6, 3) and lengths
     (n, 6) [m], and the caller's ``Data`` of :func:`solve_statics_pinocchio` (ArgumentError, PoseError)."""
-    checked_model(am)
-    if not isinstance(raise_on_singular, bool):
-        raise ArgumentError(f"raise_on_singular must be True or False, got {type(raise_on_singular).__name__}")
-    if legs is not None and not (isinstance(legs, LegState) and legs.lengths.shape == (am.n, 6)):
-        raise ArgumentError(f"legs must be the LegState of these plates ({am.n} x 6 legs) or None")
+    check_statics_arguments(am, raise_on_singular, legs)
     if data is not None:
         data = checked_data(am, data)
     pa = plate_arrays(am, plates)
     if legs is None:
         _, top, vec, lengths = leg_vectors(am, pa)
     else:
-        top, lengths = legs.top_points, legs.lengths
-        vec = legs.top_points - legs.bottom_points
+        state = cast(LegState, legs)  # checked by check_statics_arguments
+        top, lengths = state.top_points, state.lengths
+        vec = state.top_points - state.bottom_points
     return pa, top, vec, lengths, data
 
 
